@@ -1,0 +1,36 @@
+# The two commands of README.md: `make demo` (the main job) and `make test` (the suite).
+# Each creates the virtual environment from this project's own files when it is missing or stale.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+OUT    ?= out
+
+.PHONY: demo test lint bench clean venv
+
+venv: $(VENV)/.installed
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	touch $@
+
+demo: venv
+	$(BIN)/python -m imucalib.demo --out $(OUT)
+
+test: venv
+	$(BIN)/python -m ruff check src tests bench
+	$(BIN)/python -m mypy
+	$(BIN)/python -m pytest -n 2 -q
+
+lint: venv
+	$(BIN)/python -m ruff check src tests bench
+	$(BIN)/python -m ruff format --check src tests bench || true
+	$(BIN)/python -m mypy
+
+bench: venv
+	$(BIN)/python bench/bench_twin.py
+	$(BIN)/python bench/bench_recording.py
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

@@ -1,0 +1,114 @@
+"""The exception and warning hierarchy of imucalib.
+
+Every error raised on bad input names what was expected and what was received. Library code never
+prints; the command line renders these.
+
+Hierarchy
+---------
+- :class:`CalibrationError` (base of everything imucalib raises)
+  - :class:`InvalidInputError` (also a ``ValueError``): malformed arrays, NaN, bad shapes, bad plans
+    - :class:`UnitError`: unknown or mismatched units
+    - :class:`ConfigurationError`: a model, scenario or station description that cannot be used
+    - :class:`LimitExceededError`: a command or parameter outside a device or plan limit
+  - :class:`InsufficientExcitationError`: a rank-deficient design; names the unobservable parameters
+  - :class:`RecordingError`: a recording that cannot be written or read
+    - :class:`RecordingFormatError`: not an imucalib recording, or a newer format version
+    - :class:`RecordingCorruptError`: truncated or damaged file
+    - :class:`RecordingOpenForWriteError`: a file a crashed writer left open (use ``imucalib recover``)
+  - :class:`DeviceError`: equipment faults
+    - :class:`DeviceTimeoutError` (also a ``TimeoutError``)
+  - :class:`GuardTripError`: a guard stopped a step
+- :class:`CalibrationWarning` (a ``UserWarning``)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+__all__ = [
+    "CalibrationError",
+    "CalibrationWarning",
+    "ConfigurationError",
+    "DeviceError",
+    "DeviceTimeoutError",
+    "GuardTripError",
+    "InsufficientExcitationError",
+    "InvalidInputError",
+    "LimitExceededError",
+    "RecordingCorruptError",
+    "RecordingError",
+    "RecordingFormatError",
+    "RecordingOpenForWriteError",
+    "UnitError",
+]
+
+
+class CalibrationError(Exception):
+    """Base class of every exception imucalib raises."""
+
+
+class InvalidInputError(CalibrationError, ValueError):
+    """Input that does not meet the documented contract (shape, finiteness, range, type)."""
+
+
+class UnitError(InvalidInputError):
+    """An unknown unit, or data in units other than those a function or result expects."""
+
+
+class ConfigurationError(InvalidInputError):
+    """A model, scenario, plan or station description that is inconsistent or incomplete."""
+
+
+class LimitExceededError(InvalidInputError):
+    """A command or parameter outside a device's or plan's limit."""
+
+
+class InsufficientExcitationError(CalibrationError):
+    """A design that cannot identify some parameters.
+
+    Parameters
+    ----------
+    unobservable : sequence of str
+        Names of the parameters (or parameter combinations) that the data cannot determine.
+    message : str, optional
+        Extra context; a default naming the parameters is built when omitted.
+    """
+
+    def __init__(self, unobservable: Sequence[str], message: str | None = None) -> None:
+        self.unobservable = tuple(unobservable)
+        text = message or (
+            "the design does not excite these parameters: " + ", ".join(self.unobservable)
+        )
+        super().__init__(text)
+
+
+class RecordingError(CalibrationError):
+    """A recording that cannot be written or read."""
+
+
+class RecordingFormatError(RecordingError):
+    """A file that is not an imucalib recording, or one of an unsupported format version."""
+
+
+class RecordingCorruptError(RecordingError):
+    """A recording that is truncated or damaged beyond what ``imucalib recover`` can mend."""
+
+
+class RecordingOpenForWriteError(RecordingError):
+    """A recording still marked open by a writer that crashed; ``imucalib recover FILE`` fixes it."""
+
+
+class DeviceError(CalibrationError):
+    """A fault reported by, or detected on, a piece of equipment."""
+
+
+class DeviceTimeoutError(DeviceError, TimeoutError):
+    """A device that did not answer within its time-out."""
+
+
+class GuardTripError(CalibrationError):
+    """A guard stopped a step (table drift, rate error, saturation, counter gap, …)."""
+
+
+class CalibrationWarning(UserWarning):
+    """Something the user should know that does not stop the computation."""
