@@ -15,7 +15,8 @@ Frames
     Platform frame of a rate table: fixed to the innermost moving axis. With an ideally mounted
     fixture ``m`` coincides with ``p``.
 ``t``
-    Table base frame: fixed to the ground. ``z_t`` points **up** (against gravity); ``x_t`` points at
+    Table base frame: fixed to the ground. ``z_t`` points **up** (against gravity); ``x_t``
+    points at
     the station's heading (azimuth from North, clockwise seen from above); ``y_t = z_t × x_t``.
 ``n``
     Local-level navigation frame, **NED**: x North, y East, z Down.

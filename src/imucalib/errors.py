@@ -14,7 +14,8 @@ Hierarchy
   - :class:`RecordingError`: a recording that cannot be written or read
     - :class:`RecordingFormatError`: not an imucalib recording, or a newer format version
     - :class:`RecordingCorruptError`: truncated or damaged file
-    - :class:`RecordingOpenForWriteError`: a file a crashed writer left open (use ``imucalib recover``)
+    - :class:`RecordingOpenForWriteError`: a file a crashed writer left open
+      (use ``imucalib recover``)
   - :class:`DeviceError`: equipment faults
     - :class:`DeviceTimeoutError` (also a ``TimeoutError``)
   - :class:`GuardTripError`: a guard stopped a step
@@ -95,7 +96,7 @@ class RecordingCorruptError(RecordingError):
 
 
 class RecordingOpenForWriteError(RecordingError):
-    """A recording still marked open by a writer that crashed; ``imucalib recover FILE`` fixes it."""
+    """A recording still marked open by a crashed writer; ``imucalib recover FILE`` fixes it."""
 
 
 class DeviceError(CalibrationError):

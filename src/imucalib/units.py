@@ -16,7 +16,8 @@ Acceleration: ``G0_MPS2`` (standard gravity, 9.80665 m/s²), ``G``, ``MG``, ``UG
 Time: ``MINUTE``, ``HOUR``, ``SIDEREAL_DAY_S``.
 Relative: ``PPM``, ``PERCENT``.
 Temperature: :func:`degc_to_kelvin`, :func:`kelvin_to_degc`.
-Parsing: :func:`parse_unit` turns a unit string ("deg/s", "°/h", "g", "m/s^2", …) into its SI factor.
+Parsing: :func:`parse_unit` turns a unit string ("deg/s", "°/h", "g", "m/s^2", …) into its SI
+factor.
 
 Notes
 -----
@@ -44,7 +45,6 @@ __all__ = [
     "DEG_PER_S",
     "DEG_PER_S_PER_RTHZ",
     "EARTH_RATE_RPS",
-    "G",
     "G0_MPS2",
     "HOUR",
     "MG",
@@ -58,6 +58,7 @@ __all__ = [
     "UG",
     "UG_PER_RTHZ",
     "URAD",
+    "G",
     "degc_to_kelvin",
     "kelvin_to_degc",
     "parse_unit",
