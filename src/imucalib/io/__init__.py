@@ -1,0 +1,53 @@
+"""The Recording (crash-safe HDF5 file of a station run): writer, reader, recovery, exports.
+
+Contents
+--------
+:class:`RecordingWriter`, :class:`StreamSpec`, :class:`ColumnSpec`
+    Write a Recording (:mod:`imucalib.io.recording`, which documents the file format).
+:func:`open_recording`, :class:`Recording`, :class:`StreamInfo`, :class:`StreamData`,
+:class:`StepRecord`, :class:`LogEvent`
+    Read one (:mod:`imucalib.io.reader`).
+:func:`recover_recording`, :class:`RecoveryReport`
+    Copy what a crashed writer flushed into a cleanly closed file (:mod:`imucalib.io.recover`).
+:func:`export_csv`, :func:`export_mat`
+    Export a stream or a step of it (:mod:`imucalib.io.export`).
+"""
+
+from __future__ import annotations
+
+from imucalib.io.export import export_csv, export_mat
+from imucalib.io.reader import (
+    LogEvent,
+    Recording,
+    StepRecord,
+    StreamData,
+    StreamInfo,
+    open_recording,
+)
+from imucalib.io.recording import (
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    ColumnSpec,
+    RecordingWriter,
+    StreamSpec,
+)
+from imucalib.io.recover import RecoveredStream, RecoveryReport, recover_recording
+
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "ColumnSpec",
+    "LogEvent",
+    "Recording",
+    "RecordingWriter",
+    "RecoveredStream",
+    "RecoveryReport",
+    "StepRecord",
+    "StreamData",
+    "StreamInfo",
+    "StreamSpec",
+    "export_csv",
+    "export_mat",
+    "open_recording",
+    "recover_recording",
+]

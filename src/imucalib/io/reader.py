@@ -1,0 +1,583 @@
+"""Read a Recording: streams by time range, by step or in chunks; steps, log, metadata, truth.
+
+Contents
+--------
+:func:`open_recording`
+    Open a Recording (a context manager), including one a crashed writer left open.
+:class:`Recording`
+    The opened file: ``metadata``, ``streams``, ``read_stream``, ``iter_stream``, ``steps``,
+    ``read_step``, ``log``, ``truth``, ``read_truth_stream``, ``to_dataframe``.
+:class:`StreamInfo`, :class:`StreamData`, :class:`StepRecord`, :class:`LogEvent`
+    What it returns.
+
+Time windows are half-open: ``t_start_s <= time_s < t_end_s``. They are located by bisection on
+the ``time_s`` dataset (single-element reads, then one block), so only the rows needed are read.
+The format is described in :mod:`imucalib.io.recording`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import h5py
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.conventions import TIME_COLUMN
+from imucalib.errors import (
+    InvalidInputError,
+    RecordingCorruptError,
+    RecordingOpenForWriteError,
+)
+from imucalib.io._open import check_format, open_h5
+from imucalib.io._schema import (
+    COMMIT_GROUP,
+    LOG_FIELDS,
+    LOG_GROUP,
+    STEP_FIELDS,
+    STEPS_GROUP,
+    STREAMS_GROUP,
+    TRUTH_GROUP,
+    TRUTH_STREAMS_GROUP,
+    ColumnSpec,
+    decode_attr,
+    decode_text,
+)
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo", "open_recording"]
+
+_T = TypeVar("_T")
+_SEARCH_BLOCK = 1 << 14  # rows read at once when the bisection has narrowed down
+
+
+@dataclass(frozen=True)
+class StreamInfo:
+    """One stream: its name, columns (``time_s`` first) and extent."""
+
+    device: str
+    unit: str
+    columns: dict[str, ColumnSpec]
+    n_samples: int
+    t_first_s: float  # NaN when empty [s]
+    t_last_s: float  # NaN when empty [s]
+
+    @property
+    def name(self) -> str:
+        """``"<device>/<unit>"``."""
+        return f"{self.device}/{self.unit}"
+
+
+@dataclass(frozen=True)
+class StreamData:
+    """Rows of one stream: ``time_s`` and the other requested columns, with their units."""
+
+    time_s: NDArray[np.float64]
+    columns: dict[str, NDArray[Any]]
+    units: dict[str, str]  # column name (``time_s`` included) -> unit string
+
+    def __len__(self) -> int:
+        return int(self.time_s.shape[0])
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """One executed plan step, as recorded."""
+
+    index: int
+    kind: str
+    label: str
+    commanded: Any  # decoded JSON (usually a dict); None when not given
+    t_start_s: float
+    t_end_s: float  # NaN while running [s]
+    valid_start_s: float  # NaN until known [s]
+    valid_end_s: float  # NaN until known [s]
+    status: str
+    note: str
+
+    @property
+    def has_valid_window(self) -> bool:
+        """Whether both ends of the valid window are known."""
+        return math.isfinite(self.valid_start_s) and math.isfinite(self.valid_end_s)
+
+
+@dataclass(frozen=True)
+class LogEvent:
+    """One logged event."""
+
+    time_s: float
+    level: str
+    source: str
+    message: str
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """The fixed part of a stream: names and column specifications."""
+
+    device: str
+    unit: str
+    columns: dict[str, ColumnSpec]
+
+    @property
+    def name(self) -> str:
+        return f"{self.device}/{self.unit}"
+
+
+def open_recording(path: str | os.PathLike[str], *, strict: bool = False) -> Recording:
+    """Open a Recording for reading.
+
+    A file left open by a crashed (or still running) writer is opened in SWMR-read mode and
+    ``recording.was_open_for_write`` is set; it then shows every row flushed before the crash.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.h5`` file.
+    strict : bool
+        Refuse a file a writer left open instead of reading it.
+
+    Returns
+    -------
+    Recording
+        Use it as a context manager, or call :meth:`Recording.close`.
+
+    Raises
+    ------
+    RecordingError
+        If the file does not exist.
+    RecordingFormatError
+        A foreign HDF5 file (the message names what it holds) or a newer ``format_version``.
+    RecordingCorruptError
+        A truncated or garbage file; the message says what is wrong.
+    RecordingOpenForWriteError
+        With ``strict=True``, for a file a writer left open (``imucalib recover`` fixes it).
+    """
+    p = Path(path)
+    f, was_open = open_h5(p)
+    try:
+        version = check_format(f, p)
+        if strict and was_open:
+            raise RecordingOpenForWriteError(
+                f"{p} is still marked open for writing (its writer crashed or is still running); "
+                f"run `imucalib recover {p}` to make a cleanly closed copy, or open it with "
+                "strict=False to read it in SWMR mode")
+        rec = Recording(f, p, version, was_open_for_write=was_open)
+        rec.metadata  # noqa: B018 -- fail now, not later, on unreadable attributes
+    except OSError as exc:
+        f.close()
+        raise RecordingCorruptError(
+            f"{p} opened but its structure is unreadable ({exc}); `imucalib recover {p}` copies "
+            "out what is readable") from exc
+    except BaseException:
+        f.close()
+        raise
+    return rec
+
+
+def _decode_text_array(values: NDArray[Any]) -> list[str]:
+    return [decode_text(v) for v in values.tolist()]
+
+
+class Recording:
+    """An opened Recording (thin: it reads on demand). Make it with :func:`open_recording`."""
+
+    def __init__(self, file: h5py.File, path: Path, format_version: int, *,
+                 was_open_for_write: bool) -> None:
+        self._file = file
+        self.path = path
+        self.format_version = format_version
+        self.was_open_for_write = was_open_for_write
+        # layout cannot change after creation (SWMR forbids it): cache it
+        self._datasets: dict[str, h5py.Dataset] = {}
+        self._layouts: dict[str, _Layout] = {}
+        self._commit_entries: list[str] | None = None
+
+    # --------------------------------------------------------------------------- basics
+    def close(self) -> None:
+        """Close the file (idempotent)."""
+        if self._file.id.valid:
+            self._file.close()
+
+    def __enter__(self) -> Recording:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        flag = ", was open for write" if self.was_open_for_write else ""
+        return f"Recording({str(self.path)!r}, format v{self.format_version}{flag})"
+
+    def _dataset(self, path: str) -> h5py.Dataset:
+        ds = self._datasets.get(path)
+        if ds is None:
+            ds = self._datasets[path] = self._file[path]
+        elif self._file.swmr_mode:
+            ds.refresh()
+        return ds
+
+    def _guard(self, what: str, func: Callable[..., _T], *args: Any) -> _T:
+        try:
+            return func(*args)
+        except OSError as exc:
+            raise RecordingCorruptError(
+                f"{self.path}: {what} is unreadable ({exc}); `imucalib recover {self.path}` "
+                "copies out what is readable") from exc
+
+    @property
+    def metadata(self) -> dict[str, Any]:
+        """Root attributes; values of ``*_json`` attributes are decoded."""
+        out: dict[str, Any] = {}
+        for key, value in self._file.attrs.items():
+            v = decode_attr(value)
+            if key.endswith("_json") and isinstance(v, str):
+                try:
+                    v = json.loads(v)
+                except ValueError:
+                    pass
+            out[key] = v
+        return out
+
+    def committed_rows(self) -> dict[str, int]:
+        """Rows known durable per entry (``"streams/imu/IMU-0001"``, ``"steps"``, ``"log"``)."""
+        if self._commit_entries is None:
+            if COMMIT_GROUP not in self._file:
+                return {}
+            self._commit_entries = [str(e) for e in json.loads(
+                decode_attr(self._file[COMMIT_GROUP].attrs["entries_json"]))]
+        rows = self._dataset(f"{COMMIT_GROUP}/rows")[()]
+        return {e: int(n) for e, n in zip(self._commit_entries, rows, strict=True)}
+
+    # --------------------------------------------------------------------------- streams
+    def _stream_paths(self, base: str) -> list[str]:
+        if base not in self._file:
+            return []
+        group = self._file[base]
+        return [f"{base}/{dev}/{unit}" for dev in sorted(group) for unit in sorted(group[dev])]
+
+    def _layout(self, path: str) -> _Layout:
+        layout = self._layouts.get(path)
+        if layout is None:
+            group = self._file[path]
+            cols = {c["name"]: ColumnSpec(unit=c["unit"], dtype=c["dtype"],
+                                          quantity=c["quantity"], description=c["description"])
+                    for c in json.loads(decode_attr(group.attrs["columns_json"]))}
+            for name in cols:  # opening through the group is cheaper than by full path
+                self._datasets.setdefault(f"{path}/{name}", group[name])
+            device, unit = path.rsplit("/", 2)[-2:]
+            layout = _Layout(device, unit, cols)
+            self._layouts[path] = layout
+        return layout
+
+    def _n_rows(self, path: str, committed: dict[str, int] | None = None) -> int:
+        """Rows readable in every column and committed by the writer."""
+        n = committed.get(path) if committed is not None else self.committed_rows().get(path)
+        for name in self._layout(path).columns:
+            length = self._dataset(f"{path}/{name}").shape[0]
+            n = length if n is None else min(n, length)
+        return int(n or 0)
+
+    def _info(self, path: str, committed: dict[str, int] | None = None) -> StreamInfo:
+        layout = self._layout(path)
+        n = self._n_rows(path, committed)
+        if n:
+            t = self._dataset(f"{path}/{TIME_COLUMN}")
+            t_first, t_last = float(t[0]), float(t[n - 1])
+        else:
+            t_first = t_last = math.nan
+        return StreamInfo(layout.device, layout.unit, dict(layout.columns), n, t_first, t_last)
+
+    def _infos(self, base: str) -> list[StreamInfo]:
+        committed = self.committed_rows()
+        return [self._guard(f"stream {p}", self._info, p, committed)
+                for p in self._stream_paths(base)]
+
+    @property
+    def streams(self) -> list[StreamInfo]:
+        """Every stream, sorted by device then unit."""
+        return self._infos(STREAMS_GROUP)
+
+    @property
+    def truth_streams(self) -> list[StreamInfo]:
+        """Every truth stream (twin recordings only)."""
+        return self._infos(TRUTH_STREAMS_GROUP)
+
+    def stream_info(self, device: str, unit: str) -> StreamInfo:
+        """Describe one stream (a :class:`StreamInfo`)."""
+        return self._guard("stream", self._info, self._stream_path(STREAMS_GROUP, device, unit))
+
+    def _stream_path(self, base: str, device: str, unit: str) -> str:
+        path = f"{base}/{device}/{unit}"
+        if path in self._layouts:
+            return path
+        if (not isinstance(device, str) or not isinstance(unit, str) or "/" in device + unit
+                or path not in self._file):
+            known = ", ".join(p.removeprefix(base + "/") for p in self._stream_paths(base))
+            what = "truth stream" if base == TRUTH_STREAMS_GROUP else "stream"
+            raise InvalidInputError(f"no {what} {device}/{unit} in {self.path.name}; "
+                                    f"streams: {known or 'none'}")
+        return path
+
+    @staticmethod
+    def _select(info: StreamInfo | _Layout, columns: Sequence[str] | None) -> list[str]:
+        if columns is None:
+            return [c for c in info.columns if c != TIME_COLUMN]
+        if isinstance(columns, str):
+            raise InvalidInputError("`columns` must be a sequence of names, not a str")
+        unknown = [c for c in columns if c not in info.columns]
+        if unknown:
+            raise InvalidInputError(f"stream {info.name} has no column(s) {unknown}; columns: "
+                                    f"{list(info.columns)}")
+        return [c for c in dict.fromkeys(columns) if c != TIME_COLUMN]
+
+    def _search(self, ds: h5py.Dataset, n: int, t: float, side: str) -> int:
+        """Find where `t` goes in the non-decreasing dataset `ds[:n]` without loading it whole.
+
+        One interpolation probe first (sampling is nearly uniform, so it usually lands on the
+        answer: three small reads), then bisection with single-element reads, then one block.
+        """
+        if math.isinf(t):
+            return 0 if t < 0 else n
+        lo, hi = 0, n  # the answer lies in [lo, hi]
+        block = _SEARCH_BLOCK
+        if n > block:
+            t_first, t_last = float(ds[0]), float(ds[n - 1])
+            if t_last > t_first:
+                frac = min(max((t - t_first) / (t_last - t_first), 0.0), 1.0)
+                a = min(max(int(frac * (n - 1)) - block // 2, 0), n - block)
+                seg = ds[a:a + block]
+                k = int(np.searchsorted(seg, t, side=side))  # type: ignore[call-overload]
+                if 0 < k < block:
+                    return a + k
+                if k == 0:
+                    hi = a
+                else:
+                    lo = a + block
+        while hi - lo > block:
+            mid = (lo + hi) // 2
+            v = float(ds[mid])
+            if v < t or (side == "right" and v == t):
+                lo = mid + 1
+            else:
+                hi = mid
+        seg = ds[lo:hi]
+        return lo + int(np.searchsorted(seg, t, side=side))  # type: ignore[call-overload]
+
+    def _row_range(self, path: str, n: int, t_start_s: float | None,
+                   t_end_s: float | None) -> tuple[int, int]:
+        for name, v in (("t_start_s", t_start_s), ("t_end_s", t_end_s)):
+            if v is not None and (not isinstance(v, int | float | np.floating) or math.isnan(v)):
+                raise InvalidInputError(f"`{name}` must be a number [s] or None; got {v!r}")
+        if t_start_s is not None and t_end_s is not None and t_end_s < t_start_s:
+            raise InvalidInputError(f"`t_end_s` ({t_end_s}) is before `t_start_s` ({t_start_s})")
+        ds = self._dataset(f"{path}/{TIME_COLUMN}")
+        i0 = 0 if t_start_s is None else self._search(ds, n, float(t_start_s), "left")
+        i1 = n if t_end_s is None else self._search(ds, n, float(t_end_s), "left")
+        return i0, max(i0, i1)
+
+    def row_range(self, device: str, unit: str, t_start_s: float | None = None,
+                  t_end_s: float | None = None) -> tuple[int, int]:
+        """Row indices ``[i0, i1)`` of a stream's rows with ``t_start_s <= time_s < t_end_s``."""
+        path = self._stream_path(STREAMS_GROUP, device, unit)
+        n = self._guard(f"stream {device}/{unit}", self._n_rows, path)
+        return self._guard(f"stream {device}/{unit} time_s", self._row_range,
+                           path, n, t_start_s, t_end_s)
+
+    def _read_rows(self, path: str, info: StreamInfo | _Layout, names: list[str], i0: int, i1: int,
+                   dsets: dict[str, h5py.Dataset] | None = None) -> StreamData:
+        def read() -> StreamData:
+            ds = dsets if dsets is not None else self._open_columns(path, names)
+            t = ds[TIME_COLUMN][i0:i1]
+            cols = {c: ds[c][i0:i1] for c in names}
+            units = {TIME_COLUMN: info.columns[TIME_COLUMN].unit}
+            units.update({c: info.columns[c].unit for c in names})
+            return StreamData(t, cols, units)
+
+        return self._guard(f"stream {info.name} rows {i0}:{i1}", read)
+
+    def _open_columns(self, path: str, names: list[str]) -> dict[str, h5py.Dataset]:
+        return {c: self._dataset(f"{path}/{c}") for c in (TIME_COLUMN, *names)}
+
+    def _read(self, base: str, device: str, unit: str, columns: Sequence[str] | None,
+              t_start_s: float | None, t_end_s: float | None) -> StreamData:
+        path = self._stream_path(base, device, unit)
+        layout = self._guard(f"stream {device}/{unit}", self._layout, path)
+        names = self._select(layout, columns)
+        n = self._guard(f"stream {device}/{unit}", self._n_rows, path)
+        i0, i1 = self._guard(f"stream {device}/{unit} time_s", self._row_range, path, n,
+                             t_start_s, t_end_s)
+        return self._read_rows(path, layout, names, i0, i1)
+
+    def read_stream(self, device: str, unit: str, columns: Sequence[str] | None = None,
+                    t_start_s: float | None = None, t_end_s: float | None = None) -> StreamData:
+        """Read a stream, or the rows with ``t_start_s <= time_s < t_end_s``.
+
+        Parameters
+        ----------
+        device, unit : str
+            The stream.
+        columns : sequence of str, optional
+            Columns besides ``time_s`` (default: all).
+        t_start_s, t_end_s : float, optional
+            Half-open time window [s]; ``None`` means unbounded.
+
+        Returns
+        -------
+        StreamData
+            ``time_s``, the columns and their units.
+
+        Raises
+        ------
+        InvalidInputError
+            Unknown stream or column, or a bad window.
+        RecordingCorruptError
+            If the data cannot be read.
+        """
+        return self._read(STREAMS_GROUP, device, unit, columns, t_start_s, t_end_s)
+
+    def read_truth_stream(self, device: str, unit: str, columns: Sequence[str] | None = None,
+                          t_start_s: float | None = None,
+                          t_end_s: float | None = None) -> StreamData:
+        """Read a truth stream (twin only); like :meth:`read_stream`."""
+        return self._read(TRUTH_STREAMS_GROUP, device, unit, columns, t_start_s, t_end_s)
+
+    def iter_stream(self, device: str, unit: str, chunk_samples: int = 1 << 18,
+                    columns: Sequence[str] | None = None, t_start_s: float | None = None,
+                    t_end_s: float | None = None) -> Iterator[StreamData]:
+        """Yield a stream (or a window of it) in pieces of at most `chunk_samples` rows.
+
+        Memory is bounded by `chunk_samples` rows of the requested columns. The extent is fixed
+        when iteration starts.
+        """
+        if not isinstance(chunk_samples, int | np.integer) or chunk_samples < 1:
+            raise InvalidInputError(f"`chunk_samples` must be a positive int; got "
+                                    f"{chunk_samples!r}")
+        path = self._stream_path(STREAMS_GROUP, device, unit)
+        layout = self._guard(f"stream {device}/{unit}", self._layout, path)
+        names = self._select(layout, columns)
+        n = self._guard(f"stream {device}/{unit}", self._n_rows, path)
+        i0, i1 = self._guard(f"stream {device}/{unit} time_s", self._row_range, path, n,
+                             t_start_s, t_end_s)
+        return self._iter(path, layout, names, i0, i1, int(chunk_samples))
+
+    def _iter(self, path: str, info: StreamInfo | _Layout, names: list[str], i0: int, i1: int,
+              chunk: int) -> Iterator[StreamData]:
+        dsets = self._open_columns(path, names)
+        for a in range(i0, i1, chunk):
+            yield self._read_rows(path, info, names, a, min(a + chunk, i1), dsets)
+
+    def to_dataframe(self, device: str, unit: str, columns: Sequence[str] | None = None,
+                     t_start_s: float | None = None, t_end_s: float | None = None,
+                     step: int | None = None) -> pd.DataFrame:
+        """Read a stream (window, or step's valid window) as a DataFrame indexed by ``time_s``.
+
+        Units are in ``df.attrs["units"]``.
+        """
+        import pandas as pd
+
+        if step is not None:
+            data = self.read_step(step, device, unit, columns)
+        else:
+            data = self.read_stream(device, unit, columns, t_start_s, t_end_s)
+        df = pd.DataFrame(data.columns, index=pd.Index(data.time_s, name=TIME_COLUMN))
+        df.attrs["units"] = dict(data.units)
+        return df
+
+    # ---------------------------------------------------------------------- steps and log
+    def _table(self, group: str, fields: dict[str, Any]) -> dict[str, list[Any]]:
+        n = self.committed_rows().get(group)
+        out: dict[str, list[Any]] = {}
+        for name in fields:
+            ds = self._dataset(f"{group}/{name}")
+            n = ds.shape[0] if n is None else min(n, ds.shape[0])
+        for name, spec in fields.items():
+            values = self._dataset(f"{group}/{name}")[: n or 0]
+            out[name] = _decode_text_array(values) if spec.kind == "text" else values.tolist()
+        return out
+
+    @property
+    def steps(self) -> list[StepRecord]:
+        """The executed steps, in order."""
+        t = self._guard("the steps table", self._table, STEPS_GROUP, STEP_FIELDS)
+        out = []
+        for i in range(len(t["index"])):
+            cmd = t["commanded"][i]
+            out.append(StepRecord(
+                index=int(t["index"][i]), kind=t["kind"][i], label=t["label"][i],
+                commanded=json.loads(cmd) if cmd else None,
+                t_start_s=t["t_start_s"][i], t_end_s=t["t_end_s"][i],
+                valid_start_s=t["valid_start_s"][i], valid_end_s=t["valid_end_s"][i],
+                status=t["status"][i], note=t["note"][i]))
+        return out
+
+    def step(self, step_index: int) -> StepRecord:
+        """One step by index."""
+        steps = self.steps
+        for st in steps:
+            if st.index == step_index:
+                return st
+        raise InvalidInputError(f"no step {step_index!r} in {self.path.name}; it has "
+                                f"{len(steps)} step(s)")
+
+    def step_window(self, step_index: int, *,
+                    valid_only: bool = True) -> tuple[float, float | None]:
+        """Return a step's valid window, or with ``valid_only=False`` its whole span [s]."""
+        st = self.step(step_index)
+        if valid_only:
+            if not st.has_valid_window:
+                raise InvalidInputError(
+                    f"step {st.index} ({st.label!r}, status {st.status!r}) has no valid window; "
+                    "pass valid_only=False for its whole duration")
+            return st.valid_start_s, st.valid_end_s
+        return st.t_start_s, st.t_end_s if math.isfinite(st.t_end_s) else None
+
+    def read_step(self, step_index: int, device: str, unit: str,
+                  columns: Sequence[str] | None = None, valid_only: bool = True) -> StreamData:
+        """Rows of a stream inside a step's valid window (or its whole span).
+
+        Raises
+        ------
+        InvalidInputError
+            Unknown step, or no valid window while `valid_only` is true.
+        """
+        t0, t1 = self.step_window(step_index, valid_only=valid_only)
+        return self.read_stream(device, unit, columns, t0, t1)
+
+    @property
+    def log(self) -> list[LogEvent]:
+        """The logged events, in the order logged."""
+        t = self._guard("the log", self._table, LOG_GROUP, LOG_FIELDS)
+        return [LogEvent(*row) for row in zip(t["time_s"], t["level"], t["source"], t["message"],
+                                              strict=True)]
+
+    # ----------------------------------------------------------------------------- truth
+    @property
+    def has_truth(self) -> bool:
+        """Whether the file holds a digital-twin truth."""
+        return TRUTH_GROUP in self._file
+
+    @property
+    def truth(self) -> dict[str, Any]:
+        """Digital-twin truth (empty for a real station): JSON values, and arrays exactly."""
+        if TRUTH_GROUP not in self._file:
+            return {}
+        group = self._file[TRUTH_GROUP]
+        out: dict[str, Any] = {}
+        for key, value in group.attrs.items():
+            if key.endswith("_json"):
+                out[key.removesuffix("_json")] = json.loads(decode_attr(value))
+        if "arrays" in group:
+            for key, ds in group["arrays"].items():
+                out[key] = ds[()]
+        return out

@@ -1,0 +1,586 @@
+"""The Recording: one crash-safe HDF5 file per station run, and its writer.
+
+Contents
+--------
+:class:`RecordingWriter`
+    Creates a Recording, then appends samples, steps and log events under SWMR.
+:class:`StreamSpec`, :class:`ColumnSpec`
+    Declarations of the streams (given up front: SWMR forbids new datasets later).
+:data:`FORMAT_NAME`, :data:`FORMAT_VERSION`, :data:`DEFAULT_CHUNK_ROWS`, :data:`STEP_FIELDS`,
+:data:`LOG_FIELDS`, :data:`STEP_STATUSES`, :data:`LOG_LEVELS`, :data:`EXTRA_UNITS`
+    Format constants.
+
+File format, version 1
+----------------------
+An HDF5 file (``libver="latest"``, superblock v3) written in SWMR mode. Everything is created
+before SWMR starts; afterwards the writer only appends to and overwrites datasets, so everything
+known at creation is stored then.
+
+Root attributes
+    ``format`` = ``"imucalib-recording"``; ``format_version`` = 1 (int); ``created_utc``
+    (ISO 8601, ``Z``); ``software_version`` (``imucalib.__version__``); and the caller's metadata,
+    one attribute per key (str, int, float or bool). Keys ending in ``_json`` hold JSON text;
+    the conventional keys are ``plan_toml``, ``station_json``, ``environment_json``,
+    ``imu_identity_json`` and ``scenario_json``. A recovered copy adds ``recovered_from`` and
+    ``recovered_utc``.
+``/streams/<device>/<unit>/<column>``
+    One group per stream (``device``: kind such as ``imu``, ``table``, ``chamber``,
+    ``centrifuge``; ``unit``: the physical unit's name, e.g. ``IMU-0001`` or ``main``). Each column
+    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk, no compression by
+    default), attributes ``unit`` (a unit string, checked against
+    :func:`imucalib.units.parse_unit` or :data:`EXTRA_UNITS`), ``quantity`` (``"si"`` or ``"raw"``)
+    and ``description``. ``time_s`` (float64, ``"s"``, non-decreasing, finite) is mandatory and is
+    the stream's time base. Float columns have fill value NaN. The group has attributes
+    ``device``, ``unit`` and ``columns_json``: the column specifications in declared order, a
+    JSON list of ``{"name", "unit", "dtype", "quantity", "description"}`` (the same facts as the
+    datasets' attributes, in one attribute so that a reader opens a stream quickly).
+``/steps/<field>``
+    The executed plan steps as one 1-D dataset per field (row ``i`` is step ``index == i``):
+    ``index`` (int64), ``kind``, ``label``, ``commanded`` (JSON text), ``t_start_s``, ``t_end_s``,
+    ``valid_start_s``, ``valid_end_s`` (float64, NaN until known), ``status`` (one of
+    :data:`STEP_STATUSES`), ``note``. Text fields are fixed-length UTF-8 with the capacities of
+    :data:`STEP_FIELDS`; longer text is refused, never truncated. Rows are overwritten in place
+    when a step is updated.
+``/log/<field>``
+    Events: ``time_s`` (float64), ``level`` (one of :data:`LOG_LEVELS`), ``source``, ``message``.
+``/truth`` (digital twin only; analysis code never reads it)
+    Attributes ``<key>_json`` (JSON of each truth value) and datasets ``/truth/arrays/<key>``
+    (numpy-array values, exact), and truth streams under ``/truth/streams/<device>/<unit>/``
+    laid out as ``/streams``.
+``/commit``
+    Dataset ``rows`` (int64) with, for each entry named in the group's ``entries_json``
+    attribute (``"streams/imu/IMU-0001"``, ``"truth/streams/…"``, ``"steps"``, ``"log"``), the
+    number of rows known to be durable. The writer updates it only after an HDF5 flush of the
+    data has returned, then flushes again, so after a crash it never counts rows whose data
+    did not reach the file. Readers use ``min(commit count, dataset lengths)``.
+
+Crash safety
+------------
+Appended rows are buffered in memory and written in large blocks. :meth:`RecordingWriter.flush`
+(called automatically every ``flush_interval_s`` of wall-clock time, checked on each call, and
+when the buffers exceed ``buffer_limit_bytes``) writes every buffer, flushes HDF5, then
+commits the row counts. A writer killed at any moment loses at most what was appended after its
+last completed flush; the file then refuses a normal HDF5 open (its "open for write" flag stays
+set) but :func:`imucalib.io.reader.open_recording` reads it in SWMR mode, and
+:func:`imucalib.io.recover.recover_recording` copies it into a cleanly closed file. The flush
+makes data durable against the process dying (SIGKILL), not against power loss (no fsync).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Mapping, Sequence
+from datetime import UTC, datetime
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import h5py
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imucalib import __version__
+from imucalib.conventions import TIME_COLUMN
+from imucalib.errors import InvalidInputError, RecordingError
+from imucalib.io._schema import (
+    COMMIT_GROUP,
+    DEFAULT_CHUNK_ROWS,
+    EXTRA_UNITS,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    LOG_CHUNK_ROWS,
+    LOG_FIELDS,
+    LOG_GROUP,
+    LOG_LEVELS,
+    STEP_FIELDS,
+    STEP_STATUSES,
+    STEPS_CHUNK_ROWS,
+    STEPS_GROUP,
+    STREAMS_GROUP,
+    TRUTH_GROUP,
+    TRUTH_STREAMS_GROUP,
+    ColumnSpec,
+    StreamSpec,
+    as_column,
+    check_key,
+    check_metadata,
+    json_dumps,
+)
+from imucalib.io._tables import StepLogTables, create_table
+
+__all__ = [
+    "DEFAULT_CHUNK_ROWS",
+    "EXTRA_UNITS",
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "LOG_FIELDS",
+    "LOG_LEVELS",
+    "STEP_FIELDS",
+    "STEP_STATUSES",
+    "ColumnSpec",
+    "RecordingWriter",
+    "StreamSpec",
+]
+
+_COMPRESSIONS = (None, "gzip", "lzf")
+
+
+class _StreamState:
+    """Buffers and bookkeeping of one stream while writing."""
+
+    __slots__ = ("buffers", "datasets", "dtypes", "entry", "last_time_s", "n_buffered",
+                 "n_written", "spec")
+
+    def __init__(self, spec: StreamSpec, entry: str, datasets: dict[str, h5py.Dataset]) -> None:
+        self.spec = spec
+        self.entry = entry
+        self.datasets = datasets
+        self.dtypes = {name: np.dtype(c.dtype) for name, c in spec.columns.items()}
+        self.buffers: dict[str, list[NDArray[Any]]] = {name: [] for name in spec.columns}
+        self.n_buffered = 0
+        self.n_written = 0
+        self.last_time_s = -math.inf
+
+
+class RecordingWriter:
+    """Write a Recording: create the file, then append under SWMR (a context manager).
+
+    Parameters
+    ----------
+    path : str or Path
+        File to create (``.h5``). Must be on a local filesystem (SWMR needs POSIX semantics).
+    streams : sequence of StreamSpec
+        Every stream the run will write; none can be added later.
+    metadata : mapping of str to str, int, float or bool, optional
+        Root attributes (``plan_toml``, ``station_json``, …); keys ending in ``_json`` must hold
+        JSON text.
+    truth : mapping of str to any, optional
+        Digital-twin truth, stored under ``/truth`` (numpy arrays exactly, the rest as JSON).
+    truth_streams : sequence of StreamSpec
+        Truth time series, written with :meth:`append_truth`.
+    flush_interval_s : float
+        Wall-clock interval between automatic flushes [s]; ``0`` flushes on every call and
+        ``math.inf`` only on :meth:`flush` / :meth:`close` (and when the buffers fill).
+    overwrite : bool
+        Replace an existing file; otherwise an existing `path` is an error.
+    chunk_rows : int
+        Rows per HDF5 chunk of a stream column.
+    compression : {None, "lzf", "gzip"}
+        Column compression; off by default (see ``bench/bench_recording.py``).
+    buffer_limit_bytes : int
+        Buffered bytes (all streams) above which the writer flushes.
+
+    Raises
+    ------
+    InvalidInputError, UnitError
+        For bad specifications or metadata (checked before the file is created).
+    RecordingError
+        If `path` exists and `overwrite` is false, or the file cannot be created.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> spec = StreamSpec("imu", "IMU-0001", {"gyro_x_rps": ColumnSpec("rad/s")})
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "run.h5"
+    >>> with RecordingWriter(path, streams=[spec], metadata={"operator": "ab"}) as w:
+    ...     w.append("imu", "IMU-0001", {"time_s": [0.0, 0.01], "gyro_x_rps": [1e-5, 2e-5]})
+    ...     i = w.begin_step("static", "position 1", 0.0)
+    ...     w.update_step(i, t_end_s=0.01, status="done")
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        streams: Sequence[StreamSpec],
+        metadata: Mapping[str, str | int | float | bool] | None = None,
+        truth: Mapping[str, Any] | None = None,
+        truth_streams: Sequence[StreamSpec] = (),
+        flush_interval_s: float = 1.0,
+        overwrite: bool = False,
+        chunk_rows: int = DEFAULT_CHUNK_ROWS,
+        compression: str | None = None,
+        buffer_limit_bytes: int = 64 << 20,
+    ) -> None:
+        self._path = Path(path)
+        meta = check_metadata(metadata or {})
+        stream_specs = self._check_specs(streams, "streams")
+        truth_specs = self._check_specs(truth_streams, "truth_streams")
+        truth_items = self._check_truth(truth)
+        if not (isinstance(flush_interval_s, int | float) and flush_interval_s >= 0):
+            raise InvalidInputError(f"`flush_interval_s` must be ≥ 0 [s]; got {flush_interval_s!r}")
+        if not isinstance(chunk_rows, int) or chunk_rows < 1:
+            raise InvalidInputError(f"`chunk_rows` must be a positive int; got {chunk_rows!r}")
+        if compression not in _COMPRESSIONS:
+            raise InvalidInputError(f"`compression` must be one of {_COMPRESSIONS}; "
+                                    f"got {compression!r}")
+        if not isinstance(buffer_limit_bytes, int) or buffer_limit_bytes < 1:
+            raise InvalidInputError(f"`buffer_limit_bytes` must be a positive int; "
+                                    f"got {buffer_limit_bytes!r}")
+        if self._path.exists() and not overwrite:
+            raise RecordingError(f"{self._path} exists; pass overwrite=True to replace it")
+        self._flush_interval_s = float(flush_interval_s)
+        self._buffer_limit_bytes = buffer_limit_bytes
+        self._buffered_bytes = 0
+        self._streams: dict[tuple[str, str], _StreamState] = {}
+        self._truth_streams: dict[tuple[str, str], _StreamState] = {}
+        self._closed = True
+        try:
+            self._file = h5py.File(self._path, "w", libver="latest")
+        except OSError as exc:
+            raise RecordingError(f"cannot create {self._path}: {exc}") from exc
+        try:
+            self._create(meta, stream_specs, truth_specs, truth_items, chunk_rows, compression)
+            self._file.swmr_mode = True
+        except BaseException:
+            self._file.close()
+            self._path.unlink(missing_ok=True)
+            raise
+        self._closed = False
+        self._committed = np.zeros(len(self._entries), dtype=np.int64)
+        self._last_flush = time.monotonic()
+
+    # ----------------------------------------------------------------------------- creation
+    @staticmethod
+    def _check_specs(specs: Sequence[StreamSpec], what: str) -> list[StreamSpec]:
+        out: list[StreamSpec] = []
+        seen: set[tuple[str, str]] = set()
+        for spec in specs:
+            if not isinstance(spec, StreamSpec):
+                raise InvalidInputError(f"`{what}` must hold StreamSpec objects; "
+                                        f"got {type(spec).__name__}")
+            key = (spec.device, spec.unit)
+            if key in seen:
+                raise InvalidInputError(f"`{what}` declares stream {spec.name} twice")
+            seen.add(key)
+            out.append(spec)
+        return out
+
+    @staticmethod
+    def _check_truth(truth: Mapping[str, Any] | None) -> dict[str, tuple[str, Any]]:
+        if truth is None:
+            return {}
+        if not isinstance(truth, Mapping):
+            raise InvalidInputError(f"`truth` must be a mapping; got {type(truth).__name__}")
+        items: dict[str, tuple[str, Any]] = {}
+        for key, value in truth.items():
+            check_key(key, "truth key")
+            if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+                items[key] = ("array", value)
+            else:
+                items[key] = ("json", json_dumps(value, f"truth[{key!r}]"))
+        return items
+
+    def _create(self, meta: dict[str, Any], stream_specs: list[StreamSpec],
+                truth_specs: list[StreamSpec], truth_items: dict[str, tuple[str, Any]],
+                chunk_rows: int, compression: str | None) -> None:
+        f = self._file
+        f.attrs["format"] = FORMAT_NAME
+        f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        f.attrs["created_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        f.attrs["software_version"] = __version__
+        for key, value in meta.items():
+            f.attrs[key] = value
+        f.create_group(STREAMS_GROUP)
+        entries: list[str] = []
+        for spec in stream_specs:
+            st = self._create_stream(STREAMS_GROUP, spec, chunk_rows, compression)
+            self._streams[(spec.device, spec.unit)] = st
+            entries.append(st.entry)
+        if truth_items or truth_specs:
+            tg = f.create_group(TRUTH_GROUP)
+            for key, (kind, value) in truth_items.items():
+                if kind == "array":
+                    tg.require_group("arrays").create_dataset(key, data=value)
+                else:
+                    tg.attrs[f"{key}_json"] = value
+            f.create_group(TRUTH_STREAMS_GROUP)
+            for spec in truth_specs:
+                st = self._create_stream(TRUTH_STREAMS_GROUP, spec, chunk_rows, compression)
+                self._truth_streams[(spec.device, spec.unit)] = st
+                entries.append(st.entry)
+        sg = f.create_group(STEPS_GROUP)
+        create_table(sg, STEP_FIELDS, STEPS_CHUNK_ROWS)
+        lg = f.create_group(LOG_GROUP)
+        create_table(lg, LOG_FIELDS, LOG_CHUNK_ROWS)
+        entries += [STEPS_GROUP, LOG_GROUP]
+        cg = f.create_group(COMMIT_GROUP)
+        cg.attrs["entries_json"] = json_dumps(entries, "commit entries")
+        self._commit_ds = cg.create_dataset("rows", data=np.zeros(len(entries), dtype=np.int64))
+        self._entries = entries
+        self._tables = StepLogTables(sg, lg)
+
+    def _create_stream(self, base: str, spec: StreamSpec, chunk_rows: int,
+                       compression: str | None) -> _StreamState:
+        group = self._file.create_group(f"{base}/{spec.device}/{spec.unit}")
+        group.attrs["device"] = spec.device
+        group.attrs["unit"] = spec.unit
+        group.attrs["columns_json"] = json_dumps(
+            [{"name": name, "unit": c.unit, "dtype": c.dtype, "quantity": c.quantity,
+              "description": c.description} for name, c in spec.columns.items()], "columns")
+        datasets: dict[str, h5py.Dataset] = {}
+        for name, col in spec.columns.items():
+            dt = np.dtype(col.dtype)
+            ds = group.create_dataset(
+                name, shape=(0,), maxshape=(None,), chunks=(chunk_rows,), dtype=dt,
+                compression=compression, fillvalue=np.nan if dt.kind == "f" else None)
+            ds.attrs["unit"] = col.unit
+            ds.attrs["quantity"] = col.quantity
+            ds.attrs["description"] = col.description
+            datasets[name] = ds
+        return _StreamState(spec, f"{base}/{spec.device}/{spec.unit}", datasets)
+
+    # ------------------------------------------------------------------------------ appending
+    @property
+    def path(self) -> Path:
+        """The file being written."""
+        return self._path
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has run."""
+        return self._closed
+
+    def _check_open(self, action: str) -> None:
+        if self._closed:
+            raise RecordingError(f"cannot {action}: the writer of {self._path} is closed")
+
+    def append(self, device: str, unit: str, columns: Mapping[str, ArrayLike]) -> None:
+        """Append rows to a stream.
+
+        Parameters
+        ----------
+        device, unit : str
+            The stream, as declared.
+        columns : mapping of str to array_like, shape (n,)
+            Every declared column (``time_s`` included), all of the same length. ``time_s``
+            must be finite and non-decreasing, within this call and after the previous one [s].
+            NaN in other float columns is data and is kept.
+
+        Raises
+        ------
+        InvalidInputError
+            Unknown stream or column, missing column, wrong length or dtype, bad ``time_s``;
+            the message names the stream and column. Nothing is appended then.
+        RecordingError
+            After :meth:`close`.
+        """
+        self._check_open(f"append to {device}/{unit}")
+        self._append(self._streams, "stream", device, unit, columns)
+
+    def append_truth(self, device: str, unit: str, columns: Mapping[str, ArrayLike]) -> None:
+        """Append rows to a truth stream; same rules as :meth:`append`."""
+        self._check_open(f"append to truth stream {device}/{unit}")
+        self._append(self._truth_streams, "truth stream", device, unit, columns)
+
+    def _append(self, table: dict[tuple[str, str], _StreamState], what: str, device: str,
+                unit: str, columns: Mapping[str, ArrayLike]) -> None:
+        st = table.get((device, unit))
+        if st is None:
+            known = ", ".join(s.spec.name for s in table.values()) or "none"
+            raise InvalidInputError(f"unknown {what} {device}/{unit}; declared: {known}")
+        name = st.spec.name
+        if not isinstance(columns, Mapping):
+            raise InvalidInputError(f"{what} {name}: `columns` must be a mapping of column name "
+                                    f"to array; got {type(columns).__name__}")
+        missing = [c for c in st.dtypes if c not in columns]
+        if missing:
+            raise InvalidInputError(f"{what} {name}: missing column(s) {missing}")
+        unknown = [c for c in columns if c not in st.dtypes]
+        if unknown:
+            raise InvalidInputError(f"{what} {name}: unknown column(s) {unknown}; declared: "
+                                    f"{list(st.dtypes)}")
+        t = as_column(columns[TIME_COLUMN], st.dtypes[TIME_COLUMN], f"{what} {name}, column time_s")
+        n = t.shape[0]
+        if n == 0:
+            for col in st.dtypes:
+                if np.size(columns[col]) != 0:
+                    raise InvalidInputError(f"{what} {name}, column {col!r}: length "
+                                            f"{np.size(columns[col])} differs from time_s length 0")
+            return
+        finite = np.isfinite(t)
+        if not finite.all():
+            i = int(np.argmin(finite))
+            raise InvalidInputError(f"{what} {name}, column time_s: must be finite; row {i} of "
+                                    f"this append is {float(t[i])}")
+        if t[0] < st.last_time_s:
+            raise InvalidInputError(f"{what} {name}, column time_s: must be non-decreasing across "
+                                    f"appends; this append starts at {float(t[0])!r} s, before the "
+                                    f"previous last time {st.last_time_s!r} s")
+        if n > 1:
+            back = np.flatnonzero(t[1:] < t[:-1])
+            if back.size:
+                i = int(back[0]) + 1
+                raise InvalidInputError(f"{what} {name}, column time_s: must be non-decreasing; "
+                                        f"row {i} ({float(t[i])!r} s) is before row {i - 1} "
+                                        f"({float(t[i - 1])!r} s)")
+        arrays = {TIME_COLUMN: t}
+        for col, dt in st.dtypes.items():
+            if col == TIME_COLUMN:
+                continue
+            arr = as_column(columns[col], dt, f"{what} {name}, column {col!r}")
+            if arr.shape[0] != n:
+                raise InvalidInputError(f"{what} {name}, column {col!r}: length {arr.shape[0]} "
+                                        f"differs from time_s length {n}")
+            arrays[col] = arr
+        nbytes = 0
+        for col, arr in arrays.items():
+            st.buffers[col].append(arr)
+            nbytes += arr.nbytes
+        st.n_buffered += n
+        st.last_time_s = float(t[-1])
+        self._buffered_bytes += nbytes
+        if st.n_buffered >= st.datasets[TIME_COLUMN].chunks[0]:
+            self._write_stream(st)
+        self._maybe_flush()
+
+    def _maybe_flush(self) -> None:
+        if (self._buffered_bytes > self._buffer_limit_bytes
+                or time.monotonic() - self._last_flush >= self._flush_interval_s):
+            self.flush()
+
+    def _write_stream(self, st: _StreamState) -> None:
+        """Write a stream's buffer: every column to the same length, idempotent on retry."""
+        n = st.n_buffered
+        if n == 0:
+            return
+        n0, n1 = st.n_written, st.n_written + n
+        nbytes = 0
+        try:
+            for col, ds in st.datasets.items():
+                parts = st.buffers[col]
+                block = parts[0] if len(parts) == 1 else np.concatenate(parts)
+                if len(parts) > 1:
+                    parts[:] = [block]
+                if ds.shape[0] != n1:
+                    ds.resize((n1,))
+                ds.write_direct(block, dest_sel=np.s_[n0:n1])
+                nbytes += block.nbytes
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise RecordingError(f"writing stream {st.entry} rows {n0}:{n1} to {self._path} "
+                                 f"failed: {exc}; the rows stay buffered") from exc
+        for parts in st.buffers.values():
+            parts.clear()
+        st.n_written = n1
+        st.n_buffered = 0
+        self._buffered_bytes -= nbytes
+
+    # ------------------------------------------------------------------------- steps and log
+    def begin_step(self, kind: str, label: str, t_start_s: float, *,
+                   commanded: Mapping[str, Any] | str | None = None, status: str = "running",
+                   note: str = "") -> int:
+        """Record the start of a plan step and return its index (0, 1, 2, … in call order).
+
+        Parameters
+        ----------
+        kind : str
+            Step kind, e.g. ``"static"``, ``"rate"``, ``"thermal_soak"``.
+        label : str
+            Human-readable label.
+        t_start_s : float
+            Start time on the recording's time base [s].
+        commanded : mapping or JSON str, optional
+            Commanded state (positions, rates, temperatures), stored as JSON text.
+        status : str
+            One of :data:`STEP_STATUSES`.
+        note : str
+            Free text.
+
+        Returns
+        -------
+        int
+            The step index, for :meth:`update_step`.
+
+        Raises
+        ------
+        InvalidInputError
+            For a bad status, a non-finite time, or text longer than its field.
+        """
+        self._check_open("begin a step")
+        index = self._tables.begin_step(kind, label, t_start_s, commanded, status, note)
+        self._maybe_flush()
+        return index
+
+    def update_step(self, index: int, /, **fields: Any) -> None:
+        """Overwrite fields of a recorded step (``t_end_s``, ``valid_start_s``, ``status``, …).
+
+        Raises
+        ------
+        InvalidInputError
+            Unknown step or field, bad value, text too long, or an end before its start.
+        """
+        self._check_open("update a step")
+        self._tables.update_step(index, fields)
+        self._maybe_flush()
+
+    def log_event(self, time_s: float, level: str, source: str, message: str) -> None:
+        """Record an event (guard trip, fault, operator action).
+
+        Parameters
+        ----------
+        time_s : float
+            Event time on the recording's time base [s].
+        level : str
+            One of :data:`LOG_LEVELS`.
+        source, message : str
+            Who reports it and what; refused (not truncated) when longer than their fields.
+        """
+        self._check_open("log an event")
+        self._tables.log_event(time_s, level, source, message)
+        self._maybe_flush()
+
+    # ------------------------------------------------------------------------ flush / close
+    def flush(self) -> None:
+        """Write every buffer and make it durable: after this returns, a killed writer keeps it.
+
+        Raises
+        ------
+        RecordingError
+            After :meth:`close`, or when HDF5 fails to write (buffered rows are kept).
+        """
+        self._check_open("flush")
+        for st in (*self._streams.values(), *self._truth_streams.values()):
+            self._write_stream(st)
+        try:
+            self._tables.write()
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise RecordingError(f"writing steps or log to {self._path} failed: {exc}") from exc
+        counts = np.array(
+            [st.n_written for st in self._streams.values()]
+            + [st.n_written for st in self._truth_streams.values()]
+            + [self._tables.n_steps_written, self._tables.n_log_written], dtype=np.int64)
+        try:
+            self._file.flush()
+            if not np.array_equal(counts, self._committed):
+                # only after the data are in the file: a crash never commits unwritten rows
+                self._commit_ds[:] = counts
+                self._file.flush()
+                self._committed = counts
+        except (OSError, RuntimeError) as exc:
+            raise RecordingError(f"flushing {self._path} failed: {exc}") from exc
+        self._last_flush = time.monotonic()
+
+    def close(self) -> None:
+        """Flush and close; the file then opens normally. Calling it again does nothing."""
+        if self._closed:
+            return
+        try:
+            self.flush()
+        finally:
+            self._closed = True
+            self._file.close()
+
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "open"
+        return (f"RecordingWriter({str(self._path)!r}, {len(self._streams)} stream(s), "
+                f"{self._tables.n_steps} step(s), {state})")
+
