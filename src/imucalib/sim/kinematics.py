@@ -102,6 +102,16 @@ class PlatformMotion:
     def __len__(self) -> int:
         return int(self.time_s.shape[0])
 
+    def __getitem__(self, index: slice) -> PlatformMotion:
+        """Return the samples selected by a slice."""
+        if not isinstance(index, slice):
+            raise InvalidInputError(f"a PlatformMotion is indexed by a slice; got {index!r}")
+        return PlatformMotion(time_s=self.time_s[index], angle_rad=self.angle_rad[index],
+                              rate_rps=self.rate_rps[index], accel_rps2=self.accel_rps2[index],
+                              rot_tp=self.rot_tp[index],
+                              omega_tp_p_rps=self.omega_tp_p_rps[index],
+                              alpha_tp_p_rps2=self.alpha_tp_p_rps2[index])
+
 
 @dataclass(frozen=True, eq=False)
 class ImuKinematics:
@@ -119,6 +129,9 @@ class ImuKinematics:
         Time derivative of ω_ib (body components). [rad/s²]
     rot_tb : Rotation, length n
         Attitude of b relative to the table base t; ``v_t = rot_tb.apply(v_b)``.
+    constant : bool
+        True when every sample is known to equal the first (set by :meth:`repeat`; the arrays
+        are then read-only broadcast views).
     """
 
     time_s: _F64
@@ -126,9 +139,26 @@ class ImuKinematics:
     specific_force_b_mps2: _F64
     angular_accel_b_rps2: _F64
     rot_tb: Rotation
+    constant: bool = False
 
     def __len__(self) -> int:
         return int(self.time_s.shape[0])
+
+    def repeat(self, n: int, *, time_s: _F64) -> ImuKinematics:
+        """Return the first sample's inputs repeated `n` times, at `time_s` (shape (n,))."""
+        if len(self) == 0 or time_s.shape != (n,):
+            raise InvalidInputError(
+                f"repeat needs a non-empty ImuKinematics and `time_s` of shape ({n},); "
+                f"got {len(self)} sample(s) and shape {time_s.shape}"
+            )
+        return ImuKinematics(
+            time_s=time_s,
+            rate_b_rps=np.broadcast_to(self.rate_b_rps[:1], (n, 3)),
+            specific_force_b_mps2=np.broadcast_to(self.specific_force_b_mps2[:1], (n, 3)),
+            angular_accel_b_rps2=np.broadcast_to(self.angular_accel_b_rps2[:1], (n, 3)),
+            rot_tb=self.rot_tb[np.zeros(n, dtype=np.intp)],
+            constant=True,
+        )
 
 
 def _samples(value: ArrayLike | None, name: str, n: int) -> _F64 | None:

@@ -240,21 +240,26 @@ class ImuSynthesizer:
         temp_degc, temp_rate = temperature(t_true)
         temp_arg = temp_degc if model.gyro.temperature or model.accel.temperature else None
         rate_arg = temp_rate if temp_arg is not None else None
+        # exact shortcut: inputs known to be constant (a platform at rest) and no temperature
+        # dependence give every sample the deterministic output of the first
+        rows = slice(0, 1) if n > 1 and temp_arg is None and kin.constant else slice(None)
         gyro = apply_triad(
             model.gyro,
-            kin.rate_b_rps,
-            specific_force_b_mps2=kin.specific_force_b_mps2,
+            kin.rate_b_rps[rows],
+            specific_force_b_mps2=kin.specific_force_b_mps2[rows],
             temperature_degc=temp_arg,
             temperature_rate_degc_ps=rate_arg,
         )
         accel = apply_triad(
             model.accel,
-            kin.specific_force_b_mps2,
-            rate_b_rps=kin.rate_b_rps,
-            angular_accel_b_rps2=kin.angular_accel_b_rps2,
+            kin.specific_force_b_mps2[rows],
+            rate_b_rps=kin.rate_b_rps[rows],
+            angular_accel_b_rps2=kin.angular_accel_b_rps2[rows],
             temperature_degc=temp_arg,
             temperature_rate_degc_ps=rate_arg,
         )
+        if gyro.shape[0] != n:
+            gyro, accel = np.repeat(gyro, n, axis=0), np.repeat(accel, n, axis=0)
         gyro += self._gyro_noise.generate(n)
         accel += self._accel_noise.generate(n)
         gyro_res = self._gyro_out.process(gyro)
@@ -268,12 +273,12 @@ class ImuSynthesizer:
         host: NDArray[np.float64] = t_true + clock.latency_s
         if clock.jitter_s > 0:
             host = host + clock.jitter_s * self._rng.standard_normal(n)
-        host = np.maximum.accumulate(np.maximum(host, self._last_time_s))
+            host = np.maximum.accumulate(np.maximum(host, self._last_time_s))
         self._last_time_s = float(host[-1])
-        keep: NDArray[np.bool_] = (
+        keep: NDArray[np.bool_] | slice = (
             np.asarray(self._rng.random(n) >= clock.drop_probability)
             if clock.drop_probability > 0
-            else np.ones(n, dtype=bool)
+            else slice(None)  # every sample delivered: views, no copies
         )
         counter = idx % (1 << clock.counter_bits)
         return ImuSamples(

@@ -1,0 +1,5 @@
+"""``python -m imucalib.cli``."""
+
+from imucalib.cli import main
+
+main()

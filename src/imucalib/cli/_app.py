@@ -1,0 +1,24 @@
+"""The Typer application and the console helpers shared by every command module."""
+
+from __future__ import annotations
+
+import typer
+from rich.console import Console
+
+__all__ = ["app", "console", "err_console", "fail"]
+
+app = typer.Typer(
+    name="imucalib",
+    help="Inertial-sensor calibration station: twin, recordings, analysis.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console()
+err_console = Console(stderr=True)
+
+
+def fail(exc: Exception) -> typer.Exit:
+    """Print `exc` as an error line and return the exit (code 2) to raise."""
+    err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
+    return typer.Exit(code=2)

@@ -1,0 +1,66 @@
+"""Commands of the digital twin: ``simulate`` and ``scenarios``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from imucalib.cli._app import app, console, fail
+from imucalib.errors import CalibrationError
+
+__all__ = ["scenarios", "simulate"]
+
+
+@app.command()
+def scenarios() -> None:
+    """List the built-in twin scenarios."""
+    from imucalib.sim.scenario import BUILTIN_SCENARIOS
+
+    table = Table("name", "steps", "description")
+    for name, make in BUILTIN_SCENARIOS.items():
+        sc = make()
+        table.add_row(name, str(len(sc.steps)), sc.description)
+    console.print(table)
+
+
+@app.command()
+def simulate(
+    scenario: Annotated[str, typer.Argument(help="Built-in scenario name or a TOML file.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Recording to write (.h5).")],
+    seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing file.")] = False,
+) -> None:
+    """Run a scenario on the digital twin and write its Recording."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from imucalib.sim.runner import simulate_scenario
+    from imucalib.sim.scenario import load_scenario
+
+    try:
+        sc = load_scenario(scenario)
+        if seed is not None:
+            sc = sc.model_copy(update={"seed": seed})
+        with Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            TextColumn("{task.fields[virtual]}"),
+            TimeRemainingColumn(),
+            console=console,
+            transient=False,
+        ) as progress:
+            task = progress.add_task(sc.name, total=1.0, virtual="")
+
+            def on_progress(done_s: float, total_s: float) -> None:
+                progress.update(
+                    task,
+                    completed=done_s / total_s if total_s > 0 else 1.0,
+                    virtual=f"{done_s:,.0f} / {total_s:,.0f} s virtual",
+                )
+
+            summary = simulate_scenario(sc, out, progress=on_progress, overwrite=overwrite)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(summary.describe(), highlight=False)
