@@ -63,4 +63,4 @@ def simulate(
             summary = simulate_scenario(sc, out, progress=on_progress, overwrite=overwrite)
     except CalibrationError as exc:
         raise fail(exc) from exc
-    console.print(summary.describe(), highlight=False)
+    console.print(summary.describe(), highlight=False, soft_wrap=True)

@@ -9,7 +9,9 @@ Contents
 
 Gaps are counted two ways: from the sample counter where a stream has one (a jump other than +1,
 modulo the counter's wrap, is a gap of that many samples), and from time (an interval longer than
-1.5 times the median interval).
+the median interval by more than max(half the median, six robust standard deviations of the
+intervals), so that receive-time jitter is not taken for gaps; median and spread come from the
+first chunk).
 """
 
 from __future__ import annotations
@@ -51,7 +53,13 @@ class StreamSummary:
 
     @property
     def sample_rate_hz(self) -> float:
-        """Median sample rate. [Hz]"""
+        """Sample rate [Hz].
+
+        Counted samples (delivered + missing) over the duration when the stream has a counter
+        (robust to receive-time jitter), else one over the median interval.
+        """
+        if self.missing_samples is not None and self.n_samples > 1 and self.duration_s > 0:
+            return (self.n_samples - 1 + self.missing_samples) / self.duration_s
         return 1.0 / self.median_interval_s if self.median_interval_s > 0 else float("nan")
 
 
@@ -110,7 +118,7 @@ def _scan_stream(rec: Any, info: Any, chunk_samples: int) -> StreamSummary:
     """One bounded-memory pass; the median interval comes from the first chunk."""
     has_counter = COUNTER_COLUMN in info.columns
     wanted = [TIME_COLUMN] + ([COUNTER_COLUMN] if has_counter else [])
-    median = 0.0
+    median = threshold = 0.0
     time_gaps = counter_gaps = missing = 0
     last_t: float | None = None
     last_c: int | None = None
@@ -124,8 +132,10 @@ def _scan_stream(rec: Any, info: Any, chunk_samples: int) -> StreamSummary:
         dt = np.diff(t)
         if median == 0.0 and dt.size:
             median = float(np.median(dt))
+            sigma = 1.4826 * float(np.median(np.abs(dt - median)))
+            threshold = median + max(0.5 * median, 6.0 * sigma)
         if median > 0:
-            time_gaps += int(np.count_nonzero(dt > 1.5 * median))
+            time_gaps += int(np.count_nonzero(dt > threshold))
         last_t = float(t[-1])
         if has_counter:
             c = np.asarray(chunk.columns[COUNTER_COLUMN], dtype=np.int64)

@@ -1,7 +1,5 @@
 """Deterministic error models and stochastic noise models of IMU triads.
 
-Each block below is one module's public API; see the module docstrings.
-
 Contents
 --------
 :mod:`imucalib.models.triad`
@@ -9,11 +7,25 @@ Contents
     (measured → true), :data:`PARAMETER_NAMES`, :data:`TriadKind`.
 :mod:`imucalib.models.temperature`
     :class:`TemperatureDependence`, :func:`evaluate_parameter`.
+:mod:`imucalib.models.noise`
+    :class:`NoiseModel`, :class:`NoiseGenerator`, :func:`simulate_noise`,
+    :func:`compute_theoretical_adev`.
+:mod:`imucalib.models.sensor`
+    :class:`SensorSpec` (range, resolution, bandwidth), :class:`OutputChain`.
+:mod:`imucalib.models.imu`
+    :class:`ImuModel`, :data:`GRADES`, :func:`sample_imu_model`.
 """
 
 from __future__ import annotations
 
-# --- triad ---
+from imucalib.models.imu import GRADES, GradeSpec, ImuModel, sample_imu_model
+from imucalib.models.noise import (
+    NoiseGenerator,
+    NoiseModel,
+    compute_theoretical_adev,
+    simulate_noise,
+)
+from imucalib.models.sensor import OutputChain, SensorSpec, apply_output_chain
 from imucalib.models.temperature import TemperatureDependence, evaluate_parameter
 from imucalib.models.triad import (
     PARAMETER_NAMES,
@@ -23,16 +35,23 @@ from imucalib.models.triad import (
     correct_triad,
 )
 
-# --- end triad ---
-
 __all__ = [
-    # --- triad ---
+    "GRADES",
     "PARAMETER_NAMES",
+    "GradeSpec",
+    "ImuModel",
+    "NoiseGenerator",
+    "NoiseModel",
+    "OutputChain",
+    "SensorSpec",
     "TemperatureDependence",
     "TriadKind",
     "TriadModel",
+    "apply_output_chain",
     "apply_triad",
+    "compute_theoretical_adev",
     "correct_triad",
     "evaluate_parameter",
-    # --- end triad ---
+    "sample_imu_model",
+    "simulate_noise",
 ]

@@ -5,13 +5,16 @@ Equipment and kinematics: :mod:`~imucalib.sim.earth` (site, Earth rate, normal g
 (thermal chamber, IMU thermal lag), :mod:`~imucalib.sim.centrifuge` (precision centrifuge with
 dynamic unbalance), :mod:`~imucalib.sim.fixture` (IMU mounts), :mod:`~imucalib.sim.kinematics`
 (true angular rate and specific force of each IMU). Frames and signs: :mod:`imucalib.conventions`.
+
+The station together: :mod:`~imucalib.sim.synth` (an IMU at its own clock),
+:mod:`~imucalib.sim.rig` (:class:`TwinRig`, every stream of the station in virtual time),
+:mod:`~imucalib.sim.scenario` (what to simulate), :mod:`~imucalib.sim.build` (scenario → rig and
+truth), :mod:`~imucalib.sim.runner` (scenario → Recording).
 """
 
 from __future__ import annotations
 
-__all__: list[str] = []
-
-# --- equipment and kinematics ---
+from imucalib.sim.build import BuiltRig, build_rig
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge, dynamic_radius_m
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber, imu_temperature_degc
 from imucalib.sim.earth import (
@@ -38,6 +41,10 @@ from imucalib.sim.kinematics import (
     compute_imu_kinematics,
     stationary_platform_motion,
 )
+from imucalib.sim.rig import RigChunk, TwinRig
+from imucalib.sim.runner import SimulationSummary, simulate_scenario
+from imucalib.sim.scenario import BUILTIN_SCENARIOS, Scenario, load_scenario
+from imucalib.sim.synth import ClockSpec, ImuSamples, ImuSynthesizer, SimImu
 from imucalib.sim.table import (
     AxisSpec,
     RateTableSpec,
@@ -47,25 +54,36 @@ from imucalib.sim.table import (
     compute_platform_motion,
 )
 
-__all__ += [
+__all__ = [
+    "BUILTIN_SCENARIOS",
     "HEXAHEDRAL_FACES",
     "AxisSpec",
+    "BuiltRig",
     "CentrifugeSpec",
     "ChamberSpec",
+    "ClockSpec",
     "Fixture",
     "ImuKinematics",
+    "ImuSamples",
+    "ImuSynthesizer",
     "ImuThermalSpec",
     "MountedImu",
     "PlatformMotion",
     "RateTableSpec",
+    "RigChunk",
+    "Scenario",
     "SimCentrifuge",
     "SimChamber",
+    "SimImu",
     "SimRateTable",
+    "SimulationSummary",
     "Site",
     "TableFeedback",
     "TableGrade",
+    "TwinRig",
     "array_fixture",
     "as_rotation",
+    "build_rig",
     "compute_fixture_kinematics",
     "compute_imu_kinematics",
     "compute_platform_motion",
@@ -74,10 +92,11 @@ __all__ += [
     "gravity_n_mps2",
     "hexahedral_fixture",
     "imu_temperature_degc",
+    "load_scenario",
     "normal_gravity_gradient_ps2",
     "normal_gravity_mps2",
     "rot_nt",
+    "simulate_scenario",
     "single_imu_fixture",
     "stationary_platform_motion",
 ]
-# --- end equipment and kinematics ---

@@ -180,16 +180,18 @@ class ImuSynthesizer:
     imu : SimImu
         The unit to synthesise.
     rng : numpy.random.Generator or int or None
-        Random source; one generator feeds noise, jitter and drops.
+        Random source; independent child generators feed the gyro noise, the accelerometer
+        noise, the jitter and the drops, so any chunking of a record gives the same values.
     """
 
     def __init__(self, imu: SimImu, rng: np.random.Generator | int | None = None) -> None:
         self.imu = imu
-        self._rng = np.random.default_rng(rng)
+        # one child generator per process, so that any chunking gives the same record
+        gyro_rng, accel_rng, self._jitter_rng, self._drop_rng = np.random.default_rng(rng).spawn(4)
         model = imu.model
         dt = 1.0 / model.sample_rate_hz
-        self._gyro_noise = NoiseGenerator(model.gyro_noise, dt, self._rng)
-        self._accel_noise = NoiseGenerator(model.accel_noise, dt, self._rng)
+        self._gyro_noise = NoiseGenerator(model.gyro_noise, dt, gyro_rng)
+        self._accel_noise = NoiseGenerator(model.accel_noise, dt, accel_rng)
         self._gyro_out = OutputChain(model.gyro_output, model.sample_rate_hz)
         self._accel_out = OutputChain(model.accel_output, model.sample_rate_hz)
         self._next_index = 0
@@ -272,11 +274,11 @@ class ImuSynthesizer:
         temp_meas = np.round(temp_degc / res) * res if res > 0 else temp_degc.copy()
         host: NDArray[np.float64] = t_true + clock.latency_s
         if clock.jitter_s > 0:
-            host = host + clock.jitter_s * self._rng.standard_normal(n)
+            host = host + clock.jitter_s * self._jitter_rng.standard_normal(n)
             host = np.maximum.accumulate(np.maximum(host, self._last_time_s))
         self._last_time_s = float(host[-1])
         keep: NDArray[np.bool_] | slice = (
-            np.asarray(self._rng.random(n) >= clock.drop_probability)
+            np.asarray(self._drop_rng.random(n) >= clock.drop_probability)
             if clock.drop_probability > 0
             else slice(None)  # every sample delivered: views, no copies
         )
