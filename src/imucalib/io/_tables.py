@@ -65,6 +65,24 @@ class StepLogTables:
         self._log_pending: list[tuple[float, bytes, bytes, bytes]] = []
         self.n_log_written = 0
 
+    def load_existing(self) -> None:
+        """Take over the rows already in the datasets (reopening a closed Recording)."""
+        n = self._steps_group["index"].shape[0]
+        cols = {name: self._steps_group[name][:n] for name in STEP_FIELDS}
+        for i in range(n):
+            row: dict[str, Any] = {}
+            for name, spec in STEP_FIELDS.items():
+                value = cols[name][i]
+                if spec.kind == "text":
+                    row[name] = value.decode("utf-8") if isinstance(value, bytes) else str(value)
+                elif spec.kind == "i8":
+                    row[name] = int(value)
+                else:
+                    row[name] = float(value)
+            self._steps.append(row)
+        self.n_steps_written = n
+        self.n_log_written = self._log_group["time_s"].shape[0]
+
     @property
     def n_steps(self) -> int:
         """Steps begun so far."""

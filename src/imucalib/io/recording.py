@@ -68,6 +68,7 @@ makes data durable against the process dying (SIGKILL), not against power loss (
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import time
@@ -106,6 +107,7 @@ from imucalib.io._schema import (
     as_column,
     check_key,
     check_metadata,
+    decode_attr,
     json_dumps,
 )
 from imucalib.io._tables import StepLogTables, create_table
@@ -241,6 +243,78 @@ class RecordingWriter:
         self._closed = False
         self._committed = np.zeros(len(self._entries), dtype=np.int64)
         self._last_flush = time.monotonic()
+
+    @classmethod
+    def reopen(cls, path: str | os.PathLike[str], *, flush_interval_s: float = 1.0,
+               buffer_limit_bytes: int = 64 << 20) -> RecordingWriter:
+        """Reopen a cleanly closed Recording to append to its streams, steps and log.
+
+        The streams and truth streams are those declared when the file was created; rows
+        already written, steps (which :meth:`update_step` may still change) and events are kept.
+        A file a crashed writer left open must first be recovered
+        (:func:`imucalib.io.recover.recover_recording`).
+
+        Raises
+        ------
+        RecordingOpenForWriteError
+            If the file is still marked open by a writer.
+        RecordingFormatError, RecordingCorruptError, RecordingError
+            If it is not a readable Recording of this format.
+        """
+        from imucalib.io.reader import open_recording
+
+        p = Path(path)
+        with open_recording(p, strict=True):
+            pass  # diagnoses foreign, newer, damaged and still-open files with clear messages
+        self = cls.__new__(cls)
+        self._path = p
+        self._flush_interval_s = float(flush_interval_s)
+        self._buffer_limit_bytes = int(buffer_limit_bytes)
+        self._buffered_bytes = 0
+        self._streams = {}
+        self._truth_streams = {}
+        self._closed = True
+        try:
+            self._file = h5py.File(p, "r+", libver="latest")
+        except OSError as exc:
+            raise RecordingError(f"cannot reopen {p} for appending: {exc}") from exc
+        try:
+            f = self._file
+            cg = f[COMMIT_GROUP]
+            self._entries = json.loads(decode_attr(cg.attrs["entries_json"]))
+            self._commit_ds = cg["rows"]
+            for entry in self._entries:
+                if entry in (STEPS_GROUP, LOG_GROUP):
+                    continue
+                st = self._existing_stream(entry)
+                table = (self._truth_streams if entry.startswith(TRUTH_STREAMS_GROUP + "/")
+                         else self._streams)
+                table[(st.spec.device, st.spec.unit)] = st
+            self._tables = StepLogTables(f[STEPS_GROUP], f[LOG_GROUP])
+            self._tables.load_existing()
+            f.swmr_mode = True
+        except BaseException:
+            self._file.close()
+            raise
+        self._closed = False
+        self._committed = np.array(self._commit_ds[:], dtype=np.int64)
+        self._last_flush = time.monotonic()
+        return self
+
+    def _existing_stream(self, entry: str) -> _StreamState:
+        group = self._file[entry]
+        cols = json.loads(decode_attr(group.attrs["columns_json"]))
+        spec = StreamSpec(decode_attr(group.attrs["device"]), decode_attr(group.attrs["unit"]),
+                          {c["name"]: ColumnSpec(c["unit"], c["dtype"], c["quantity"],
+                                                 c["description"])
+                           for c in cols if c["name"] != TIME_COLUMN})
+        datasets = {name: group[name] for name in spec.columns}
+        st = _StreamState(spec, entry, datasets)
+        n = datasets[TIME_COLUMN].shape[0]
+        st.n_written = n
+        if n:
+            st.last_time_s = float(datasets[TIME_COLUMN][n - 1])
+        return st
 
     # ----------------------------------------------------------------------------- creation
     @staticmethod

@@ -37,7 +37,7 @@ from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber
 from imucalib.sim.earth import Site
 from imucalib.sim.fixture import Fixture, array_fixture, hexahedral_fixture, single_imu_fixture
 from imucalib.sim.rig import TwinRig
-from imucalib.sim.scenario import Scenario
+from imucalib.sim.scenario import TwinEquipment
 from imucalib.sim.synth import ClockSpec, SimImu
 from imucalib.sim.table import RateTableSpec, SimRateTable
 
@@ -81,7 +81,7 @@ class BuiltRig:
     truth: dict[str, Any]
 
 
-def _table(sc: Scenario) -> SimRateTable | None:
+def _table(sc: TwinEquipment) -> SimRateTable | None:
     cfg = sc.table
     if cfg.kind == "none":
         return None
@@ -93,7 +93,7 @@ def _table(sc: Scenario) -> SimRateTable | None:
     return SimRateTable(spec, rng=np.random.default_rng(scenario_seed(sc.seed, "table")))
 
 
-def _chamber(sc: Scenario) -> SimChamber | None:
+def _chamber(sc: TwinEquipment) -> SimChamber | None:
     cfg = sc.chamber
     if not cfg.enabled:
         return None
@@ -106,7 +106,7 @@ def _chamber(sc: Scenario) -> SimChamber | None:
                       rng=np.random.default_rng(scenario_seed(sc.seed, "chamber")))
 
 
-def _centrifuge(sc: Scenario) -> SimCentrifuge | None:
+def _centrifuge(sc: TwinEquipment) -> SimCentrifuge | None:
     cfg = sc.centrifuge
     if not cfg.enabled:
         return None
@@ -118,7 +118,7 @@ def _centrifuge(sc: Scenario) -> SimCentrifuge | None:
                          rng=np.random.default_rng(scenario_seed(sc.seed, "centrifuge")))
 
 
-def _fixture(sc: Scenario) -> Fixture:
+def _fixture(sc: TwinEquipment) -> Fixture:
     cfg = sc.fixture
     names = [imu.name for imu in sc.imus]
     if cfg.kind == "hexahedral":
@@ -135,8 +135,8 @@ def _fixture(sc: Scenario) -> Fixture:
     return single_imu_fixture(arm, None, names[0])
 
 
-def build_rig(sc: Scenario) -> BuiltRig:
-    """Build the rig of scenario `sc` at virtual time 0, with its truth.
+def build_rig(sc: TwinEquipment) -> BuiltRig:
+    """Build the rig of scenario (or twin equipment) `sc` at virtual time 0, with its truth.
 
     Raises
     ------

@@ -53,13 +53,14 @@ __all__ = [
     "SoakStep",
     "StaticStep",
     "TableConfig",
+    "TwinEquipment",
     "format_validation_error",
     "load_scenario",
 ]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class SiteConfig(_Model):
@@ -202,11 +203,13 @@ Step = Annotated[
 ]
 
 
-class Scenario(_Model):
-    """A complete twin scenario."""
+class TwinEquipment(_Model):
+    """The twin station without a step list: site, equipment, fixture and IMUs.
 
-    name: str = Field(min_length=1)
-    description: str = ""
+    It is what a simulated station is built from (:func:`imucalib.sim.build.build_rig`); a
+    :class:`Scenario` adds the steps, and a test plan can carry one as its ``[twin]`` table.
+    """
+
     seed: int = 0
     site: SiteConfig = Field(default_factory=SiteConfig)
     table: TableConfig = Field(default_factory=TableConfig)
@@ -214,12 +217,9 @@ class Scenario(_Model):
     centrifuge: CentrifugeConfig = Field(default_factory=CentrifugeConfig)
     fixture: FixtureConfig = Field(default_factory=FixtureConfig)
     imus: tuple[ImuConfig, ...] = Field(min_length=1)
-    steps: tuple[Step, ...] = Field(min_length=1)
-    store_truth_streams: bool = False
-    chunk_s: float = Field(10.0, gt=0.0, le=600.0)
 
     @model_validator(mode="after")
-    def _consistent(self) -> Scenario:
+    def _consistent_equipment(self) -> TwinEquipment:
         names = [imu.name for imu in self.imus]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
@@ -230,6 +230,22 @@ class Scenario(_Model):
             raise ValueError(
                 f"fixture kind 'single' carries one IMU; got {len(self.imus)} (use 'array')"
             )
+        if self.centrifuge.enabled and self.table.kind != "none":
+            raise ValueError("a twin station has either a rate table or a centrifuge, not both")
+        return self
+
+
+class Scenario(TwinEquipment):
+    """A complete twin scenario: the equipment and the steps to run on it."""
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    steps: tuple[Step, ...] = Field(min_length=1)
+    store_truth_streams: bool = False
+    chunk_s: float = Field(10.0, gt=0.0, le=600.0)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Scenario:
         n_axes = {"none": 0, "single-axis": 1, "dual-axis": 2}[self.table.kind]
         for i, step in enumerate(self.steps):
             where = f"steps[{i}] ({step.kind})"
@@ -246,14 +262,12 @@ class Scenario(_Model):
                 raise ValueError(f"{where}: a soak step needs `chamber.enabled = true`")
             if isinstance(step, CentrifugeStep) and not self.centrifuge.enabled:
                 raise ValueError(f"{where}: a centrifuge step needs `centrifuge.enabled = true`")
-        if self.centrifuge.enabled and self.table.kind != "none":
-            raise ValueError("a scenario has either a rate table or a centrifuge, not both")
         return self
 
 
-def format_validation_error(exc: ValidationError, source: str) -> str:
+def format_validation_error(exc: ValidationError, source: str, what: str = "scenario") -> str:
     """Render a pydantic error as one line per problem, naming the field path."""
-    lines = [f"invalid scenario {source}:"]
+    lines = [f"invalid {what} {source}:"]
     for err in exc.errors():
         loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
         got = err.get("input")
