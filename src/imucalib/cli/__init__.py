@@ -9,13 +9,15 @@ Commands
 ``inspect FILE``                   summarise a Recording: streams, units, steps, rates, gaps
 ``recover FILE``                   copy out what a crashed writer left in an open Recording
 ``export FILE --stream DEV/UNIT``  write a stream (or one step of it) as CSV or MAT
+``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
+``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 """
 
 from __future__ import annotations
 
 import logging
 
-from imucalib.cli import recording, twin  # noqa: F401  (they register their commands)
+from imucalib.cli import plan, recording, run, twin  # noqa: F401  (they register commands)
 from imucalib.cli._app import app
 
 __all__ = ["app", "main"]

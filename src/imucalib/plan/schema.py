@@ -101,6 +101,8 @@ class GuardConfig(_Model):
     chamber_band_degc: float = Field(
         1.0, gt=0.0, description="chamber air vs setpoint while recording, after a soak [°C]")
     device_timeout_s: float = Field(5.0, gt=0.0, description="device time-out [s]")
+    recover_timeout_s: float = Field(
+        60.0, gt=0.0, description="after a trip, wait this long for healthy devices [s]")
     on_trip: Literal["retry", "stop"] = "retry"
     max_retries: int = Field(2, ge=0, le=10)
 

@@ -209,6 +209,24 @@ class AxisProfile:
                 jerk[mask] -= amp * w * w * np.sin(ph)
         return theta, rate, accel, idx, jerk
 
+    def is_still(self, t_start_s: float, t_end_s: float) -> bool:
+        """Whether :meth:`evaluate` gives one constant angle and zero rate on [start, end].
+
+        True when one segment covers the span with no reference motion, no ripple, and a servo
+        transient that is zero or, from `t_start_s` on, past the horizon beyond which
+        :meth:`evaluate` drops it (so constant-valued evaluation is exact, not approximate).
+        """
+        i = self.active_index(t_start_s)
+        if self.active_index(t_end_s) != i:
+            return False
+        s = self.segments[i]
+        if s.v0 != 0.0 or s.a != 0.0 or s.ripple_rps != 0.0:
+            return False
+        if not math.isfinite(self.omega) or (s.e0 == 0.0 and s.ed0 == 0.0):
+            return True
+        horizon = 60.0 / decay_rate(self.zeta, self.omega)
+        return t_start_s - s.t0 >= horizon
+
     def reference_state(self, time_s: float) -> tuple[float, float, float, float, int]:
         """Return (reference angle incl. ripple, its rate, servo error, its rate, index)."""
         i = self.active_index(time_s)

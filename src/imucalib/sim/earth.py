@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -245,6 +246,10 @@ class Site:
     @property
     def earth_rate_t_rps(self) -> NDArray[np.float64]:
         """Earth rate in t: Ω_e·[cos L cos ψ, cos L sin ψ, sin L], shape (3,) [rad/s]."""
+        return self._earth_rate_t.copy()
+
+    @cached_property
+    def _earth_rate_t(self) -> NDArray[np.float64]:
         return np.asarray(self.rot_nt.inv().apply(self.earth_rate_n_rps), dtype=np.float64)
 
     @property

@@ -169,6 +169,7 @@ class TwinRig:
             self.imus[imu.name] = mounted
             self._synth[imu.name] = ImuSynthesizer(mounted, gen)
         self._imu_cursor_s = dict.fromkeys(self.imus, 0.0)
+        self._still: dict[str, tuple[tuple[float, ...], ImuKinematics]] = {}
         self.now_s = 0.0
         self.lock = threading.RLock()
 
@@ -191,6 +192,16 @@ class TwinRig:
                 first = compute_imu_kinematics(stationary_platform_motion(true_time_s[:1]),
                                                self.site, imu.mount, self.fixture.rot_pm)
                 return first.repeat(n, time_s=true_time_s)
+            if (self.table is not None and n > 1
+                    and self.table.is_still(float(true_time_s[0]), float(true_time_s[-1]))):
+                key = self.table.hold_pose(float(true_time_s[0]))
+                cached = self._still.get(name)
+                if cached is None or cached[0] != key:  # a new pose: its inputs once
+                    cached = (key, compute_imu_kinematics(self.table.motion(true_time_s[:1]),
+                                                          self.site, imu.mount,
+                                                          self.fixture.rot_pm))
+                    self._still[name] = cached
+                return cached[1].repeat(n, time_s=true_time_s)
             motion = (self.table.motion(true_time_s) if self.table is not None
                       else stationary_platform_motion(true_time_s))
             if n > 1 and _at_rest(motion):

@@ -571,6 +571,18 @@ class SimRateTable:
         th, thd, thdd, _, jerk = self._profiles[i].evaluate(t, with_jerk=True)
         return th, thd, thdd, np.zeros_like(th) if jerk is None else jerk
 
+    def is_still(self, t_start_s: float, t_end_s: float) -> bool:
+        """Whether every axis holds one angle, exactly at rest, from `t_start_s` to `t_end_s`."""
+        return all(prof.is_still(float(t_start_s), float(t_end_s)) for prof in self._profiles)
+
+    def hold_pose(self, time_s: float) -> tuple[float, ...]:
+        """Return the reference angles of the pieces active at `time_s` [rad].
+
+        While :meth:`is_still`, they are the axes' exact angles: equal poses give equal motion.
+        """
+        t = float(time_s)
+        return tuple(p.segments[p.active_index(t)].r0 for p in self._profiles)
+
     def mode(self, axis: int | str, time_s: float) -> AxisMode:
         """Mode of an axis at a time: ``"off"``, ``"position"``, ``"rate"`` or ``"stop"``."""
         i, _ = self._axis(axis)

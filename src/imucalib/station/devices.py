@@ -350,13 +350,40 @@ class ImuSource(Protocol):
 class Station(Protocol):
     """Everything a run drives: a clock and the devices, with a description for the records."""
 
-    clock: Clock
-    table: MotionDevice | None
-    centrifuge: MotionDevice | None
-    chamber: ChamberDevice | None
-    imus: Sequence[ImuSource]
-    latitude_deg: float
-    heading_deg: float
+    @property
+    def clock(self) -> Clock:
+        """The station's time base."""
+        ...
+
+    @property
+    def table(self) -> MotionDevice | None:
+        """The rate table, if any."""
+        ...
+
+    @property
+    def centrifuge(self) -> MotionDevice | None:
+        """The centrifuge, if any."""
+        ...
+
+    @property
+    def chamber(self) -> ChamberDevice | None:
+        """The thermal chamber, if any."""
+        ...
+
+    @property
+    def imus(self) -> Sequence[ImuSource]:
+        """The IMU sources (at least one)."""
+        ...
+
+    @property
+    def latitude_deg(self) -> float:
+        """Latitude of the station. [°]"""
+        ...
+
+    @property
+    def heading_deg(self) -> float:
+        """Azimuth of the table's x axis from North. [°]"""
+        ...
 
     def describe(self) -> dict[str, Any]:
         """Return a JSON-able description (devices, addresses, models) for the Recording."""

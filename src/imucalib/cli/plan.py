@@ -1,0 +1,96 @@
+"""Commands on plan files: ``plan validate``, ``plan show`` and ``plan schema``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from imucalib.cli._app import app, console, fail
+from imucalib.errors import CalibrationError, ConfigurationError
+
+__all__ = ["plan_app"]
+
+plan_app = typer.Typer(help="Validate, show and describe test plans.", no_args_is_help=True)
+app.add_typer(plan_app, name="plan")
+
+
+@plan_app.command("validate")
+def validate(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> None:
+    """Check a plan file against the schema; exit 2 naming every bad field."""
+    from imucalib.plan import load_plan, plan_hash
+
+    try:
+        plan = load_plan(path)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"{path}: valid plan {plan.name!r}, {len(plan.steps)} steps, "
+                  f"sha256 {plan_hash(plan)[:16]}…", highlight=False)
+
+
+@plan_app.command("show")
+def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> None:
+    """Print the expanded step list with each step's least duration and the total."""
+    from imucalib.plan import describe_plan, load_plan
+
+    try:
+        plan = load_plan(path)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    rows = describe_plan(plan)
+    table = Table("#", "kind", "label", "what", "≥ s", "tags",
+                  title=f"{plan.name} ({plan.procedure or 'no procedure'})")
+    for r in rows:
+        table.add_row(str(r.index), r.kind, r.label, r.what, f"{r.min_duration_s:,.0f}",
+                      ", ".join(r.tags))
+    console.print(table)
+    total = sum(r.min_duration_s for r in rows)
+    console.print(f"{len(rows)} steps; at least {total:,.0f} s ({total / 3600:.2f} h) without "
+                  "moves and stability waits", highlight=False)
+
+
+@plan_app.command("new")
+def new(
+    procedure: Annotated[str, typer.Argument(help="Procedure: p1.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
+    grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
+    "tactical",
+    repetitions: Annotated[int, typer.Option(help="Complete calibrations.")] = 3,
+    static_s: Annotated[float, typer.Option(help="Level static record [s].")] = 3600.0,
+    sample_rate_hz: Annotated[float, typer.Option(help="Twin IMU output rate [Hz].")] = 1000.0,
+    seed: Annotated[int, typer.Option(help="Seed of the twin.")] = 1,
+) -> None:
+    """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
+    from imucalib.plan import describe_plan, write_plan
+
+    try:
+        if procedure != "p1":
+            raise ConfigurationError(f"unknown procedure {procedure!r}; known: p1")
+        from imucalib.procedures import generate_p1_plan
+
+        plan = generate_p1_plan(grade=grade, repetitions=repetitions, static_s=static_s,
+                                sample_rate_hz=sample_rate_hz, seed=seed)
+        write_plan(plan, out)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    total = sum(r.min_duration_s for r in describe_plan(plan))
+    console.print(f"wrote {out}: plan {plan.name!r}, {len(plan.steps)} steps, at least "
+                  f"{total / 3600:.2f} h", highlight=False)
+
+
+@plan_app.command("schema")
+def schema(
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Write to a file.")] = None,
+) -> None:
+    """Print (or write) the JSON Schema of plan files, for editors."""
+    from imucalib.plan import plan_json_schema
+
+    text = json.dumps(plan_json_schema(), indent=2)
+    if out is None:
+        typer.echo(text)
+    else:
+        out.write_text(text + "\n", encoding="utf-8")
+        console.print(f"wrote {out}", highlight=False)

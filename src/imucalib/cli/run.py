@@ -1,0 +1,174 @@
+"""``imucalib run``: execute a plan on the twin or on real equipment, with a live view."""
+
+from __future__ import annotations
+
+import getpass
+import sys
+import time
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.live import Live
+from rich.table import Table
+
+from imucalib.cli._app import app, console, fail
+from imucalib.errors import CalibrationError, ConfigurationError
+from imucalib.plan.schema import Plan
+from imucalib.station.devices import Station
+from imucalib.station.operator import AutoOperator, Operator, OperatorAnswer
+from imucalib.station.runner import RunOptions, RunStatus, RunSummary
+
+__all__ = ["run"]
+
+
+class _PromptOperator:
+    """Asks at the terminal; records the operator's name."""
+
+    def __init__(self, who: str) -> None:
+        self.who = who
+
+    def confirm(self, item: str) -> OperatorAnswer:
+        ok = typer.confirm(f"[operator check] {item} — confirmed?", default=False)
+        return OperatorAnswer(ok, self.who)
+
+
+def make_station(spec: str, plan: Plan, start_time_s: float = 0.0) -> tuple[Station, str]:
+    """Build the station named by ``--station`` (``sim`` or a station TOML file).
+
+    Returns the station and the station file's text (empty for the twin).
+    """
+    if spec == "sim":
+        from imucalib.station.sim import SimStation
+
+        if plan.twin is None:
+            raise ConfigurationError(
+                f"plan {plan.name!r} has no [twin] table describing the simulated station; "
+                "add one (see `imucalib plan schema`) or give --station STATION.toml")
+        return SimStation(plan.twin, start_time_s=start_time_s), ""
+    path = Path(spec)
+    import importlib
+
+    drivers = importlib.import_module("imucalib.drivers")
+    station: Station = drivers.load_driver_station(path, start_time_s=start_time_s)
+    return station, path.read_text(encoding="utf-8")
+
+
+def _view(status: RunStatus) -> Table:
+    table = Table(show_header=False, title=f"imucalib run — {status.plan}", title_justify="left")
+    table.add_column(style="bold")
+    table.add_column()
+    table.add_row("step", f"{status.step_index + 1}/{status.n_steps} {status.step_label} "
+                          f"(attempt {status.attempt + 1})")
+    table.add_row("progress", f"{status.steps_done} done, {status.steps_invalid} invalid; "
+                              f"≥{status.remaining_min_s:,.0f} s of steps left")
+    table.add_row("station time", f"{status.time_s:,.1f} s")
+    if status.table_angle_deg:
+        table.add_row("table", "  ".join(f"{a:9.4f}° {r:+8.3f}°/s" for a, r in
+                                         zip(status.table_angle_deg, status.table_rate_dps,
+                                             strict=False)))
+    if status.chamber_degc is not None:
+        table.add_row("chamber", f"{status.chamber_degc:.2f} °C")
+    for name, rate in status.imu_rate_hz.items():
+        temp = status.imu_temperature_degc.get(name, float("nan"))
+        table.add_row(name, f"{rate:7.1f} Hz  {temp:6.2f} °C  {status.imu_errors.get(name, '')}")
+    if status.last_event:
+        table.add_row("last event", status.last_event)
+    return table
+
+
+def _report(summary: RunSummary) -> None:
+    colour = "green" if summary.status == "done" else "red"
+    console.print(f"[{colour}]{summary.status}[/]: {summary.steps_done} step(s) done, "
+                  f"{summary.steps_invalid} invalid attempt(s); recording {summary.path}",
+                  highlight=False)
+    for trip in summary.trips:
+        console.print(f"  trip: {trip}", highlight=False)
+    if summary.reason:
+        console.print(f"  stopped: {summary.reason}", highlight=False)
+
+
+@app.command()
+def run(
+    plan_path: Annotated[Path | None, typer.Argument(
+        metavar="PLAN", help="Plan file (.toml); not needed with --resume.")] = None,
+    station: Annotated[str, typer.Option(
+        help="'sim' (the plan's [twin]) or a station file STATION.toml.")] = "sim",
+    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for the recording.")] = Path(
+        "out"),
+    resume: Annotated[Path | None, typer.Option(
+        help="Continue this interrupted run's recording.")] = None,
+    operator: Annotated[str | None, typer.Option(help="Operator's name (recorded).")] = None,
+    yes: Annotated[bool, typer.Option("--yes", help="Confirm operator checks automatically.")]
+    = False,
+    tick_s: Annotated[float | None, typer.Option(
+        help="Acquisition interval [s]; default 2 on the twin (virtual), 0.5 on equipment.")]
+    = None,
+    live: Annotated[bool, typer.Option(help="Show the live view.")] = True,
+) -> None:
+    """Run a plan on the twin or on real equipment, writing a crash-safe recording."""
+    from imucalib.plan import load_plan
+    from imucalib.station.runner import resume_run, run_plan
+
+    who = operator or getpass.getuser()
+    op: Operator
+    if yes:
+        op = AutoOperator(who)
+    elif sys.stdin.isatty():
+        op = _PromptOperator(who)
+    else:
+        op = AutoOperator(who)  # checked below: only when the plan has no operator checks
+    last_draw = [0.0]
+    live_view = Live(console=console, auto_refresh=False, transient=True) if live else None
+
+    def on_status(status: RunStatus) -> None:
+        now = time.monotonic()
+        if live_view is not None and now - last_draw[0] > 0.1:
+            last_draw[0] = now
+            live_view.update(_view(status), refresh=True)
+
+    tick = tick_s if tick_s is not None else (2.0 if station == "sim" else 0.5)
+    options = RunOptions(tick_s=tick, operator=op, on_status=on_status)
+    try:
+        if resume is not None:
+            def factory(plan: Plan, start_time_s: float) -> Station:
+                st, _ = make_station(station, plan, start_time_s)
+                return st
+
+            with live_view or _nothing():
+                summary = resume_run(resume, factory, options=options)
+        else:
+            if plan_path is None:
+                raise ConfigurationError("give a PLAN file, or --resume FILE")
+            plan = load_plan(plan_path)
+            if not yes and not sys.stdin.isatty() and any(
+                    s.kind == "operator-check" for s in plan.steps):
+                raise ConfigurationError(
+                    f"plan {plan.name!r} has operator checks; run it at a terminal or pass --yes "
+                    "to confirm them automatically (recorded as such)")
+            st, station_toml = make_station(station, plan)
+            options.station_toml = station_toml
+            options.truth = getattr(st, "truth", None)
+            out.mkdir(parents=True, exist_ok=True)
+            stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
+            path = out / f"{plan.name}-{stamp}.h5"
+            with live_view or _nothing():
+                summary = run_plan(plan, st, path, options=options)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    except KeyboardInterrupt:
+        console.print("[red]interrupted[/]: equipment stopped safely; resume with "
+                      "`imucalib run --resume FILE`")
+        raise typer.Exit(code=130) from None
+    _report(summary)
+    if summary.status != "done":
+        raise typer.Exit(code=1)
+
+
+class _nothing:  # noqa: N801 - a no-op context manager
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *args: object) -> None:
+        return None

@@ -1,0 +1,180 @@
+"""The default plan of procedure P1 (two-dimensional calibration on a dual-axis table).
+
+:func:`generate_p1_plan` writes SPEC.md P1 as a :class:`~imucalib.plan.schema.Plan`: an operator
+check of the mounting, a warm-up, then ``repetitions`` complete calibrations, each with
+
+1. the six static positions (pitch, roll) = (0, 0) Z up, (0, 180) Z down, (90, 0) X up,
+   (90, 180) X down, (0, 90) Y up, (0, 270) Y down; settle ≥30 s, record ≥10 s
+   (tag ``"six-position"``);
+2. the level static record for the gyro bias, 60 min by default (tag ``"gyro-bias"``);
+3. the rate points about pitch (sensing axis X) and roll (sensing axis Y), both signs and 0,
+   e.g. −100, −50, 0, +50, +100 °/s; settle ≥20 s; whole revolutions (tag ``"rate"``);
+4. held-out positions and rates for the accuracy verification (tag ``"verification"``),
+
+every step also tagged ``"rep<k>"``. The steps the fit uses carry ``"calibration"``.
+
+The plan carries a ``[twin]`` table describing a simulated station for it (a high-grade dual-axis
+table and one IMU of the chosen grade), so that ``imucalib run PLAN --station sim`` runs it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from imucalib.errors import ConfigurationError
+from imucalib.plan.schema import (
+    GuardConfig,
+    ImuSpecConfig,
+    OperatorCheckStep,
+    Plan,
+    PlanLimits,
+    PlanStep,
+    PositionStep,
+    RateStep,
+    StaticStep,
+    WarmUpStep,
+)
+from imucalib.sim.scenario import ImuConfig, SiteConfig, TableConfig, TwinEquipment
+
+__all__ = [
+    "P1_HELD_OUT_POSITIONS_DEG",
+    "P1_SIX_POSITIONS_DEG",
+    "generate_p1_plan",
+]
+
+#: The six positions of SPEC.md P1 step 1, (pitch, roll) [°], and which axis points up.
+P1_SIX_POSITIONS_DEG: tuple[tuple[tuple[float, float], str], ...] = (
+    ((0.0, 0.0), "Z up"), ((0.0, 180.0), "Z down"), ((90.0, 0.0), "X up"),
+    ((90.0, 180.0), "X down"), ((0.0, 90.0), "Y up"), ((0.0, 270.0), "Y down"),
+)
+#: Positions not used by the fit, for the accuracy check (pitch, roll) [°].
+P1_HELD_OUT_POSITIONS_DEG: tuple[tuple[float, float], ...] = (
+    (45.0, 0.0), (0.0, 45.0), (30.0, 120.0), (60.0, 225.0),
+)
+_WARM_UP_S = {"consumer": 900.0, "tactical": 1800.0, "navigation": 3600.0}
+
+
+def generate_p1_plan(
+    *,
+    name: str = "p1-dual-axis",
+    grade: str = "tactical",
+    rates_dps: Sequence[float] = (-100.0, -50.0, 0.0, 50.0, 100.0),
+    held_out_rates_dps: Sequence[float] = (-75.0, 25.0),
+    revolutions: int = 3,
+    static_s: float = 3600.0,
+    settle_s: float = 30.0,
+    record_s: float = 10.0,
+    rate_settle_s: float = 20.0,
+    repetitions: int = 3,
+    warm_up_s: float | None = None,
+    sample_rate_hz: float = 1000.0,
+    latitude_deg: float = 45.0,
+    heading_deg: float = 0.0,
+    seed: int = 1,
+) -> Plan:
+    """Return the default P1 plan.
+
+    Parameters
+    ----------
+    name : str
+        Plan name (the recording's file name starts with it).
+    grade : {"consumer", "tactical", "navigation"}
+        The IMU's grade: the twin's IMU and the warm-up time (10–20 min consumer, 30–60 min
+        navigation; SPEC.md P1).
+    rates_dps : sequence of float
+        Rate points per axis (SPEC.md P1: 5–7 points, both signs and 0). [°/s]
+    held_out_rates_dps : sequence of float
+        Rate points per axis kept out of the fit for verification. [°/s]
+    revolutions : int
+        Whole turns recorded at each non-zero rate.
+    static_s : float
+        Level static record for the gyro bias (SPEC.md P1: ≥60 min). [s]
+    settle_s, record_s : float
+        Settling and recording time at each position (≥30 s, ≥10 s). [s]
+    rate_settle_s : float
+        Settling time at each rate (≥20 s). [s]
+    repetitions : int
+        Complete calibrations (SPEC.md P1: three, for the repeatability check).
+    warm_up_s : float, optional
+        Warm-up duration; the grade's default when omitted. [s]
+    sample_rate_hz : float
+        The twin IMU's output data rate (≥100 Hz). [Hz]
+    latitude_deg, heading_deg : float
+        Site of the twin station. [°]
+    seed : int
+        Seed of the twin (the IMU's truth and noise).
+
+    Raises
+    ------
+    ConfigurationError
+        For fewer than 3 rate points or no zero rate, fewer than 1 repetition, or a rate plan
+        that the SPEC's minimums reject.
+    """
+    if grade not in _WARM_UP_S:
+        raise ConfigurationError(f"`grade` must be one of {sorted(_WARM_UP_S)}; got {grade!r}")
+    if len(rates_dps) < 3 or 0.0 not in rates_dps or not any(r < 0 for r in rates_dps) \
+            or not any(r > 0 for r in rates_dps):
+        raise ConfigurationError(
+            f"`rates_dps` needs at least 3 points with both signs and 0 (SPEC.md P1 uses 5–7); "
+            f"got {list(rates_dps)}")
+    if repetitions < 1:
+        raise ConfigurationError(f"`repetitions` must be ≥ 1; got {repetitions}")
+    steps: list[PlanStep] = [
+        OperatorCheckStep(kind="operator-check", label="mounting",
+                          item="IMU mounted: X parallel to the roll axis, Z up when level, "
+                               "axis parallelism ≤5″; cables strain-relieved"),
+        WarmUpStep(kind="warm-up", label="warm-up",
+                   duration_s=_WARM_UP_S[grade] if warm_up_s is None else warm_up_s,
+                   window_s=60.0),
+    ]
+    for rep in range(1, repetitions + 1):
+        tag = f"rep{rep}"
+        for (pitch, roll), up in P1_SIX_POSITIONS_DEG:
+            steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
+                                      settle_s=settle_s, record_s=record_s,
+                                      label=f"{tag} {up} (pitch {pitch:g}, roll {roll:g})",
+                                      tags=("calibration", "six-position", tag)))
+        steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=settle_s,
+                                  record_s=1.0, label=f"{tag} level for the static record",
+                                  tags=(tag,)))
+        steps.append(StaticStep(kind="static", duration_s=static_s,
+                                label=f"{tag} level static (gyro bias)",
+                                tags=("calibration", "gyro-bias", tag)))
+        for axis, axis_name in ((0, "pitch"), (1, "roll")):
+            for rate, role in [*((r, "calibration") for r in rates_dps),
+                               *((r, "verification") for r in held_out_rates_dps)]:
+                if rate == 0.0:
+                    length: dict[str, float | int] = {"record_s": record_s}
+                else:
+                    length = {"revolutions": revolutions}
+                steps.append(RateStep(kind="rate", axis=axis, rate_dps=rate,
+                                      settle_s=rate_settle_s,
+                                      label=f"{tag} {axis_name} {rate:+g} °/s",
+                                      tags=(role, "rate", tag), **length))
+            steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=5.0,
+                                      record_s=1.0, label=f"{tag} home after {axis_name}",
+                                      tags=(tag,)))
+        for pitch, roll in P1_HELD_OUT_POSITIONS_DEG:
+            steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
+                                      settle_s=settle_s, record_s=record_s,
+                                      label=f"{tag} held-out (pitch {pitch:g}, roll {roll:g})",
+                                      tags=("verification", "position", tag)))
+    max_rate = max(abs(r) for r in (*rates_dps, *held_out_rates_dps))
+    twin = TwinEquipment(
+        seed=seed,
+        site=SiteConfig(latitude_deg=latitude_deg, heading_deg=heading_deg),
+        table=TableConfig(kind="dual-axis", grade="high"),
+        imus=(ImuConfig(name="IMU-0001", grade=grade, sample_rate_hz=sample_rate_hz),),
+    )
+    return Plan(
+        name=name,
+        description=f"SPEC.md P1 on a dual-axis table: six positions, {static_s / 60:g} min "
+                    f"static, {len(rates_dps)} rates per axis, held-out checks, "
+                    f"{repetitions} repetition(s).",
+        procedure="p1",
+        imu=ImuSpecConfig(grade=grade),
+        limits=PlanLimits(max_rate_dps=max(300.0, 1.2 * max_rate)),
+        guards=GuardConfig(),
+        twin=twin,
+        steps=tuple(steps),
+    )
