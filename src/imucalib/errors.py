@@ -11,6 +11,7 @@ Hierarchy
     - :class:`ConfigurationError`: a model, scenario or station description that cannot be used
     - :class:`LimitExceededError`: a command or parameter outside a device or plan limit
   - :class:`InsufficientExcitationError`: a rank-deficient design; names the unobservable parameters
+  - :class:`ConvergenceError`: an iterative solver that stopped before converging
   - :class:`RecordingError`: a recording that cannot be written or read
     - :class:`RecordingFormatError`: not an imucalib recording, or a newer format version
     - :class:`RecordingCorruptError`: truncated or damaged file
@@ -30,6 +31,7 @@ __all__ = [
     "CalibrationError",
     "CalibrationWarning",
     "ConfigurationError",
+    "ConvergenceError",
     "DeviceError",
     "DeviceTimeoutError",
     "GuardTripError",
@@ -81,6 +83,10 @@ class InsufficientExcitationError(CalibrationError):
             "the design does not excite these parameters: " + ", ".join(self.unobservable)
         )
         super().__init__(text)
+
+
+class ConvergenceError(CalibrationError):
+    """An iterative solver (nonlinear least squares, …) stopped before meeting its tolerances."""
 
 
 class RecordingError(CalibrationError):

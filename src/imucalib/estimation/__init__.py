@@ -1,0 +1,86 @@
+"""Pure estimators: weighted and nonlinear least squares, Kalman filter, Cramér–Rao bounds.
+
+Everything here works on arrays (no Recording access) and returns frozen dataclasses; a design
+that cannot determine its parameters raises
+:class:`~imucalib.errors.InsufficientExcitationError` naming them. Algorithms, equations and
+choices: ``docs/processing-estimation.md``.
+
+Contents
+--------
+:mod:`imucalib.estimation.linear`
+    :func:`solve_weighted_lsq` → :class:`LsqSolution`.
+:mod:`imucalib.estimation.nonlinear`
+    :func:`solve_nonlinear_lsq` → :class:`NlsSolution`.
+:mod:`imucalib.estimation.kalman`
+    :func:`kf_predict`, :func:`kf_update` (→ :class:`KalmanUpdate`), :class:`KalmanFilter`,
+    :func:`refine_with_kalman` → :class:`KalmanRefinement`.
+:mod:`imucalib.estimation.crlb`
+    :func:`compute_crlb` → :class:`CrlbResult`; closed forms
+    :func:`compute_six_position_accel_crlb`, :func:`compute_sphere_accel_crlb` (→
+    :class:`TriadCrlb`), :func:`compute_rate_table_gyro_crlb` (→ :class:`RateTableCrlb`).
+:mod:`imucalib.estimation.observability`
+    :func:`compute_observability` → :class:`ObservabilityReport`.
+:mod:`imucalib.estimation.designs`
+    :func:`build_triad_design` → :class:`LinearDesign`, :data:`SIX_POSITION_UP_B`,
+    :data:`TRIAD_PARAMETER_NAMES`.
+"""
+
+from __future__ import annotations
+
+from imucalib.estimation.crlb import (
+    CrlbResult,
+    RateTableCrlb,
+    TriadCrlb,
+    compute_crlb,
+    compute_rate_table_gyro_crlb,
+    compute_six_position_accel_crlb,
+    compute_sphere_accel_crlb,
+)
+from imucalib.estimation.designs import (
+    SIX_POSITION_UP_B,
+    TRIAD_PARAMETER_NAMES,
+    LinearDesign,
+    build_triad_design,
+)
+from imucalib.estimation.kalman import (
+    KalmanFilter,
+    KalmanRefinement,
+    KalmanUpdate,
+    kf_predict,
+    kf_update,
+    refine_with_kalman,
+)
+from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
+from imucalib.estimation.nonlinear import NlsSolution, solve_nonlinear_lsq
+from imucalib.estimation.observability import (
+    DEFAULT_COND_LIMIT,
+    ObservabilityReport,
+    compute_observability,
+)
+
+__all__ = [
+    "DEFAULT_COND_LIMIT",
+    "SIX_POSITION_UP_B",
+    "TRIAD_PARAMETER_NAMES",
+    "CrlbResult",
+    "KalmanFilter",
+    "KalmanRefinement",
+    "KalmanUpdate",
+    "LinearDesign",
+    "LsqSolution",
+    "NlsSolution",
+    "ObservabilityReport",
+    "RateTableCrlb",
+    "TriadCrlb",
+    "build_triad_design",
+    "compute_crlb",
+    "compute_observability",
+    "compute_rate_table_gyro_crlb",
+    "compute_six_position_accel_crlb",
+    "compute_sphere_accel_crlb",
+    "kf_predict",
+    "kf_update",
+    "refine_with_kalman",
+    "solve_nonlinear_lsq",
+    "solve_weighted_lsq",
+]

@@ -1,0 +1,147 @@
+"""Shared input checks and noise whitening of the estimation package (private).
+
+A measurement model z = H·x + n with n ~ N(0, C) is *whitened* by W = L⁻¹, C = L·Lᵀ (Cholesky):
+W·z = W·H·x + e with e ~ N(0, I). Diagonal C reduces to dividing each row by its σ.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+from imucalib._checks import as_array
+from imucalib.errors import InvalidInputError
+
+__all__ = ["Whitener", "as_design", "as_names", "make_whitener"]
+
+
+def as_design(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """Return a finite float64 matrix of shape (m, p) with m ≥ 1 and p ≥ 1."""
+    arr = as_array(value, name, shape=(None, None))
+    if arr.shape[0] < 1 or arr.shape[1] < 1:
+        raise InvalidInputError(
+            f"`{name}` must have at least one row and one column; got {arr.shape}"
+        )
+    return arr
+
+
+def as_names(names: Sequence[str], n_params: int, name: str = "param_names") -> tuple[str, ...]:
+    """Return `names` as a tuple of `n_params` distinct non-empty strings."""
+    if isinstance(names, str):
+        raise InvalidInputError(f"`{name}` must be a sequence of strings; got the string {names!r}")
+    out = tuple(names)
+    if len(out) != n_params:
+        raise InvalidInputError(
+            f"`{name}` must have {n_params} entries (one per column); got {len(out)}"
+        )
+    if not all(isinstance(s, str) and s for s in out):
+        raise InvalidInputError(f"`{name}` must hold non-empty strings; got {list(out)!r}")
+    if len(set(out)) != len(out):
+        dup = sorted({s for s in out if out.count(s) > 1})
+        raise InvalidInputError(f"`{name}` must be distinct; got duplicates {dup}")
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Whitener:
+    """Noise whitening W = C^{-1/2} (Cholesky factor) for m observations.
+
+    Attributes
+    ----------
+    sigma : ndarray, shape (m,)
+        Standard deviation of each observation (square root of diag C).
+    chol : ndarray, shape (m, m), or None
+        Lower Cholesky factor L of a full C; None when C is diagonal.
+    """
+
+    sigma: NDArray[np.float64]
+    chol: NDArray[np.float64] | None
+
+    def whiten(self, a: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return W·a for a of shape (m,) or (m, p)."""
+        if self.chol is None:
+            return a / (self.sigma if a.ndim == 1 else self.sigma[:, None])
+        return np.asarray(scipy.linalg.solve_triangular(self.chol, a, lower=True), dtype=np.float64)
+
+    def colour(self, a: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return L·a (the inverse of :meth:`whiten`) for a of shape (m,) or (m, p)."""
+        if self.chol is None:
+            return a * (self.sigma if a.ndim == 1 else self.sigma[:, None])
+        return self.chol @ a
+
+
+def make_whitener(m: int, *, weights: ArrayLike | None = None,
+                  covariance: ArrayLike | None = None,
+                  sigma: ArrayLike | None = None) -> tuple[Whitener, bool]:
+    """Build the whitening of m observations from at most one noise description.
+
+    Parameters
+    ----------
+    m : int
+        Number of observations.
+    weights : array_like, shape (m,), optional
+        Inverse variances 1/σᵢ² [1/unit²], all > 0.
+    covariance : float or array_like, shape (m,) or (m, m), optional
+        A common variance, per-observation variances, or the full symmetric positive-definite
+        covariance [unit²].
+    sigma : float or array_like, shape (m,), optional
+        A common standard deviation or one per observation [unit], all > 0.
+
+    Returns
+    -------
+    Whitener
+        The whitening.
+    bool
+        True when a noise description was given (the noise level is *known*).
+
+    Raises
+    ------
+    InvalidInputError
+        If more than one description is given, a shape differs from (m,) / (m, m), a value is not
+        positive, or the covariance is not symmetric positive definite.
+    """
+    given = [n for n, v in (("weights", weights), ("covariance", covariance), ("sigma", sigma))
+             if v is not None]
+    if len(given) > 1:
+        raise InvalidInputError(
+            f"give at most one of `weights`, `covariance`, `sigma`; got {given}"
+        )
+    if weights is not None:
+        w = _vector(weights, "weights", m)
+        return Whitener(1.0 / np.sqrt(w), None), True
+    if sigma is not None:
+        return Whitener(_vector(sigma, "sigma", m), None), True
+    if covariance is None:
+        return Whitener(np.ones(m), None), False
+    cov = as_array(covariance, "covariance")
+    if cov.ndim <= 1:
+        return Whitener(np.sqrt(_vector(cov, "covariance", m)), None), True
+    if cov.shape != (m, m):
+        raise InvalidInputError(
+            f"`covariance` must be a scalar or have shape ({m},) or ({m}, {m}); got {cov.shape}"
+        )
+    if not np.allclose(cov, cov.T, rtol=1e-10, atol=0.0):
+        raise InvalidInputError("`covariance` must be symmetric; got max |C - Cᵀ| = "
+                                f"{np.abs(cov - cov.T).max():.3g}")
+    try:
+        chol = np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError as exc:
+        raise InvalidInputError("`covariance` must be positive definite; its Cholesky "
+                                "factorisation failed") from exc
+    return Whitener(np.sqrt(np.diag(cov)).copy(), np.asarray(chol, dtype=np.float64)), True
+
+
+def _vector(value: ArrayLike, name: str, m: int) -> NDArray[np.float64]:
+    arr = as_array(value, name)
+    if arr.ndim == 0:
+        arr = np.full(m, float(arr))
+    if arr.shape != (m,):
+        raise InvalidInputError(f"`{name}` must be a scalar or have shape ({m},); got {arr.shape}")
+    if np.any(arr <= 0):
+        raise InvalidInputError(f"`{name}` must be > 0; got {int(np.sum(arr <= 0))} value(s) ≤ 0 "
+                                f"(min {arr.min():.6g})")
+    return arr
