@@ -192,7 +192,7 @@ def test_diffuse_prior_with_rank_deficient_blocks_raises(kit: SimpleNamespace, t
          r"`H_blocks\[1\]` must have 2 columns; got 3"),
         (lambda: refine_with_kalman([np.eye(2)], [[1.0, 2.0]], [[[1.0, 2.0], [2.0, 1.0]]],
                                     param_names=["a", "b"]),
-         r"`covariance` must be positive definite"),
+         r"`R_blocks\[0\]` must be positive definite; got smallest eigenvalue -1"),
         (lambda: refine_with_kalman([np.eye(2)], [[1.0, 2.0]], [1.0], param_names=["a", "b"],
                                     prior_covariance=[[1.0, 0.0], [0.0, -1.0]]),
          r"`prior_covariance` must be positive definite; got smallest eigenvalue -1"),

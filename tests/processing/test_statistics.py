@@ -101,7 +101,7 @@ def test_allan_fit_on_white_noise_stays_near_the_white_formula() -> None:
         assert np.all(st.standard_error >= st.standard_error_white)
         ratios.append(st.standard_error / st.standard_error_white)
         np.testing.assert_allclose(st.white_density, 0.1, rtol=0.2)
-    assert 0.99 <= np.median(ratios) < 1.4
+    assert 0.99 <= np.median(ratios) < 1.5  # SE, not SE²: docs table median SE² 1.47
 
 
 def test_short_window_falls_back_to_white_and_basic_statistics() -> None:

@@ -18,6 +18,8 @@ Contents
     :func:`compute_crlb` → :class:`CrlbResult`; closed forms
     :func:`compute_six_position_accel_crlb`, :func:`compute_sphere_accel_crlb` (→
     :class:`TriadCrlb`), :func:`compute_rate_table_gyro_crlb` (→ :class:`RateTableCrlb`).
+:mod:`imucalib.estimation.noise_covariance`
+    :func:`compute_window_mean_covariance` (coloured-noise covariance of window means).
 :mod:`imucalib.estimation.observability`
     :func:`compute_observability` → :class:`ObservabilityReport`.
 :mod:`imucalib.estimation.designs`
@@ -51,6 +53,7 @@ from imucalib.estimation.kalman import (
     refine_with_kalman,
 )
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
+from imucalib.estimation.noise_covariance import compute_window_mean_covariance
 from imucalib.estimation.nonlinear import NlsSolution, solve_nonlinear_lsq
 from imucalib.estimation.observability import (
     DEFAULT_COND_LIMIT,
@@ -78,6 +81,7 @@ __all__ = [
     "compute_rate_table_gyro_crlb",
     "compute_six_position_accel_crlb",
     "compute_sphere_accel_crlb",
+    "compute_window_mean_covariance",
     "kf_predict",
     "kf_update",
     "refine_with_kalman",

@@ -57,7 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import InvalidInputError
-from imucalib.estimation._common import as_names, make_whitener
+from imucalib.estimation._common import as_names
 from imucalib.estimation.observability import DEFAULT_COND_LIMIT, compute_observability
 
 __all__ = [
@@ -415,5 +415,11 @@ def _block(H: ArrayLike, z: ArrayLike, R: ArrayLike, i: int
     if Hm.ndim != 2 or Hm.shape[0] != k:
         raise InvalidInputError(f"`H_blocks[{i}]` must have shape ({k}, p); got {Hm.shape}")
     Rm = _as_cov(R, f"R_blocks[{i}]", k)
-    make_whitener(k, covariance=Rm)  # checks symmetry and positive definiteness
+    if not np.allclose(Rm, Rm.T, rtol=1e-10, atol=0.0):
+        raise InvalidInputError(f"`R_blocks[{i}]` must be symmetric; got max |R - Rᵀ| = "
+                                f"{np.abs(Rm - Rm.T).max():.3g}")
+    lam_min = float(np.min(np.linalg.eigvalsh(Rm)))
+    if lam_min <= 0.0:
+        raise InvalidInputError(f"`R_blocks[{i}]` must be positive definite; got smallest "
+                                f"eigenvalue {lam_min:.3g}")
     return Hm, zv, Rm

@@ -14,7 +14,7 @@ Standard error of a window mean
 For white noise the standard error of the mean of n samples is s/√n. Inertial sensors add
 flicker (bias instability) and random-walk noise whose correlation times reach the window length
 T = n·Δt, and s/√n then understates the scatter of the mean — on a one-hour gyro bias record of a
-consumer MEMS part by a factor of about fifty. We define the standard error as the **Allan
+consumer MEMS part by a factor of about sixty. We define the standard error as the **Allan
 deviation at τ = T** [1]_, [3]_::
 
     SE² = σ²_A(T) = ½·E[(ȳ₂ − ȳ₁)²]                                                  (1)
@@ -41,12 +41,13 @@ multi-position test follow each other in time). Two ways to evaluate it (``se_me
     estimator, NIST SP 1065 §5.2.4 [3]_), re-weighted once with the fitted model; then
     SE² = max(N̂²/T + Ĉ_B + K̂²·T/3, s²/n). One window holds only a few degrees of freedom at
     its own time scale, so this estimate is *uncertain by about a factor of two* and
-    heavy-tailed: its median is within 0.8–1.3 of the truth in the regimes tested, but when the
-    correlated terms only appear in the last octave the mean of SE² over many windows can be
-    2–4 times too high (spurious random-walk terms). It is reliable when the correlated noise
-    dominates over several octaves below T (long static records). Windows too short for three
-    cluster sizes fall back to ``"white"``. Before using it on low-pass filtered data, raise
-    `min_cluster_samples` above the filter's time constant (≈ f_s/f_c samples).
+    heavy-tailed: on 10–60 s windows its median SE² is 0.8–1.5 times the truth but its mean 2.5–4
+    times (spurious random-walk terms extrapolated from the last octaves; measurements in
+    ``docs/processing-estimation.md``). It is right on average when the correlated noise
+    dominates over several octaves below T (long static records: mean 0.85–1.2 at 10–60 min).
+    Windows too short for three cluster sizes fall back to ``"white"``. Before using it on
+    low-pass filtered data, raise `min_cluster_samples` above the filter's time constant
+    (≈ f_s/f_c samples).
 ``"white"``
     s/√n, for comparison or for data known to be white.
 
