@@ -56,6 +56,7 @@ __all__ = [
     "FRAMES",
     "GYRO_COLUMNS",
     "IMU_COLUMNS",
+    "TABLE_AXIS_VECTORS",
     "TEMPERATURE_COLUMN",
     "TIME_COLUMN",
 ]
@@ -79,3 +80,14 @@ TEMPERATURE_COLUMN = "temperature_degc"
 GYRO_COLUMNS: tuple[str, str, str] = ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps")
 ACCEL_COLUMNS: tuple[str, str, str] = ("accel_x_mps2", "accel_y_mps2", "accel_z_mps2")
 IMU_COLUMNS: tuple[str, ...] = (*GYRO_COLUMNS, *ACCEL_COLUMNS)
+
+#: Nominal direction of each named rate-table axis in its parent frame (the base t for the outer
+#: axis): the dual-axis table of P1 turns pitch about −y_t (outer) and roll about x (inner), so
+#: that (pitch 90°, roll 0°) puts x up and (0°, 90°) puts y up; a single-axis table and a
+#: centrifuge turn about z_t (up).
+TABLE_AXIS_VECTORS: dict[str, tuple[float, float, float]] = {
+    "pitch": (0.0, -1.0, 0.0),
+    "roll": (1.0, 0.0, 0.0),
+    "azimuth": (0.0, 0.0, 1.0),
+    "spin": (0.0, 0.0, 1.0),
+}

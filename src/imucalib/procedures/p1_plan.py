@@ -4,11 +4,16 @@
 check of the mounting, a warm-up, then ``repetitions`` complete calibrations, each with
 
 1. the six static positions (pitch, roll) = (0, 0) Z up, (0, 180) Z down, (90, 0) X up,
-   (90, 180) X down, (0, 90) Y up, (0, 270) Y down; settle ≥30 s, record ≥10 s
-   (tag ``"six-position"``);
+   (−90, 0) X down, (0, 90) Y up, (0, 270) Y down; settle ≥30 s, record ≥10 s
+   (tag ``"six-position"``). SPEC.md lists (90°, 180°) for X down, but by its own reference
+   formula a_X = g·sin θ that position reads +g on X (rolling about the vertical X axis does not
+   turn X over): X down needs pitch −90°;
 2. the level static record for the gyro bias, 60 min by default (tag ``"gyro-bias"``);
-3. the rate points about pitch (sensing axis X) and roll (sensing axis Y), both signs and 0,
-   e.g. −100, −50, 0, +50, +100 °/s; settle ≥20 s; whole revolutions (tag ``"rate"``);
+3. the rate points about pitch and roll, both signs and 0, e.g. −100, −50, 0, +50, +100 °/s;
+   settle ≥20 s; whole revolutions (tag ``"rate"``); and, by default, about pitch with roll at
+   90°, which turns the IMU about Z. With SPEC.md P1's own positions ((90°, 0°) puts X up),
+   pitch turns the IMU about its Y axis and roll about X; SPEC.md's text pairs pitch with the X
+   gyro, which contradicts its position table, and we follow the geometry;
 4. held-out positions and rates for the accuracy verification (tag ``"verification"``),
 
 every step also tagged ``"rep<k>"``. The steps the fit uses carry ``"calibration"``.
@@ -45,7 +50,7 @@ __all__ = [
 #: The six positions of SPEC.md P1 step 1, (pitch, roll) [°], and which axis points up.
 P1_SIX_POSITIONS_DEG: tuple[tuple[tuple[float, float], str], ...] = (
     ((0.0, 0.0), "Z up"), ((0.0, 180.0), "Z down"), ((90.0, 0.0), "X up"),
-    ((90.0, 180.0), "X down"), ((0.0, 90.0), "Y up"), ((0.0, 270.0), "Y down"),
+    ((-90.0, 0.0), "X down"), ((0.0, 90.0), "Y up"), ((0.0, 270.0), "Y down"),
 )
 #: Positions not used by the fit, for the accuracy check (pitch, roll) [°].
 P1_HELD_OUT_POSITIONS_DEG: tuple[tuple[float, float], ...] = (
@@ -66,6 +71,7 @@ def generate_p1_plan(
     record_s: float = 10.0,
     rate_settle_s: float = 20.0,
     repetitions: int = 3,
+    z_rates: bool = True,
     warm_up_s: float | None = None,
     sample_rate_hz: float = 1000.0,
     latitude_deg: float = 45.0,
@@ -95,6 +101,10 @@ def generate_p1_plan(
         Settling time at each rate (≥20 s). [s]
     repetitions : int
         Complete calibrations (SPEC.md P1: three, for the repeatability check).
+    z_rates : bool
+        Add rate points about the pitch axis with the roll axis at 90°, which turns the IMU
+        about its Z axis. SPEC.md P1 is two-dimensional (rates about pitch and roll only);
+        without them the Z gyro's scale factor and its Z-input misalignments are unobservable.
     warm_up_s : float, optional
         Warm-up duration; the grade's default when omitted. [s]
     sample_rate_hz : float
@@ -140,7 +150,13 @@ def generate_p1_plan(
         steps.append(StaticStep(kind="static", duration_s=static_s,
                                 label=f"{tag} level static (gyro bias)",
                                 tags=("calibration", "gyro-bias", tag)))
-        for axis, axis_name in ((0, "pitch"), (1, "roll")):
+        groups = [(0, 0.0, "pitch (Y)"), (1, 0.0, "roll (X)")]
+        if z_rates:
+            groups.append((0, 90.0, "pitch at roll 90° (Z)"))
+        for axis, roll_deg, group in groups:
+            steps.append(PositionStep(kind="position", angles_deg=(0.0, roll_deg), settle_s=5.0,
+                                      record_s=1.0, label=f"{tag} start of {group} rates",
+                                      tags=(tag,)))
             for rate, role in [*((r, "calibration") for r in rates_dps),
                                *((r, "verification") for r in held_out_rates_dps)]:
                 if rate == 0.0:
@@ -149,11 +165,8 @@ def generate_p1_plan(
                     length = {"revolutions": revolutions}
                 steps.append(RateStep(kind="rate", axis=axis, rate_dps=rate,
                                       settle_s=rate_settle_s,
-                                      label=f"{tag} {axis_name} {rate:+g} °/s",
+                                      label=f"{tag} {group} {rate:+g} °/s",
                                       tags=(role, "rate", tag), **length))
-            steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=5.0,
-                                      record_s=1.0, label=f"{tag} home after {axis_name}",
-                                      tags=(tag,)))
         for pitch, roll in P1_HELD_OUT_POSITIONS_DEG:
             steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
                                       settle_s=settle_s, record_s=record_s,

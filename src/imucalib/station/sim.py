@@ -344,7 +344,8 @@ class SimImuSource:
         return ImuIdentity(name=self.name, model=f"twin-{grade}", maker="imucalib digital twin",
                            sample_rate_hz=imu.model.sample_rate_hz,
                            gyro_range_rps=imu.model.gyro_output.range,
-                           accel_range_mps2=imu.model.accel_output.range)
+                           accel_range_mps2=imu.model.accel_output.range,
+                           extra={"bandwidth_hz": imu.model.gyro_output.bandwidth_hz})
 
     def read(self) -> ImuBlock:
         """Return the samples delivered since the previous read."""

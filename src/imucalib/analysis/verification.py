@@ -1,0 +1,214 @@
+"""Verification of a calibration: residuals, held-out accuracy, repeatability, the decision.
+
+Pure functions over numbers; the procedures gather them (:mod:`imucalib.procedures.p1`).
+
+Contents
+--------
+:class:`CheckRow`, :class:`Check`, :class:`Decision`
+    One compared quantity, one named check (its rows and verdict), the overall decision.
+:func:`check_residuals`
+    SPEC.md P1 rule 5: at every position and rate point the residual mean ≈ 0 and its standard
+    deviation within the limit (0.002 g, 0.1 °/s), and no significant misfit overall (a χ² test of
+    the residual means against their standard errors: "a trend or a large residual means the
+    model is too simple").
+:func:`check_accuracy`
+    SPEC.md P1 rule 7: after compensation, the error at held-out positions and rates within the
+    IMU's specification (0.01 g, 0.5 °/s by default).
+:func:`check_repeatability`
+    SPEC.md P1 rule 6: over the repetitions, the coefficient of variation of each scale factor
+    ≤ 1 %; for parameters near zero (biases, misalignments, g-sensitivities), where a CV means
+    nothing, the spread (sample standard deviation) within k times the parameter's typical
+    standard uncertainty.
+:func:`decide`
+    The overall verdict and its rule.
+
+Decision rule
+-------------
+*Simple acceptance* (ISO/IEC Guide 98-4 §8.2, ILAC-G8 "simple acceptance"): a check passes when
+every measured value lies within its limit, with no guard band; the calibration passes when every
+assessed check passes. Checks that could not be assessed (e.g. repeatability with one
+repetition) are listed and do not count.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import stats
+
+__all__ = [
+    "DECISION_RULE",
+    "Check",
+    "CheckRow",
+    "Decision",
+    "check_accuracy",
+    "check_repeatability",
+    "check_residuals",
+    "decide",
+]
+
+DECISION_RULE = ("simple acceptance (ISO/IEC Guide 98-4 §8.2; ILAC-G8): each value within its "
+                 "limit, no guard band; pass when every assessed check passes")
+
+
+@dataclass(frozen=True)
+class CheckRow:
+    """One compared quantity: its value, its limit, and whether it is within it."""
+
+    name: str
+    value: float
+    limit: float
+    unit: str
+    passed: bool
+    detail: str = ""
+
+
+@dataclass(frozen=True)
+class Check:
+    """A named check: its rows, its verdict (None when not assessed) and a summary line."""
+
+    name: str
+    passed: bool | None
+    summary: str
+    rows: tuple[CheckRow, ...] = ()
+
+    @property
+    def assessed(self) -> bool:
+        """Whether the check could be made."""
+        return self.passed is not None
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The overall verdict."""
+
+    passed: bool
+    rule: str
+    failed: tuple[str, ...] = ()
+    not_assessed: tuple[str, ...] = ()
+    checks: tuple[Check, ...] = field(default_factory=tuple)
+
+    def summary(self) -> str:
+        """Return the verdict in one line."""
+        verdict = "PASS" if self.passed else "FAIL"
+        text = f"{verdict} ({self.rule})"
+        if self.failed:
+            text += "; failed: " + ", ".join(self.failed)
+        if self.not_assessed:
+            text += "; not assessed: " + ", ".join(self.not_assessed)
+        return text
+
+
+def check_residuals(name: str, groups: Sequence[tuple[str, ArrayLike, ArrayLike]],
+                    *, mean_limit: float, std_limit: float, unit: str, scale: float,
+                    chi2: float, dof: int, significance: float = 1e-3) -> Check:
+    """Check residuals group by group and their overall consistency.
+
+    Parameters
+    ----------
+    name : str
+        The check's name (``"accelerometer residuals"``).
+    groups : sequence of (label, mean (3,), std (3,))
+        Residual mean and standard deviation of each window, SI.
+    mean_limit, std_limit : float
+        Limits in the display unit (`unit`; e.g. 0.002 g, 0.1 °/s).
+    unit : str
+        Display unit.
+    scale : float
+        SI value of one display unit (g → 9.80665).
+    chi2 : float
+        Σ (residual mean / its standard error)² of the fit.
+    dof : int
+        Its degrees of freedom.
+    significance : float
+        p-value below which the residual means are too large for their noise (model too simple).
+    """
+    rows: list[CheckRow] = []
+    for label, mean, std in groups:
+        worst_mean = float(np.max(np.abs(mean))) / scale
+        worst_std = float(np.max(std)) / scale
+        rows.append(CheckRow(f"{label}: |mean|", worst_mean, mean_limit, unit,
+                             worst_mean <= mean_limit))
+        rows.append(CheckRow(f"{label}: std", worst_std, std_limit, unit, worst_std <= std_limit))
+    p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 else 1.0
+    rows.append(CheckRow("χ² of the residual means (p-value)", p_value, significance, "",
+                         p_value >= significance,
+                         f"χ² = {chi2:.4g} with {dof} degrees of freedom"))
+    failed = [r for r in rows if not r.passed]
+    summary = ("all residuals within limits and consistent with the noise" if not failed
+               else f"{len(failed)} of {len(rows)} residual criteria exceeded (model too simple "
+                    "or bad data)")
+    return Check(name, not failed, summary, tuple(rows))
+
+
+def check_accuracy(name: str, errors: Sequence[tuple[str, ArrayLike]], *, limit: float,
+                   unit: str, scale: float) -> Check:
+    """Check held-out errors after compensation against the specification.
+
+    `errors` holds (label, error (3,) SI) per held-out window; `limit` is in `unit`.
+    """
+    if not errors:
+        return Check(name, None, "no held-out windows: accuracy not assessed")
+    rows = []
+    for label, err in errors:
+        worst = float(np.max(np.abs(err))) / scale
+        rows.append(CheckRow(label, worst, limit, unit, worst <= limit))
+    failed = [r for r in rows if not r.passed]
+    worst_all = max(r.value for r in rows)
+    summary = (f"largest held-out error {worst_all:.3g} {unit} (limit {limit:g} {unit})")
+    return Check(name, not failed, summary, tuple(rows))
+
+
+def check_repeatability(name: str, estimates: Mapping[str, Sequence[float]],
+                        sigmas: Mapping[str, Sequence[float]], units: Mapping[str, str],
+                        *, scale_names: Sequence[str], cv_limit: float = 0.01,
+                        spread_k: float = 3.0) -> Check:
+    """Check the spread of each parameter over repetitions.
+
+    Parameters
+    ----------
+    estimates, sigmas : mapping of name to sequence of float
+        The parameter's estimate and standard uncertainty in each repetition.
+    units : mapping of name to str
+    scale_names : sequence of str
+        Parameters judged by their coefficient of variation (scale factors, ≈ 1).
+    cv_limit : float
+        Largest CV (SPEC.md P1: 1 %).
+    spread_k : float
+        Other parameters: the sample standard deviation must stay within `spread_k` × the RMS
+        of their reported standard uncertainties.
+    """
+    counts = {len(v) for v in estimates.values()}
+    n = min(counts) if counts else 0
+    if n < 2:
+        return Check(name, None, f"{n} repetition(s): repeatability needs at least 2")
+    rows = []
+    for pname, values in estimates.items():
+        v = np.asarray(values, dtype=np.float64)
+        spread = float(v.std(ddof=1))
+        if pname in scale_names:
+            mean = float(v.mean())
+            cv = spread / abs(mean) if mean != 0 else math.inf
+            rows.append(CheckRow(pname, cv, cv_limit, "CV", cv <= cv_limit,
+                                 f"mean {mean:.9g}, std {spread:.3g}"))
+        else:
+            typical = float(np.sqrt(np.mean(np.square(sigmas[pname]))))
+            limit = spread_k * typical
+            rows.append(CheckRow(pname, spread, limit, units.get(pname, ""), spread <= limit,
+                                 f"spread vs {spread_k:g}× typical σ {typical:.3g}"))
+    failed = [r for r in rows if not r.passed]
+    summary = (f"{n} repetitions: {len(rows) - len(failed)} of {len(rows)} parameters repeat "
+               "within their limits")
+    return Check(name, not failed, summary, tuple(rows))
+
+
+def decide(checks: Sequence[Check]) -> Decision:
+    """Return the overall decision under :data:`DECISION_RULE`."""
+    failed = tuple(c.name for c in checks if c.passed is False)
+    not_assessed = tuple(c.name for c in checks if c.passed is None)
+    return Decision(passed=not failed and any(c.assessed for c in checks), rule=DECISION_RULE,
+                    failed=failed, not_assessed=not_assessed, checks=tuple(checks))

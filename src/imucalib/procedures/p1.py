@@ -1,0 +1,347 @@
+"""Procedure P1 end to end: a Recording → calibrated parameters, checks and a decision.
+
+:func:`analyze_p1` runs the chain of SPEC.md P1: observations (:mod:`.p1_observations`), the
+fit of the chosen model (:mod:`.p1_fit`), then the verification of
+:mod:`imucalib.analysis.verification`:
+
+- residuals of the calibration windows against the seed's limits (0.002 g, 0.1 °/s) and a χ²
+  test of their means (rule 5: a too-simple model fails it);
+- accuracy at the held-out positions and rates after compensation (rule 7: the plan's IMU
+  specification, 0.01 g and 0.5 °/s by default);
+- repeatability over the repetitions (rule 6: CV ≤ 1 % for scale factors, spread within 3σ for
+  parameters near zero);
+- the Kalman refinement of the same observations (P1 step 4), reported with its largest
+  difference from least squares in standard deviations;
+- the Cramér–Rao bound of the design with the same observation covariance (standards.md §5);
+
+and one decision under :data:`~imucalib.analysis.verification.DECISION_RULE`. The calibration
+itself (:class:`~imucalib.models.result.CalibrationResult`) is the fit of every repetition's
+calibration windows together; each repetition is also fitted alone for the repeatability.
+
+Earth rate: the gyro references include the Earth-rate projection at the recorded latitude and
+table heading, so the gyro bias excludes it (stated in the result's notes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from imucalib import __version__, units
+from imucalib.analysis.verification import (
+    Check,
+    Decision,
+    check_accuracy,
+    check_repeatability,
+    check_residuals,
+    decide,
+)
+from imucalib.estimation import compute_crlb, refine_with_kalman
+from imucalib.io.reader import open_recording
+from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
+from imucalib.models.triad import correct_triad
+from imucalib.procedures.p1_fit import (
+    P1Fit,
+    TriadFit,
+    _stack_covariance,
+    fit_p1,
+    gyro_windows,
+    observation_covariance,
+    predict_outputs,
+)
+from imucalib.procedures.p1_observations import (
+    P1Observations,
+    P1Processing,
+    WindowObservation,
+    extract_p1_observations,
+)
+
+__all__ = ["P1Analysis", "P1Options", "analyze_p1", "analyze_p1_observations"]
+
+
+@dataclass(frozen=True)
+class P1Options:
+    """How to analyse a P1 recording.
+
+    Attributes
+    ----------
+    model : {"triad", "per-axis"}
+        The full triad model or the seed's per-axis model.
+    g_sensitivity : bool
+        Triad model: estimate the gyro g-sensitivity.
+    processing : P1Processing
+        Outliers, low-pass, synchronisation, gravity.
+    correlated : bool
+        Weight with the full covariance of the window means (recommended).
+    residual_accel_g, residual_gyro_dps : float
+        Residual limits of SPEC.md P1 rule 5.
+    significance : float
+        p-value of the χ² test below which the model is too simple.
+    accel_accuracy_g, gyro_accuracy_dps : float or None
+        Held-out limits; None: the plan's ``[imu]`` values.
+    repeatability_cv : float
+        CV limit of scale factors (SPEC.md P1: 1 %).
+    repeatability_k : float
+        Spread limit of other parameters, in their typical standard uncertainty.
+    hash_recording : bool
+        Put the recording's SHA-256 into the provenance (reads the whole file once).
+    """
+
+    model: Literal["triad", "per-axis"] = "triad"
+    g_sensitivity: bool = True
+    processing: P1Processing = field(default_factory=P1Processing)
+    correlated: bool = True
+    residual_accel_g: float = 0.002
+    residual_gyro_dps: float = 0.1
+    significance: float = 1e-3
+    accel_accuracy_g: float | None = None
+    gyro_accuracy_dps: float | None = None
+    repeatability_cv: float = 0.01
+    repeatability_k: float = 3.0
+    hash_recording: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class P1Analysis:
+    """Everything a P1 analysis produced."""
+
+    result: CalibrationResult
+    per_repetition: dict[int, CalibrationResult]
+    checks: tuple[Check, ...]
+    decision: Decision
+    kalman_max_difference_sigma: float
+    crlb_ratio: dict[str, float]
+    observations: P1Observations
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return a JSON-able report: the result, the checks and the decision."""
+        return {
+            "result": self.result.to_dict(),
+            "per_repetition": {str(k): v.to_dict() for k, v in self.per_repetition.items()},
+            "checks": [{"name": c.name, "passed": c.passed, "summary": c.summary,
+                        "rows": [r.__dict__ for r in c.rows]} for c in self.checks],
+            "decision": {"passed": self.decision.passed, "rule": self.decision.rule,
+                         "failed": list(self.decision.failed),
+                         "not_assessed": list(self.decision.not_assessed),
+                         "summary": self.decision.summary()},
+            "kalman_max_difference_sigma": self.kalman_max_difference_sigma,
+            "crlb_ratio": self.crlb_ratio,
+        }
+
+
+def _units(name: str) -> str:
+    triad, symbol = name.split("_")[0], name.split("_")[1]
+    si = "m/s^2" if triad == "accel" else "rad/s"
+    return {"bias": si, "b": si, "M": "1", "K": "1",
+            "G": "rad/s/(m/s^2)"}.get(symbol, "1")
+
+
+def _residual_groups(fit: P1Fit, windows: list[WindowObservation], triad: str
+                     ) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    out = []
+    for w in windows:
+        gyro, accel = predict_outputs(fit, w)
+        if triad == "accel":
+            out.append((w.label, w.accel_mean_mps2 - accel, w.accel_std_mps2))
+        else:
+            out.append((w.label, w.gyro_mean_rps - gyro, w.gyro_std_rps))
+    return out
+
+
+def _chi2(groups: list[tuple[str, np.ndarray, np.ndarray]], se: list[np.ndarray],
+          obs_cov: np.ndarray | None, n_params: int) -> tuple[float, int]:
+    """χ² = rᵀC⁻¹r of every residual mean (all axes, all windows), and its degrees of freedom.
+
+    Every axis counts, also those a per-axis model ignores (cross-axis outputs), so a model
+    without cross-coupling fails it when the sensor has some.
+    """
+    r = np.concatenate([g[1] for g in groups])
+    cov = _stack_covariance(obs_cov) if obs_cov is not None else np.diag(
+        np.concatenate(se) ** 2)
+    chi2 = float(r @ np.linalg.solve(cov, r))
+    return chi2, max(r.size - n_params, 0)
+
+
+def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provenance,
+            residuals: dict[str, ResidualStats], extra_notes: list[str]) -> CalibrationResult:
+    notes = [
+        f"gyro bias excludes Earth rate: its projection at latitude {obs.latitude_deg:g}° and "
+        f"table heading {obs.heading_deg:g}° (15.041 °/h) was subtracted",
+        f"reference specific force with g = {obs.gravity_mps2:.6f} m/s^2"
+        + (" (normal gravity at the site)" if opt.processing.gravity_mps2 is None else ""),
+        f"model: {fit.model}; weights: "
+        + ("full covariance of the window means (noise model from the static record)"
+           if opt.correlated and obs.noise else "standard error of each window mean"),
+        *obs.notes, *extra_notes,
+    ]
+    return CalibrationResult(
+        sensor_id=obs.sensor_id, procedure="p1", model=fit.model,
+        param_names=fit.param_names, values=fit.estimate, covariance=fit.covariance,
+        units={n: _units(n) for n in fit.param_names}, residuals=residuals,
+        provenance=provenance, notes=tuple(notes))
+
+
+def _kalman_difference(tf: TriadFit, obs_cov: np.ndarray | None) -> float:
+    """Largest |x_KF − x_LSQ|/σ_LSQ of the sequential refinement (triad model)."""
+    if tf.H.size == 0:
+        return math.nan
+    n = tf.H.shape[0] // 3
+    if obs_cov is not None:
+        full = _stack_covariance(obs_cov)
+        blocks_r = [full]
+        blocks_h, blocks_z = [tf.H], [tf.z]
+    else:
+        blocks_h = [tf.H[3 * k:3 * k + 3] for k in range(n)]
+        blocks_z = [tf.z[3 * k:3 * k + 3] for k in range(n)]
+        blocks_r = [np.diag(tf.sigma[3 * k:3 * k + 3] ** 2) for k in range(n)]
+    kf = refine_with_kalman(blocks_h, blocks_z, blocks_r, param_names=tf.param_names)
+    sd = np.sqrt(np.diag(tf.covariance))
+    return float(np.max(np.abs(kf.estimate - tf.estimate) / sd))
+
+
+def _crlb_ratio(tf: TriadFit, obs_cov: np.ndarray | None) -> float:
+    """Largest reported σ over the Cramér–Rao σ of the same design (1 for an efficient fit)."""
+    if tf.H.size == 0:
+        return math.nan
+    cov = _stack_covariance(obs_cov) if obs_cov is not None else np.diag(tf.sigma**2)
+    bound = compute_crlb(tf.H, cov, param_names=tf.param_names)
+    return float(np.max(np.sqrt(np.diag(tf.covariance)) / bound.std))
+
+
+def _held_out(result: CalibrationResult, obs: P1Observations
+              ) -> tuple[list[tuple[str, np.ndarray]], list[tuple[str, np.ndarray]]]:
+    accel_model = result.triad_model("accel")
+    gyro_model = result.triad_model("gyro")
+    accel_err, gyro_err = [], []
+    for w in obs.select(role="verification"):
+        zeros = np.zeros(3)
+        f_hat = correct_triad(accel_model, w.accel_mean_mps2, rate_b_rps=zeros,
+                              angular_accel_b_rps2=zeros)
+        if w.kind == "static":
+            accel_err.append((w.label, f_hat - w.force_b_mps2))
+        else:
+            w_hat = correct_triad(gyro_model, w.gyro_mean_rps, specific_force_b_mps2=f_hat)
+            gyro_err.append((w.label, w_hat - w.rate_b_rps))
+    return accel_err, gyro_err
+
+
+def analyze_p1_observations(obs: P1Observations, options: P1Options | None = None, *,
+                            provenance: Provenance | None = None) -> P1Analysis:
+    """Fit, verify and decide from extracted observations (see :func:`analyze_p1`)."""
+    opt = options or P1Options()
+    fit = fit_p1(obs, model=opt.model, g_sensitivity=opt.g_sensitivity,
+                 correlated=opt.correlated)
+    accel_w = fit.accel.windows
+    gyro_w = list(fit.gyro.windows)
+    accel_groups = _residual_groups(fit, list(accel_w), "accel")
+    gyro_groups = _residual_groups(fit, gyro_w, "gyro")
+    residuals = {f"accel: {lab}": ResidualStats(tuple(m), tuple(s), 0, "m/s^2")
+                 for lab, m, s in accel_groups}
+    residuals.update({f"gyro: {lab}": ResidualStats(tuple(m), tuple(s), 0, "rad/s")
+                      for lab, m, s in gyro_groups})
+    cov_a = observation_covariance(accel_w, obs.noise.get("accel")) if opt.correlated else None
+    cov_g = observation_covariance(gyro_w, obs.noise.get("gyro")) if opt.correlated else None
+    chi2_a, dof_a = _chi2(accel_groups, [w.accel_se_mps2 for w in accel_w], cov_a,
+                          fit.accel.estimate.size)
+    chi2_g, dof_g = _chi2(gyro_groups, [w.gyro_se_rps for w in gyro_w], cov_g,
+                          fit.gyro.estimate.size)
+    checks = [
+        check_residuals("accelerometer residuals", accel_groups,
+                        mean_limit=opt.residual_accel_g, std_limit=opt.residual_accel_g,
+                        unit="g", scale=units.G0_MPS2, chi2=chi2_a, dof=dof_a,
+                        significance=opt.significance),
+        check_residuals("gyro residuals", gyro_groups, mean_limit=opt.residual_gyro_dps,
+                        std_limit=opt.residual_gyro_dps, unit="°/s", scale=units.DEG,
+                        chi2=chi2_g, dof=dof_g, significance=opt.significance),
+    ]
+    kalman = max(_kalman_difference(fit.accel, cov_a), _kalman_difference(fit.gyro, cov_g)) \
+        if fit.model == "triad" else math.nan
+    crlb = ({"accel": _crlb_ratio(fit.accel, cov_a), "gyro": _crlb_ratio(fit.gyro, cov_g)}
+            if fit.model == "triad" else {})
+    prov = provenance or Provenance(software_version=__version__,
+                                    created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
+    result = _result(fit, obs, opt, prov, residuals, [])
+    spec = obs.plan.imu
+    accel_err, gyro_err = _held_out(result, obs)
+    checks.append(check_accuracy("held-out accelerometer accuracy", accel_err,
+                                 limit=opt.accel_accuracy_g or spec.accel_accuracy_g, unit="g",
+                                 scale=units.G0_MPS2))
+    checks.append(check_accuracy("held-out gyro accuracy", gyro_err,
+                                 limit=opt.gyro_accuracy_dps or spec.gyro_accuracy_dps,
+                                 unit="°/s", scale=units.DEG))
+    per_rep: dict[int, CalibrationResult] = {}
+    reps = obs.repetitions
+    if len(reps) > 1:
+        for rep in reps:
+            rep_fit = fit_p1(obs, model=opt.model, g_sensitivity=opt.g_sensitivity,
+                             repetitions=[rep], correlated=opt.correlated)
+            per_rep[rep] = _result(rep_fit, obs, opt, prov, {}, [f"repetition {rep} alone"])
+    names = result.param_names
+    estimates = {n: [r.value(n) for r in per_rep.values()] for n in names}
+    sigmas = {n: [r.sigma(n) for r in per_rep.values()] for n in names}
+    scale_names = [n for n in names if "_K_" in n]
+    if fit.model == "triad":  # 1 + M_ii is the scale factor: judge M_ii by its spread in CV
+        scale_names = [n for n in names if n.split("_")[1] == "M" and n[-1] == n[-2]]
+        estimates = {n: [v + 1.0 for v in vals] if n in scale_names else vals
+                     for n, vals in estimates.items()}
+    checks.append(check_repeatability(
+        "repeatability", estimates, sigmas, result.units, scale_names=scale_names,
+        cv_limit=opt.repeatability_cv, spread_k=opt.repeatability_k))
+    return P1Analysis(result=result, per_repetition=per_rep, checks=tuple(checks),
+                      decision=decide(checks), kalman_max_difference_sigma=kalman,
+                      crlb_ratio=crlb, observations=obs)
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 22), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def analyze_p1(path: str | Path, sensor_id: str | None = None,
+               options: P1Options | None = None) -> P1Analysis:
+    """Analyse a P1 Recording: observations, fit, verification and decision.
+
+    Parameters
+    ----------
+    path : str or Path
+        The Recording of a P1 plan run (``imucalib run``).
+    sensor_id : str, optional
+        The IMU (the only one when omitted).
+    options : P1Options, optional
+
+    Raises
+    ------
+    RecordingError
+        Missing plan, streams, latitude or data (the message names what is missing).
+    InsufficientExcitationError
+        A design that cannot determine some parameters (a missing position, no rate about an
+        axis), naming them.
+    """
+    opt = options or P1Options()
+    p = Path(path)
+    with open_recording(p) as rec:
+        obs = extract_p1_observations(rec, sensor_id, processing=opt.processing)
+        meta = rec.metadata
+    gyro_w = gyro_windows(obs, "calibration", None)
+    prov = Provenance(
+        plan_hash=str(meta.get("plan_hash", "")),
+        recording_sha256=_sha256(p) if opt.hash_recording else "",
+        recording=str(p.name), software_version=__version__,
+        created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        details={"repetitions": list(obs.repetitions), "n_windows": len(obs.windows),
+                 "n_gyro_windows": len(gyro_w), "cutoff_hz": obs.cutoff_hz,
+                 "max_alignment_error_s": max(w.alignment_error_s for w in obs.windows),
+                 "outliers_removed": int(sum(w.n_outliers for w in obs.windows)),
+                 "processing": json.loads(json.dumps(opt.processing.__dict__)),
+                 "skipped_steps": list(obs.skipped)})
+    return analyze_p1_observations(obs, opt, provenance=prov)

@@ -1,0 +1,274 @@
+"""P1 estimation: the accelerometer and gyro models fitted to window observations.
+
+Models (``model`` argument)
+---------------------------
+``"per-axis"`` — the seed's model (SPEC.md P1), cross-coupling neglected, per axis i:
+    accelerometer  a_out,i = K_i·(a_ref,i + b_i), from the six positions;
+    gyro           ω_out,i = K_i·(ω_ref,i + b_i), from the rate points turning about axis i and the
+    static windows (whose reference is the Earth-rate projection, so b_i excludes Earth rate).
+    Each axis is the straight-line fit y = K·x + c with c = K·b (weighted least squares), and
+    (K, b) with covariance J·C·Jᵀ, J = ∂(K, b)/∂(K, c) = [[1, 0], [−c/K², 1/K]].
+``"triad"`` — the full linear triad model of :class:`~imucalib.models.triad.TriadModel`:
+    accelerometer  y = b + (I + M)·f            (12 parameters; six positions, 18 observations)
+    gyro           y = b + (I + M)·ω + G·f      (21 parameters with g-sensitivity, else 12)
+    as z = y − x = b + M·x (+ G·f), rows ordered by window then axis (standards.md §3.4).
+
+Observations are window means weighted by their standard errors (correlated noise included), so
+the covariance is not rescaled by the residuals (known noise); the fit's χ² then tests the model.
+The estimates and covariances come from
+:func:`~imucalib.estimation.linear.solve_weighted_lsq` (rank and conditioning checked: a design
+that cannot determine a parameter raises InsufficientExcitationError naming it).
+
+Contents
+--------
+:func:`fit_p1`, :class:`P1Fit`, :class:`TriadFit`, :func:`predict_outputs`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.conventions import AXES
+from imucalib.errors import InsufficientExcitationError
+from imucalib.estimation import (
+    build_triad_design,
+    compute_window_mean_covariance,
+    solve_weighted_lsq,
+)
+from imucalib.models.noise import NoiseModel
+from imucalib.models.result import triad_parameter_names
+from imucalib.procedures.p1_observations import P1Observations, WindowObservation
+
+__all__ = [
+    "P1Fit",
+    "TriadFit",
+    "fit_p1",
+    "gyro_windows",
+    "observation_covariance",
+    "predict_outputs",
+]
+
+_F64 = NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class TriadFit:
+    """One triad's fit: names, estimate, covariance, design blocks and the fit's χ²."""
+
+    triad: str
+    model: str
+    param_names: tuple[str, ...]
+    estimate: _F64
+    covariance: _F64
+    chi2: float
+    dof: int
+    H: _F64
+    z: _F64
+    sigma: _F64
+    windows: tuple[WindowObservation, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class P1Fit:
+    """Both triads' fits of one set of windows (one repetition or all)."""
+
+    model: str
+    accel: TriadFit
+    gyro: TriadFit
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """Accelerometer names, then gyro names."""
+        return (*self.accel.param_names, *self.gyro.param_names)
+
+    @property
+    def estimate(self) -> _F64:
+        """All estimates, in :attr:`param_names` order."""
+        return np.concatenate([self.accel.estimate, self.gyro.estimate])
+
+    @property
+    def covariance(self) -> _F64:
+        """Block-diagonal covariance (the triads' fits are independent)."""
+        na, ng = self.accel.estimate.size, self.gyro.estimate.size
+        cov = np.zeros((na + ng, na + ng))
+        cov[:na, :na] = self.accel.covariance
+        cov[na:, na:] = self.gyro.covariance
+        return cov
+
+
+def observation_covariance(windows: Sequence[WindowObservation], noise: NoiseModel | None
+                           ) -> _F64 | None:
+    """Return the covariance of the window means per axis, shape (3, K, K), or None.
+
+    With a noise model, flicker and random-walk noise shared by windows that follow each other
+    correlate their means (:func:`~imucalib.estimation.compute_window_mean_covariance`); the
+    slowly varying flicker state common to all windows is included, so a fitted bias carries
+    it in its uncertainty.
+    """
+    if noise is None or not windows:
+        return None
+    starts = np.array([w.t_start_s for w in windows])
+    durations = np.maximum(np.array([w.duration_s for w in windows]), 1e-3)
+    order = np.argsort(starts, kind="stable")
+    ref = float(starts.min())
+    cov = np.empty((3, len(windows), len(windows)))
+    sorted_cov = compute_window_mean_covariance(noise, starts[order], durations[order],
+                                                reference_time_s=ref)
+    inv = np.argsort(order)
+    for i in range(3):
+        cov[i] = sorted_cov[i][np.ix_(inv, inv)]
+    return cov
+
+
+def _stack_covariance(cov: _F64) -> _F64:
+    """(3, K, K) per-axis covariances → (3K, 3K) for rows ordered window, then axis."""
+    k = cov.shape[1]
+    full = np.zeros((3 * k, 3 * k))
+    for i in range(3):
+        full[i::3, i::3] = cov[i]
+    return full
+
+
+def _per_axis_fit(triad: str, x: _F64, y: _F64, se: _F64, masks: Sequence[NDArray[np.bool_]],
+                  windows: tuple[WindowObservation, ...], obs_cov: _F64 | None) -> TriadFit:
+    names = triad_parameter_names(triad, "per-axis")
+    est = np.zeros(6)
+    cov = np.zeros((6, 6))
+    chi2, dof = 0.0, 0
+    H_all, z_all, s_all = [], [], []
+    for i, axis in enumerate(AXES):
+        sel = masks[i]
+        if np.count_nonzero(sel) < 2 or np.ptp(x[sel, i]) == 0.0:
+            raise InsufficientExcitationError(
+                (f"{triad}_K_{axis}", f"{triad}_b_{axis}"),
+                f"the per-axis {triad} model needs at least two different inputs on axis "
+                f"{axis}; the windows give {np.count_nonzero(sel)}: {triad}_K_{axis} and "
+                f"{triad}_b_{axis} are unobservable")
+        H = np.column_stack([x[sel, i], np.ones(np.count_nonzero(sel))])
+        sol = solve_weighted_lsq(
+            H, y[sel, i], param_names=(f"K_{axis}", f"c_{axis}"), scale_covariance=False,
+            covariance=None if obs_cov is None else obs_cov[i][np.ix_(sel, sel)],
+            sigma=se[sel, i] if obs_cov is None else None)
+        k, c = sol.estimate
+        J = np.array([[1.0, 0.0], [-c / k**2, 1.0 / k]])
+        est[i], est[3 + i] = k, c / k
+        c2 = J @ sol.covariance @ J.T
+        cov[np.ix_([i, 3 + i], [i, 3 + i])] = c2
+        chi2 += sol.chi2
+        dof += sol.dof
+        H_all.append(H)
+        z_all.append(y[sel, i])
+        s_all.append(se[sel, i])
+    return TriadFit(triad, "per-axis", names, est, cov, chi2, dof, np.zeros((0, 0)),
+                    np.concatenate(z_all), np.concatenate(s_all), windows)
+
+
+def _triad_fit(triad: str, x: _F64, y: _F64, se: _F64, f: _F64 | None,
+               windows: tuple[WindowObservation, ...], cov: _F64 | None) -> TriadFit:
+    design = build_triad_design(x)
+    H = np.array(design.H)
+    names = [f"{triad}_{n}" for n in design.param_names]
+    if f is not None:
+        G = np.zeros((H.shape[0], 9))
+        for k in range(x.shape[0]):
+            for i in range(3):
+                G[3 * k + i, 3 * i:3 * i + 3] = f[k]
+        H = np.hstack([H, G])
+        names += [f"{triad}_G_{i}{j}" for i in AXES for j in AXES]
+    z = (y - x).ravel()
+    sigma = se.ravel()
+    sol = solve_weighted_lsq(H, z, param_names=names, scale_covariance=False,
+                             covariance=None if cov is None else _stack_covariance(cov),
+                             sigma=sigma if cov is None else None)
+    return TriadFit(triad, "triad", tuple(names), np.asarray(sol.estimate),
+                    np.asarray(sol.covariance), float(sol.chi2), int(sol.dof), H, z, sigma,
+                    windows)
+
+
+def gyro_windows(obs: P1Observations, role: str, repetitions: Sequence[int] | None
+                 ) -> list[WindowObservation]:
+    """Rate points and static windows (six positions, bias record) of a role."""
+    out = []
+    for w in obs.select(role=role):
+        if repetitions is not None and w.repetition not in repetitions:
+            continue
+        if w.kind == "rate" or "six-position" in w.tags or "gyro-bias" in w.tags:
+            out.append(w)
+    return out
+
+
+def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool = True,
+           repetitions: Sequence[int] | None = None, correlated: bool = True) -> P1Fit:
+    """Fit the accelerometer and gyro models to the calibration windows.
+
+    Parameters
+    ----------
+    obs : P1Observations
+    model : {"triad", "per-axis"}
+        Module docstring.
+    g_sensitivity : bool
+        Triad model only: estimate the gyro g-sensitivity G.
+    repetitions : sequence of int, optional
+        Use only these repetitions' windows (all when omitted).
+    correlated : bool
+        Weight with the full covariance of the window means (flicker and random walk shared
+        between windows) when the observations carry a noise model; else each window's standard
+        error alone.
+
+    Raises
+    ------
+    InsufficientExcitationError
+        If the windows cannot determine a parameter (a missing position, no rate about an
+        axis …); the message names the parameters.
+    """
+    accel_w = tuple(w for w in obs.select(kind="static", role="calibration", tag="six-position")
+                    if repetitions is None or w.repetition in repetitions)
+    if len(accel_w) < 6 and model == "triad":
+        raise InsufficientExcitationError(
+            triad_parameter_names("accel", "triad"),
+            f"the accelerometer triad fit needs the six P1 positions; the recording has "
+            f"{len(accel_w)} completed six-position window(s), so the accelerometer biases and "
+            "scale/misalignment cannot all be determined")
+    xa = np.array([w.force_b_mps2 for w in accel_w]).reshape(-1, 3)
+    ya = np.array([w.accel_mean_mps2 for w in accel_w]).reshape(-1, 3)
+    sa = np.array([w.accel_se_mps2 for w in accel_w]).reshape(-1, 3)
+    gyro_w = tuple(gyro_windows(obs, "calibration", repetitions))
+    xg = np.array([w.rate_b_rps for w in gyro_w]).reshape(-1, 3)
+    yg = np.array([w.gyro_mean_rps for w in gyro_w]).reshape(-1, 3)
+    sg = np.array([w.gyro_se_rps for w in gyro_w]).reshape(-1, 3)
+    fg = np.array([w.force_b_mps2 for w in gyro_w]).reshape(-1, 3)
+    cov_a = observation_covariance(accel_w, obs.noise.get("accel")) if correlated else None
+    cov_g = observation_covariance(gyro_w, obs.noise.get("gyro")) if correlated else None
+    if model == "per-axis":
+        accel = _per_axis_fit("accel", xa, ya, sa, [np.ones(len(accel_w), bool)] * 3, accel_w,
+                              cov_a)
+        kinds = np.array([w.kind for w in gyro_w])
+        masks = []
+        for i in range(3):
+            along = np.abs(xg[:, i]) > 0.99 * np.linalg.norm(xg, axis=1)
+            masks.append((kinds == "static") | ((kinds == "rate") & along))
+        gyro = _per_axis_fit("gyro", xg, yg, sg, masks, gyro_w, cov_g)
+    elif model == "triad":
+        accel = _triad_fit("accel", xa, ya, sa, None, accel_w, cov_a)
+        gyro = _triad_fit("gyro", xg, yg, sg, fg if g_sensitivity else None, gyro_w, cov_g)
+    else:
+        raise ValueError(f"`model` must be 'triad' or 'per-axis'; got {model!r}")
+    return P1Fit(model, accel, gyro)
+
+
+def predict_outputs(fit: P1Fit, w: WindowObservation) -> tuple[_F64, _F64]:
+    """Return the fitted models' (gyro, accel) output for a window's reference inputs, SI."""
+    a, g = fit.accel, fit.gyro
+    if fit.model == "per-axis":
+        accel = a.estimate[:3] * (w.force_b_mps2 + a.estimate[3:])
+        gyro = g.estimate[:3] * (w.rate_b_rps + g.estimate[3:])
+        return gyro, accel
+    accel = a.estimate[:3] + (np.eye(3) + a.estimate[3:12].reshape(3, 3)) @ w.force_b_mps2
+    gyro = g.estimate[:3] + (np.eye(3) + g.estimate[3:12].reshape(3, 3)) @ w.rate_b_rps
+    if g.estimate.size == 21:
+        gyro = gyro + g.estimate[12:21].reshape(3, 3) @ w.force_b_mps2
+    return gyro, accel

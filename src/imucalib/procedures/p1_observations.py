@@ -1,0 +1,486 @@
+"""From a P1 Recording to observations: one mean per static window and per rate point.
+
+The processing chain of SPEC.md P1 (data processing steps 1–3), one step's valid window at a
+time, so memory is bounded by the longest step, not the file:
+
+1. read the IMU samples of the window and the table feedback;
+2. rebuild the IMU time base from its sample counter (regression of receive time on counter,
+   devices.md §3.3), which removes receive-time jitter;
+3. reject outliers per channel (3σ on a robust scale, or Grubbs), replacing them by
+   interpolation (or dropping them), counts kept;
+4. compute per-channel statistics with a standard error that accounts for correlated noise
+   (:func:`~imucalib.processing.statistics.compute_window_statistics`);
+5. low-pass the window with a zero-phase Butterworth at 1/4 (1/5–1/3) of the IMU bandwidth;
+6. interpolate the filtered IMU onto the table feedback times (the achieved alignment error is
+   reported and must stay below 1 ms);
+7. average: a static window over its feedback times; a rate point over the longest span of
+   whole table revolutions
+   (:func:`~imucalib.processing.statistics.compute_integer_revolution_window`).
+
+Reference inputs
+----------------
+The table geometry comes from the axis names (:data:`imucalib.conventions.TABLE_AXIS_VECTORS`:
+pitch about −y, roll about x, azimuth about z), outer axis first, with the IMU body frame equal
+to the platform frame. For measured angles, rot_tp = Π R_{n_i}(θ_i) and
+
+- static: specific force f_b = rot_tpᵀ·[0, 0, g] (P1: g·[sin θ, sin φ cos θ, cos θ cos φ]) and
+  angular rate ω_b = rot_tpᵀ·Ω_t (Earth rate at the site's latitude and heading);
+- rate point turning axis i at the measured mean rate ω: the axis in b is a_b = (Π_{j>i}
+  R_{n_j}(θ_j))ᵀ·n_i and in t a_t = rot_tp·a_b (constant while it turns); averaged over whole
+  revolutions the input is ω_b = (ω + Ω_t·a_t)·a_b (the horizontal Earth rate and gravity cancel,
+  their components along the axis stay) and f_b = (g_t·a_t)·a_b.
+
+Contents
+--------
+:func:`extract_p1_observations`, :class:`P1Processing`, :class:`P1Observations`,
+:class:`WindowObservation`, :func:`table_rotation`, :func:`site_vectors`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TABLE_AXIS_VECTORS
+from imucalib.errors import ConfigurationError, InvalidInputError, RecordingError
+from imucalib.io.reader import Recording
+from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
+from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.plan.io import parse_plan
+from imucalib.plan.schema import Plan
+from imucalib.processing import (
+    compute_integer_revolution_window,
+    compute_window_statistics,
+    lowpass_zero_phase,
+    reconstruct_time_base,
+    reject_outliers_3sigma,
+    reject_outliers_grubbs,
+    synchronize,
+)
+from imucalib.sim.earth import Site
+
+__all__ = [
+    "P1Observations",
+    "P1Processing",
+    "WindowObservation",
+    "estimate_noise",
+    "extract_p1_observations",
+    "site_vectors",
+    "table_rotation",
+]
+
+_F64 = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class P1Processing:
+    """Settings of the processing chain (SPEC.md P1 data processing, steps 1–3).
+
+    Attributes
+    ----------
+    outlier_test : {"3sigma", "grubbs", "none"}
+    outlier_method : {"interpolate", "drop"}
+    cutoff_fraction : float or None
+        Low-pass cut-off as a fraction of the IMU bandwidth (1/5–1/3); None: no filter.
+    max_alignment_error_s : float
+        Largest synchronisation error allowed (SPEC.md: 1 ms). [s]
+    gravity_mps2 : float or None
+        g for the reference specific force; None: the site's normal gravity (P1's 9.80665 is
+        the alternative for a site that does not know its g). [m/s²]
+    """
+
+    outlier_test: Literal["3sigma", "grubbs", "none"] = "3sigma"
+    outlier_method: Literal["interpolate", "drop"] = "interpolate"
+    cutoff_fraction: float | None = 0.25
+    max_alignment_error_s: float = 1e-3
+    gravity_mps2: float | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class WindowObservation:
+    """One valid window reduced to means: a static position or a rate point.
+
+    Attributes
+    ----------
+    step_index, plan_step : int
+        Row in the Recording's steps and index in the plan.
+    kind : {"static", "rate"}
+    role : {"calibration", "verification"}
+    repetition : int
+        The ``rep<k>`` tag (1 when absent).
+    tags : tuple of str
+    label : str
+    gyro_mean_rps, accel_mps2 : ndarray, shape (3,)
+        Window means (whole revolutions for a rate point). [rad/s], [m/s²]
+    gyro_se_rps, accel_se_mps2 : ndarray, shape (3,)
+        Their standard errors (correlated noise accounted for). [rad/s], [m/s²]
+    gyro_std_rps, accel_std_mps2 : ndarray, shape (3,)
+        Standard deviation of the filtered samples about their mean. [rad/s], [m/s²]
+    rate_b_rps, force_b_mps2 : ndarray, shape (3,)
+        Reference inputs in b (module docstring). [rad/s], [m/s²]
+    angles_rad : ndarray, shape (k,)
+        Mean measured table angles (the spinning axis: at the window start). [rad]
+    table_rate_rps : float
+        Mean measured rate of the spinning axis (0 for a static window). [rad/s]
+    axis : int or None
+        The spinning table axis of a rate point.
+    n_samples, n_outliers : int
+    n_revolutions : int
+    alignment_error_s : float
+        Bound on the IMU-to-table synchronisation error. [s]
+    duration_s, t_start_s : float
+        Length and start of the averaged span (whole revolutions for a rate point). [s]
+    allan_fit : ndarray, shape (3, 6), or None
+        Per channel (gyro x, y, z, accel x, y, z) the fitted N̂, Ĉ_B, K̂ of the window's Allan
+        variance (:func:`~imucalib.processing.statistics.compute_window_statistics`).
+    """
+
+    step_index: int
+    plan_step: int
+    kind: str
+    role: str
+    repetition: int
+    tags: tuple[str, ...]
+    label: str
+    gyro_mean_rps: _F64
+    accel_mean_mps2: _F64
+    gyro_se_rps: _F64
+    accel_se_mps2: _F64
+    gyro_std_rps: _F64
+    accel_std_mps2: _F64
+    rate_b_rps: _F64
+    force_b_mps2: _F64
+    angles_rad: _F64
+    table_rate_rps: float
+    axis: int | None
+    n_samples: int
+    n_outliers: int
+    n_revolutions: int
+    alignment_error_s: float
+    duration_s: float
+    t_start_s: float = 0.0
+    allan_fit: _F64 | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class P1Observations:
+    """Every usable window of one IMU in a P1 Recording, with the site and processing facts."""
+
+    sensor_id: str
+    plan: Plan
+    windows: tuple[WindowObservation, ...]
+    gravity_mps2: float
+    earth_rate_t_rps: _F64
+    latitude_deg: float
+    heading_deg: float
+    sample_rate_hz: float
+    cutoff_hz: float | None
+    notes: tuple[str, ...] = ()
+    skipped: tuple[str, ...] = field(default_factory=tuple)
+    noise: dict[str, NoiseModel] = field(default_factory=dict)
+
+    def select(self, *, kind: str | None = None, role: str | None = None,
+               repetition: int | None = None, tag: str | None = None
+               ) -> list[WindowObservation]:
+        """Return the windows matching every given criterion."""
+        return [w for w in self.windows
+                if (kind is None or w.kind == kind) and (role is None or w.role == role)
+                and (repetition is None or w.repetition == repetition)
+                and (tag is None or tag in w.tags)]
+
+    @property
+    def repetitions(self) -> tuple[int, ...]:
+        """The repetition numbers present."""
+        return tuple(sorted({w.repetition for w in self.windows}))
+
+
+def table_rotation(axis_names: Sequence[str], angles_rad: Sequence[float] | _F64) -> Rotation:
+    """Return rot_tp for measured axis angles (outer axis first; module docstring)."""
+    rot = Rotation.identity()
+    for name, angle in zip(axis_names, angles_rad, strict=True):
+        rot = rot * Rotation.from_rotvec(float(angle) * _axis_vector(name))
+    return rot
+
+
+def _axis_vector(name: str) -> _F64:
+    try:
+        return np.asarray(TABLE_AXIS_VECTORS[name], dtype=np.float64)
+    except KeyError:
+        raise ConfigurationError(
+            f"unknown table axis {name!r}: the P1 analysis knows {sorted(TABLE_AXIS_VECTORS)}"
+        ) from None
+
+
+def site_vectors(latitude_deg: float, heading_deg: float, gravity_mps2: float | None
+                 ) -> tuple[float, _F64]:
+    """Return (g, Earth rate in t) for a site: the given g or normal gravity. [m/s²], [rad/s]"""
+    site = Site(latitude_deg=latitude_deg, heading_deg=heading_deg, gravity_mps2=gravity_mps2)
+    return site.local_gravity_mps2, site.earth_rate_t_rps
+
+
+def _meta_json(rec: Recording, key: str) -> dict[str, Any]:
+    text = rec.metadata.get(key)
+    if isinstance(text, dict):
+        return text
+    if not text:
+        return {}
+    try:
+        value = json.loads(str(text))
+    except ValueError as exc:
+        raise RecordingError(f"{rec.path}: metadata {key} is not JSON: {exc}") from exc
+    return value if isinstance(value, dict) else {}
+
+
+def _role(tags: Sequence[str]) -> str | None:
+    if "verification" in tags:
+        return "verification"
+    if "calibration" in tags:
+        return "calibration"
+    return None
+
+
+def _repetition(tags: Sequence[str]) -> int:
+    for t in tags:
+        if t.startswith("rep") and t[3:].isdigit():
+            return int(t[3:])
+    return 1
+
+
+class _Extractor:
+    def __init__(self, rec: Recording, sensor_id: str, opt: P1Processing) -> None:
+        self.rec, self.sensor, self.opt = rec, sensor_id, opt
+        meta = rec.metadata
+        if "plan_toml" not in meta:
+            raise RecordingError(f"{rec.path} holds no plan (plan_toml): the P1 analysis needs "
+                                 "the plan's step tags")
+        self.plan = parse_plan(str(meta["plan_toml"]), f"{rec.path} (plan_toml)")
+        tables = [s for s in rec.streams if s.device == DEVICE_TABLE]
+        if not tables:
+            raise RecordingError(f"{rec.path} has no table stream: P1 needs the table feedback")
+        self.table = tables[0]
+        self.axis_names = tuple(c[len("angle_"):-len("_rad")] for c in self.table.columns
+                                if c.startswith("angle_") and c.endswith("_rad"))
+        for name in self.axis_names:
+            _axis_vector(name)
+        if not any(s.device == DEVICE_IMU and s.unit == sensor_id for s in rec.streams):
+            have = [s.unit for s in rec.streams if s.device == DEVICE_IMU]
+            raise RecordingError(f"{rec.path} has no IMU stream {sensor_id!r}; it has {have}")
+        ident = _meta_json(rec, "imu_identity_json").get(sensor_id, {})
+        self.sample_rate_hz = float(ident.get("sample_rate_hz") or 0.0)
+        self.bandwidth_hz = ident.get("bandwidth_hz")
+        lat = float(meta.get("latitude_deg", math.nan))
+        heading = float(meta.get("heading_deg", 0.0))
+        if not math.isfinite(lat):
+            raise RecordingError(f"{rec.path} does not record the latitude (latitude_deg): the "
+                                 "Earth-rate projection needs it")
+        self.latitude_deg, self.heading_deg = lat, heading
+        self.g, self.earth_t = site_vectors(lat, heading, opt.gravity_mps2)
+        self.cutoff_hz: float | None = None
+        self.notes: list[str] = []
+
+    def imu_window(self, step_index: int) -> tuple[_F64, _F64, int]:
+        """Return (time, values (n, 6): gyro then accel, outliers removed) of a step."""
+        data = self.rec.read_step(step_index, DEVICE_IMU, self.sensor,
+                                  [*GYRO_COLUMNS, *ACCEL_COLUMNS, "counter"])
+        if len(data) < 10:
+            raise RecordingError(f"step {step_index}: only {len(data)} IMU samples in its valid "
+                                 "window")
+        values = np.column_stack([data.columns[c] for c in (*GYRO_COLUMNS, *ACCEL_COLUMNS)])
+        if not np.all(np.isfinite(values)):
+            raise InvalidInputError(f"step {step_index}: IMU window holds NaN or inf samples")
+        fs_nominal = self.sample_rate_hz if self.sample_rate_hz > 0 else None
+        base = reconstruct_time_base(data.columns["counter"], data.time_s,
+                                     nominal_rate_hz=fs_nominal)
+        t = base.time_s
+        if self.sample_rate_hz <= 0:
+            self.sample_rate_hz = base.sample_rate_hz
+        n_out = 0
+        if self.opt.outlier_test != "none":
+            reject = (reject_outliers_3sigma if self.opt.outlier_test == "3sigma"
+                      else reject_outliers_grubbs)
+            res = reject(values, method=self.opt.outlier_method, time_s=t)
+            values = res.values
+            n_out = int(np.sum(res.n_outliers))
+            if self.opt.outlier_method == "drop":
+                t = t[res.kept]
+        return t, values, n_out
+
+    def filtered(self, values: _F64) -> _F64:
+        frac = self.opt.cutoff_fraction
+        if frac is None:
+            return values
+        bw = float(self.bandwidth_hz) if self.bandwidth_hz else 0.45 * self.sample_rate_hz
+        res = lowpass_zero_phase(values, self.sample_rate_hz, bandwidth_hz=bw,
+                                 cutoff_fraction=frac)
+        self.cutoff_hz = res.cutoff_hz
+        return res.values
+
+    def observe(self, step: Any, role: str, tags: tuple[str, ...]) -> WindowObservation:
+        t, raw, n_out = self.imu_window(step.index)
+        stats = compute_window_statistics(raw, self.sample_rate_hz)
+        filt = self.filtered(raw)
+        fb = self.rec.read_step(step.index, DEVICE_TABLE, self.table.unit)
+        inside = (fb.time_s >= t[0]) & (fb.time_s <= t[-1])
+        if np.count_nonzero(inside) < 2:
+            raise RecordingError(f"step {step.index} ({step.label}): fewer than 2 table feedback "
+                                 "samples inside the IMU window")
+        fb_t = fb.time_s[inside]
+        angles = np.column_stack([fb.columns[axis_columns(a)[0]][inside]
+                                  for a in self.axis_names])
+        rates = np.column_stack([fb.columns[axis_columns(a)[1]][inside]
+                                 for a in self.axis_names])
+        sync = synchronize(t, filt, fb_t, max_alignment_error_s=self.opt.max_alignment_error_s)
+        plan_step = self.plan.steps[int(step.commanded["plan_step"])]
+        axis = getattr(plan_step, "axis", None) if step.kind == "rate" else None
+        n_rev = 0
+        if axis is not None and getattr(plan_step, "rate_dps", 0.0) != 0.0:
+            win = compute_integer_revolution_window(fb_t, sync.values, angle_rad=angles[:, axis])
+            mean = win.mean
+            sel = slice(win.start_index, win.stop_index)
+            n_rev = win.n_revolutions
+            t0, span = float(win.start_time_s), float(win.end_time_s - win.start_time_s)
+            table_rate = float(np.mean(rates[sel, axis]))
+            held = angles[sel].mean(axis=0)
+            held[axis] = angles[win.start_index, axis]
+            a_b = self.spin_axis_b(axis, held)
+            a_t = table_rotation(self.axis_names, held).apply(a_b)
+            rate_b = (table_rate + float(self.earth_t @ a_t)) * a_b
+            force_b = float(np.array([0.0, 0.0, self.g]) @ a_t) * a_b
+            kind, mean_angles = "rate", held
+        else:
+            mean = sync.values.mean(axis=0)
+            mean_angles = angles.mean(axis=0)
+            rot = table_rotation(self.axis_names, mean_angles)
+            rate_b = rot.inv().apply(self.earth_t)
+            force_b = rot.inv().apply([0.0, 0.0, self.g])
+            table_rate, kind = 0.0, "static"
+            t0, span = float(fb_t[0]), float(fb_t[-1] - fb_t[0])
+        resid_std = filt.std(axis=0, ddof=1)
+        return WindowObservation(
+            step_index=step.index, plan_step=int(step.commanded["plan_step"]), kind=kind,
+            role=role, repetition=_repetition(tags), tags=tags, label=step.label,
+            gyro_mean_rps=np.asarray(mean[:3], dtype=np.float64),
+            accel_mean_mps2=np.asarray(mean[3:], dtype=np.float64),
+            gyro_se_rps=stats.standard_error[:3], accel_se_mps2=stats.standard_error[3:],
+            gyro_std_rps=resid_std[:3], accel_std_mps2=resid_std[3:],
+            rate_b_rps=np.asarray(rate_b, dtype=np.float64),
+            force_b_mps2=np.asarray(force_b, dtype=np.float64),
+            angles_rad=np.asarray(mean_angles, dtype=np.float64), table_rate_rps=table_rate,
+            axis=axis, n_samples=int(t.size), n_outliers=n_out, n_revolutions=n_rev,
+            alignment_error_s=float(sync.alignment_error_s), duration_s=span, t_start_s=t0,
+            allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
+                                 stats.random_walk]))
+
+    def spin_axis_b(self, axis: int, angles: _F64) -> _F64:
+        inner = table_rotation(self.axis_names[axis + 1:], angles[axis + 1:])
+        return np.asarray(inner.inv().apply(_axis_vector(self.axis_names[axis])),
+                          dtype=np.float64)
+
+
+def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
+                            processing: P1Processing | None = None) -> P1Observations:
+    """Reduce a P1 Recording to window observations of one IMU (module docstring).
+
+    Parameters
+    ----------
+    rec : Recording
+        An open Recording of a P1 plan run (the plan's step tags say which windows calibrate
+        and which verify).
+    sensor_id : str, optional
+        The IMU; the only one when omitted.
+    processing : P1Processing, optional
+
+    Returns
+    -------
+    P1Observations
+
+    Raises
+    ------
+    RecordingError
+        No plan, no table or IMU stream, no latitude, or a window without enough data.
+    InvalidInputError
+        NaN in a window, an alignment error above the limit (LimitExceededError).
+    """
+    opt = processing or P1Processing()
+    imus = [s.unit for s in rec.streams if s.device == DEVICE_IMU]
+    if sensor_id is None:
+        if len(imus) != 1:
+            raise InvalidInputError(f"{rec.path} has {len(imus)} IMU streams {imus}; name one "
+                                    "with `sensor_id`")
+        sensor_id = imus[0]
+    ex = _Extractor(rec, sensor_id, opt)
+    windows: list[WindowObservation] = []
+    skipped: list[str] = []
+    for step in rec.steps:
+        if step.status != "done" or not step.has_valid_window:
+            if step.status in ("invalid", "aborted"):
+                skipped.append(f"step {step.index} ({step.label}): {step.status}")
+            continue
+        idx = step.commanded.get("plan_step") if isinstance(step.commanded, dict) else None
+        if idx is None or not 0 <= int(idx) < len(ex.plan.steps):
+            continue
+        tags = tuple(ex.plan.steps[int(idx)].tags)
+        role = _role(tags)
+        if role is None or step.kind not in ("position", "static", "rate"):
+            continue
+        windows.append(ex.observe(step, role, tags))
+    if not windows:
+        raise RecordingError(f"{rec.path}: no completed calibration or verification window for "
+                             f"{sensor_id}")
+    noise = estimate_noise(windows)
+    notes = list(ex.notes)
+    if noise:
+        windows = [_with_model_se(w, noise) for w in windows]
+        notes.append("standard errors of the window means from the noise model fitted to the "
+                     "longest static record (white, flicker and random-walk terms)")
+    else:
+        notes.append("no long static record: standard errors from each window's own Allan "
+                     "variance (uncertain by about a factor of two)")
+    return P1Observations(sensor_id=sensor_id, plan=ex.plan, windows=tuple(windows),
+                          gravity_mps2=ex.g, earth_rate_t_rps=ex.earth_t,
+                          latitude_deg=ex.latitude_deg, heading_deg=ex.heading_deg,
+                          sample_rate_hz=ex.sample_rate_hz, cutoff_hz=ex.cutoff_hz,
+                          notes=tuple(notes), skipped=tuple(skipped), noise=noise)
+
+
+_FLICKER_FACTOR = 2.0 * math.log(2.0) / math.pi  # Allan plateau² of flicker per B² (IEEE 952)
+
+
+def estimate_noise(windows: Sequence[WindowObservation], *, min_duration_s: float = 120.0
+                   ) -> dict[str, NoiseModel]:
+    """Fit gyro and accelerometer noise models to the longest static record.
+
+    The record's overlapping Allan variance is fitted with σ²(τ) ≈ N²/τ + C_B + K²τ/3 (the
+    ``allan-fit`` of :func:`~imucalib.processing.statistics.compute_window_statistics`);
+    B = √(C_B/(2 ln 2/π)). Empty when no static window lasts `min_duration_s`. [s]
+    """
+    static = [w for w in windows if w.kind == "static" and w.allan_fit is not None
+              and w.duration_s >= min_duration_s]
+    if not static:
+        return {}
+    best = max(static, key=lambda w: w.duration_s)
+    assert best.allan_fit is not None
+    fit = np.nan_to_num(best.allan_fit, nan=0.0)
+    out = {}
+    for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6))):
+        n, c_b, k = fit[0, cols], fit[1, cols], fit[2, cols]
+        out[triad] = NoiseModel(white_density=np.maximum(n, 0.0),
+                                bias_instability=np.sqrt(np.maximum(c_b, 0.0) / _FLICKER_FACTOR),
+                                random_walk=np.maximum(k, 0.0))
+    return out
+
+
+def _with_model_se(w: WindowObservation, noise: Mapping[str, NoiseModel]) -> WindowObservation:
+    tau = np.array([max(w.duration_s, 1e-3)])
+    gyro = compute_theoretical_adev(noise["gyro"], tau)[0]
+    accel = compute_theoretical_adev(noise["accel"], tau)[0]
+    return dataclasses.replace(w, gyro_se_rps=np.maximum(gyro, 1e-300),
+                               accel_se_mps2=np.maximum(accel, 1e-300))
