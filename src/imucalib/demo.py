@@ -1,50 +1,109 @@
-"""The main job of ``make demo``: the P1 procedure end to end on the digital twin.
+"""The main job of ``make demo``: procedure P1 end to end on the digital twin.
 
-Run as ``python -m imucalib.demo --out DIR``. It simulates the dual-axis P1 scenario (six
-positions, a level static record, ±rate points about pitch and roll) into ``DIR/p1.h5`` and
-summarises the recording.
+Run as ``python -m imucalib.demo --out DIR``. It
+
+1. generates the default P1 plan (six positions, a 60-minute level static record, rate points
+   about pitch, roll and Z, held-out positions and rates, three repetitions) for a tactical-grade
+   IMU and writes it to ``DIR/p1-plan.toml``;
+2. runs it on the twin through the station runner, with every guard active, into a Recording;
+3. calibrates: estimates every parameter with its uncertainty (full triad model), checks the
+   residuals, the held-out accuracy and the repeatability, and decides pass/fail;
+4. compares the estimates with the twin's truth (which only the demo and the tests read);
+
+and prints where the files are. ``--quick`` shortens the static record and runs one repetition.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from rich.console import Console
+from rich.table import Table
 
 from imucalib.errors import CalibrationError
 
+if TYPE_CHECKING:
+    from imucalib.procedures.p1 import P1Analysis
+
 __all__ = ["main"]
+
+
+def _truth_table(analysis: P1Analysis, truth: dict[str, Any]) -> Table:
+    from imucalib.models.imu import ImuModel
+
+    result = analysis.result
+    model = ImuModel.from_dict(truth["imu_models"][result.sensor_id])
+    true = {}
+    for triad, tm in (("accel", model.accel), ("gyro", model.gyro)):
+        for i, a in enumerate("xyz"):
+            true[f"{triad}_bias_{a}"] = tm.bias[i]
+            for j, b in enumerate("xyz"):
+                true[f"{triad}_M_{a}{b}"] = tm.scale_misalignment[i, j]
+                true[f"{triad}_G_{a}{b}"] = tm.g_sensitivity[i, j] if triad == "gyro" else 0.0
+    z = np.array([(result.value(n) - true[n]) / result.sigma(n) for n in result.param_names])
+    table = Table("parameters", "within 2σ", "within 3σ", "within 4σ", "largest |error|/σ",
+                  title="estimates against the twin's truth")
+    table.add_row(str(z.size), str(int(np.sum(np.abs(z) <= 2))), str(int(np.sum(np.abs(z) <= 3))),
+                  str(int(np.sum(np.abs(z) <= 4))), f"{np.abs(z).max():.2f}")
+    return table
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the demo; return the process exit code."""
     parser = argparse.ArgumentParser(prog="python -m imucalib.demo", description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("out"), help="output folder")
-    parser.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the twin")
+    parser.add_argument("--quick", action="store_true", help="one repetition, 10 min static")
     args = parser.parse_args(argv)
     console = Console()
-    from imucalib.io.inspect import summarize_recording
-    from imucalib.sim.runner import simulate_scenario
-    from imucalib.sim.scenario import load_scenario
+    from imucalib.cli.calibrate import render_calibration, run_calibration
+    from imucalib.io.reader import open_recording
+    from imucalib.plan import describe_plan, write_plan
+    from imucalib.procedures import generate_p1_plan
+    from imucalib.station.runner import RunOptions, run_plan
+    from imucalib.station.sim import SimStation
 
     try:
         args.out.mkdir(parents=True, exist_ok=True)
-        scenario = load_scenario("dual-axis-p1")
-        if args.seed is not None:
-            scenario = scenario.model_copy(update={"seed": args.seed})
-        path = args.out / "p1.h5"
-        console.rule("[bold]1. Run P1 on the digital twin")
-        summary = simulate_scenario(scenario, path, overwrite=True)
-        console.print(summary.describe(), highlight=False)
-        console.rule("[bold]2. The recording")
-        summarize_recording(path).render(console)
+        plan = generate_p1_plan(grade="tactical", sample_rate_hz=200.0, seed=args.seed,
+                                repetitions=1 if args.quick else 3,
+                                static_s=600.0 if args.quick else 3600.0,
+                                warm_up_s=300.0 if args.quick else None)
+        plan_path = write_plan(plan, args.out / "p1-plan.toml")
+        total = sum(r.min_duration_s for r in describe_plan(plan))
+        console.rule("[bold]1. The plan")
+        console.print(f"{plan_path}: {len(plan.steps)} steps, at least {total / 3600:.2f} h of "
+                      "station time", highlight=False)
+        console.rule("[bold]2. Run it on the digital twin")
+        assert plan.twin is not None
+        station = SimStation(plan.twin)
+        path = args.out / "p1-run.h5"
+        wall = time.perf_counter()
+        summary = run_plan(plan, station, path, overwrite=True,
+                           options=RunOptions(tick_s=2.0, truth=station.truth))
+        console.print(f"{summary.status}: {summary.steps_done} steps, "
+                      f"{summary.end_s / 3600:.2f} h of station time in "
+                      f"{time.perf_counter() - wall:.1f} s → {path}", highlight=False)
+        if summary.status != "done":
+            raise CalibrationError(f"the run did not complete: {summary.reason}")
+        console.rule("[bold]3. Calibrate and verify")
+        analysis, result_path, report_path = run_calibration(path, None, "triad", args.out)
+        render_calibration(analysis, result_path, report_path)
+        console.rule("[bold]4. Against the truth")
+        with open_recording(path) as rec:
+            truth = rec.truth
+        console.print(_truth_table(analysis, truth))
     except CalibrationError as exc:
         Console(stderr=True).print(f"[bold red]error:[/] {exc}", highlight=False)
         return 2
-    console.print(f"\nFiles are in {args.out.resolve()}", highlight=False)
-    return 0
+    console.print(f"\nFiles are in {args.out.resolve()}: the plan, the recording, the result "
+                  "(.result.json) and the full report (.report.json)", highlight=False)
+    return 0 if analysis.decision.passed else 1
 
 
 if __name__ == "__main__":

@@ -11,13 +11,15 @@ Commands
 ``export FILE --stream DEV/UNIT``  write a stream (or one step of it) as CSV or MAT
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
+``calibrate RECORDING``            estimate, verify and decide; write the result JSON
+``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
 """
 
 from __future__ import annotations
 
 import logging
 
-from imucalib.cli import plan, recording, run, twin  # noqa: F401  (they register commands)
+from imucalib.cli import calibrate, plan, recording, run, twin  # noqa: F401 (register)
 from imucalib.cli._app import app
 
 __all__ = ["app", "main"]

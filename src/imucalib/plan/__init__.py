@@ -23,6 +23,7 @@ from imucalib.plan.io import (
 )
 from imucalib.plan.schema import (
     CentrifugeStep,
+    EquipmentConfig,
     GuardConfig,
     ImuSpecConfig,
     OperatorCheckStep,
@@ -38,6 +39,7 @@ from imucalib.plan.schema import (
 
 __all__ = [
     "CentrifugeStep",
+    "EquipmentConfig",
     "GuardConfig",
     "ImuSpecConfig",
     "OperatorCheckStep",

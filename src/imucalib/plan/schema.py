@@ -40,6 +40,7 @@ from imucalib.sim.scenario import TwinEquipment
 
 __all__ = [
     "CentrifugeStep",
+    "EquipmentConfig",
     "GuardConfig",
     "ImuSpecConfig",
     "OperatorCheckStep",
@@ -116,6 +117,19 @@ class ImuSpecConfig(_Model):
     accel_accuracy_g: float = Field(0.01, gt=0.0, description="held-out accuracy spec [g]")
     gyro_accuracy_dps: float = Field(0.5, gt=0.0, description="held-out accuracy spec [°/s]")
     gyro_noise_dps: float | None = Field(None, gt=0.0, description="gyro noise spec [°/s]")
+
+
+class EquipmentConfig(_Model):
+    """What the plan requires of the equipment (SPEC.md P1 preparation).
+
+    The analysis also uses these as Type B uncertainties (uniform, u = a/√3) of the quantities
+    they limit: table angle errors tilt the reference gravity (accelerometer misalignments),
+    a non-perpendicular axis pair tilts the reference rates (gyro misalignments).
+    """
+
+    table_position_accuracy_arcsec: float = Field(10.0, ge=0.0, description="[″]")
+    table_orthogonality_arcsec: float = Field(5.0, ge=0.0, description="[″]")
+    acquisition_rate_min_hz: float = Field(100.0, gt=0.0, description="[Hz]")
 
 
 class _Step(_Model):
@@ -225,6 +239,7 @@ class Plan(_Model):
     imu: ImuSpecConfig = Field(default_factory=ImuSpecConfig)
     limits: PlanLimits = Field(default_factory=PlanLimits)
     guards: GuardConfig = Field(default_factory=GuardConfig)
+    equipment: EquipmentConfig = Field(default_factory=EquipmentConfig)
     twin: TwinEquipment | None = Field(
         None, description="the twin station to run this plan on with --station sim")
     steps: tuple[PlanStep, ...] = Field(min_length=1)

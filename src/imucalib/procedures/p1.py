@@ -92,6 +92,9 @@ class P1Options:
         Spread limit of other parameters, in their typical standard uncertainty.
     hash_recording : bool
         Put the recording's SHA-256 into the provenance (reads the whole file once).
+    type_b : bool
+        Add the plan's equipment accuracy (``[equipment]``: table position accuracy and axis
+        perpendicularity, uniform distributions) to the misalignment variances (GUM Type B).
     """
 
     model: Literal["triad", "per-axis"] = "triad"
@@ -106,6 +109,7 @@ class P1Options:
     repeatability_cv: float = 0.01
     repeatability_k: float = 3.0
     hash_recording: bool = True
+    type_b: bool = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,11 +185,32 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
            if opt.correlated and obs.noise else "standard error of each window mean"),
         *obs.notes, *extra_notes,
     ]
+    cov = fit.covariance
+    if opt.type_b:
+        cov, text = _add_type_b(fit.param_names, cov, obs)
+        notes.append(text)
     return CalibrationResult(
         sensor_id=obs.sensor_id, procedure="p1", model=fit.model,
-        param_names=fit.param_names, values=fit.estimate, covariance=fit.covariance,
+        param_names=fit.param_names, values=fit.estimate, covariance=cov,
         units={n: _units(n) for n in fit.param_names}, residuals=residuals,
         provenance=provenance, notes=tuple(notes))
+
+
+def _add_type_b(names: tuple[str, ...], cov: np.ndarray, obs: P1Observations
+                ) -> tuple[np.ndarray, str]:
+    """Add the equipment's Type B variances to the misalignments (uniform, u = a/√3)."""
+    eq = obs.plan.equipment
+    u_pos = eq.table_position_accuracy_arcsec * units.ARCSEC / math.sqrt(3.0)
+    u_perp = eq.table_orthogonality_arcsec * units.ARCSEC / math.sqrt(3.0)
+    out = cov.copy()
+    for i, name in enumerate(names):
+        parts = name.split("_")
+        if len(parts) == 3 and parts[1] == "M" and parts[2][0] != parts[2][1]:
+            out[i, i] += (u_pos if parts[0] == "accel" else u_perp) ** 2
+    text = (f"Type B (GUM): table position accuracy {eq.table_position_accuracy_arcsec:g}″ and "
+            f"axis perpendicularity {eq.table_orthogonality_arcsec:g}″ (uniform) added to the "
+            "accelerometer and gyro misalignment variances")
+    return out, text
 
 
 def _kalman_difference(tf: TriadFit, obs_cov: np.ndarray | None) -> float:
@@ -291,9 +316,13 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
         scale_names = [n for n in names if n.split("_")[1] == "M" and n[-1] == n[-2]]
         estimates = {n: [v + 1.0 for v in vals] if n in scale_names else vals
                      for n, vals in estimates.items()}
-    checks.append(check_repeatability(
-        "repeatability", estimates, sigmas, result.units, scale_names=scale_names,
-        cv_limit=opt.repeatability_cv, spread_k=opt.repeatability_k))
+    if per_rep:
+        checks.append(check_repeatability(
+            "repeatability", estimates, sigmas, result.units, scale_names=scale_names,
+            cv_limit=opt.repeatability_cv, spread_k=opt.repeatability_k))
+    else:
+        checks.append(Check("repeatability", None, f"{len(reps)} repetition in the recording: "
+                            "repeatability needs at least 2 (SPEC.md P1 asks for 3)"))
     return P1Analysis(result=result, per_repetition=per_rep, checks=tuple(checks),
                       decision=decide(checks), kalman_max_difference_sigma=kalman,
                       crlb_ratio=crlb, observations=obs)

@@ -337,7 +337,9 @@ class _Extractor:
                                   for a in self.axis_names])
         rates = np.column_stack([fb.columns[axis_columns(a)[1]][inside]
                                  for a in self.axis_names])
-        sync = synchronize(t, filt, fb_t, max_alignment_error_s=self.opt.max_alignment_error_s)
+        # the filtered signal holds nothing above the cut-off: the interpolation bound uses it
+        sync = synchronize(t, filt, fb_t, max_alignment_error_s=self.opt.max_alignment_error_s,
+                           signal_bandwidth_hz=self.cutoff_hz)
         plan_step = self.plan.steps[int(step.commanded["plan_step"])]
         axis = getattr(plan_step, "axis", None) if step.kind == "rate" else None
         n_rev = 0
