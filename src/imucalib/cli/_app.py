@@ -20,5 +20,5 @@ err_console = Console(stderr=True)
 
 def fail(exc: Exception) -> typer.Exit:
     """Print `exc` as an error line and return the exit (code 2) to raise."""
-    err_console.print(f"[bold red]error:[/] {exc}", highlight=False)
+    err_console.print(f"[bold red]error:[/] {exc}", highlight=False, soft_wrap=True)
     return typer.Exit(code=2)

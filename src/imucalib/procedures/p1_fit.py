@@ -28,12 +28,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
+from imucalib import units
 from imucalib.conventions import AXES
-from imucalib.errors import InsufficientExcitationError
+from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation import (
     build_triad_design,
     compute_window_mean_covariance,
@@ -44,9 +46,11 @@ from imucalib.models.result import triad_parameter_names
 from imucalib.procedures.p1_observations import P1Observations, WindowObservation
 
 __all__ = [
+    "MIN_EXCITATION",
     "P1Fit",
     "TriadFit",
     "fit_p1",
+    "fit_triad",
     "gyro_windows",
     "observation_covariance",
     "predict_outputs",
@@ -201,6 +205,81 @@ def gyro_windows(obs: P1Observations, role: str, repetitions: Sequence[int] | No
     return out
 
 
+#: Least input an axis must see for the parameters that multiply it to count as excited:
+#: half a g for an accelerometer, 1 °/s for a gyro (Earth rate alone, 0.004 °/s, is not enough).
+MIN_EXCITATION = {"accel": 0.5 * units.G0_MPS2, "gyro": 1.0 * units.DEG}
+
+
+def _check_excitation(triad: str, model: str, x: _F64) -> None:
+    """Refuse a design whose inputs never reach an axis (the parameters would rest on noise)."""
+    if x.shape[0] == 0:
+        raise InsufficientExcitationError(
+            triad_parameter_names(triad, model),
+            f"no {triad} calibration windows: every {triad} parameter is unobservable")
+    peak = np.abs(x).max(axis=0)
+    limit = MIN_EXCITATION[triad]
+    weak = [j for j in range(3) if peak[j] < limit]
+    if not weak:
+        return
+    if model == "per-axis":
+        names = [n for j in weak for n in (f"{triad}_K_{AXES[j]}", f"{triad}_b_{AXES[j]}")]
+    else:
+        names = [f"{triad}_M_{i}{AXES[j]}" for j in weak for i in AXES]
+    unit, scale = ("g", units.G0_MPS2) if triad == "accel" else ("°/s", units.DEG)
+    detail = ", ".join(f"{AXES[j]}: {peak[j] / scale:.3g} {unit}" for j in weak)
+    raise InsufficientExcitationError(
+        names, f"the windows never excite the {triad} input axis/axes {detail} (at least "
+        f"{limit / scale:g} {unit} needed); {', '.join(names)} are unobservable"
+        + (" — add rate points about that axis (the P1 plan's z_rates)" if triad == "gyro"
+           else " — add the positions that put that axis up and down"))
+
+
+def fit_triad(triad: Literal["accel", "gyro"], windows: Sequence[WindowObservation], *,
+              model: str = "triad", noise: NoiseModel | None = None,
+              g_sensitivity: bool = False) -> TriadFit:
+    """Fit one triad's model to windows (module docstring).
+
+    Parameters
+    ----------
+    triad : {"accel", "gyro"}
+    windows : sequence of WindowObservation
+        Accelerometer: static windows (reference specific force). Gyro: rate points and static
+        windows (reference rate incl. Earth rate; specific force for G).
+    model : {"triad", "per-axis"}
+    noise : NoiseModel, optional
+        With it the window means are weighted with their full covariance; else with their
+        standard errors alone.
+    g_sensitivity : bool
+        Gyro triad model: estimate G.
+
+    Raises
+    ------
+    InsufficientExcitationError
+        If the windows cannot determine a parameter; the message names it.
+    """
+    w = tuple(windows)
+    accel = triad == "accel"
+    x = np.array([o.force_b_mps2 if accel else o.rate_b_rps for o in w]).reshape(-1, 3)
+    y = np.array([o.accel_mean_mps2 if accel else o.gyro_mean_rps for o in w]).reshape(-1, 3)
+    se = np.array([o.accel_se_mps2 if accel else o.gyro_se_rps for o in w]).reshape(-1, 3)
+    f = np.array([o.force_b_mps2 for o in w]).reshape(-1, 3)
+    cov = observation_covariance(w, noise)
+    _check_excitation(triad, model, x)
+    if model == "per-axis":
+        if accel:
+            masks = [np.ones(len(w), dtype=bool)] * 3
+        else:
+            kinds = np.array([o.kind for o in w])
+            masks = []
+            for i in range(3):
+                along = np.abs(x[:, i]) > 0.99 * np.linalg.norm(x, axis=1)
+                masks.append((kinds == "static") | ((kinds == "rate") & along))
+        return _per_axis_fit(triad, x, y, se, masks, w, cov)
+    if model != "triad":
+        raise InvalidInputError(f"`model` must be 'triad' or 'per-axis'; got {model!r}")
+    return _triad_fit(triad, x, y, se, f if (g_sensitivity and not accel) else None, w, cov)
+
+
 def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool = True,
            repetitions: Sequence[int] | None = None, correlated: bool = True) -> P1Fit:
     """Fit the accelerometer and gyro models to the calibration windows.
@@ -233,30 +312,11 @@ def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool = T
             f"the accelerometer triad fit needs the six P1 positions; the recording has "
             f"{len(accel_w)} completed six-position window(s), so the accelerometer biases and "
             "scale/misalignment cannot all be determined")
-    xa = np.array([w.force_b_mps2 for w in accel_w]).reshape(-1, 3)
-    ya = np.array([w.accel_mean_mps2 for w in accel_w]).reshape(-1, 3)
-    sa = np.array([w.accel_se_mps2 for w in accel_w]).reshape(-1, 3)
     gyro_w = tuple(gyro_windows(obs, "calibration", repetitions))
-    xg = np.array([w.rate_b_rps for w in gyro_w]).reshape(-1, 3)
-    yg = np.array([w.gyro_mean_rps for w in gyro_w]).reshape(-1, 3)
-    sg = np.array([w.gyro_se_rps for w in gyro_w]).reshape(-1, 3)
-    fg = np.array([w.force_b_mps2 for w in gyro_w]).reshape(-1, 3)
-    cov_a = observation_covariance(accel_w, obs.noise.get("accel")) if correlated else None
-    cov_g = observation_covariance(gyro_w, obs.noise.get("gyro")) if correlated else None
-    if model == "per-axis":
-        accel = _per_axis_fit("accel", xa, ya, sa, [np.ones(len(accel_w), bool)] * 3, accel_w,
-                              cov_a)
-        kinds = np.array([w.kind for w in gyro_w])
-        masks = []
-        for i in range(3):
-            along = np.abs(xg[:, i]) > 0.99 * np.linalg.norm(xg, axis=1)
-            masks.append((kinds == "static") | ((kinds == "rate") & along))
-        gyro = _per_axis_fit("gyro", xg, yg, sg, masks, gyro_w, cov_g)
-    elif model == "triad":
-        accel = _triad_fit("accel", xa, ya, sa, None, accel_w, cov_a)
-        gyro = _triad_fit("gyro", xg, yg, sg, fg if g_sensitivity else None, gyro_w, cov_g)
-    else:
-        raise ValueError(f"`model` must be 'triad' or 'per-axis'; got {model!r}")
+    noise_a = obs.noise.get("accel") if correlated else None
+    noise_g = obs.noise.get("gyro") if correlated else None
+    accel = fit_triad("accel", accel_w, model=model, noise=noise_a)
+    gyro = fit_triad("gyro", gyro_w, model=model, noise=noise_g, g_sensitivity=g_sensitivity)
     return P1Fit(model, accel, gyro)
 
 

@@ -123,7 +123,9 @@ class WindowObservation:
     gyro_se_rps, accel_se_mps2 : ndarray, shape (3,)
         Their standard errors (correlated noise accounted for). [rad/s], [m/s²]
     gyro_std_rps, accel_std_mps2 : ndarray, shape (3,)
-        Standard deviation of the filtered samples about their mean. [rad/s], [m/s²]
+        Scatter of the filtered samples about what the model predicts within the window: the
+        mean for a static window; the mean and the once-per-revolution harmonic of the table
+        angle for a rate point (g-sensitivity, horizontal Earth rate). [rad/s], [m/s²]
     rate_b_rps, force_b_mps2 : ndarray, shape (3,)
         Reference inputs in b (module docstring). [rad/s], [m/s²]
     angles_rad : ndarray, shape (k,)
@@ -357,6 +359,7 @@ class _Extractor:
             rate_b = (table_rate + float(self.earth_t @ a_t)) * a_b
             force_b = float(np.array([0.0, 0.0, self.g]) @ a_t) * a_b
             kind, mean_angles = "rate", held
+            resid_std = _harmonic_residual_std(sync.values[sel], angles[sel, axis])
         else:
             mean = sync.values.mean(axis=0)
             mean_angles = angles.mean(axis=0)
@@ -365,7 +368,7 @@ class _Extractor:
             force_b = rot.inv().apply([0.0, 0.0, self.g])
             table_rate, kind = 0.0, "static"
             t0, span = float(fb_t[0]), float(fb_t[-1] - fb_t[0])
-        resid_std = filt.std(axis=0, ddof=1)
+            resid_std = filt.std(axis=0, ddof=1)
         return WindowObservation(
             step_index=step.index, plan_step=int(step.commanded["plan_step"]), kind=kind,
             role=role, repetition=_repetition(tags), tags=tags, label=step.label,
@@ -385,6 +388,20 @@ class _Extractor:
         inner = table_rotation(self.axis_names[axis + 1:], angles[axis + 1:])
         return np.asarray(inner.inv().apply(_axis_vector(self.axis_names[axis])),
                           dtype=np.float64)
+
+
+def _harmonic_residual_std(values: _F64, angle_rad: _F64) -> _F64:
+    """Return the standard deviation about the mean and the once-per-revolution harmonic.
+
+    At a rate point the calibrated model predicts the mean and a once-per-revolution term (the
+    g-sensitivity to the gravity turning in the IMU, the horizontal Earth rate); the residual
+    scatter is what remains.
+    """
+    A = np.column_stack([np.ones_like(angle_rad), np.sin(angle_rad), np.cos(angle_rad)])
+    coef, *_ = np.linalg.lstsq(A, values, rcond=None)
+    resid = values - A @ coef
+    dof = max(values.shape[0] - 3, 1)
+    return np.asarray(np.sqrt(np.sum(resid**2, axis=0) / dof), dtype=np.float64)
 
 
 def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
@@ -424,7 +441,8 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     for step in rec.steps:
         if step.status != "done" or not step.has_valid_window:
             if step.status in ("invalid", "aborted"):
-                skipped.append(f"step {step.index} ({step.label}): {step.status}")
+                skipped.append(f"step {step.index} ({step.label}): {step.status}"
+                               + (f" — {step.note}" if step.note else ""))
             continue
         idx = step.commanded.get("plan_step") if isinstance(step.commanded, dict) else None
         if idx is None or not 0 <= int(idx) < len(ex.plan.steps):
@@ -435,8 +453,9 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
             continue
         windows.append(ex.observe(step, role, tags))
     if not windows:
+        why = "; ".join(skipped) if skipped else "the plan has no tagged measurement steps"
         raise RecordingError(f"{rec.path}: no completed calibration or verification window for "
-                             f"{sensor_id}")
+                             f"{sensor_id} ({why})")
     noise = estimate_noise(windows)
     notes = list(ex.notes)
     if noise:
