@@ -40,7 +40,8 @@ def test_every_estimate_within_4_sigma_of_the_truth(p1_tools, grade, seed, tmp_p
     path = p1_tools.run_twin(p1_tools.p1_plan(grade, seed), tmp_path / "r.h5")
     z, analysis = normalized_errors(path)
     assert z.size == 33  # accelerometer bias + M, gyro bias + M + G
-    assert np.all(np.abs(z) < 4.0), dict(zip(analysis.result.param_names, np.round(z, 2), strict=True))
+    by_name = dict(zip(analysis.result.param_names, np.round(z, 2), strict=True))
+    assert np.all(np.abs(z) < 4.0), by_name
     # a correct model on honest data passes its own residual rule and the held-out check
     names = {c.name: c for c in analysis.checks}
     assert names["accelerometer residuals"].passed
