@@ -11,6 +11,9 @@ Transports: :class:`Transport`, :class:`TcpTransport`, :class:`SerialTransport`,
 :class:`VisaTransport`, :class:`FakeTransport`, :class:`TransportSpec`,
 :func:`parse_transport_url`, :func:`open_transport`; Modbus: :class:`RegisterLink`,
 :class:`ModbusTcpLink`, :class:`FakeRegisterLink`.
+Codecs (modules): :mod:`~imucalib.drivers.acl`, :mod:`~imucalib.drivers.aerosmith`,
+:mod:`~imucalib.drivers.watlow_f4t`, :mod:`~imucalib.drivers.espec_p300`,
+:mod:`~imucalib.drivers.imu_packet`, :mod:`~imucalib.drivers.imu_csv`.
 """
 
 from __future__ import annotations
