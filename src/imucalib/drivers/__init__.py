@@ -14,13 +14,20 @@ Transports: :class:`Transport`, :class:`TcpTransport`, :class:`SerialTransport`,
 Codecs (modules): :mod:`~imucalib.drivers.acl`, :mod:`~imucalib.drivers.aerosmith`,
 :mod:`~imucalib.drivers.watlow_f4t`, :mod:`~imucalib.drivers.espec_p300`,
 :mod:`~imucalib.drivers.imu_packet`, :mod:`~imucalib.drivers.imu_csv`.
+Devices: :class:`AcutrolTable`, :class:`AerosmithTable`, :class:`AxisLimits` (motion);
+:class:`WatlowF4TChamber`, :class:`EspecP300Chamber`; :class:`PacketImu`, :class:`CsvLineImu`;
+:class:`DeviceCheck`.
 """
 
 from __future__ import annotations
 
+from imucalib.drivers.base import DeviceCheck
+from imucalib.drivers.chambers import EspecP300Chamber, WatlowF4TChamber
 from imucalib.drivers.clock import MonotonicClock
 from imucalib.drivers.fake import FakeRegisterLink, FakeTransport
+from imucalib.drivers.imus import CsvLineImu, PacketImu
 from imucalib.drivers.modbus import ModbusTcpLink, RegisterLink
+from imucalib.drivers.motion import AcutrolTable, AerosmithTable, AxisLimits
 from imucalib.drivers.transport import (
     SerialTransport,
     TcpTransport,
@@ -32,16 +39,24 @@ from imucalib.drivers.transport import (
 )
 
 __all__ = [
+    "AcutrolTable",
+    "AerosmithTable",
+    "AxisLimits",
+    "CsvLineImu",
+    "DeviceCheck",
+    "EspecP300Chamber",
     "FakeRegisterLink",
     "FakeTransport",
     "ModbusTcpLink",
     "MonotonicClock",
+    "PacketImu",
     "RegisterLink",
     "SerialTransport",
     "TcpTransport",
     "Transport",
     "TransportSpec",
     "VisaTransport",
+    "WatlowF4TChamber",
     "open_transport",
     "parse_transport_url",
 ]
