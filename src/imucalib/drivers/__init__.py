@@ -2,7 +2,8 @@
 
 Layers (``reference/devices.md``; STYLE.md §8): transports move bytes; pure codecs turn commands
 into bytes and replies into values; device classes implement the station protocols of
-:mod:`imucalib.station.devices` with the two.
+:mod:`imucalib.station.devices` with the two; simulator servers
+(:mod:`imucalib.drivers.simulators`) speak each dialect on 127.0.0.1 with the twin behind them.
 
 Contents
 --------
