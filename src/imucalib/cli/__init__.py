@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 
-from imucalib.cli import recording, twin  # noqa: F401  (they register their commands)
+from imucalib.cli import recording, station, twin  # noqa: F401  (they register their commands)
 from imucalib.cli._app import app
 
 __all__ = ["app", "main"]

@@ -18,6 +18,8 @@ Codecs (modules): :mod:`~imucalib.drivers.acl`, :mod:`~imucalib.drivers.aerosmit
 Devices: :class:`AcutrolTable`, :class:`AerosmithTable`, :class:`AxisLimits` (motion);
 :class:`WatlowF4TChamber`, :class:`EspecP300Chamber`; :class:`PacketImu`, :class:`CsvLineImu`;
 :class:`DeviceCheck`.
+Station: :class:`StationConfig`, :func:`load_station_config`, :func:`parse_station_config`,
+:class:`DriverStation`, :func:`load_driver_station`.
 """
 
 from __future__ import annotations
@@ -29,6 +31,12 @@ from imucalib.drivers.fake import FakeRegisterLink, FakeTransport
 from imucalib.drivers.imus import CsvLineImu, PacketImu
 from imucalib.drivers.modbus import ModbusTcpLink, RegisterLink
 from imucalib.drivers.motion import AcutrolTable, AerosmithTable, AxisLimits
+from imucalib.drivers.station import DriverStation, load_driver_station
+from imucalib.drivers.station_config import (
+    StationConfig,
+    load_station_config,
+    parse_station_config,
+)
 from imucalib.drivers.transport import (
     SerialTransport,
     TcpTransport,
@@ -45,6 +53,7 @@ __all__ = [
     "AxisLimits",
     "CsvLineImu",
     "DeviceCheck",
+    "DriverStation",
     "EspecP300Chamber",
     "FakeRegisterLink",
     "FakeTransport",
@@ -53,11 +62,15 @@ __all__ = [
     "PacketImu",
     "RegisterLink",
     "SerialTransport",
+    "StationConfig",
     "TcpTransport",
     "Transport",
     "TransportSpec",
     "VisaTransport",
     "WatlowF4TChamber",
+    "load_driver_station",
+    "load_station_config",
     "open_transport",
+    "parse_station_config",
     "parse_transport_url",
 ]
