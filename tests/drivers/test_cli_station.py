@@ -9,13 +9,20 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from imucalib.cli import app
+from imucalib.cli import _app, app
 from imucalib.drivers.simulators import AclSimServer, F4TSimServer, SimulatedStation
 
 from ._rigs import SPEED, make_rig
 
 runner = CliRunner()
 WIDE = {"COLUMNS": "400"}
+
+
+@pytest.fixture(autouse=True)
+def wide_console(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rich fixes the width when the console is made: widen it so no cell is cut."""
+    monkeypatch.setattr(_app.console, "width", 400)
+    monkeypatch.setattr(_app.err_console, "width", 400)
 
 
 @pytest.fixture
