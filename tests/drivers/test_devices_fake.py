@@ -203,3 +203,17 @@ def test_watlow_fahrenheit_display() -> None:
     chamber.connect()
     chamber.set_temperature(100.0 - 15.0)
     assert (f4t.SETPOINT, floats_to_registers([185.0])) in link.writes
+
+
+def test_acutrol_sends_the_mode_again_after_a_refused_demand() -> None:
+    fake = FakeTransport([
+        *CONNECT,
+        (b":D:R 1,10.000000\n", encode_reply(202, "axis 1 is in mode O, not R")),
+        (b":M:R 1;:D:R 1,10.000000\n", ok()),
+    ])
+    table = AcutrolTable("t", ["spin"], _opener(fake), clock=MonotonicClock(), limits=LIMITS)
+    table.connect()
+    with pytest.raises(DeviceError, match="error 202"):
+        table.set_rate(0, 10 * units.DEG)
+    table.set_rate(0, 10 * units.DEG)
+    assert fake.pending == 0

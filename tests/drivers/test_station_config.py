@@ -124,7 +124,7 @@ BAD = [
     (_variant('kind = "espec-p300"', 'kind = "votsch"'),
      "chamber.kind: unknown chamber kind 'votsch'; expected 'watlow-f4t' or 'espec-p300'"),
     (_variant('kind = "csv"', 'kind = "xbus"'),
-     "imu[1].kind: unknown imu[1] kind 'xbus'; expected 'packet' or 'csv'"),
+     "imu[1].kind: unknown imu kind 'xbus'; expected 'packet' or 'csv'"),
     # unknown device (section) and key
     (FULL + '\n[oven]\nkind = "x"\n',
      "oven: unknown device or section 'oven'; expected one of name, site, table, centrifuge, "

@@ -111,7 +111,7 @@ class _StreamImu:
                 data = transport.read(self.chunk_bytes, timeout_s=self.read_timeout_s)
             except DeviceTimeoutError:
                 continue
-            except DeviceError as exc:
+            except Exception as exc:  # DeviceError, or a transport closed under the reader
                 if not self._stop.is_set():
                     _LOG.warning("%s: stream lost: %s", self.name, exc)
                     with self._lock:

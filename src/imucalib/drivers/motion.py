@@ -387,8 +387,7 @@ class AcutrolTable(_MotionDriver):
         angle = self._check_angle(i, angle_rad)
         n = self.axis_numbers[i]
         cmds = [] if self._modes[i] == "position" else [acl.mode(n, "position")]
-        self._send(*cmds, acl.demand_position(n, angle / units.DEG))
-        self._modes[i] = "position"
+        self._demand(i, "position", *cmds, acl.demand_position(n, angle / units.DEG))
 
     def set_rate(self, axis: int, rate_rps: float) -> None:
         """Rate mode: spin an axis at a constant rate. [rad/s]"""
@@ -396,8 +395,16 @@ class AcutrolTable(_MotionDriver):
         rate = self._check_rate(i, rate_rps)
         n = self.axis_numbers[i]
         cmds = [] if self._modes[i] == "rate" else [acl.mode(n, "rate")]
-        self._send(*cmds, acl.demand_rate(n, rate / units.DEG))
-        self._modes[i] = "rate"
+        self._demand(i, "rate", *cmds, acl.demand_rate(n, rate / units.DEG))
+
+    def _demand(self, i: int, mode: str, *commands: str) -> None:
+        """Send a demand; after a refusal, send the mode again next time."""
+        try:
+            self._send(*commands)
+        except DeviceError:
+            self._modes[i] = None
+            raise
+        self._modes[i] = mode
 
     def _read_feedback(self) -> tuple[list[float], list[float]]:
         k = len(self.axis_numbers)

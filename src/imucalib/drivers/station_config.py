@@ -298,7 +298,8 @@ def format_config_errors(exc: ValidationError, source: str) -> str:
                 msg = f"unknown key {loc[-1]!r}"
         elif kind == "literal_error" and loc and loc[-1] == "kind":
             expected = str(err.get("ctx", {}).get("expected", ""))
-            msg = f"unknown {_loc(loc[:-1]) or 'device'} kind {got!r}; expected {expected}"
+            section = loc[0] if len(loc) > 1 else "device"
+            msg = f"unknown {section} kind {got!r}; expected {expected}"
         elif kind == "missing":
             msg = "required but missing"
         elif not isinstance(got, dict | list | tuple) and kind not in ("value_error",):

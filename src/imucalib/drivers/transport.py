@@ -275,9 +275,10 @@ class SerialTransport(_Buffered):
             rest = self._ser.read(n_bytes - 1) if n_bytes > 1 else b""
         except DeviceTimeoutError:
             raise
-        except (self._serial_exc, OSError, TypeError, AttributeError) as exc:
+        except (self._serial_exc, OSError, TypeError, AttributeError, ValueError) as exc:
             # pyserial's socket:// raises SerialException('socket disconnected') when the peer
-            # closes; a port closed under a blocked reader raises TypeError/AttributeError
+            # closes; a port closed under a blocked reader raises TypeError, AttributeError or
+            # ValueError (select on a closed descriptor)
             raise DeviceError(f"{self.name}: link lost while reading: {exc}") from exc
         return bytes(first) + bytes(rest)
 

@@ -160,8 +160,12 @@ class _ImuStreamServer(SimServer):
         while not self._closed.is_set():
             next_t += self.chunk_period_s
             time.sleep(max(0.0, next_t - time.monotonic()))
-            with self.rig.lock:
-                s = self.rig.generate_imu(self.imu_name, self.time_base.now_s())
+            try:
+                with self.rig.lock:
+                    s = self.rig.generate_imu(self.imu_name, self.time_base.now_s())
+            except Exception:
+                _LOG.exception("%s: the twin failed to generate samples; stopping", self.name)
+                return
             if len(s) == 0:
                 continue
             with self._clients_lock:
