@@ -13,13 +13,14 @@ Commands
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 ``calibrate RECORDING``            estimate, verify and decide; write the result JSON
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
+``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 """
 
 from __future__ import annotations
 
 import logging
 
-from imucalib.cli import calibrate, plan, recording, run, twin  # noqa: F401 (register)
+from imucalib.cli import calibrate, plan, recording, run, station, twin  # noqa: F401 (register)
 from imucalib.cli._app import app
 
 __all__ = ["app", "main"]
