@@ -66,7 +66,7 @@ def test_check_fails_on_an_alarm(sim: SimulatedStation, tmp_path: Path) -> None:
     result = runner.invoke(app, ["station", "check", str(path), "--listen-s", "0.1"], env=WIDE)
     assert result.exit_code == 2
     assert "station check failed" in result.output
-    assert "chamber: running; ALARM alarm 1: high" in result.output
+    assert "chamber main: running; ALARM alarm 1: high" in result.output
 
 
 def test_check_fails_on_an_unreachable_device(sim: SimulatedStation, tmp_path: Path) -> None:

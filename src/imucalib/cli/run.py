@@ -47,11 +47,10 @@ def make_station(spec: str, plan: Plan, start_time_s: float = 0.0) -> tuple[Stat
                 f"plan {plan.name!r} has no [twin] table describing the simulated station; "
                 "add one (see `imucalib plan schema`) or give --station STATION.toml")
         return SimStation(plan.twin, start_time_s=start_time_s), ""
-    path = Path(spec)
-    import importlib
+    from imucalib.drivers import load_driver_station
 
-    drivers = importlib.import_module("imucalib.drivers")
-    station: Station = drivers.load_driver_station(path, start_time_s=start_time_s)
+    path = Path(spec)
+    station: Station = load_driver_station(path, start_time_s=start_time_s)
     return station, path.read_text(encoding="utf-8")
 
 

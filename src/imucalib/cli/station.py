@@ -47,8 +47,9 @@ def check(
             result = (dev.check(listen_s=listen_s) if isinstance(dev, PacketImu | CsvLineImu)
                       else dev.check())
         except CalibrationError as exc:
-            problems.append(f"{dev.name}: {exc}")
-            table.add_row(dev.name, getattr(dev, "kind", "?"), getattr(dev, "address", "?"),
+            label = f"{getattr(dev, 'role', '')} {dev.name}".strip()
+            problems.append(f"{label}: {exc}")
+            table.add_row(label, getattr(dev, "kind", "?"), getattr(dev, "address", "?"),
                           "—", "[bold red]unreachable[/]", str(exc))
             continue
         state = result.state if result.ok else f"[bold red]{result.state}[/]"
@@ -56,7 +57,7 @@ def check(
         table.add_row(label, result.kind, result.address,
                       result.identity, state, result.reading)
         if not result.ok:
-            problems.append(f"{result.name}: {result.state}")
+            problems.append(f"{label}: {result.state}")
     console.print(table)
     if problems:
         err_console.print("[bold red]error:[/] station check failed:\n  " + "\n  ".join(problems),

@@ -2,9 +2,11 @@
 
 Both implement :class:`~imucalib.station.devices.ImuSource`. A background thread reads the
 transport in chunks, stamps each chunk with the station clock when it arrives (host receive
-time, ``reference/devices.md`` §3.3: one time stamp per chunk, the device counter and time kept
-alongside so the analysis can rebuild the device time base), decodes it and buffers the samples;
-:meth:`~PacketImu.read` returns everything received since the previous read.
+time, ``reference/devices.md`` §3.3), decodes it and buffers the samples;
+:meth:`~PacketImu.read` returns everything received since the previous read. Each sample's time
+is back-dated from its chunk's arrival by the device's own time stamps (the chunk's last sample
+arrives with it), so samples are spread over the time they cover; the device counter and time
+are kept alongside so that the analysis can rebuild the device time base.
 
 Contents
 --------
@@ -28,6 +30,7 @@ from dataclasses import asdict, replace
 from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from imucalib.drivers.base import DeviceCheck, TransportOpener
 from imucalib.drivers.imu_csv import CsvLineDecoder
@@ -80,6 +83,7 @@ class _StreamImu:
         self._stop = threading.Event()
         self._error: Exception | None = None
         self._first_data = threading.Event()
+        self._last_time_s = -np.inf
 
     @property
     def connected(self) -> bool:
@@ -96,6 +100,8 @@ class _StreamImu:
             self._decoder = self._make_decoder()
             self._blocks = []
             self._error = None
+            # a backlog in the first chunk is not back-dated before the connection
+            self._last_time_s = self._clock.now_s()
         self._stop.clear()
         self._first_data.clear()
         self._thread = threading.Thread(target=self._run, name=f"imu-reader-{self.name}",
@@ -162,12 +168,29 @@ class _StreamImu:
                 raise DeviceError(f"{self.name}: not connected; call connect()")
             return empty_imu_block()
         samples = DecodedSamples.concatenate([b for _, b in blocks])
-        times = np.concatenate([np.full(len(b), t) for t, b in blocks])
+        times = np.concatenate([self._back_dated(t, b) for t, b in blocks])
+        times = np.maximum.accumulate(np.maximum(times, self._last_time_s))
+        self._last_time_s = float(times[-1])
         return ImuBlock(time_s=times, device_time_s=samples.device_time_s,
                         counter=samples.counter, gyro_rps=samples.gyro_rps,
                         accel_mps2=samples.accel_mps2,
                         temperature_degc=samples.temperature_degc,
                         saturated=samples.saturated)
+
+    def _back_dated(self, t_host: float, block: DecodedSamples) -> NDArray[np.float64]:
+        """Station time of each sample of a chunk that arrived at `t_host`.
+
+        The chunk's last sample arrives with it; the earlier ones are placed before it by the
+        device's own time stamps (or, without them, the nominal period), so a chunk is spread
+        over the time it covers instead of piling up on its arrival time.
+        """
+        n = len(block)
+        dev = np.asarray(block.device_time_s, dtype=np.float64)
+        if n and np.all(np.isfinite(dev)):
+            return np.asarray(t_host - (dev[-1] - dev), dtype=np.float64)
+        rate = self._identity.sample_rate_hz
+        period = 1.0 / rate if rate > 0 else 0.0
+        return np.asarray(t_host - period * np.arange(n - 1, -1, -1), dtype=np.float64)
 
     def health(self) -> ImuHealth:
         """Return the cumulative transport counters since the last connect."""

@@ -135,7 +135,7 @@ class MotionSection(_Model):
 
     kind: Literal["acutrol", "aerosmith"]
     transport: str
-    name: str = Field("table", min_length=1)
+    name: str = Field("main", min_length=1)
     axes: tuple[AxisSection, ...] = Field(min_length=1, max_length=3)
     model: str = ""
     timeout_s: float = Field(2.0, gt=0.0, le=60.0)
@@ -161,7 +161,7 @@ class MotionSection(_Model):
 class CentrifugeSection(MotionSection):
     """A centrifuge: a motion controller with one axis named ``spin``."""
 
-    name: str = Field("centrifuge", min_length=1)
+    name: str = Field("main", min_length=1)
     radius_m: float | None = Field(None, gt=0.0, le=20.0)
 
     @model_validator(mode="after")
@@ -177,7 +177,7 @@ class ChamberSection(_Model):
 
     kind: Literal["watlow-f4t", "espec-p300"]
     transport: str
-    name: str = Field("chamber", min_length=1)
+    name: str = Field("main", min_length=1)
     min_temp_degc: float = Field(ge=-100.0, le=300.0)
     max_temp_degc: float = Field(ge=-100.0, le=300.0)
     rated_min_temp_degc: float | None = Field(None, ge=-200.0, le=500.0)

@@ -459,20 +459,28 @@ class _Extractor:
         axis = getattr(plan_step, "axis", None) if step.kind == "rate" else None
         n_rev = 0
         if axis is not None and getattr(plan_step, "rate_dps", 0.0) != 0.0:
-            win = compute_integer_revolution_window(fb_t, sync.values, angle_rad=angles[:, axis])
+            # at constant rate the table angle is linear in time: interpolated onto the IMU
+            # times it gives every IMU sample its angle, so the whole-revolution mean uses all
+            # samples whatever the feedback rate (the IMU-onto-table interpolation above
+            # still bounds the alignment error)
+            inner = (t >= fb_t[0]) & (t <= fb_t[-1])
+            imu_angle = np.interp(t[inner], fb_t, np.unwrap(angles[:, axis]))
+            win = compute_integer_revolution_window(t[inner], filt[inner], angle_rad=imu_angle)
             mean = win.mean
-            sel = slice(win.start_index, win.stop_index)
+            in_win = (fb_t >= win.start_time_s) & (fb_t <= win.end_time_s)
+            sel = in_win if np.count_nonzero(in_win) >= 2 else np.ones(fb_t.size, dtype=bool)
             n_rev = win.n_revolutions
             t0, span = float(win.start_time_s), float(win.end_time_s - win.start_time_s)
             table_rate = float(np.mean(rates[sel, axis]))
             held = angles[sel].mean(axis=0)
-            held[axis] = angles[win.start_index, axis]
+            held[axis] = float(np.interp(win.start_time_s, fb_t, angles[:, axis]))
             a_b = self.spin_axis_b(axis, held)
             a_t = table_rotation(self.axis_names, held).apply(a_b)
             rate_b = (table_rate + float(self.earth_t @ a_t)) * a_b
             force_b = float(np.array([0.0, 0.0, self.g]) @ a_t) * a_b
             kind, mean_angles = "rate", held
-            resid_std = _harmonic_residual_std(sync.values[sel], angles[sel, axis])
+            in_imu = slice(win.start_index, win.stop_index)
+            resid_std = _harmonic_residual_std(filt[inner][in_imu], imu_angle[in_imu])
         else:
             mean = sync.values.mean(axis=0)
             mean_angles = angles.mean(axis=0)

@@ -99,6 +99,7 @@ from imucalib.station.operator import AutoOperator, Operator
 __all__ = ["RunOptions", "RunStatus", "RunSummary", "resume_run", "run_plan"]
 
 _log = logging.getLogger(__name__)
+_DRAIN_S = 1.0  # station time acquired after the last step [s]
 
 
 @dataclass
@@ -411,7 +412,13 @@ class _Run:
                 turned = np.abs(angle[:, axis] - theta0)
                 hit = np.flatnonzero((t > start) & (turned >= target))
                 if hit.size:
-                    return start, float(t[hit[0]])
+                    # the crossing, interpolated between the feedback rows around it (the
+                    # angle is linear at constant rate): exact whatever the feedback rate
+                    h = int(hit[0])
+                    if h == 0 or t[h - 1] < start or turned[h] == turned[h - 1]:
+                        return start, float(t[h])
+                    frac = (target - turned[h - 1]) / (turned[h] - turned[h - 1])
+                    return start, float(t[h - 1] + frac * (t[h] - t[h - 1]))
         finally:
             self.recording = False
 
@@ -733,6 +740,11 @@ def _drive(run: _Run, first: int) -> RunSummary:
     try:
         run.acquire()
         run.run_steps(first)
+        # samples still in transit (IMU packets arrive after the moment they describe) belong
+        # to the last window: keep acquiring a moment before closing
+        drain_until = run.now() + max(run.opt.tick_s, _DRAIN_S)
+        while run.now() < drain_until - 1e-9:
+            run.tick(drain_until)
         run.writer.log_event(run.now(), "info", "runner", f"plan {run.plan.name!r} completed")
     except _StopError as stop:
         status, reason = "aborted", str(stop)
