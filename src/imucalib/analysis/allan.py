@@ -176,7 +176,7 @@ def check_uniform_sampling(time_s: ArrayLike, *, rtol: float = 0.01) -> float:
     if not nominal > 0 or np.any(dt <= 0):
         i = int(np.argmax(dt <= 0))
         raise InvalidInputError(f"`time_s` must be strictly increasing; stamp {i + 1} "
-                                f"({t[i + 1]!r} s) follows {t[i]!r} s")
+                                f"({float(t[i + 1])!r} s) follows {float(t[i])!r} s")
     gap = dt > 1.5 * nominal
     if gap.any():
         i = int(np.argmax(gap))

@@ -298,7 +298,7 @@ def compute_confidence_interval(deviation: ArrayLike, edf: ArrayLike,
     dev = np.asarray(deviation, dtype=np.float64)
     nu = np.asarray(edf, dtype=np.float64)
     if np.any(~(nu > 0)):
-        raise InvalidInputError(f"`edf` must be > 0; got minimum {np.min(nu)!r}")
+        raise InvalidInputError(f"`edf` must be > 0; got minimum {float(np.min(nu))!r}")
     hi_q = stats.chi2.ppf((1 + confidence) / 2, nu)
     lo_q = stats.chi2.ppf((1 - confidence) / 2, nu)
     return dev * np.sqrt(nu / hi_q), dev * np.sqrt(nu / lo_q)
@@ -339,6 +339,7 @@ def identify_noise_lag1(averages: ArrayLike, *, max_differences: int = 2,
     if z.size < min_points:
         raise InvalidInputError(f"noise identification needs at least {min_points} τ-averages; "
                                 f"got {z.size}")
+    n_points = int(z.size)
     k = np.arange(z.size, dtype=np.float64)
     z = z - np.polyval(np.polyfit(k, z, 1), k)
     d = 0
@@ -347,6 +348,6 @@ def identify_noise_lag1(averages: ArrayLike, *, max_differences: int = 2,
         delta = r1 / (1 + r1)
         if delta < 0.25 or d >= max_differences:
             alpha = int(-round(2 * delta) - 2 * d)
-            return NoiseIdentification(alpha, -2 * (delta + d), d, delta, int(z.size))
+            return NoiseIdentification(alpha, -2 * (delta + d), d, delta, n_points)
         z = np.diff(z)
         d += 1

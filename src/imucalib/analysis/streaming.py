@@ -174,8 +174,8 @@ class SamplingCheck:
             bad_order = dt <= 0
             if bad_order.any() or not nominal > 0:
                 i = int(np.argmax(bad_order))
-                raise InvalidInputError(f"`time_s` must be strictly increasing; {full[i + 1]!r} s "
-                                        f"follows {full[i]!r} s")
+                raise InvalidInputError(f"`time_s` must be strictly increasing; "
+                                        f"{float(full[i + 1])!r} s follows {float(full[i])!r} s")
             gap = dt > 1.5 * nominal
             if gap.any():
                 i = int(np.argmax(gap))
