@@ -108,5 +108,6 @@ def test_result_round_trip_and_noise_names() -> None:
     assert res.noise_types[0].startswith("white rate")
     np.testing.assert_allclose(res.variance, res.deviation**2)
     assert np.all(res.ci_low < res.deviation) and np.all(res.deviation < res.ci_high)
-    with pytest.raises(InvalidInputError, match=r"deviation result is missing \['averaging_factors', 'ci_high'"):
+    with pytest.raises(InvalidInputError,
+                       match=r"deviation result is missing \['averaging_factors', 'ci_high'"):
         DeviationResult.from_dict({"kind": "oadev"})

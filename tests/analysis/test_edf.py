@@ -100,7 +100,7 @@ def test_confidence_interval_is_the_chi2_interval() -> None:
     assert ONE_SIGMA == pytest.approx(0.6826894921370859)
     with pytest.raises(InvalidInputError, match=r"`confidence` must be in \(0, 1\); got 1.5"):
         compute_confidence_interval(1.0, 5.0, 1.5)
-    with pytest.raises(InvalidInputError, match="`edf` must be > 0; got minimum 0.0"):
+    with pytest.raises(InvalidInputError, match=r"`edf` must be > 0; got minimum 0\.0"):
         compute_confidence_interval(1.0, 0.0)
 
 

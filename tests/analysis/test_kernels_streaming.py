@@ -18,8 +18,8 @@ from imucalib.analysis import (
     kernel_backend,
     set_kernel_backend,
 )
-from imucalib.analysis import _allan_kernels as kernels
 from imucalib.analysis import _allan_engine as engine
+from imucalib.analysis import _allan_kernels as kernels
 from imucalib.analysis.streaming import FilePhase
 from imucalib.errors import InvalidInputError
 
@@ -161,7 +161,8 @@ def test_stream_state_and_errors(tmp_path) -> None:
         assert s.scratch_path is None
         s.append(record(10))
         assert s.scratch_path is not None and s.scratch_path.exists()
-        with pytest.raises(InvalidInputError, match=r"sample 17 \(t = 0.17 s from the start\) is NaN"):
+        with pytest.raises(InvalidInputError,
+                           match=r"sample 17 \(t = 0.17 s from the start\) is NaN"):
             s.append(np.array([0.1, 0.2, np.nan]))
         with pytest.raises(InvalidInputError, match=r"`samples` must be 1-D; got shape \(2, 2\)"):
             s.append(np.zeros((2, 2)))
@@ -171,8 +172,10 @@ def test_stream_state_and_errors(tmp_path) -> None:
             s.append([1.0])
         path = s.scratch_path
     assert path is not None and not path.exists()
-    with AllanStream(100.0) as s, pytest.raises(InvalidInputError, match="data too short: need at least"):
+    with AllanStream(100.0) as s, pytest.raises(InvalidInputError,
+                                                match="data too short: need at least"):
         s.append([1.0, 2.0])
         s.compute()
-    with pytest.raises(InvalidInputError, match="`memory_limit_samples` must be an int ≥ 0; got -1"):
+    with pytest.raises(InvalidInputError,
+                       match="`memory_limit_samples` must be an int ≥ 0; got -1"):
         AllanStream(1.0, memory_limit_samples=-1)
