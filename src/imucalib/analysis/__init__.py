@@ -18,7 +18,7 @@ Contents
     :class:`NoiseIdentification`, :data:`NOISE_TYPES`, :data:`ONE_SIGMA`.
 :mod:`imucalib.analysis.noise_fit`
     :func:`fit_noise_terms`, :class:`NoiseFit`, :class:`NoiseTerm`, :func:`read_slope_lines`,
-    :func:`term_avar`, :data:`FIT_TERMS`, :data:`FLICKER_FACTOR`.
+    :func:`term_avar`, :func:`make_noise_term`, :data:`FIT_TERMS`, :data:`FLICKER_FACTOR`.
 :mod:`imucalib.analysis.noise_units`
     :func:`convert_noise_term`, :class:`UnitValue`, :data:`DENSITY_CONVENTION`.
 :func:`kernel_backend`, :func:`set_kernel_backend`
@@ -60,6 +60,7 @@ from imucalib.analysis.noise_fit import (
     NoiseFit,
     NoiseTerm,
     fit_noise_terms,
+    make_noise_term,
     read_slope_lines,
     term_avar,
 )
@@ -105,6 +106,7 @@ __all__ = [
     "fit_noise_terms",
     "identify_noise_lag1",
     "kernel_backend",
+    "make_noise_term",
     "read_slope_lines",
     "resolve_averaging_factors",
     "set_kernel_backend",

@@ -7,7 +7,7 @@ Contents
 :func:`read_slope_lines`
     The classical readings of `../shared/reference/standards.md` §2.4 (each on the points where
     its term dominates), plus the Allan minimum with and without the 0.664 factor.
-:class:`NoiseTerm`, :data:`FIT_TERMS`, :func:`term_avar`
+:class:`NoiseTerm`, :func:`make_noise_term`, :data:`FIT_TERMS`, :func:`term_avar`
 
 Model (standards.md §2.4, two-sided densities; [1]_ Annex C)
 -----------------------------------------------------------
@@ -58,7 +58,7 @@ from imucalib.analysis.noise_units import (
 from imucalib.errors import InvalidInputError
 
 __all__ = ["FIT_TERMS", "FLICKER_FACTOR", "NoiseFit", "NoiseTerm", "fit_noise_terms",
-           "read_slope_lines", "term_avar"]
+           "make_noise_term", "read_slope_lines", "term_avar"]
 
 F64 = NDArray[np.float64]
 #: Terms of the power-law model, in τ-power order −2 … 2.
@@ -132,11 +132,28 @@ class NoiseTerm:
         return cls(**kw)
 
 
-def _make_term(sensor: str, name: str, value: float, std: float, taus: tuple[float, float],
-               method: str, detected: bool) -> NoiseTerm:
-    return NoiseTerm(name, TERM_LABELS[sensor][name], float(value), float(std),
-                     SI_UNITS[sensor][name], (float(taus[0]), float(taus[1])), method,
-                     bool(detected), convert_noise_term(sensor, name, value, std))
+def make_noise_term(sensor: str, name: str, value_si: float, std_si: float = math.nan,
+                    tau_range_s: tuple[float, float] = (math.nan, math.nan),
+                    method: str = "given", detected: bool = True) -> NoiseTerm:
+    """Build a :class:`NoiseTerm` (label, SI unit and conversions filled in).
+
+    For values from elsewhere (a datasheet, another tool) that should be exported or tabulated
+    like fitted ones. `value_si` is the two-sided SI coefficient (:mod:`.noise_units`).
+
+    Raises
+    ------
+    InvalidInputError
+        Unknown sensor or term name.
+    """
+    if sensor not in SI_UNITS or name not in SI_UNITS[sensor]:
+        raise InvalidInputError(f"unknown sensor/term {sensor!r}/{name!r}; terms: "
+                                f"{sorted(SI_UNITS['gyro'])}")
+    return NoiseTerm(name, TERM_LABELS[sensor][name], float(value_si), float(std_si),
+                     SI_UNITS[sensor][name], (float(tau_range_s[0]), float(tau_range_s[1])),
+                     method, bool(detected), convert_noise_term(sensor, name, value_si, std_si))
+
+
+_make_term = make_noise_term
 
 
 @dataclass(frozen=True, eq=False)
