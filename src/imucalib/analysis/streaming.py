@@ -32,6 +32,7 @@ the streamed result **equals the in-memory one bit for bit** whatever the chunki
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from collections.abc import Iterable
@@ -199,6 +200,16 @@ class SamplingCheck:
     def n_samples(self) -> int:
         """Stamps seen so far."""
         return self._count
+
+    @property
+    def t_first_s(self) -> float:
+        """First stamp [s] (NaN before any)."""
+        return math.nan if self._first is None else self._first
+
+    @property
+    def t_last_s(self) -> float:
+        """Last stamp [s] (NaN before any)."""
+        return math.nan if self._last is None else self._last
 
     def sample_rate_hz(self) -> float:
         """(n − 1)/(t_last − t_first) [Hz]; InvalidInputError before two stamps."""
