@@ -126,9 +126,14 @@ class NoiseTerm:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> NoiseTerm:
         """Inverse of :meth:`to_dict`."""
+        def num(v: Any) -> float:
+            return math.nan if v is None else float(v)
+
         kw = dict(data)
-        kw["tau_range_s"] = tuple(float(v) for v in kw["tau_range_s"])
-        kw["display"] = tuple(UnitValue(**u) for u in kw.get("display", ()))
+        kw["value_si"], kw["std_si"] = num(kw["value_si"]), num(kw["std_si"])
+        kw["tau_range_s"] = tuple(num(v) for v in kw["tau_range_s"])
+        kw["display"] = tuple(UnitValue(u["unit"], num(u["value"]), num(u["std"]),
+                                        u.get("note", "")) for u in kw.get("display", ()))
         return cls(**kw)
 
 
@@ -214,7 +219,8 @@ class NoiseFit:
                    coefficients=np.asarray(data["coefficients"], dtype=np.float64),
                    covariance=np.asarray(data["covariance"], dtype=np.float64).reshape(
                        len(data["fitted_terms"]), len(data["fitted_terms"])),
-                   chi2=float(data["chi2"]), dof=int(data["dof"]),
+                   chi2=math.nan if data["chi2"] is None else float(data["chi2"]),
+                   dof=int(data["dof"]),
                    taus_s=np.asarray(data["taus_s"], dtype=np.float64),
                    markov_time_constant_s=data.get("markov_time_constant_s"))
 

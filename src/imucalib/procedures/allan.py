@@ -177,8 +177,8 @@ class NoiseCharacterization:
                 "segments": [s.to_dict() for s in self.segments]}
 
     def to_json(self) -> str:
-        """Versioned JSON text; :meth:`from_json` rebuilds the result exactly."""
-        return json.dumps(self.to_dict(), ensure_ascii=False)
+        """Versioned, strict JSON text (NaN written as null); :meth:`from_json` rebuilds it."""
+        return json.dumps(_strict(self.to_dict()), ensure_ascii=False, allow_nan=False)
 
     @classmethod
     def from_json(cls, text: str) -> NoiseCharacterization:
@@ -211,6 +211,17 @@ class NoiseCharacterization:
     def load(cls, path: str | os.PathLike[str]) -> NoiseCharacterization:
         """Read a file written by :meth:`save`."""
         return cls.from_json(Path(path).read_text(encoding="utf-8"))
+
+
+def _strict(obj: Any) -> Any:
+    """Replace non-finite floats by None (JSON has no NaN); readers turn None back into NaN."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _strict(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_strict(v) for v in obj]
+    return obj
 
 
 def _select_unit(rec: Recording, device: str, unit: str | None) -> str:
