@@ -74,9 +74,10 @@ def test_uniform_sampling_check() -> None:
         check_uniform_sampling(gap)
     bad = t.copy()
     bad[500] += 0.0002
-    with pytest.raises(InvalidInputError, match=r"interval 499 is 0.0052 s, 4.00% off the nominal"):
+    with pytest.raises(InvalidInputError, match=r"the interval after t = 2.495000 s is 0.0052 s, "
+                                                r"4.00% off the nominal 0.005 s"):
         check_uniform_sampling(bad)
-    with pytest.raises(InvalidInputError, match=r"stamp 11 \(0.05 s\) follows 0.05 s"):
+    with pytest.raises(InvalidInputError, match=r"strictly increasing; 0.05 s follows 0.05 s"):
         check_uniform_sampling(np.concatenate([t[:11], t[10:]]))
     with pytest.raises(InvalidInputError, match=r"`time_s` must be 1-D with ≥ 2 stamps"):
         check_uniform_sampling([1.0])

@@ -8,10 +8,10 @@ Contents
     :class:`DeviationResult`, :func:`compute_deviation` and :func:`compute_adev`,
     :func:`compute_oadev`, :func:`compute_mdev`, :func:`compute_tdev`, :func:`compute_hdev`,
     :func:`compute_ohdev`, :func:`compute_totdev`; :func:`resolve_averaging_factors`,
-    :func:`check_uniform_sampling`, :data:`DEVIATION_KINDS`.
+    :func:`check_uniform_sampling`, :class:`SamplingCheck`, :data:`DEVIATION_KINDS`.
 :mod:`imucalib.analysis.streaming`
-    :class:`AllanStream`, :func:`compute_deviations_streaming`, :class:`SamplingCheck`
-    (exact results in bounded memory).
+    :class:`AllanStream`, :func:`compute_deviations_streaming` (exact results in bounded
+    memory).
 :mod:`imucalib.analysis.edf`
     :func:`compute_edf`, :func:`compute_edf_greenhall`, :func:`compute_edf_totdev`,
     :func:`compute_confidence_interval`, :func:`identify_noise_lag1`,
@@ -33,6 +33,7 @@ from imucalib.analysis._allan_kernels import set_backend as set_kernel_backend
 from imucalib.analysis.allan import (
     DEVIATION_KINDS,
     DeviationResult,
+    SamplingCheck,
     check_uniform_sampling,
     compute_adev,
     compute_deviation,
@@ -65,11 +66,7 @@ from imucalib.analysis.noise_fit import (
     term_avar,
 )
 from imucalib.analysis.noise_units import DENSITY_CONVENTION, UnitValue, convert_noise_term
-from imucalib.analysis.streaming import (
-    AllanStream,
-    SamplingCheck,
-    compute_deviations_streaming,
-)
+from imucalib.analysis.streaming import AllanStream, compute_deviations_streaming
 
 # --- end noise ---
 

@@ -30,13 +30,12 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.analysis._allan_kernels import BLOCK, get_kernels
+from imucalib.analysis._allan_kernels import get_kernels
 
 __all__ = [
     "ArrayPhase",
@@ -255,10 +254,3 @@ def decimated_averages(source: PhaseSource, m: int, tau0_s: float, max_points: i
     x = source.read(k0 * m, (k0 + k) * m + 1, m)
     out: F64 = np.diff(x) / (m * tau0_s)
     return out
-
-
-def check_sequence(values: Sequence[int]) -> None:  # pragma: no cover - debugging aid
-    """Assert that superblocks are multiples of BLOCK (used by sources' constructors)."""
-    for v in values:
-        if v % BLOCK:
-            raise ValueError(f"superblock {v} is not a multiple of {BLOCK}")

@@ -11,8 +11,8 @@ Contents
 :func:`resolve_averaging_factors`
     The τ grid: ``"octave"``, ``"decade"``, ``"all"``, an int (log-spaced, that many per decade)
     or explicit τ values [s].
-:func:`check_uniform_sampling`
-    Sample rate from time stamps, refusing gaps and jitter.
+:func:`check_uniform_sampling`, :class:`SamplingCheck`
+    Sample rate from time stamps (all at once, or chunk by chunk), refusing gaps and jitter.
 :data:`DEVIATION_KINDS`
 
 Data
@@ -64,6 +64,7 @@ from imucalib.errors import InvalidInputError
 __all__ = [
     "DEVIATION_KINDS",
     "DeviationResult",
+    "SamplingCheck",
     "TauSpec",
     "check_uniform_sampling",
     "compute_adev",
@@ -156,41 +157,98 @@ class DeviationResult:
         return cls(**kw)
 
 
+class SamplingCheck:
+    """Check time stamps chunk by chunk for gaps and jitter; the sample rate at the end.
+
+    The nominal interval is the median interval of the first chunk given. A gap is an interval
+    longer than 1.5 nominal intervals; jitter an interval off the nominal by more than `rtol`
+    (relative); both raise :class:`~imucalib.errors.InvalidInputError` giving the time, as do
+    non-increasing or non-finite stamps.
+    """
+
+    def __init__(self, *, rtol: float = 0.01) -> None:
+        self.rtol = rtol
+        self._first: float | None = None
+        self._last: float | None = None
+        self._nominal: float | None = None
+        self._count = 0
+
+    def update(self, time_s: ArrayLike) -> None:
+        """Check the next stamps (1-D) [s]; raise InvalidInputError on a gap or jitter."""
+        t = np.asarray(time_s, dtype=np.float64).ravel()
+        if t.size == 0:
+            return
+        if not np.all(np.isfinite(t)):
+            raise InvalidInputError("`time_s` must be finite; got NaN or infinite stamps")
+        full = t if self._last is None else np.concatenate([[self._last], t])
+        dt = np.diff(full)
+        if self._nominal is None and dt.size:
+            self._nominal = float(np.median(dt))
+        if dt.size and self._nominal is not None:
+            nominal = self._nominal
+            bad_order = dt <= 0
+            if bad_order.any() or not nominal > 0:
+                i = int(np.argmax(bad_order))
+                raise InvalidInputError(f"`time_s` must be strictly increasing; "
+                                        f"{float(full[i + 1])!r} s follows {float(full[i])!r} s")
+            gap = dt > 1.5 * nominal
+            if gap.any():
+                i = int(np.argmax(gap))
+                raise InvalidInputError(
+                    f"non-uniform sampling: a gap of {dt[i]:.6g} s (nominal interval "
+                    f"{nominal:.6g} s) after t = {full[i]:.6f} s; Allan deviations need gap-free "
+                    "data: analyse the pieces separately")
+            dev = np.abs(dt / nominal - 1)
+            if np.any(dev > self.rtol):
+                i = int(np.argmax(dev))
+                raise InvalidInputError(
+                    f"non-uniform sampling: the interval after t = {full[i]:.6f} s is "
+                    f"{dt[i]:.6g} s, {dev[i]:.2%} off the nominal {nominal:.6g} s (tolerance "
+                    f"{self.rtol:.2%}); resample onto a uniform grid first")
+        if self._first is None:
+            self._first = float(t[0])
+        self._last = float(t[-1])
+        self._count += t.size
+
+    @property
+    def n_samples(self) -> int:
+        """Stamps seen so far."""
+        return self._count
+
+    @property
+    def t_first_s(self) -> float:
+        """First stamp [s] (NaN before any)."""
+        return math.nan if self._first is None else self._first
+
+    @property
+    def t_last_s(self) -> float:
+        """Last stamp [s] (NaN before any)."""
+        return math.nan if self._last is None else self._last
+
+    def sample_rate_hz(self) -> float:
+        """(n − 1)/(t_last − t_first) [Hz]; InvalidInputError before two stamps."""
+        if self._count < 2 or self._first is None or self._last is None:
+            raise InvalidInputError(f"need at least 2 time stamps; got {self._count}")
+        return (self._count - 1) / (self._last - self._first)
+
+
 def check_uniform_sampling(time_s: ArrayLike, *, rtol: float = 0.01) -> float:
     """Return the sample rate [Hz] of uniformly spaced time stamps `time_s` [s].
+
+    (n − 1)/(t_last − t_first), after the checks of :class:`SamplingCheck` on the whole array.
 
     Raises
     ------
     InvalidInputError
-        Fewer than 2 stamps, non-finite or non-increasing stamps, a gap (an interval more than
-        1.5 nominal intervals: the message gives where), or jitter: an interval that differs from
-        the median by more than `rtol` (relative).
+        Fewer than 2 stamps or not 1-D, non-finite or non-increasing stamps, a gap or jitter
+        (the message says where).
     """
     t = np.asarray(time_s, dtype=np.float64)
     if t.ndim != 1 or t.size < 2:
         raise InvalidInputError(f"`time_s` must be 1-D with ≥ 2 stamps; got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise InvalidInputError("`time_s` must be finite; got NaN or infinite stamps")
-    dt = np.diff(t)
-    nominal = float(np.median(dt))
-    if not nominal > 0 or np.any(dt <= 0):
-        i = int(np.argmax(dt <= 0))
-        raise InvalidInputError(f"`time_s` must be strictly increasing; stamp {i + 1} "
-                                f"({float(t[i + 1])!r} s) follows {float(t[i])!r} s")
-    gap = dt > 1.5 * nominal
-    if gap.any():
-        i = int(np.argmax(gap))
-        raise InvalidInputError(
-            f"non-uniform sampling: a gap of {dt[i]:.6g} s (nominal interval {nominal:.6g} s) "
-            f"after t = {t[i]:.6f} s (sample {i}); {int(gap.sum())} gap(s) in all. Allan "
-            "deviations need gap-free data: analyse the pieces separately")
-    dev = np.abs(dt / nominal - 1)
-    if np.any(dev > rtol):
-        i = int(np.argmax(dev))
-        raise InvalidInputError(
-            f"non-uniform sampling: interval {i} is {dt[i]:.6g} s, {dev[i]:.2%} off the nominal "
-            f"{nominal:.6g} s (tolerance {rtol:.2%}); resample onto a uniform grid first")
-    return 1.0 / float((t[-1] - t[0]) / (t.size - 1))
+    check = SamplingCheck(rtol=rtol)
+    check.update(t)
+    return check.sample_rate_hz()
 
 
 def resolve_averaging_factors(taus: TauSpec, n_phase: int, sample_rate_hz: float,

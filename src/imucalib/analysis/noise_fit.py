@@ -56,6 +56,7 @@ from imucalib.analysis.noise_units import (
     convert_noise_term,
 )
 from imucalib.errors import InvalidInputError
+from imucalib.models.noise import FLICKER_ALLAN_FACTOR, NoiseModel, compute_theoretical_adev
 
 __all__ = ["FIT_TERMS", "FLICKER_FACTOR", "NoiseFit", "NoiseTerm", "fit_noise_terms",
            "make_noise_term", "read_slope_lines", "term_avar"]
@@ -65,8 +66,8 @@ F64 = NDArray[np.float64]
 FIT_TERMS = ("quantization", "white", "bias_instability", "random_walk", "rate_ramp")
 _POWER = {"quantization": -2, "white": -1, "bias_instability": 0, "random_walk": 1,
           "rate_ramp": 2}
-#: σ_Allan plateau of flicker noise divided by B: √(2 ln 2/π) = 0.6643.
-FLICKER_FACTOR = math.sqrt(2 * math.log(2) / math.pi)
+#: σ_Allan plateau of flicker noise divided by B: √(2 ln 2/π) = 0.6643 (models.noise's).
+FLICKER_FACTOR = FLICKER_ALLAN_FACTOR
 # c_p = k_p·P², P the physical coefficient
 _K = {"quantization": 3.0, "white": 1.0, "bias_instability": FLICKER_FACTOR**2,
       "random_walk": 1 / 3, "rate_ramp": 0.5}
@@ -91,13 +92,11 @@ def term_avar(term: str, value_si: float, tau_s: ArrayLike,
 def _markov_shape(tau: F64, tc: float) -> F64:
     """Return the AVAR of a unit-variance first-order Gauss–Markov rate (standards.md §2.4).
 
-    2(T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))], with its series for τ ≪ T.
+    2(T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))], as :func:`compute_theoretical_adev` of
+    :mod:`imucalib.models.noise` gives it.
     """
-    r = tau / tc
-    with np.errstate(divide="ignore", invalid="ignore"):
-        br = 1 - (-4 * np.expm1(-r) + np.expm1(-2 * r)) / (2 * r)
-    br = np.where(r < 1e-3, r**2 / 3 - r**3 / 4 + 7 * r**4 / 60, br)
-    out: F64 = 2 / r * br
+    model = NoiseModel(markov_sigma=1.0, markov_time_constant_s=tc)
+    out: F64 = compute_theoretical_adev(model, tau)[:, 0] ** 2
     return out
 
 
@@ -244,8 +243,8 @@ def _amplitudes(names: Sequence[str], c: F64) -> tuple[dict[str, float], float]:
     return amps, ramp
 
 
-def _gls(x: F64, a: F64, sigma: F64) -> tuple[F64, F64, F64]:
-    """NNLS on the whitened system; return c, the whitening (solve) operator, and Σ⁻¹."""
+def _gls(x: F64, a: F64, sigma: F64) -> tuple[F64, F64]:
+    """NNLS on the Cholesky-whitened system; return the coefficients c and Σ⁻¹."""
     d = 1 / np.sqrt(np.diag(sigma))
     corr = sigma * np.outer(d, d)
     chol = linalg.cholesky(corr + 1e-12 * np.eye(d.size), lower=True)
@@ -254,7 +253,7 @@ def _gls(x: F64, a: F64, sigma: F64) -> tuple[F64, F64, F64]:
     scale = 1 / np.maximum(np.linalg.norm(xw, axis=0), 1e-300)
     sol, _ = optimize.nnls(xw * scale, aw, maxiter=50 * x.shape[1])
     inv = np.outer(d, d) * linalg.cho_solve((chol, True), np.eye(d.size))
-    return sol * scale, xw, inv
+    return sol * scale, inv
 
 
 def _sigma(names: Sequence[str], c: F64, tau: F64, a: F64, edf: F64, ms: tuple[int, ...],
@@ -335,18 +334,18 @@ def fit_noise_terms(result: DeviationResult, *, sensor: str = "gyro",
     if search:
         tc = _best_markov_tc(names, tau, a, sigma, tau0)
     x = _design(names, tau, tc)
-    c, _, _ = _gls(x, a, sigma)
+    c, _ = _gls(x, a, sigma)
     for it in range(max_iterations):
         sigma = _sigma(names, c, tau, a, edf, ms, n_phase, tau0, tc)
         if search and it < 3:  # T_c against the full covariance, a few times
             tc = _best_markov_tc(names, tau, a, sigma, tau0)
             x = _design(names, tau, tc)
-        c_new, _, _ = _gls(x, a, sigma)
+        c_new, _ = _gls(x, a, sigma)
         done = np.allclose(c_new, c, rtol=1e-7, atol=1e-12 * float(np.max(np.abs(c_new)) + 1e-300))
         c = c_new
         if done:
             break
-    _, _, inv = _gls(x, a, sigma)
+    _, inv = _gls(x, a, sigma)
     resid = a - x @ c
     chi2 = float(resid @ inv @ resid)
     active = c > 0
@@ -393,7 +392,7 @@ def _best_markov_tc(names: Sequence[str], tau: F64, a: F64, w: F64, tau0: float)
 
     def chi2(log_tc: float) -> float:
         x = _design(names, tau, math.exp(log_tc))
-        c, _, inv = _gls(x, a, w)
+        c, inv = _gls(x, a, w)
         r = a - x @ c
         return float(r @ inv @ r)
 

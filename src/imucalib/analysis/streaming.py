@@ -7,8 +7,6 @@ Contents
     :meth:`~AllanStream.compute` any estimators of :mod:`imucalib.analysis.allan`.
 :func:`compute_deviations_streaming`
     The same for an iterable of chunks.
-:class:`SamplingCheck`
-    Incremental version of :func:`imucalib.analysis.allan.check_uniform_sampling`.
 :class:`FilePhase`
     The scratch-file phase source.
 
@@ -32,7 +30,6 @@ the streamed result **equals the in-memory one bit for bit** whatever the chunki
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 from collections.abc import Iterable
@@ -57,7 +54,7 @@ from imucalib.analysis.allan import (
 from imucalib.analysis.edf import ONE_SIGMA
 from imucalib.errors import InvalidInputError
 
-__all__ = ["AllanStream", "FilePhase", "SamplingCheck", "compute_deviations_streaming"]
+__all__ = ["AllanStream", "FilePhase", "compute_deviations_streaming"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -143,79 +140,6 @@ class FilePhase:
             self._read_range(buf[base[g]:base[g + 1]], a)
         starts = base[owner] + (lo - np.array([groups[g][0] for g in owner], dtype=np.int64))
         return buf, starts.astype(np.int64)
-
-
-class SamplingCheck:
-    """Check time stamps chunk by chunk for gaps and jitter; the sample rate at the end.
-
-    The nominal interval is the median interval of the first chunk; the rules and messages are
-    those of :func:`imucalib.analysis.allan.check_uniform_sampling`.
-    """
-
-    def __init__(self, *, rtol: float = 0.01) -> None:
-        self.rtol = rtol
-        self._first: float | None = None
-        self._last: float | None = None
-        self._nominal: float | None = None
-        self._count = 0
-
-    def update(self, time_s: ArrayLike) -> None:
-        """Check the next stamps (1-D) [s]; raise InvalidInputError on a gap or jitter."""
-        t = np.asarray(time_s, dtype=np.float64).ravel()
-        if t.size == 0:
-            return
-        if not np.all(np.isfinite(t)):
-            raise InvalidInputError("`time_s` must be finite; got NaN or infinite stamps")
-        full = t if self._last is None else np.concatenate([[self._last], t])
-        dt = np.diff(full)
-        if self._nominal is None and dt.size:
-            self._nominal = float(np.median(dt))
-        if dt.size and self._nominal is not None:
-            nominal = self._nominal
-            bad_order = dt <= 0
-            if bad_order.any() or not nominal > 0:
-                i = int(np.argmax(bad_order))
-                raise InvalidInputError(f"`time_s` must be strictly increasing; "
-                                        f"{float(full[i + 1])!r} s follows {float(full[i])!r} s")
-            gap = dt > 1.5 * nominal
-            if gap.any():
-                i = int(np.argmax(gap))
-                raise InvalidInputError(
-                    f"non-uniform sampling: a gap of {dt[i]:.6g} s (nominal interval "
-                    f"{nominal:.6g} s) after t = {full[i]:.6f} s; Allan deviations need gap-free "
-                    "data: analyse the pieces separately")
-            dev = np.abs(dt / nominal - 1)
-            if np.any(dev > self.rtol):
-                i = int(np.argmax(dev))
-                raise InvalidInputError(
-                    f"non-uniform sampling: the interval after t = {full[i]:.6f} s is "
-                    f"{dt[i]:.6g} s, {dev[i]:.2%} off the nominal {nominal:.6g} s (tolerance "
-                    f"{self.rtol:.2%}); resample onto a uniform grid first")
-        if self._first is None:
-            self._first = float(t[0])
-        self._last = float(t[-1])
-        self._count += t.size
-
-    @property
-    def n_samples(self) -> int:
-        """Stamps seen so far."""
-        return self._count
-
-    @property
-    def t_first_s(self) -> float:
-        """First stamp [s] (NaN before any)."""
-        return math.nan if self._first is None else self._first
-
-    @property
-    def t_last_s(self) -> float:
-        """Last stamp [s] (NaN before any)."""
-        return math.nan if self._last is None else self._last
-
-    def sample_rate_hz(self) -> float:
-        """(n − 1)/(t_last − t_first) [Hz]; InvalidInputError before two stamps."""
-        if self._count < 2 or self._first is None or self._last is None:
-            raise InvalidInputError(f"need at least 2 time stamps; got {self._count}")
-        return (self._count - 1) / (self._last - self._first)
 
 
 class AllanStream:

@@ -54,7 +54,7 @@ from imucalib.analysis.allan import TauSpec
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import InvalidInputError
 from imucalib.io.noise_export import ImuNoiseParameters, noise_parameters_from_fits
-from imucalib.io.reader import Recording, StepRecord, open_recording
+from imucalib.io.reader import Recording, open_recording
 from imucalib.units import parse_unit
 
 __all__ = ["FORMAT_VERSION", "STATIC_STEP_KINDS", "ChannelNoise", "NoiseCharacterization",
@@ -279,15 +279,9 @@ def _windows(rec: Recording, steps: Iterable[int] | None
         chosen = [rec.step(int(i)) for i in steps]
     out: list[tuple[str, int | None, float | None, float | None]] = []
     for st in chosen:
-        t0, t1 = _window(st)
+        t0, t1 = rec.step_window(st.index, valid_only=st.has_valid_window)
         out.append((st.label or f"step {st.index}", st.index, t0, t1))
     return out
-
-
-def _window(st: StepRecord) -> tuple[float, float | None]:
-    if st.has_valid_window:
-        return st.valid_start_s, st.valid_end_s
-    return st.t_start_s, st.t_end_s if math.isfinite(st.t_end_s) else None
 
 
 def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
