@@ -1,15 +1,27 @@
-"""Procedures: one module per procedure, with its default plan and its analysis.
+"""Procedures: one module per calibration procedure (plan generator and analysis).
 
 Contents
 --------
+:mod:`imucalib.procedures.allan`
+    :func:`analyze_allan_recording`, :class:`NoiseCharacterization`, :class:`SegmentNoise`,
+    :class:`ChannelNoise`, :data:`STATIC_STEP_KINDS`.
 :mod:`imucalib.procedures.p1_plan`
     :func:`generate_p1_plan`: SPEC.md P1's plan (six positions, static bias, rates, held-out
     checks, repetitions).
+:mod:`imucalib.procedures.p1`
+    :func:`~imucalib.procedures.p1.analyze_p1` (imported from its module: it pulls in the
+    whole analysis chain).
 """
 
 from __future__ import annotations
 
-# --- p1 ---
+from imucalib.procedures.allan import (
+    STATIC_STEP_KINDS,
+    ChannelNoise,
+    NoiseCharacterization,
+    SegmentNoise,
+    analyze_allan_recording,
+)
 from imucalib.procedures.p1_plan import (
     P1_HELD_OUT_POSITIONS_DEG,
     P1_SIX_POSITIONS_DEG,
@@ -19,6 +31,10 @@ from imucalib.procedures.p1_plan import (
 __all__ = [
     "P1_HELD_OUT_POSITIONS_DEG",
     "P1_SIX_POSITIONS_DEG",
+    "STATIC_STEP_KINDS",
+    "ChannelNoise",
+    "NoiseCharacterization",
+    "SegmentNoise",
+    "analyze_allan_recording",
     "generate_p1_plan",
 ]
-# --- end p1 ---

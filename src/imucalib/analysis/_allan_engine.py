@@ -1,0 +1,256 @@
+"""Block drivers of the Allan-family estimators over a phase source (private).
+
+A *phase source* holds the phase (angle) series x_0 … x_{n−1} of one channel, either in memory
+(:class:`ArrayPhase`) or in a scratch file (:class:`imucalib.analysis.streaming.FilePhase`). The
+drivers below read it in superblocks (multiples of :data:`~._allan_kernels.BLOCK` terms) and
+call the kernels of :mod:`._allan_kernels`; the reduction blocks and their order do not depend
+on the source or the superblock size, so a streamed computation equals the in-memory one bit for
+bit.
+
+Estimator sums (NIST SP 1065 [1]_, phase x, n = number of phase points, m = averaging factor):
+
+=========  ===========================================  ==================================
+kind       sum                                          number of terms
+=========  ===========================================  ==================================
+adev       Σ_k (x[km+2m] − 2x[km+m] + x[km])²            ⌈(n − 2m)/m⌉        eq. (7)
+oadev      Σ_i (x[i+2m] − 2x[i+m] + x[i])²               n − 2m              eq. (11)
+mdev       Σ_j (Σ_{i=j}^{j+m−1} x[i+2m] − 2x[i+m] + x[i])²   n − 3m + 1      eq. (14)
+hdev       Σ_k (x[km+3m] − 3x[km+2m] + 3x[km+m] − x[km])²  ⌈(n − 3m)/m⌉      eq. (18)
+ohdev      Σ_i (x[i+3m] − 3x[i+2m] + 3x[i+m] − x[i])²    n − 3m              eq. (20)
+totdev     Σ_{i=1}^{n−2} (x*[i−m] − 2x*[i] + x*[i+m])²   n − 2               eq. (25)
+=========  ===========================================  ==================================
+
+x* is x extended by reflection at both ends: x*[−j] = 2x[0] − x[j] and
+x*[n−1+j] = 2x[n−1] − x[n−1−j] for j = 1 … n−2.
+
+References
+----------
+.. [1] W. J. Riley, "Handbook of Frequency Stability Analysis", NIST SP 1065, 2008.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.analysis._allan_kernels import get_kernels
+
+__all__ = [
+    "ArrayPhase",
+    "PhaseSource",
+    "n_terms",
+    "read_reflected",
+    "sum_nonoverlapping",
+    "sum_overlapping",
+    "sums_mdev",
+    "sums_totdev",
+]
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+KINDS = ("adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev")
+
+
+class PhaseSource(Protocol):
+    """Read access to a phase series x_0 … x_{n−1} [angle units]."""
+
+    @property
+    def n_phase(self) -> int:
+        """Number of phase points n."""
+
+    @property
+    def superblock(self) -> int:
+        """Terms handled per kernel call (a multiple of BLOCK)."""
+
+    def read(self, start: int, stop: int, step: int = 1) -> F64:
+        """x[start:stop:step] as a contiguous float64 array (0 ≤ start ≤ stop ≤ n)."""
+
+    def gather(self, start: int, offsets: I64, length: int) -> tuple[F64, I64]:
+        """Windows x[start+o : start+o+length] (cut at n): one buffer and each window's start."""
+
+
+class ArrayPhase:
+    """A phase series held in memory (windows are views: nothing is copied)."""
+
+    superblock = 1 << 16
+
+    def __init__(self, phase: F64) -> None:
+        self._x = phase
+
+    @property
+    def n_phase(self) -> int:
+        return int(self._x.size)
+
+    def read(self, start: int, stop: int, step: int = 1) -> F64:
+        return np.ascontiguousarray(self._x[start:stop:step])
+
+    def gather(self, start: int, offsets: I64, length: int) -> tuple[F64, I64]:
+        return self._x, (start + offsets).astype(np.int64)
+
+
+def n_terms(kind: str, m: NDArray[np.int64] | int, n_phase: int) -> NDArray[np.int64]:
+    """Return the number of terms of estimator `kind` at averaging factors `m` (table above)."""
+    mm = np.asarray(m, dtype=np.int64)
+    n = np.int64(n_phase)
+    if kind == "oadev":
+        out = n - 2 * mm
+    elif kind == "adev":
+        out = -(-(n - 2 * mm) // mm)
+    elif kind in ("mdev", "tdev"):
+        out = n - 3 * mm + 1
+    elif kind == "ohdev":
+        out = n - 3 * mm
+    elif kind == "hdev":
+        out = -(-(n - 3 * mm) // mm)
+    elif kind == "totdev":
+        out = np.where(mm <= (n - 1) // 2, n - 2, 0)
+    else:  # pragma: no cover - callers validate
+        raise ValueError(kind)
+    return np.maximum(np.asarray(out, dtype=np.int64), 0)
+
+
+def _windows(ms: I64, order: int) -> tuple[I64, I64]:
+    """Distinct offsets {0, m, 2m(, 3m)} and, per job, the index of each of its windows."""
+    offsets = np.unique(np.concatenate([np.arange(order + 1, dtype=np.int64)[:, None] * ms]))
+    win = np.searchsorted(offsets, np.arange(order + 1, dtype=np.int64)[None, :] * ms[:, None])
+    if order == 2:
+        win = np.concatenate([win, win[:, :1]], axis=1)  # unused 4th column
+    return offsets.astype(np.int64), np.ascontiguousarray(win, dtype=np.int64)
+
+
+def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> F64:
+    """Blocked sums of squared differences of order 2 or 3 over positions i < totals_n[t]."""
+    kern = get_kernels()["sumsq_overlap"]
+    offsets, win = _windows(ms, order)
+    totals = np.zeros(ms.size)
+    n_max = int(totals_n.max(initial=0))
+    step = source.superblock
+    for start in range(0, n_max, step):
+        n_t = np.clip(totals_n - start, 0, step).astype(np.int64)
+        live = n_t > 0
+        need = np.unique(win[live, : order + 1])
+        buf, starts = source.gather(start, offsets[need], step)
+        full = np.zeros(offsets.size, dtype=np.int64)
+        full[need] = starts
+        kern(buf, full, win, n_t, order, totals)
+    return totals
+
+
+def _sum_seq(source: PhaseSource, ms: I64, totals_n: I64, order: int, power: int,
+             acc: F64 | None = None) -> F64:
+    kern = get_kernels()["sum_seq"]
+    offsets, win = _windows(ms, order)
+    acc = np.zeros(ms.size) if acc is None else acc
+    n_max = int(totals_n.max(initial=0))
+    step = source.superblock
+    for start in range(0, n_max, step):
+        n_t = np.clip(totals_n - start, 0, step).astype(np.int64)
+        need = np.unique(win[n_t > 0, : order + 1])
+        buf, starts = source.gather(start, offsets[need], step)
+        full = np.zeros(offsets.size, dtype=np.int64)
+        full[need] = starts
+        kern(buf, full, win, n_t, order, power, acc)
+    return acc
+
+
+def sum_nonoverlapping(source: PhaseSource, ms: I64, order: int) -> F64:
+    """Sequential Σ d² of the non-overlapping (stride m) estimator: the decimated series x[::m]."""
+    kern = get_kernels()["sum_seq"]
+    out = np.zeros(ms.size)
+    one = np.array([0, 1, 2, 3], dtype=np.int64)
+    win = one[None, :].copy()
+    n = source.n_phase
+    step = source.superblock
+    for t, m in enumerate(ms.tolist()):
+        n_dec = -(-n // m)  # len(x[::m])
+        n_t = n_dec - order
+        acc = np.zeros(1)
+        for start in range(0, max(n_t, 0), step):
+            cnt = min(step, n_t - start)
+            z = source.read(start * m, min(n, (start + cnt + order) * m), m)
+            kern(z, one, win, np.array([cnt], dtype=np.int64), order, 2, acc)
+        out[t] = acc[0]
+    return out
+
+
+def sums_mdev(source: PhaseSource, ms: I64) -> F64:
+    """Σ_j v_j² of the modified Allan variance, v_j the sums of m second differences.
+
+    v_0 is a sequential sum of the first m second differences; then v_{j+1} = v_j + t_j with
+    t_j the third difference at j, as in NIST SP 1065 eq. (14) (the recursion of Stable32's and
+    allantools' implementations).
+    """
+    ms = ms.astype(np.int64)
+    v0 = _sum_seq(source, ms, ms.copy(), 2, 1)
+    totals = v0 * v0
+    v = v0.copy()
+    kern = get_kernels()["mdev_running"]
+    offsets, win = _windows(ms, 3)
+    n_steps = np.maximum(source.n_phase - 3 * ms, 0).astype(np.int64)
+    step = source.superblock
+    for start in range(0, int(n_steps.max(initial=0)), step):
+        n_t = np.clip(n_steps - start, 0, step).astype(np.int64)
+        need = np.unique(win[n_t > 0])
+        buf, starts = source.gather(start, offsets[need], step)
+        full = np.zeros(offsets.size, dtype=np.int64)
+        full[need] = starts
+        kern(buf, full, win, n_t, v, totals)
+    return totals
+
+
+def read_reflected(source: PhaseSource, start: int, stop: int) -> F64:
+    """x*[start:stop] of the reflected extension (module docstring), for −(n−2) ≤ start."""
+    n = source.n_phase
+    lo, hi = max(start, 0), min(stop, n)
+    parts: list[F64] = []
+    if start < 0:
+        x0 = source.read(0, 1)[0]
+        left = source.read(1, -start + 1)[::-1]  # x[-start] … x[1]
+        parts.append(2.0 * x0 - left[: min(stop, 0) - start])
+    if hi > lo:
+        parts.append(source.read(lo, hi))
+    if stop > n:
+        xl = source.read(n - 1, n)[0]
+        a, b = max(start, n), stop  # x*[n-1+j] = 2x[n-1] − x[n-1-j], j = a-n+1 … b-n
+        right = source.read(2 * (n - 1) - (b - 1), 2 * (n - 1) - a + 1)[::-1]
+        parts.append(2.0 * xl - right)
+    if not parts:
+        return np.empty(0)
+    return np.ascontiguousarray(np.concatenate(parts))
+
+
+def sums_totdev(source: PhaseSource, ms: I64) -> F64:
+    """Σ_{i=1}^{n−2} (x*[i−m] − 2x*[i] + x*[i+m])² (NIST SP 1065 eq. (25)), blocked sums."""
+    kern = get_kernels()["sumsq_overlap"]
+    n = source.n_phase
+    totals = np.zeros(ms.size)
+    win = np.array([[0, 1, 2, 0]], dtype=np.int64)
+    step = source.superblock
+    n_centres = n - 2
+    for t, m in enumerate(ms.tolist()):
+        acc = np.zeros(1)
+        for start in range(0, n_centres, step):
+            cnt = min(step, n_centres - start)
+            base = 1 + start - m  # x* index of the first window
+            buf = np.concatenate([read_reflected(source, base + k * m, base + k * m + cnt)
+                                  for k in range(3)])
+            starts = np.array([0, cnt, 2 * cnt], dtype=np.int64)
+            kern(buf, starts, win, np.array([cnt], dtype=np.int64), 2, acc)
+        totals[t] = acc[0]
+    return totals
+
+
+def decimated_averages(source: PhaseSource, m: int, tau0_s: float, max_points: int) -> F64:
+    """Up to `max_points` consecutive τ-averages of the rate, (x[(k+1)m] − x[km])/(m·τ0).
+
+    They are taken from the middle of the record (noise identification, :mod:`..edf`).
+    """
+    n_avg = (source.n_phase - 1) // m
+    k = min(n_avg, max_points)
+    k0 = (n_avg - k) // 2
+    x = source.read(k0 * m, (k0 + k) * m + 1, m)
+    out: F64 = np.diff(x) / (m * tau0_s)
+    return out

@@ -1,0 +1,333 @@
+"""Kernels of the Allan-family deviations (private): a numba backend and its numpy twin.
+
+Every kernel exists twice, once as plain Python written for numba (``_*_nb``) and once as numpy
+(``_*_np``). The two perform the same IEEE operations in the same order, so they return
+**bit-identical** results (``tests/analysis/test_kernels.py``); numba is only faster. numba is
+imported on first use, never when :mod:`imucalib` is imported, and the numpy twin is used when
+numba is missing, fails to compile, or ``IMUCALIB_KERNELS=numpy`` is set.
+
+Canonical arithmetic (both backends)
+------------------------------------
+Phase [1]_ eq. (2): ``x_0 = 0``, ``s_k = s_{k-1} + (y_{k-1} - ȳ)``, ``x_k = s_k·τ0`` (one
+sequential sum; the mean ȳ is removed first, as allantools does, to keep the phase small).
+
+Differences: second ``d = (x[i+2m] - 2·x[i+m]) + x[i]`` (Allan, total), third
+``d = ((x[i+3m] - 3·x[i+2m]) + 3·x[i+m]) - x[i]`` (Hadamard, modified-Allan recursion).
+
+Sums of squares of an overlapping estimator are taken in blocks of :data:`BLOCK` consecutive
+terms (the last one zero-padded): each block is reduced by repeated halving
+(``e_i += e_{i+h}``, h = BLOCK/2, …, 1; the first three halvings are fused, which does not change
+the order) and the block sums are added sequentially. The tree vectorises without re-ordering,
+and its rounding error grows like log₂(BLOCK) instead of BLOCK. Other sums (non-overlapping
+estimators, the modified-Allan running sum) are plain sequential sums.
+
+Memory layout: a kernel sees one float64 buffer ``buf`` and the positions ``starts[k]`` in it of
+the windows it needs; a job (one τ of one estimator) names its windows by index. The in-memory
+driver passes the phase array itself with ``starts = block start + offsets`` (no copy); the
+streaming driver passes windows read from its scratch file. Both feed the same blocks in the
+same order, hence equal results.
+
+References
+----------
+.. [1] W. J. Riley, "Handbook of Frequency Stability Analysis", NIST SP 1065, 2008.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "BLOCK",
+    "backend_name",
+    "get_kernels",
+    "set_backend",
+]
+
+#: Terms per reduction block of the overlapping sums (a power of two ≥ 8).
+BLOCK = 1024
+_Q = BLOCK // 8
+
+F64 = NDArray[np.float64]
+I64 = NDArray[np.int64]
+
+
+# --------------------------------------------------------------------------- numba sources
+def _phase_nb(rate: F64, mean: float, dt: float, out: F64, carry: float) -> float:
+    s = carry
+    for k in range(rate.size):
+        s += rate[k] - mean
+        out[k] = s * dt
+    return s
+
+
+def _tree_nb(buf: F64, h: int) -> float:
+    while h >= 1:
+        for i in range(h):
+            buf[i] += buf[i + h]
+        h >>= 1
+    return buf[0]
+
+
+def _block2_nb(a: F64, b: F64, c: F64, n: int, buf: F64) -> float:
+    q = _Q
+    if n == BLOCK:
+        for i in range(q):
+            d0 = (c[i] - 2.0 * b[i]) + a[i]
+            d1 = (c[i + q] - 2.0 * b[i + q]) + a[i + q]
+            d2 = (c[i + 2 * q] - 2.0 * b[i + 2 * q]) + a[i + 2 * q]
+            d3 = (c[i + 3 * q] - 2.0 * b[i + 3 * q]) + a[i + 3 * q]
+            d4 = (c[i + 4 * q] - 2.0 * b[i + 4 * q]) + a[i + 4 * q]
+            d5 = (c[i + 5 * q] - 2.0 * b[i + 5 * q]) + a[i + 5 * q]
+            d6 = (c[i + 6 * q] - 2.0 * b[i + 6 * q]) + a[i + 6 * q]
+            d7 = (c[i + 7 * q] - 2.0 * b[i + 7 * q]) + a[i + 7 * q]
+            buf[i] = (((d0 * d0) + (d4 * d4)) + ((d2 * d2) + (d6 * d6))) + (
+                ((d1 * d1) + (d5 * d5)) + ((d3 * d3) + (d7 * d7)))
+        return _tree_nb(buf, q >> 1)
+    for i in range(n):
+        d = (c[i] - 2.0 * b[i]) + a[i]
+        buf[i] = d * d
+    for i in range(n, BLOCK):
+        buf[i] = 0.0
+    return _tree_nb(buf, BLOCK >> 1)
+
+
+def _block3_nb(a: F64, b: F64, c: F64, e: F64, n: int, buf: F64) -> float:
+    for i in range(n):
+        d = ((e[i] - 3.0 * c[i]) + 3.0 * b[i]) - a[i]
+        buf[i] = d * d
+    for i in range(n, BLOCK):
+        buf[i] = 0.0
+    return _tree_nb(buf, BLOCK >> 1)
+
+
+def _sumsq_overlap_nb(buf: F64, starts: I64, win: I64, n_terms: I64, order: int,
+                      totals: F64) -> None:
+    """totals[t] += blocked tree sums of d² over the n_terms[t] terms of job t."""
+    scratch = np.empty(BLOCK)
+    n_max = 0
+    for t in range(n_terms.size):
+        n_max = max(n_max, n_terms[t])
+    for p in range(0, n_max, BLOCK):
+        for t in range(n_terms.size):
+            n = min(BLOCK, n_terms[t] - p)
+            if n <= 0:
+                continue
+            s0 = starts[win[t, 0]] + p
+            s1 = starts[win[t, 1]] + p
+            s2 = starts[win[t, 2]] + p
+            if order == 2:
+                totals[t] += _block2_nb(buf[s0:s0 + n], buf[s1:s1 + n], buf[s2:s2 + n], n,
+                                        scratch)
+            else:
+                s3 = starts[win[t, 3]] + p
+                totals[t] += _block3_nb(buf[s0:s0 + n], buf[s1:s1 + n], buf[s2:s2 + n],
+                                        buf[s3:s3 + n], n, scratch)
+
+
+def _sum_seq_nb(buf: F64, starts: I64, win: I64, n_terms: I64, order: int, power: int,
+                acc: F64) -> None:
+    """acc[t] += Σ d^power (power 1 or 2), sequentially, over the n_terms[t] terms of job t."""
+    for t in range(n_terms.size):
+        s0 = starts[win[t, 0]]
+        s1 = starts[win[t, 1]]
+        s2 = starts[win[t, 2]]
+        s3 = starts[win[t, 3]] if order == 3 else 0
+        a = acc[t]
+        for i in range(n_terms[t]):
+            if order == 2:
+                d = (buf[s2 + i] - 2.0 * buf[s1 + i]) + buf[s0 + i]
+            else:
+                d = ((buf[s3 + i] - 3.0 * buf[s2 + i]) + 3.0 * buf[s1 + i]) - buf[s0 + i]
+            if power == 2:
+                a += d * d
+            else:
+                a += d
+        acc[t] = a
+
+
+def _mdev_running_nb(buf: F64, starts: I64, win: I64, n_terms: I64, v: F64,
+                     totals: F64) -> None:
+    """Run the modified Allan sum: v[t] += t_i, then totals[t] += v[t]², per third difference."""
+    for t in range(n_terms.size):
+        s0 = starts[win[t, 0]]
+        s1 = starts[win[t, 1]]
+        s2 = starts[win[t, 2]]
+        s3 = starts[win[t, 3]]
+        vv = v[t]
+        tot = totals[t]
+        for i in range(n_terms[t]):
+            vv += ((buf[s3 + i] - 3.0 * buf[s2 + i]) + 3.0 * buf[s1 + i]) - buf[s0 + i]
+            tot += vv * vv
+        v[t] = vv
+        totals[t] = tot
+
+
+# --------------------------------------------------------------------------- numpy twins
+def _phase_np(rate: F64, mean: float, dt: float, out: F64, carry: float) -> float:
+    if rate.size == 0:
+        return carry
+    z = rate - mean
+    z[0] = carry + z[0]
+    np.cumsum(z, out=z)
+    np.multiply(z, dt, out=out)
+    return float(z[-1])
+
+
+def _diff_np(buf: F64, starts: I64, row: I64, p: int, n: int, order: int) -> F64:
+    a = buf[starts[row[0]] + p:starts[row[0]] + p + n]
+    b = buf[starts[row[1]] + p:starts[row[1]] + p + n]
+    c = buf[starts[row[2]] + p:starts[row[2]] + p + n]
+    if order == 2:
+        out: F64 = (c - 2.0 * b) + a
+        return out
+    e = buf[starts[row[3]] + p:starts[row[3]] + p + n]
+    out = ((e - 3.0 * c) + 3.0 * b) - a
+    return out
+
+
+def _seq_sum_np(start: float, values: F64) -> float:
+    """Return start + v0 + v1 + … summed left to right (numpy's accumulate is sequential)."""
+    if values.size == 0:
+        return start
+    acc = np.empty(values.size + 1)
+    acc[0] = start
+    acc[1:] = values
+    return float(np.add.accumulate(acc)[-1])
+
+
+def _sumsq_overlap_np(buf: F64, starts: I64, win: I64, n_terms: I64, order: int,
+                      totals: F64) -> None:
+    for t in range(n_terms.size):
+        n = int(n_terms[t])
+        if n <= 0:
+            continue
+        d = _diff_np(buf, starts, win[t], 0, n, order)
+        n_blocks = -(-n // BLOCK)
+        e = np.zeros(n_blocks * BLOCK)
+        np.multiply(d, d, out=e[:n])
+        e2 = e.reshape(n_blocks, BLOCK)
+        h = BLOCK // 2
+        while h >= 1:
+            e2[:, :h] += e2[:, h:2 * h]
+            h //= 2
+        totals[t] = _seq_sum_np(float(totals[t]), e2[:, 0].copy())
+
+
+def _sum_seq_np(buf: F64, starts: I64, win: I64, n_terms: I64, order: int, power: int,
+                acc: F64) -> None:
+    for t in range(n_terms.size):
+        n = int(n_terms[t])
+        if n <= 0:
+            continue
+        d = _diff_np(buf, starts, win[t], 0, n, order)
+        acc[t] = _seq_sum_np(float(acc[t]), d * d if power == 2 else d)
+
+
+def _mdev_running_np(buf: F64, starts: I64, win: I64, n_terms: I64, v: F64,
+                     totals: F64) -> None:
+    for t in range(n_terms.size):
+        n = int(n_terms[t])
+        if n <= 0:
+            continue
+        steps = _diff_np(buf, starts, win[t], 0, n, 3)
+        run = np.empty(n + 1)
+        run[0] = v[t]
+        run[1:] = steps
+        np.add.accumulate(run, out=run)
+        vals = run[1:]
+        totals[t] = _seq_sum_np(float(totals[t]), vals * vals)
+        v[t] = run[-1]
+
+
+# --------------------------------------------------------------------------- dispatch
+_NUMPY: dict[str, Callable[..., Any]] = {
+    "phase": _phase_np,
+    "sumsq_overlap": _sumsq_overlap_np,
+    "sum_seq": _sum_seq_np,
+    "mdev_running": _mdev_running_np,
+}
+_STATE: dict[str, Any] = {"requested": None, "numba": None, "error": None}
+
+
+def _compile_numba() -> dict[str, Callable[..., Any]] | None:
+    if _STATE["numba"] is not None or _STATE["error"] is not None:
+        cached: dict[str, Callable[..., Any]] | None = _STATE["numba"]
+        return cached
+    try:
+        import numba
+
+        jit = numba.njit(cache=True, nogil=True)
+        inline = numba.njit(cache=True, nogil=True, inline="always")
+        g = globals()
+        # the helpers are resolved by name from this module's globals when numba compiles
+        g["_tree_nb"] = inline(_tree_nb)
+        g["_block2_nb"] = jit(_block2_nb)
+        g["_block3_nb"] = jit(_block3_nb)
+        kernels: dict[str, Callable[..., Any]] = {
+            "phase": jit(_phase_nb),
+            "sumsq_overlap": jit(_sumsq_overlap_nb),
+            "sum_seq": jit(_sum_seq_nb),
+            "mdev_running": jit(_mdev_running_nb),
+        }
+        _smoke_test(kernels)  # compile (or load from the cache) now, fall back on any failure
+    except Exception as exc:  # pragma: no cover - depends on the environment
+        _STATE["error"] = f"numba unavailable: {type(exc).__name__}: {exc}"
+        return None
+    _STATE["numba"] = kernels
+    return kernels
+
+
+def _smoke_test(kernels: dict[str, Callable[..., Any]]) -> None:
+    """Run every kernel once on a small input (this triggers compilation)."""
+    x = np.linspace(0.0, 1.0, 64) ** 2
+    starts = np.array([0, 1, 2, 3], dtype=np.int64)
+    win = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    n = np.array([8], dtype=np.int64)
+    out = np.zeros(1)
+    kernels["phase"](x, 0.5, 0.1, np.empty(64), 0.0)
+    kernels["sumsq_overlap"](x, starts, win, n, 2, out)
+    kernels["sumsq_overlap"](x, starts, win, n, 3, out)
+    kernels["sum_seq"](x, starts, win, n, 2, 1, out)
+    kernels["mdev_running"](x, starts, win, n, np.zeros(1), out)
+
+
+def set_backend(name: str | None) -> str | None:
+    """Choose the kernels: ``"numba"``, ``"numpy"`` or ``None`` (automatic); return the old choice.
+
+    Raises
+    ------
+    ValueError
+        For another name.
+    """
+    if name not in (None, "numba", "numpy"):
+        raise ValueError(f"backend must be 'numba', 'numpy' or None; got {name!r}")
+    old: str | None = _STATE["requested"]
+    _STATE["requested"] = name
+    return old
+
+
+def _wanted() -> str:
+    requested = _STATE["requested"]
+    if requested is not None:
+        return str(requested)
+    env = os.environ.get("IMUCALIB_KERNELS", "").strip().lower()
+    return "numpy" if env == "numpy" else "numba"
+
+
+def get_kernels() -> dict[str, Callable[..., Any]]:
+    """Return the kernels of the chosen backend (numba falls back to numpy if unavailable)."""
+    if _wanted() == "numba":
+        kernels = _compile_numba()
+        if kernels is not None:
+            return kernels
+    return _NUMPY
+
+
+def backend_name() -> str:
+    """``"numba"`` or ``"numpy"``: the backend :func:`get_kernels` returns now."""
+    return "numba" if get_kernels() is not _NUMPY else "numpy"

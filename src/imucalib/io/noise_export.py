@@ -1,0 +1,328 @@
+"""Exports of IMU noise parameters: Kalibr / OpenVINS YAML and a datasheet-style table.
+
+Contents
+--------
+:class:`ImuNoiseParameters`, :func:`noise_parameters_from_fits`
+    The four continuous-time densities of a VIO filter, from per-axis noise fits.
+:func:`format_kalibr_yaml`, :func:`write_kalibr_yaml`
+    Kalibr's ``imu.yaml``.
+:func:`format_openvins_yaml`, :func:`write_openvins_yaml`
+    OpenVINS' ``kalibr_imu_chain.yaml`` (``%YAML:1.0``, ``imu0`` block, model ``kalibr`` with
+    identity intrinsics unless given).
+:func:`format_noise_table`
+    Datasheet-style table (``"text"``, ``"csv"`` or ``"markdown"``).
+
+Conversions (standards.md §0; :mod:`imucalib.analysis.noise_units`)
+-------------------------------------------------------------------
+Kalibr and OpenVINS model the white noise as a continuous-time process of density σ_c and
+discretise it as σ_d = σ_c/√Δt; the bias as a random walk ḃ = σ_b·w(t). So
+
+==============================  ==============================  ==============================
+YAML key                        value                           unit
+==============================  ==============================  ==============================
+``gyroscope_noise_density``     N_gyro (two-sided; σ_Allan(1 s)) rad/s/√Hz = rad/√s
+``gyroscope_random_walk``       K_gyro (σ_Allan(3 s) = K)        rad/s²/√Hz = rad/s/√s
+``accelerometer_noise_density`` N_accel                          m/s²/√Hz = m/s/√s
+``accelerometer_random_walk``   K_accel                          m/s³/√Hz = m/s²/√s
+``update_rate``                 sample rate                      Hz
+==============================  ==============================  ==============================
+
+No factor √2 enters: Kalibr's σ_c *is* the two-sided N (a one-sided datasheet density ND is
+√2·N, and ARW[°/√h] = 60·N[°/√s]). A triad gives one number per key: the largest axis by default
+(``combine="max"``, conservative) or the RMS over axes. A random walk that the fit did not detect
+is exported as its 1σ scale (the uncertainty of the absent term) and flagged in a YAML comment;
+Kalibr and OpenVINS need a non-zero value. Their authors advise inflating Allan values for real
+motion (vibration, temperature); `noise_inflation`/`walk_inflation` do that explicitly.
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from imucalib._checks import check_positive
+from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
+from imucalib.errors import InvalidInputError
+
+__all__ = [
+    "TABLE_ROWS",
+    "ImuNoiseParameters",
+    "format_kalibr_yaml",
+    "format_noise_table",
+    "format_openvins_yaml",
+    "noise_parameters_from_fits",
+    "write_kalibr_yaml",
+    "write_openvins_yaml",
+]
+
+
+@dataclass(frozen=True)
+class ImuNoiseParameters:
+    """Continuous-time noise densities of one IMU (two-sided = Kalibr convention), SI."""
+
+    gyroscope_noise_density: float  # [rad/s/√Hz]
+    gyroscope_random_walk: float  # [rad/s²/√Hz]
+    accelerometer_noise_density: float  # [m/s²/√Hz]
+    accelerometer_random_walk: float  # [m/s³/√Hz]
+    update_rate_hz: float  # [Hz]
+    notes: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        for name in ("gyroscope_noise_density", "gyroscope_random_walk",
+                     "accelerometer_noise_density", "accelerometer_random_walk",
+                     "update_rate_hz"):
+            check_positive(getattr(self, name), name)
+
+
+def _combine(values: Sequence[float], how: str) -> float:
+    arr = np.asarray(values, dtype=np.float64)
+    if how == "max":
+        return float(arr.max())
+    return float(math.sqrt(np.mean(arr**2)))
+
+
+def _pick(fits: Sequence[NoiseFit], sensor: str, name: str, how: str,
+          notes: list[str]) -> float:
+    if not fits:
+        raise InvalidInputError(f"no {sensor} fits given")
+    values = []
+    for k, fit in enumerate(fits):
+        if fit.sensor != sensor:
+            raise InvalidInputError(f"{sensor} fit {k} is a {fit.sensor!r} fit")
+        term = fit.term(name)
+        if term.detected and term.value_si > 0:
+            values.append(term.value_si)
+        else:
+            values.append(term.std_si)
+            notes.append(f"{sensor} axis {k}: {name} not detected; its 1-sigma scale "
+                         f"{term.std_si:.4g} {term.unit_si} is used")
+    return _combine(values, how)
+
+
+def noise_parameters_from_fits(gyro: Sequence[NoiseFit], accel: Sequence[NoiseFit],
+                               update_rate_hz: float, *, combine: str = "max",
+                               noise_inflation: float = 1.0,
+                               walk_inflation: float = 1.0) -> ImuNoiseParameters:
+    """Kalibr/OpenVINS densities from the per-axis fits of a gyro and an accelerometer triad.
+
+    Uses the fitted ``white`` (N) and ``random_walk`` (K) terms (module docstring), combined
+    over axes by ``"max"`` or ``"rms"``, times the inflation factors.
+
+    Raises
+    ------
+    InvalidInputError
+        Missing fits, a fit of the wrong sensor or without these terms, a bad `combine`.
+    """
+    if combine not in ("max", "rms"):
+        raise InvalidInputError(f"`combine` must be 'max' or 'rms'; got {combine!r}")
+    check_positive(noise_inflation, "noise_inflation")
+    check_positive(walk_inflation, "walk_inflation")
+    notes: list[str] = []
+    out = ImuNoiseParameters(
+        gyroscope_noise_density=noise_inflation * _pick(gyro, "gyro", "white", combine, notes),
+        gyroscope_random_walk=walk_inflation * _pick(gyro, "gyro", "random_walk", combine,
+                                                     notes),
+        accelerometer_noise_density=noise_inflation * _pick(accel, "accel", "white", combine,
+                                                            notes),
+        accelerometer_random_walk=walk_inflation * _pick(accel, "accel", "random_walk",
+                                                         combine, notes),
+        update_rate_hz=update_rate_hz,
+        notes=(f"combined over axes by {combine}; inflation: noise x{noise_inflation:g}, "
+               f"random walk x{walk_inflation:g}", *notes))
+    return out
+
+
+def _header(params: ImuNoiseParameters) -> list[str]:
+    lines = ["# Written by imucalib from an Allan-variance noise characterisation.",
+             "# Continuous-time densities, two-sided (Kalibr sigma_c = N = sigma_Allan(1 s));",
+             "# a one-sided datasheet density is sqrt(2) times larger."]
+    lines += [f"# {n}" for n in params.notes]
+    return lines
+
+
+def format_kalibr_yaml(params: ImuNoiseParameters, *, rostopic: str = "/imu0") -> str:
+    """Return Kalibr's ``imu.yaml`` text for `params`."""
+    p = params
+    return "\n".join([
+        *_header(p),
+        "",
+        "#Accelerometers",
+        f"accelerometer_noise_density: {p.accelerometer_noise_density:.6e}   "
+        "#Noise density (continuous-time) [m/s^2/sqrt(Hz)]",
+        f"accelerometer_random_walk:   {p.accelerometer_random_walk:.6e}   "
+        "#Bias random walk [m/s^3/sqrt(Hz)]",
+        "",
+        "#Gyroscopes",
+        f"gyroscope_noise_density:     {p.gyroscope_noise_density:.6e}   "
+        "#Noise density (continuous-time) [rad/s/sqrt(Hz)]",
+        f"gyroscope_random_walk:       {p.gyroscope_random_walk:.6e}   "
+        "#Bias random walk [rad/s^2/sqrt(Hz)]",
+        "",
+        f"rostopic:                    {rostopic}   #the IMU ROS topic",
+        f"update_rate:                 {p.update_rate_hz:.6g}   "
+        "#Hz (for discretization of the values above)",
+        "",
+    ])
+
+
+def _matrix(rows: ArrayLike, indent: str) -> list[str]:
+    arr = np.asarray(rows, dtype=np.float64)
+    return [f"{indent}- [{', '.join(f'{v:.9g}' for v in row)}]" for row in arr]
+
+
+def format_openvins_yaml(params: ImuNoiseParameters, *, rostopic: str = "/imu0",
+                         time_offset_s: float = 0.0, t_i_b: ArrayLike | None = None,
+                         intrinsics: Mapping[str, ArrayLike] | None = None) -> str:
+    """Return OpenVINS' ``kalibr_imu_chain.yaml`` text (``imu0``, model ``kalibr``).
+
+    `t_i_b` is the 4×4 IMU-to-body transform (identity by default); `intrinsics` may give the
+    3×3 matrices ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` (identity, and zero
+    for ``Tg``, by default: an IMU whose intrinsics are already applied).
+    """
+    p = params
+    eye = np.eye(3)
+    mats: dict[str, ArrayLike] = {"Tw": eye, "R_IMUtoGYRO": eye, "Ta": eye, "R_IMUtoACC": eye,
+                                  "Tg": np.zeros((3, 3))}
+    if intrinsics:
+        unknown = sorted(set(intrinsics) - set(mats))
+        if unknown:
+            raise InvalidInputError(f"unknown intrinsics {unknown}; expected {sorted(mats)}")
+        mats.update(intrinsics)
+    tib = np.eye(4) if t_i_b is None else np.asarray(t_i_b, dtype=np.float64)
+    if tib.shape != (4, 4):
+        raise InvalidInputError(f"`t_i_b` must be 4x4; got shape {tib.shape}")
+    lines = ["%YAML:1.0 # need to specify the file type at the top!", *_header(p), "", "imu0:",
+             "  T_i_b:", *_matrix(tib, "    "),
+             f"  accelerometer_noise_density: {p.accelerometer_noise_density:.6e}  "
+             "# [ m / s^2 / sqrt(Hz) ]   ( accel \"white noise\" )",
+             f"  accelerometer_random_walk: {p.accelerometer_random_walk:.6e}  "
+             "# [ m / s^3 / sqrt(Hz) ].  ( accel bias diffusion )",
+             f"  gyroscope_noise_density: {p.gyroscope_noise_density:.6e}  "
+             "# [ rad / s / sqrt(Hz) ]   ( gyro \"white noise\" )",
+             f"  gyroscope_random_walk: {p.gyroscope_random_walk:.6e}  "
+             "# [ rad / s^2 / sqrt(Hz) ] ( gyro bias diffusion )",
+             f"  rostopic: {rostopic}",
+             f"  time_offset: {float(time_offset_s):.9g}",
+             f"  update_rate: {p.update_rate_hz:.6g}",
+             "  model: \"kalibr\""]
+    for name, value in mats.items():
+        arr = np.asarray(value, dtype=np.float64)
+        if arr.shape != (3, 3):
+            raise InvalidInputError(f"intrinsic `{name}` must be 3x3; got shape {arr.shape}")
+        lines += [f"  {name}:", *_matrix(arr, "    ")]
+    return "\n".join(lines) + "\n"
+
+
+def write_kalibr_yaml(path: str | os.PathLike[str], params: ImuNoiseParameters,
+                      **kwargs: str) -> Path:
+    """Write :func:`format_kalibr_yaml` to `path`; return the path."""
+    out = Path(path)
+    out.write_text(format_kalibr_yaml(params, **kwargs), encoding="utf-8")
+    return out
+
+
+def write_openvins_yaml(path: str | os.PathLike[str], params: ImuNoiseParameters,
+                        **kwargs: object) -> Path:
+    """Write :func:`format_openvins_yaml` to `path`; return the path."""
+    out = Path(path)
+    out.write_text(format_openvins_yaml(params, **kwargs), encoding="utf-8")  # type: ignore[arg-type]
+    return out
+
+
+#: Rows of the datasheet table per sensor: (parameter, term, unit, note prefix, source).
+TABLE_ROWS: dict[str, tuple[tuple[str, str, str, str, str], ...]] = {
+    "gyro": (
+        ("Angle random walk", "white", "°/√h", "ARW", "fit"),
+        ("Noise density (one-sided)", "white", "(°/s)/√Hz", "one-sided", "fit"),
+        ("Bias instability (0.664 applied)", "bias_instability", "°/h", "", "fit"),
+        ("Allan minimum (no factor)", "bias_instability_allan_minimum", "°/h", "", "reading"),
+        ("Rate random walk", "random_walk", "°/h/√h", "RRW", "fit"),
+        ("Rate ramp", "rate_ramp", "°/h²", "", "fit"),
+        ("Quantization", "quantization", "″", "", "fit"),
+    ),
+    "accel": (
+        ("Velocity random walk", "white", "m/s/√h", "VRW", "fit"),
+        ("Noise density (one-sided)", "white", "µg/√Hz", "one-sided", "fit"),
+        ("Bias instability (0.664 applied)", "bias_instability", "µg", "", "fit"),
+        ("Allan minimum (no factor)", "bias_instability_allan_minimum", "µg", "", "reading"),
+        ("Acceleration random walk", "random_walk", "µg/√h", "", "fit"),
+        ("Acceleration ramp", "rate_ramp", "µg/h", "", "fit"),
+        ("Quantization", "quantization", "m/s", "", "fit"),
+    ),
+}
+
+
+def _cell(term: NoiseTerm | None, unit: str, note: str) -> str:
+    if term is None:
+        return "—"
+    for u in term.display:
+        if u.unit == unit and u.note.startswith(note):
+            if not term.detected:
+                return f"< {2 * u.std:.3g} (n.d.)" if math.isfinite(u.std) else "n.d."
+            if math.isfinite(u.std):
+                return f"{u.value:.4g} ± {u.std:.2g}"
+            return f"{u.value:.4g}"
+    raise InvalidInputError(f"no unit {unit!r} ({note}) for term {term.name!r}")
+
+
+def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> str:
+    """Datasheet-style table of per-axis fits, e.g. ``{"gyro_x": fit, …, "accel_z": fit}``.
+
+    One row per parameter of :data:`TABLE_ROWS` (the units users see on datasheets: ARW in
+    °/√h, one-sided density in (°/s)/√Hz or µg/√Hz, bias instability in °/h or µg with the
+    0.664 factor, the raw Allan minimum beside it, …), one column per channel with value ± standard
+    uncertainty; ``< 2u (n.d.)`` marks a term the fit did not detect, ``—`` one not fitted.
+    Sensors are grouped; the last line states the convention.
+
+    Raises
+    ------
+    InvalidInputError
+        No fits, or `fmt` not ``"text"``, ``"csv"``, ``"markdown"``.
+    """
+    if fmt not in ("text", "csv", "markdown"):
+        raise InvalidInputError(f"`fmt` must be 'text', 'csv' or 'markdown'; got {fmt!r}")
+    if not fits:
+        raise InvalidInputError("`fits` is empty")
+    rows: list[list[str]] = []
+    for sensor in ("gyro", "accel"):
+        chans = [name for name, f in fits.items() if f.sensor == sensor]
+        if not chans:
+            continue
+        rows.append(["parameter", "unit", *chans])
+        for label, term_name, unit, note, source in TABLE_ROWS[sensor]:
+            cells = []
+            for ch in chans:
+                f = fits[ch]
+                if source == "reading":
+                    term = f.reading(term_name)
+                else:
+                    term = next((t for t in f.terms if t.name == term_name), None)
+                cells.append(_cell(term, unit, note))
+            rows.append([label, unit, *cells])
+    foot = ("Densities: N two-sided (IEEE 952; = Kalibr sigma_c); the noise-density row is the "
+            "one-sided datasheet value sqrt(2)*N. Uncertainties are 1-sigma.")
+    if fmt == "csv":
+        buf = _io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerows(rows)
+        return buf.getvalue()
+    if fmt == "markdown":
+        out: list[str] = []
+        for row in rows:
+            if row[0] == "parameter" and out:
+                out.append("")
+            out.append("| " + " | ".join(row) + " |")
+            if row[0] == "parameter":
+                out.append("|" + "---|" * len(row))
+        return "\n".join([*out, "", foot]) + "\n"
+    widths = [max(len(r[i]) for r in rows if i < len(r)) for i in range(max(map(len, rows)))]
+    text = ["  ".join(c.ljust(widths[i]) for i, c in enumerate(r)).rstrip() for r in rows]
+    return "\n".join([*text, foot]) + "\n"

@@ -1,0 +1,23 @@
+"""Report: figures and tables for the calibration report (matplotlib imported lazily).
+
+Each block below is one feature's public API; see the module docstrings.
+
+Contents
+--------
+:mod:`imucalib.report.allan_figure`
+    :func:`plot_allan_triad`, :func:`save_allan_figures`.
+"""
+
+from __future__ import annotations
+
+# --- allan ---
+from imucalib.report.allan_figure import plot_allan_triad, save_allan_figures
+
+# --- end allan ---
+
+__all__ = [
+    # --- allan ---
+    "plot_allan_triad",
+    "save_allan_figures",
+    # --- end allan ---
+]
