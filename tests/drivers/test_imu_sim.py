@@ -72,8 +72,8 @@ def test_stream_matches_the_twin(kind: str, transport: str, time_base: SimTimeBa
     rig = make_rig(sample_rate_hz=RATE_HZ)
     _, imu = start(rig, time_base, servers, kind, transport=transport)
     assert isinstance(imu, ImuSource)
+    t_connect = time_base.now_s()  # samples are stamped from the connection on
     imu.connect()
-    t_connect = time_base.now_s()
     ident = imu.identify(wait_s=2.0)
     # pyserial's socket:// discards what arrived before it opened: the first info frame may be
     # lost, and the server repeats it every second
