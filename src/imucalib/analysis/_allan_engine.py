@@ -30,12 +30,14 @@ References
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.analysis._allan_kernels import get_kernels
+from imucalib.analysis._allan_kernels import backend_name, get_kernels
 
 __all__ = [
     "ArrayPhase",
@@ -121,13 +123,43 @@ def _windows(ms: I64, order: int) -> tuple[I64, I64]:
     return offsets.astype(np.int64), np.ascontiguousarray(win, dtype=np.int64)
 
 
+def _job_groups(n_jobs: int) -> list[I64]:
+    """Split the jobs (τ values) between the worker threads, interleaved for balance."""
+    workers = _worker_count() if backend_name() == "numba" else 1
+    k = max(1, min(workers, n_jobs))
+    return [np.arange(g, n_jobs, k, dtype=np.int64) for g in range(k)]
+
+
+def _worker_count() -> int:
+    env = os.environ.get("IMUCALIB_THREADS")
+    if env is not None and env.strip().isdigit():
+        return max(1, int(env))
+    return max(1, min(os.cpu_count() or 1, 8))
+
+
+_POOL: ThreadPoolExecutor | None = None
+
+
+def _pool() -> ThreadPoolExecutor:
+    global _POOL
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(max_workers=_worker_count(), thread_name_prefix="allan")
+    return _POOL
+
+
 def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> F64:
-    """Blocked sums of squared differences of order 2 or 3 over positions i < totals_n[t]."""
+    """Blocked sums of squared differences of order 2 or 3 over positions i < totals_n[t].
+
+    With the numba kernels (which release the GIL) the τ values are shared between threads;
+    each τ's sum is still computed by one thread in the same order, so the results are the same
+    bit for bit whatever the thread count.
+    """
     kern = get_kernels()["sumsq_overlap"]
     offsets, win = _windows(ms, order)
     totals = np.zeros(ms.size)
     n_max = int(totals_n.max(initial=0))
     step = source.superblock
+    groups = _job_groups(ms.size)
     for start in range(0, n_max, step):
         n_t = np.clip(totals_n - start, 0, step).astype(np.int64)
         live = n_t > 0
@@ -135,7 +167,17 @@ def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> 
         buf, starts = source.gather(start, offsets[need], step)
         full = np.zeros(offsets.size, dtype=np.int64)
         full[need] = starts
-        kern(buf, full, win, n_t, order, totals)
+        if len(groups) == 1:
+            kern(buf, full, win, n_t, order, totals)
+            continue
+        parts = [totals[g] for g in groups]  # copies that continue each τ's running sum
+        futures = [_pool().submit(kern, buf, full, np.ascontiguousarray(win[g]),
+                                  np.ascontiguousarray(n_t[g]), order, part)
+                   for g, part in zip(groups, parts, strict=True)]
+        for f in futures:
+            f.result()
+        for g, part in zip(groups, parts, strict=True):
+            totals[g] = part
     return totals
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -49,9 +49,11 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
         raise ConfigurationError(f"{recording} holds no plan: `imucalib calibrate` needs a "
                                  "recording made by `imucalib run`")
     procedure = parse_plan(str(plan_toml), str(recording)).procedure
+    if procedure == "allan":
+        raise _AllanProcedure
     if procedure != "p1":
         raise ConfigurationError(f"{recording}: plan procedure {procedure!r} has no analysis "
-                                 "here; known: p1")
+                                 "here; known: p1, allan")
     if model not in ("triad", "per-axis"):
         raise InvalidInputError(f"--model must be 'triad' or 'per-axis'; got {model!r}")
     analysis = analyze_p1(recording, imu, P1Options(model=model))  # type: ignore[arg-type]
@@ -94,6 +96,48 @@ def render_calibration(analysis: P1Analysis, result_path: Path, report_path: Pat
     console.print(f"wrote {result_path}\n      {report_path}", highlight=False)
 
 
+class _AllanProcedure(Exception):  # noqa: N818 - a control-flow signal, not an error
+    """The recording is an Allan plan's: the noise characterisation applies."""
+
+
+def run_noise_characterization(recording: Path, imu: str | None, out: Path | None
+                               ) -> tuple[Any, list[Path]]:
+    """Analyse an Allan recording; write its JSON, Kalibr/OpenVINS YAML, table and figures."""
+    from imucalib.io.noise_export import format_noise_table, write_kalibr_yaml, write_openvins_yaml
+    from imucalib.procedures.allan import analyze_allan_recording
+    from imucalib.report.allan_figure import save_allan_figures
+
+    result = analyze_allan_recording(recording, unit=imu)
+    folder = out if out is not None else recording.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    stem = f"{recording.stem}.{result.unit}.allan"
+    written = [result.save(folder / f"{stem}.json")]
+    for i, seg in enumerate(result.segments):
+        suffix = "" if len(result.segments) == 1 else f".{i}"
+        params = seg.noise_parameters()
+        written.append(write_kalibr_yaml(folder / f"{stem}{suffix}.kalibr.yaml", params))
+        written.append(write_openvins_yaml(folder / f"{stem}{suffix}.openvins.yaml", params))
+        table = folder / f"{stem}{suffix}.table.md"
+        table.write_text(format_noise_table(seg.fits(), fmt="markdown") + "\n",
+                         encoding="utf-8")
+        written.append(table)
+    written += save_allan_figures(result, folder / f"{stem}.figures")
+    return result, written
+
+
+def render_noise_characterization(result: Any, written: list[Path]) -> None:
+    """Print each record's noise-term table and the files written."""
+    from imucalib.io.noise_export import format_noise_table
+
+    for seg in result.segments:
+        temp = "" if seg.temperature_degc is None else f", {seg.temperature_degc:.1f} °C"
+        console.print(f"[bold]{seg.label}[/]: {seg.n_samples:,} samples at "
+                      f"{seg.sample_rate_hz:g} Hz{temp}", highlight=False)
+        console.print(format_noise_table(seg.fits(), fmt="text"), highlight=False,
+                      soft_wrap=True)
+    console.print("wrote " + "\n      ".join(str(p) for p in written), highlight=False)
+
+
 @app.command()
 def calibrate(
     recording: Annotated[Path, typer.Argument(help="Recording of a plan run (.h5).")],
@@ -102,9 +146,18 @@ def calibrate(
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for the results.")]
     = None,
 ) -> None:
-    """Estimate every parameter with its uncertainty, verify, and write the result (JSON)."""
+    """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
+
+    A P1 recording gives the calibration, its checks and the decision; an Allan recording the
+    noise terms (JSON, Kalibr and OpenVINS YAML, a datasheet table, figures).
+    """
     try:
-        analysis, result_path, report_path = run_calibration(recording, imu, model, out)
+        try:
+            analysis, result_path, report_path = run_calibration(recording, imu, model, out)
+        except _AllanProcedure:
+            noise, written = run_noise_characterization(recording, imu, out)
+            render_noise_characterization(noise, written)
+            return
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_calibration(analysis, result_path, report_path)

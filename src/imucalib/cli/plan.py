@@ -54,7 +54,7 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
 
 @plan_app.command("new")
 def new(
-    procedure: Annotated[str, typer.Argument(help="Procedure: p1.")],
+    procedure: Annotated[str, typer.Argument(help="Procedure: p1 or allan.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
     "tactical",
@@ -62,17 +62,34 @@ def new(
     static_s: Annotated[float, typer.Option(help="Level static record [s].")] = 3600.0,
     sample_rate_hz: Annotated[float, typer.Option(help="Twin IMU output rate [Hz].")] = 1000.0,
     seed: Annotated[int, typer.Option(help="Seed of the twin.")] = 1,
+    record_s: Annotated[float, typer.Option(help="Allan: each static record [s].")] = 7200.0,
+    temperatures: Annotated[str | None, typer.Option(
+        help="Allan: record at these chamber temperatures, e.g. '-10,20,60' [°C].")] = None,
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
 
     try:
-        if procedure != "p1":
-            raise ConfigurationError(f"unknown procedure {procedure!r}; known: p1")
-        from imucalib.procedures import generate_p1_plan
+        if procedure == "p1":
+            from imucalib.procedures import generate_p1_plan
 
-        plan = generate_p1_plan(grade=grade, repetitions=repetitions, static_s=static_s,
-                                sample_rate_hz=sample_rate_hz, seed=seed)
+            plan = generate_p1_plan(grade=grade, repetitions=repetitions, static_s=static_s,
+                                    sample_rate_hz=sample_rate_hz, seed=seed)
+        elif procedure == "allan":
+            from imucalib.procedures import generate_allan_plan
+
+            temps = None
+            if temperatures is not None:
+                try:
+                    temps = [float(t) for t in temperatures.split(",") if t.strip()]
+                except ValueError as exc:
+                    raise ConfigurationError(
+                        f"--temperatures must be numbers separated by commas; got "
+                        f"{temperatures!r}") from exc
+            plan = generate_allan_plan(grade=grade, record_s=record_s, temperatures_degc=temps,
+                                       sample_rate_hz=sample_rate_hz, seed=seed)
+        else:
+            raise ConfigurationError(f"unknown procedure {procedure!r}; known: p1, allan")
         write_plan(plan, out)
     except CalibrationError as exc:
         raise fail(exc) from exc

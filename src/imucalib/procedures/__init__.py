@@ -5,6 +5,8 @@ Contents
 :mod:`imucalib.procedures.allan`
     :func:`analyze_allan_recording`, :class:`NoiseCharacterization`, :class:`SegmentNoise`,
     :class:`ChannelNoise`, :data:`STATIC_STEP_KINDS`.
+:mod:`imucalib.procedures.allan_plan`
+    :func:`generate_allan_plan`: warm-up, soaks and long static records.
 :mod:`imucalib.procedures.p1_plan`
     :func:`generate_p1_plan`: SPEC.md P1's plan (six positions, static bias, rates, held-out
     checks, repetitions).
@@ -22,6 +24,7 @@ from imucalib.procedures.allan import (
     SegmentNoise,
     analyze_allan_recording,
 )
+from imucalib.procedures.allan_plan import generate_allan_plan
 from imucalib.procedures.p1_plan import (
     P1_HELD_OUT_POSITIONS_DEG,
     P1_SIX_POSITIONS_DEG,
@@ -36,5 +39,6 @@ __all__ = [
     "NoiseCharacterization",
     "SegmentNoise",
     "analyze_allan_recording",
+    "generate_allan_plan",
     "generate_p1_plan",
 ]

@@ -294,7 +294,8 @@ def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
                             chunk_samples: int = 1 << 18,
                             memory_limit_samples: int = 1 << 22,
                             scratch_dir: str | os.PathLike[str] | None = None,
-                            sampling_rtol: float = 0.01) -> NoiseCharacterization:
+                            sampling_rtol: float = 0.01,
+                            tau_min_s: float | None = None) -> NoiseCharacterization:
     """Characterise the noise of an IMU from the static records of a Recording.
 
     Parameters
@@ -325,6 +326,12 @@ def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
         Folder of the scratch files (default: the system temporary directory).
     sampling_rtol : float
         Allowed relative deviation of a sample interval from the nominal one.
+    tau_min_s : float, optional
+        Shortest τ the noise-term fit uses. By default 5 / bandwidth when the recording states
+        the IMU's output bandwidth (``imu_identity_json``): an output low-pass lowers the Allan
+        deviation at τ below a few filter time constants, which a white-noise term would
+        otherwise be bent to follow (the twin's 90 Hz filter at 200 Hz made a fit from the
+        first octave read the bias instability 3× too high). Without a bandwidth, every τ. [s]
 
     Returns
     -------
@@ -340,18 +347,33 @@ def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
     """
     if isinstance(recording, Recording):
         return _analyze(recording, device, unit, steps, channels, taus, kinds, confidence,
-                        terms, chunk_samples, memory_limit_samples, scratch_dir, sampling_rtol)
+                        terms, chunk_samples, memory_limit_samples, scratch_dir, sampling_rtol,
+                        tau_min_s)
     with open_recording(recording) as rec:
         return _analyze(rec, device, unit, steps, channels, taus, kinds, confidence, terms,
-                        chunk_samples, memory_limit_samples, scratch_dir, sampling_rtol)
+                        chunk_samples, memory_limit_samples, scratch_dir, sampling_rtol,
+                        tau_min_s)
+
+
+def _bandwidth_tau_min_s(rec: Recording, unit: str) -> float | None:
+    """5 / bandwidth of the IMU's output filter, when the recording states the bandwidth."""
+    ident = rec.metadata.get("imu_identity_json")
+    info = ident.get(unit, {}) if isinstance(ident, dict) else {}
+    bandwidth = info.get("bandwidth_hz") if isinstance(info, dict) else None
+    if isinstance(bandwidth, int | float) and bandwidth > 0:
+        return 5.0 / float(bandwidth)
+    return None
 
 
 def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int] | None,
              channels: Sequence[str] | None, taus: TauSpec, kinds: Sequence[str],
              confidence: float, terms: Sequence[str], chunk_samples: int,
              memory_limit_samples: int, scratch_dir: str | os.PathLike[str] | None,
-             sampling_rtol: float) -> NoiseCharacterization:
+             sampling_rtol: float, tau_min_s: float | None) -> NoiseCharacterization:
     unit = _select_unit(rec, device, unit)
+    if tau_min_s is None:
+        tau_min_s = _bandwidth_tau_min_s(rec, unit)
+    tau_range = None if tau_min_s is None else (float(tau_min_s), math.inf)
     chans = _channels(rec, device, unit, channels)
     all_kinds = tuple(dict.fromkeys(("oadev", *kinds)))
     has_temp = TEMPERATURE_COLUMN in rec.stream_info(device, unit).columns
@@ -389,7 +411,8 @@ def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int]
             for c, sensor, _ in chans:
                 streams[c].sample_rate_hz = rate
                 devs = streams[c].compute(all_kinds, taus=taus, confidence=confidence)
-                fit = fit_noise_terms(devs["oadev"], sensor=sensor, terms=terms)
+                fit = fit_noise_terms(devs["oadev"], sensor=sensor, terms=terms,
+                                      tau_range_s=tau_range)
                 results.append(ChannelNoise(c, sensor, devs, fit, sums[c] / n))
         finally:
             for s in streams.values():
@@ -402,7 +425,7 @@ def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int]
     spec = taus if isinstance(taus, str | int) else [float(v) for v in np.ravel(taus)]
     settings = {"taus": spec,
                 "kinds": list(all_kinds), "confidence": confidence, "terms": list(terms),
-                "sampling_rtol": sampling_rtol}
+                "sampling_rtol": sampling_rtol, "tau_min_s": tau_min_s}
     return NoiseCharacterization(
         recording=str(rec.path), device=device, unit=unit, segments=tuple(segments),
         settings=settings, created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
