@@ -71,8 +71,9 @@ def test_drivers_over_loopback_give_an_equivalent_recording(tmp_path):
     assert set(drv_counts) == set(twin_counts)
     for k in twin_counts:
         # 200 Hz IMU, windows on station time: host receive timing at 20× real time moves a
-        # window's edges by a few samples (1 ms of wall-clock jitter is 4 samples here)
-        tol = max(4, round(0.03 * twin_counts[k]))
+        # window's edges by a few samples (1 ms of wall-clock jitter is 4 samples here, and a
+        # loaded 2-core CI machine has a few ms)
+        tol = max(10, round(0.05 * twin_counts[k]))
         assert abs(drv_counts[k] - twin_counts[k]) <= tol, (k, drv_counts[k], twin_counts[k])
     for step, fb in windows:  # valid windows lie in settled data, as the ACL controller reports
         for i, axis in enumerate(("pitch", "roll")):

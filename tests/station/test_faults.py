@@ -165,3 +165,19 @@ def test_chamber_alarm_puts_the_chamber_in_standby_and_retries(tmp_path):
     steps, rows, _ = done_steps(tmp_path / "c.h5")
     assert [s[1] for s in steps] == ["soak", "position", "static"]
     assert any(r.status == "invalid" and "chamber main alarm" in r.note for r in rows)
+
+
+def test_a_table_pushed_off_while_settling_is_corrected_automatically(reference, tmp_path):
+    """SPEC.md P1: settle within 5″ "with automatic correction": the position is re-commanded."""
+    plan, _ = reference
+    target = window_of(reference, "position", nth=3)
+    station = SimStation(plan.twin)
+    # during the dwell, the axis is pushed 20″ off and would stay there
+    station.at(target[2] - 1.0, lambda: station.table.disturb(0, 20 * units.ARCSEC))
+    summary = run_plan(plan, station, tmp_path / "c.h5")
+    assert summary.status == "done" and summary.steps_invalid == 0
+    steps, _, log = done_steps(tmp_path / "c.h5")
+    fixes = [e for e in log if e.message.startswith("automatic correction")]
+    assert len(fixes) == 1 and "from its target" in fixes[0].message
+    corrected = next(s for s in steps if s[0] == target[0])
+    assert corrected[2] > target[2]  # the window starts once the correction has settled

@@ -372,9 +372,16 @@ class _Run:
                     raise _TripError(reason)
 
     # --- step kinds -------------------------------------------------------------------------
-    def settle(self, t_cmd: float, settle_s: float, criterion: Callable[[], str | None]) -> None:
-        """Tick until `settle_s` has passed and `criterion` holds; trip after the time-out."""
+    def settle(self, t_cmd: float, settle_s: float, criterion: Callable[[], str | None],
+               correct: Callable[[str], bool] | None = None) -> None:
+        """Tick until `settle_s` has passed and `criterion` holds; trip after the time-out.
+
+        `correct` (SPEC.md P1's "automatic correction") is offered each failing reason once
+        per `settle_check_s` after the dwell; it re-commands the equipment when the reason is
+        one it can correct, and says whether it did.
+        """
         deadline = t_cmd + self.g.settle_timeout_s + settle_s
+        last_fix = -math.inf
         while True:
             self.tick()
             if self.now() - t_cmd >= settle_s:
@@ -384,6 +391,11 @@ class _Run:
                 if self.now() >= deadline:
                     raise _TripError(
                         f"never settled within {self.g.settle_timeout_s:g} s: {reason}")
+                if correct is not None and self.now() - last_fix >= 2 * self.g.settle_check_s \
+                        and correct(reason):
+                    last_fix = self.now()
+                    self.writer.log_event(self.now(), "info", "runner",
+                                          f"automatic correction: {reason}; re-commanded")
 
     def record_for(self, duration_s: float, guard: Callable[[], None]) -> tuple[float, float]:
         start = self.now()
@@ -453,7 +465,18 @@ class _Run:
                                  if (r := check_rate_hold(rate, 0.0, i, names[i], hold_tol))),
                                 None))
 
-            self.settle(t_cmd, step.settle_s, lambda: hold() or self.accel_settled())
+            def correct(reason: str) -> bool:
+                """Re-command the axes when, at rest over the last tick, one is off target."""
+                angle, rate = self._latest(fuge)
+                if rate.size == 0 or np.abs(rate).max() > hold_tol:
+                    return False  # still moving: the move is not over yet
+                if check_position_hold(angle, targets, names, pos_tol) is None:
+                    return False  # arrived; the settling span has yet to pass
+                for i, target in enumerate(targets):
+                    dev.move_to(i, target)
+                return True
+
+            self.settle(t_cmd, step.settle_s, lambda: hold() or self.accel_settled(), correct)
 
             def guard() -> None:
                 angle, _ = self._latest(fuge)

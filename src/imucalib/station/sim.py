@@ -24,7 +24,8 @@ the runner reconnects; ``permanent=True`` refuses reconnection),
 :meth:`~SimMotionDevice.latch_fault`
 (interlock opens, status reports the fault, demands are refused until a reconnect resets it),
 :meth:`~SimMotionDevice.add_position_drift` and :meth:`~SimMotionDevice.add_rate_error` (the
-reported axis drifts / shows a rate error for a while). ``SimChamberDevice``:
+reported axis drifts / shows a rate error for a while), :meth:`~SimMotionDevice.disturb` (the axis
+is physically pushed off its position). ``SimChamberDevice``:
 :meth:`~SimChamberDevice.raise_alarm`. ``SimImuSource``: :meth:`~SimImuSource.corrupt_frames`
 (frames fail their CRC and are lost), :meth:`~SimImuSource.drop_samples`,
 :meth:`~SimImuSource.saturate`. :meth:`SimStation.at` schedules any of them at a station time.
@@ -228,6 +229,13 @@ class SimMotionDevice:
         """Make the reported angle of `axis` drift at `rate_rps` for `duration_s` from now."""
         t = self._station.rig.now_s
         self._drifts.append(_Window(t, t + duration_s, rate_rps, self._axis(axis)))
+
+    def disturb(self, axis: int, offset_rad: float) -> None:
+        """Push an axis physically away from where it holds by `offset_rad` (a bump, a slip)."""
+        i = self._axis(axis)
+        t = self._station.rig.now_s
+        current = float(self._table.axis_motion(i, np.array([t]))[0][0])
+        self._table.command_position(i, current + offset_rad, t)
 
     def add_rate_error(self, axis: int, error_rps: float, duration_s: float) -> None:
         """Add `error_rps` to the reported rate of `axis` for `duration_s` from now."""
