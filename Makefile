@@ -30,7 +30,12 @@ lint: venv
 
 bench: venv
 	$(BIN)/python bench/bench_twin.py
+	$(BIN)/python bench/bench_noise.py
 	$(BIN)/python bench/bench_recording.py
+	$(BIN)/python bench/bench_allan.py
+	$(BIN)/python bench/bench_processing_estimation.py
+	$(BIN)/python bench/bench_drivers.py
+	$(BIN)/python bench/bench_p1.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache
