@@ -1,0 +1,633 @@
+"""One session of a run: acquisition, guards, settling and the execution of each step kind.
+
+:class:`RunSession` is what :func:`~imucalib.station.runner.run_plan` and
+:func:`~imucalib.station.runner.resume_run` drive: every tick it polls the station's devices,
+writes their rows to the Recording and checks the guards; its ``run_*`` methods execute one plan
+step each (see :mod:`imucalib.station.runner` for the rules). :class:`RunOptions` and
+:class:`RunStatus` are the options of a run and the status a live view shows.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from imucalib import units
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+from imucalib.errors import DeviceError
+from imucalib.io.recording import RecordingWriter
+from imucalib.io.streams import (
+    DEVICE_CENTRIFUGE,
+    DEVICE_CHAMBER,
+    DEVICE_IMU,
+    DEVICE_TABLE,
+    axis_columns,
+)
+from imucalib.plan.schema import (
+    CentrifugeStep,
+    OperatorCheckStep,
+    Plan,
+    PositionStep,
+    RateStep,
+    SoakStep,
+    StaticStep,
+    WarmUpStep,
+)
+from imucalib.station.devices import ImuIdentity, MotionDevice, Station
+from imucalib.station.guards import (
+    RollingWindow,
+    accel_fluctuation_g,
+    check_chamber_band,
+    check_counter,
+    check_jumps,
+    check_position_hold,
+    check_rate_hold,
+    check_saturation,
+)
+from imucalib.station.operator import AutoOperator, Operator
+
+__all__ = ["RunOptions", "RunSession", "RunStatus", "StepStop", "StepTrip"]
+
+_log = logging.getLogger(__name__)
+_DRAIN_S = 1.0  # station time acquired after the last step [s]
+
+
+
+@dataclass
+class RunStatus:
+    """What a live view shows; updated in place after every tick."""
+
+    plan: str = ""
+    n_steps: int = 0
+    step_index: int = -1
+    step_label: str = ""
+    phase: str = ""
+    attempt: int = 0
+    time_s: float = 0.0
+    steps_done: int = 0
+    steps_invalid: int = 0
+    remaining_min_s: float = 0.0
+    table_angle_deg: tuple[float, ...] = ()
+    table_rate_dps: tuple[float, ...] = ()
+    chamber_degc: float | None = None
+    imu_temperature_degc: dict[str, float] = field(default_factory=dict)
+    imu_rate_hz: dict[str, float] = field(default_factory=dict)
+    imu_errors: dict[str, str] = field(default_factory=dict)
+    last_event: str = ""
+
+
+@dataclass
+class RunOptions:
+    """How to run.
+
+    Attributes
+    ----------
+    tick_s : float
+        Station time between acquisitions and guard checks. [s]
+    operator : Operator
+        Who confirms operator checks (default: confirms automatically as "auto").
+    on_status : callable, optional
+        Called with the :class:`RunStatus` after every tick (the CLI's live view).
+    flush_interval_s : float
+        Wall-clock interval between flushes of the Recording. [s]
+    truth : mapping, optional
+        Twin truth to store under ``/truth`` (never read by analysis).
+    station_toml : str
+        The station file's text, stored so that a resume can rebuild the same station.
+    """
+
+    tick_s: float = 0.5
+    operator: Operator = field(default_factory=AutoOperator)
+    on_status: Callable[[RunStatus], None] | None = None
+    flush_interval_s: float = 1.0
+    truth: dict[str, Any] | None = None
+    station_toml: str = ""
+
+
+class StepTrip(Exception):  # noqa: N818 - a signal between the session and the runner
+    """A guard tripped inside a step (the runner stops safely, marks it invalid, retries)."""
+
+
+class StepStop(Exception):  # noqa: N818 - a signal between the session and the runner
+    """The run stops without a retry (operator declined, retries exhausted)."""
+
+
+class RunSession:
+    """One session of a run: acquisition, guards and step execution on an open writer."""
+
+    def __init__(self, plan: Plan, station: Station, writer: RecordingWriter,
+                 options: RunOptions, identities: list[ImuIdentity]) -> None:
+        self.plan, self.station, self.writer, self.opt = plan, station, writer, options
+        self.g = plan.guards
+        self.ids = {i.name: i for i in identities}
+        span = max(self.g.settle_check_s, 2.0 * options.tick_s) + options.tick_s
+        self.fb = RollingWindow(span)
+        self.fuge_fb = RollingWindow(span)
+        self.accel = {name: RollingWindow(span) for name in self.ids}
+        self.temps = {name: RollingWindow(3600.0) for name in self.ids}
+        self.gyro_means = {name: RollingWindow(3600.0) for name in self.ids}
+        self.chamber_rows = RollingWindow(3600.0)
+        self.chamber_setpoint: float | None = None
+        self.last_sample_s = dict.fromkeys(self.ids, station.clock.now_s())
+        self.health0 = {src.name: src.health() for src in station.imus}
+        self.status = RunStatus(plan=plan.name, n_steps=len(plan.steps))
+        self.trips: list[str] = []
+        self.recording = False  # inside a valid window: data-quality guards apply
+        self.held_targets: list[float] | None = None  # the table's last position targets
+        self.block_reason: str | None = None
+
+    # --- acquisition ------------------------------------------------------------------------
+    def now(self) -> float:
+        """Return the station time. [s]"""
+        return self.station.clock.now_s()
+
+    def tick(self, until_s: float | None = None) -> None:
+        """Let time pass (at most one tick, not beyond `until_s`), acquire, check device guards."""
+        dt = self.opt.tick_s if until_s is None else min(self.opt.tick_s, until_s - self.now())
+        if dt > 0:
+            self.station.clock.sleep(dt)
+        self.acquire()
+
+    def acquire(self) -> None:
+        """Poll every device, write its rows, and trip on device faults and alarms."""
+        st, w = self.station, self.writer
+        self.block_reason = None
+        try:
+            for dev, kind, window in ((st.table, DEVICE_TABLE, self.fb),
+                                      (st.centrifuge, DEVICE_CENTRIFUGE, self.fuge_fb)):
+                if dev is None:
+                    continue
+                fb = dev.poll()
+                if len(fb):
+                    cols: dict[str, Any] = {"time_s": fb.time_s}
+                    for i, axis in enumerate(dev.axis_names):
+                        a, r = axis_columns(axis)
+                        cols[a], cols[r] = fb.angle_rad[:, i], fb.rate_rps[:, i]
+                    w.append(kind, dev.name, cols)
+                    window.push(fb.time_s, np.column_stack([fb.angle_rad, fb.rate_rps]))
+                    self.status.table_angle_deg = tuple(np.degrees(fb.angle_rad[-1]))
+                    self.status.table_rate_dps = tuple(np.degrees(fb.rate_rps[-1]))
+                status = dev.status()
+                if status.fault is not None:
+                    raise StepTrip(f"{kind} {dev.name} fault: {status.fault}")
+            if st.chamber is not None:
+                rows = st.chamber.poll()
+                if len(rows):
+                    w.append(DEVICE_CHAMBER, st.chamber.name, {
+                        "time_s": rows.time_s, "temperature_degc": rows.temperature_degc,
+                        "setpoint_degc": rows.setpoint_degc})
+                    self.chamber_rows.push(rows.time_s, rows.temperature_degc[:, None])
+                    self.status.chamber_degc = float(rows.temperature_degc[-1])
+                alarm = st.chamber.status().alarm
+                if alarm is not None:
+                    raise StepTrip(f"chamber {st.chamber.name} alarm: {alarm}")
+            for src in st.imus:
+                self._acquire_imu(src)
+        except DeviceError as exc:
+            raise StepTrip(f"device error: {exc}") from exc
+
+    def _acquire_imu(self, src: Any) -> None:
+        block = src.read()
+        name = src.name
+        now = self.now()
+        if len(block):
+            cols: dict[str, Any] = {"time_s": block.time_s, "device_time_s": block.device_time_s,
+                                    "counter": block.counter,
+                                    "temperature_degc": block.temperature_degc,
+                                    "saturated": block.saturated}
+            for j, c in enumerate(GYRO_COLUMNS):
+                cols[c] = block.gyro_rps[:, j]
+            for j, c in enumerate(ACCEL_COLUMNS):
+                cols[c] = block.accel_mps2[:, j]
+            self.writer.append(DEVICE_IMU, name, cols)
+            self.accel[name].push(block.time_s, block.accel_mps2)
+            self.temps[name].push(block.time_s[-1:], block.temperature_degc[-1:, None])
+            self.gyro_means[name].push(block.time_s[-1:],
+                                       np.r_[block.gyro_rps.mean(axis=0),
+                                             block.accel_mps2.mean(axis=0)][None, :])
+            self.last_sample_s[name] = float(block.time_s[-1])
+            self.status.imu_temperature_degc[name] = float(block.temperature_degc[-1])
+            self.status.imu_rate_hz[name] = len(block) / max(self.opt.tick_s, 1e-9)
+        elif now - self.last_sample_s[name] > self.g.device_timeout_s:
+            raise StepTrip(f"IMU {name}: no data for {now - self.last_sample_s[name]:.3g} s "
+                        f"(time-out {self.g.device_timeout_s:g} s)")
+        health = src.health()
+        h0 = self.health0[name]
+        crc = health.crc_errors - h0.crc_errors
+        missing = health.missing_samples - h0.missing_samples
+        self.status.imu_errors[name] = f"crc {health.crc_errors}, lost {health.missing_samples}"
+        if self.recording and len(block):
+            ident = self.ids[name]
+            reason = (check_counter(name, missing, crc, self.g.max_counter_gap_samples,
+                                    self.g.max_crc_errors)
+                      or (check_saturation(name, block.gyro_rps, block.accel_mps2,
+                                           block.saturated, ident.gyro_range_rps,
+                                           ident.accel_range_mps2)
+                          if self.g.trip_on_saturation else None)
+                      or check_jumps(name, block.gyro_rps, block.accel_mps2,
+                                     self.g.gyro_jump_dps * units.DEG,
+                                     self.g.accel_jump_g * units.G0_MPS2))
+            if reason:
+                raise StepTrip(reason)
+        elif self.recording and (crc or missing):
+            reason = check_counter(name, missing, crc, self.g.max_counter_gap_samples,
+                                   self.g.max_crc_errors)
+            if reason:
+                raise StepTrip(reason)
+        self.health0[name] = health
+
+    # --- criteria ---------------------------------------------------------------------------
+    def motion_rows(self, fuge: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return recent (time, angles, rates) of the table (or centrifuge) feedback."""
+        t, v = (self.fuge_fb if fuge else self.fb).rows()
+        k = v.shape[1] // 2 if v.size else 0
+        return t, v[:, :k], v[:, k:]
+
+    def accel_settled(self) -> str | None:
+        """Return why the accelerometer output is not settled yet, or None."""
+        worst = 0.0
+        for name, win in self.accel.items():
+            t, a = win.rows(self.now() - self.g.settle_check_s)
+            if t.size == 0 or t[-1] - t[0] < 0.5 * self.g.settle_check_s:
+                return f"IMU {name}: not enough data yet"
+            worst = max(worst, accel_fluctuation_g(t, a, self.g.settle_average_s))
+        if worst > self.g.settle_fluctuation_g:
+            return (f"accelerometer fluctuation {worst:.3g} g (limit "
+                    f"{self.g.settle_fluctuation_g:g} g)")
+        return None
+
+    def guard_chamber(self) -> None:
+        """Trip when, after a soak, the chamber air leaves its band while recording."""
+        if self.recording and self.chamber_setpoint is not None:
+            _, rows = self.chamber_rows.rows(self.now() - self.opt.tick_s)
+            if rows.size:
+                reason = check_chamber_band(rows[:, 0], self.chamber_setpoint,
+                                            self.g.chamber_band_degc)
+                if reason:
+                    raise StepTrip(reason)
+
+    # --- step kinds -------------------------------------------------------------------------
+    def settle(self, t_cmd: float, settle_s: float, criterion: Callable[[], str | None],
+               correct: Callable[[str], bool] | None = None) -> None:
+        """Tick until `settle_s` has passed and `criterion` holds; trip after the time-out.
+
+        `correct` (SPEC.md P1's "automatic correction") is offered each failing reason once
+        per `settle_check_s` after the dwell; it re-commands the equipment when the reason is
+        one it can correct, and says whether it did.
+        """
+        deadline = t_cmd + self.g.settle_timeout_s + settle_s
+        last_fix = -math.inf
+        while True:
+            self.tick()
+            if self.now() - t_cmd >= settle_s:
+                reason = criterion()
+                if reason is None:
+                    return
+                if self.now() >= deadline:
+                    raise StepTrip(
+                        f"never settled within {self.g.settle_timeout_s:g} s: {reason}")
+                if correct is not None and self.now() - last_fix >= 2 * self.g.settle_check_s \
+                        and correct(reason):
+                    last_fix = self.now()
+                    self.writer.log_event(self.now(), "info", "runner",
+                                          f"automatic correction: {reason}; re-commanded")
+
+    def record_for(self, duration_s: float, guard: Callable[[], None]) -> tuple[float, float]:
+        """Record a valid window of `duration_s` with `guard` checked every tick."""
+        start = self.now()
+        self.recording = True
+        try:
+            while self.now() < start + duration_s - 1e-9:
+                self.tick(start + duration_s)
+                guard()
+                self.guard_chamber()
+        finally:
+            self.recording = False
+        return start, start + duration_s
+
+    def record_revolutions(self, fuge: bool, axis: int, revolutions: int,
+                           guard: Callable[[], None]) -> tuple[float, float]:
+        """Record whole revolutions of a spinning axis; return the valid window."""
+        t, angle, _ = self.motion_rows(fuge)
+        start, theta0 = float(t[-1]), float(angle[-1, axis])
+        target = revolutions * 2.0 * math.pi
+        self.recording = True
+        try:
+            while True:
+                self.tick()
+                guard()
+                self.guard_chamber()
+                t, angle, _ = self.motion_rows(fuge)
+                turned = np.abs(angle[:, axis] - theta0)
+                hit = np.flatnonzero((t > start) & (turned >= target))
+                if hit.size:
+                    # the crossing, interpolated between the feedback rows around it (the
+                    # angle is linear at constant rate): exact whatever the feedback rate
+                    h = int(hit[0])
+                    if h == 0 or t[h - 1] < start or turned[h] == turned[h - 1]:
+                        return start, float(t[h])
+                    frac = (target - turned[h - 1]) / (turned[h] - turned[h - 1])
+                    return start, float(t[h - 1] + frac * (t[h] - t[h - 1]))
+        finally:
+            self.recording = False
+
+    def run_motion(self, step: PositionStep | RateStep | CentrifugeStep
+                   ) -> tuple[float, float]:
+        """Execute a position, rate or centrifuge step; return its valid window."""
+        fuge = isinstance(step, CentrifugeStep)
+        dev: MotionDevice | None = self.station.centrifuge if fuge else self.station.table
+        assert dev is not None  # checked against the station before the run
+        names = dev.axis_names
+        pos_tol = self.g.position_tolerance_arcsec * units.ARCSEC
+        hold_tol = self.g.hold_rate_tolerance_dps * units.DEG
+        rate_tol = self.g.rate_tolerance_dps * units.DEG
+        t_cmd = self.now()
+        if isinstance(step, PositionStep) or (isinstance(step, CentrifugeStep)
+                                              and step.arm_position_deg is not None):
+            angles = (list(step.angles_deg) if isinstance(step, PositionStep)
+                      else [step.arm_position_deg or 0.0])
+            targets = [a * units.DEG for a in angles]
+            if fuge:
+                dev.set_rate(0, 0.0)
+                self.settle(t_cmd, 0.0, lambda: check_rate_hold(
+                    self.motion_rows(True)[2], 0.0, 0, names[0], hold_tol))
+            for i, target in enumerate(targets):
+                dev.move_to(i, target)
+            if not fuge:
+                self.held_targets = targets
+
+            def hold() -> str | None:
+                _, angle, rate = self.motion_rows(fuge)
+                return (check_position_hold(angle, targets, names, pos_tol)
+                        or next((r for i in range(len(targets))
+                                 if (r := check_rate_hold(rate, 0.0, i, names[i], hold_tol))),
+                                None))
+
+            def correct(reason: str) -> bool:
+                """Re-command the axes when, at rest over the last tick, one is off target."""
+                angle, rate = self._latest(fuge)
+                if rate.size == 0 or np.abs(rate).max() > hold_tol:
+                    return False  # still moving: the move is not over yet
+                if check_position_hold(angle, targets, names, pos_tol) is None:
+                    return False  # arrived; the settling span has yet to pass
+                for i, target in enumerate(targets):
+                    dev.move_to(i, target)
+                return True
+
+            self.settle(t_cmd, step.settle_s, lambda: hold() or self.accel_settled(), correct)
+
+            def guard() -> None:
+                angle, _ = self._latest(fuge)
+                reason = check_position_hold(angle, targets, names, pos_tol)
+                if reason:
+                    raise StepTrip(reason)
+
+            assert step.record_s is not None  # an arm position records for a duration
+            return self.record_for(step.record_s, guard)
+        axis = 0 if fuge else step.axis  # type: ignore[union-attr]
+        rate = step.rate_dps * units.DEG
+        dev.set_rate(axis, rate)
+        self.settle(t_cmd, step.settle_s, lambda: check_rate_hold(
+            self.motion_rows(fuge)[2], rate, axis, names[axis], rate_tol))
+
+        def rate_guard() -> None:
+            reason = check_rate_hold(self._latest(fuge)[1], rate, axis, names[axis], rate_tol)
+            if reason:
+                raise StepTrip(reason)
+
+        if step.revolutions is not None:
+            return self.record_revolutions(fuge, axis, step.revolutions, rate_guard)
+        assert step.record_s is not None
+        return self.record_for(step.record_s, rate_guard)
+
+    def _latest(self, fuge: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Measured angles and rates of the last tick."""
+        t, angle, rate = self.motion_rows(fuge)
+        recent = t > self.now() - self.opt.tick_s - 1e-9
+        return angle[recent], rate[recent]
+
+    def run_static(self, step: StaticStep, attempt: int) -> tuple[float, float]:
+        """Execute a static step; return its valid window."""
+        table = self.station.table
+        names = table.axis_names if table is not None else ()
+        tol = self.g.position_tolerance_arcsec * units.ARCSEC
+        if table is not None and attempt > 0 and self.held_targets is not None:
+            # a retry after a safe stop: back to the position the record was made at
+            targets = self.held_targets
+            t_cmd = self.now()
+            for i, target in enumerate(targets):
+                table.move_to(i, target)
+            self.settle(t_cmd, 0.0, lambda: check_position_hold(
+                self.motion_rows()[1], targets, names, tol) or self.accel_settled())
+        held: list[float] | None = None
+        if table is not None:
+            _, angle, _ = self.motion_rows()
+            held = list(angle[-1]) if angle.size else None
+
+        def guard() -> None:
+            if held is not None:
+                angle, _ = self._latest()
+                reason = check_position_hold(angle, held, names, tol)
+                if reason:
+                    raise StepTrip(reason)
+
+        return self.record_for(step.duration_s, guard)
+
+    def run_soak(self, step: SoakStep) -> tuple[float, float]:
+        """Execute a soak: set the chamber, wait for stability; return the stable span."""
+        chamber = self.station.chamber
+        assert chamber is not None
+        ramp = None if step.ramp_degc_per_min is None else step.ramp_degc_per_min / 60.0
+        chamber.set_temperature(step.temperature_degc, ramp_degc_ps=ramp)
+        self.chamber_setpoint = None  # no band guard while the temperature changes
+        t_cmd = self.now()
+        for win in self.temps.values():
+            win.clear()
+
+        def stable() -> str | None:
+            t0 = self.now() - step.stable_for_s
+            _, air = self.chamber_rows.rows(t0)
+            if air.size == 0 or not self.chamber_rows.covers(t0):
+                return "chamber: not enough history"
+            reason = check_chamber_band(air[:, 0], step.temperature_degc, step.band_degc)
+            if reason:
+                return reason
+            for name, win in self.temps.items():
+                if not win.covers(t0):
+                    return f"IMU {name}: not enough history"
+                _, temp = win.rows(t0)
+                span = float(temp.max() - temp.min())
+                if span > step.imu_band_degc:
+                    return (f"IMU {name} temperature varied {span:.3g} °C over "
+                            f"{step.stable_for_s:g} s (limit {step.imu_band_degc:g} °C)")
+            return None
+
+        deadline = t_cmd + step.timeout_s
+        while True:
+            self.tick()
+            if self.now() - t_cmd >= step.stable_for_s and stable() is None:
+                self.chamber_setpoint = step.temperature_degc
+                return self.now() - step.stable_for_s, self.now()
+            if self.now() >= deadline:
+                raise StepTrip(f"soak at {step.temperature_degc:g} °C not stable within "
+                            f"{step.timeout_s:g} s: {stable()}")
+
+    def run_warm_up(self, step: WarmUpStep) -> None:
+        """Execute a warm-up: at least its duration, then until the output stops drifting."""
+        t_cmd = self.now()
+        limits = np.r_[np.full(3, step.max_gyro_drift_dps * units.DEG),
+                       np.full(3, step.max_accel_drift_g * units.G0_MPS2)]
+
+        def drift() -> str | None:
+            now = self.now()
+            for name, win in self.gyro_means.items():
+                t, means = win.rows(now - 2 * step.window_s)
+                last, prev = means[t >= now - step.window_s], means[t < now - step.window_s]
+                if last.size == 0 or prev.size == 0:
+                    return f"IMU {name}: not enough history"
+                change = np.abs(last.mean(axis=0) - prev.mean(axis=0))
+                if np.any(change > limits):
+                    return f"IMU {name}: output still drifting (change {change.max():.3g} SI)"
+            return None
+
+        while True:
+            self.tick()
+            if self.now() - t_cmd >= step.duration_s and drift() is None:
+                return
+            if self.now() - t_cmd >= step.timeout_s:
+                raise StepTrip(f"warm-up: output still drifting after {step.timeout_s:g} s: "
+                            f"{drift()}")
+
+    # --- the step loop ----------------------------------------------------------------------
+    def execute(self, index: int, attempt: int) -> str:
+        """Run plan step `index` once; return "done" (raises StepTrip, StepStop)."""
+        step = self.plan.steps[index]
+        label = self.plan.step_label(index)
+        commanded = {**step.model_dump(mode="json"), "plan_step": index, "attempt": attempt}
+        row = self.writer.begin_step(step.kind, label, self.now(), commanded=commanded)
+        self.status.step_index, self.status.step_label, self.status.attempt = index, label, attempt
+        self.writer.log_event(self.now(), "info", "runner",
+                              f"step {index} ({label}) started, attempt {attempt + 1}")
+        try:
+            window: tuple[float, float] | None = None
+            note = ""
+            if isinstance(step, OperatorCheckStep):
+                answer = self.opt.operator.confirm(step.item)
+                note = (f"{'confirmed' if answer.confirmed else 'declined'} by {answer.who} at "
+                        f"{answer.when_utc}" + (f": {answer.note}" if answer.note else ""))
+                self.writer.log_event(self.now(), "info" if answer.confirmed else "warning",
+                                      f"operator:{answer.who}", f"{step.item} — {note}")
+                if not answer.confirmed:
+                    self.writer.update_step(row, t_end_s=self.now(), status="aborted", note=note)
+                    raise StepStop(f"operator {answer.who} did not confirm: {step.item}")
+            elif isinstance(step, PositionStep | RateStep | CentrifugeStep):
+                window = self.run_motion(step)
+            elif isinstance(step, StaticStep):
+                window = self.run_static(step, attempt)
+            elif isinstance(step, SoakStep):
+                window = self.run_soak(step)
+            elif isinstance(step, WarmUpStep):
+                self.run_warm_up(step)
+            fields: dict[str, Any] = {"t_end_s": self.now(), "status": "done"}
+            if window is not None:
+                fields.update(valid_start_s=window[0], valid_end_s=window[1])
+            if note:
+                fields["note"] = note
+            self.writer.update_step(row, **fields)
+            self.status.steps_done += 1
+            return "done"
+        except StepTrip as trip:
+            self.recording = False
+            self.writer.update_step(row, t_end_s=self.now(), status="invalid", note=str(trip))
+            raise
+        except BaseException as exc:
+            self.recording = False
+            if not isinstance(exc, StepStop):
+                self.writer.update_step(row, t_end_s=self.now(), status="aborted",
+                                        note=f"interrupted: {type(exc).__name__}: {exc}"[:2000])
+            raise
+
+    def safe_state(self, *, chamber_too: bool = False) -> None:
+        """Stop the motion (and the chamber when asked); never raises."""
+        for dev in (self.station.table, self.station.centrifuge):
+            if dev is not None:
+                try:
+                    dev.safe_stop()
+                except Exception as exc:  # a safe stop must not hide the original problem
+                    _log.error("safe stop of %s failed: %s", dev.name, exc)
+        if chamber_too and self.station.chamber is not None:
+            try:
+                self.station.chamber.standby()
+            except Exception as exc:
+                _log.error("chamber standby failed: %s", exc)
+
+    def reconnect(self) -> None:
+        """Reconnect the motion devices (resetting their interlocks)."""
+        for dev in (self.station.table, self.station.centrifuge):
+            if dev is not None:
+                dev.connect()
+
+    def recover(self, index: int) -> None:
+        """Reconnect and wait until every device is healthy, or stop after the time-out."""
+        deadline = self.now() + self.g.recover_timeout_s
+        while True:
+            try:
+                self.reconnect()
+                self.tick()
+                return
+            except (StepTrip, DeviceError) as exc:
+                if self.now() >= deadline:
+                    raise StepStop(f"step {index}: cannot resume after the trip: still "
+                                     f"failing after {self.g.recover_timeout_s:g} s: {exc}"
+                                     ) from exc
+                self.safe_state()
+                self.station.clock.sleep(self.opt.tick_s)
+
+    def run_steps(self, first: int) -> None:
+        """Execute the plan from step `first`, with retries after trips."""
+        n = len(self.plan.steps)
+        for index in range(first, n):
+            self.status.remaining_min_s = _remaining_s(self.plan, index)
+            attempt = 0
+            while True:
+                try:
+                    self.execute(index, attempt)
+                    break
+                except StepTrip as trip:
+                    reason = str(trip)
+                    self.trips.append(reason)
+                    self.status.steps_invalid += 1
+                    self.status.last_event = f"trip: {reason}"
+                    chamber_fault = reason.startswith("chamber")
+                    self.safe_state(chamber_too=chamber_fault)
+                    retry = self.g.on_trip == "retry" and attempt < self.g.max_retries
+                    self.writer.log_event(self.now(), "warning", "guard",
+                                          f"step {index} ({self.plan.step_label(index)}): "
+                                          f"{reason}; equipment stopped safely; "
+                                          + ("retrying" if retry else "stopping the run"))
+                    if not retry:
+                        raise StepStop(f"step {index} tripped: {reason}") from trip
+                    attempt += 1
+                    if chamber_fault:
+                        self.chamber_setpoint = None
+                    self.recover(index)
+            self.status.step_index = index
+            if self.opt.on_status is not None:
+                self.opt.on_status(self.status)
+
+    def _notify(self) -> None:
+        if self.opt.on_status is not None:
+            self.status.time_s = self.now()
+            self.opt.on_status(self.status)
+
+
+def _remaining_s(plan: Plan, first: int) -> float:
+    from imucalib.plan.schema import step_min_duration_s
+
+    return float(sum(step_min_duration_s(s) for s in plan.steps[first:]))
+
