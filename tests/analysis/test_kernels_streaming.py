@@ -179,3 +179,52 @@ def test_stream_state_and_errors(tmp_path) -> None:
     with pytest.raises(InvalidInputError,
                        match="`memory_limit_samples` must be an int ≥ 0; got -1"):
         AllanStream(1.0, memory_limit_samples=-1)
+
+
+@pytest.mark.parametrize("n", [5, 3999, 4000, 4001, 8 * 4000 + 17, 100_003])
+def test_phase_blocks_numba_numpy_and_two_threads_agree(backend: None, n: int,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The blocked phase sum is the same bit for bit in numba, numpy and the two-thread split."""
+    y = record(n, seed=n)
+    mean = float(np.mean(y))
+    got = {}
+    for name, threads, split_min in [("numpy", "1", 1 << 40), ("numba", "1", 1 << 40),
+                                     ("numba", "2", 1)]:
+        set_kernel_backend(name)
+        monkeypatch.setenv("IMUCALIB_THREADS", threads)
+        monkeypatch.setattr(engine, "PARALLEL_PHASE_MIN", split_min)
+        out = np.empty(n)
+        engine.integrate_phase(y, mean, 0.01, out)
+        got[(name, threads)] = out
+    ref = got[("numpy", "1")]
+    for key, out in got.items():
+        np.testing.assert_array_equal(out, ref, err_msg=str(key))
+    # and it is the phase: x_{j+1} = τ0·Σ_{i≤j}(y_i − ȳ) to rounding
+    np.testing.assert_allclose(ref, 0.01 * np.cumsum(y - mean), rtol=1e-9, atol=1e-12)
+
+
+def test_streamed_scratch_file_equals_the_parallel_in_memory_phase(
+        tmp_path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Streamed phase (read in phase-block multiples) = in-memory phase split between threads."""
+    monkeypatch.setenv("IMUCALIB_THREADS", "2")
+    monkeypatch.setattr(engine, "PARALLEL_PHASE_MIN", 1)
+    y = record(2 * 1_024_000 + 12_345, seed=11)
+    ref = compute_deviation("oadev", y, 1000.0, taus=[0.001, 0.1, 10.0])
+    pieces = [y[a:a + 777_777] for a in range(0, y.size, 777_777)]
+    got = compute_deviations_streaming(pieces, 1000.0, taus=[0.001, 0.1, 10.0],
+                                       memory_limit_samples=1000, scratch_dir=tmp_path)
+    np.testing.assert_array_equal(ref.deviation, got["oadev"].deviation)
+
+
+def test_data_too_large_to_sum_is_named() -> None:
+    y = np.full(1000, 1.5e308)
+    with pytest.raises(InvalidInputError, match="too large to sum in float64"):
+        compute_deviation("oadev", y, 100.0)
+
+
+@pytest.mark.parametrize("limit", [10, 1 << 30], ids=["scratch-file", "in-memory"])
+def test_streamed_data_too_large_to_sum_is_named(tmp_path, limit: int) -> None:
+    with AllanStream(100.0, scratch_dir=tmp_path, memory_limit_samples=limit) as s:
+        s.append(np.full(1000, 1.5e308))
+        with pytest.raises(InvalidInputError, match="too large to sum in float64"):
+            s.compute()

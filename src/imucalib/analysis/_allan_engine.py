@@ -37,11 +37,13 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.analysis._allan_kernels import backend_name, get_kernels
+from imucalib.analysis._allan_kernels import PHASE_BLOCK, backend_name, get_kernels
 
 __all__ = [
+    "PARALLEL_PHASE_MIN",
     "ArrayPhase",
     "PhaseSource",
+    "integrate_phase",
     "n_terms",
     "read_reflected",
     "sum_nonoverlapping",
@@ -85,6 +87,11 @@ class ArrayPhase:
     @property
     def n_phase(self) -> int:
         return int(self._x.size)
+
+    @property
+    def array(self) -> F64:
+        """The whole phase series (a view, not a copy)."""
+        return self._x
 
     def read(self, start: int, stop: int, step: int = 1) -> F64:
         return np.ascontiguousarray(self._x[start:stop:step])
@@ -147,6 +154,45 @@ def _pool() -> ThreadPoolExecutor:
     return _POOL
 
 
+#: Samples below which the phase is integrated by one thread (the split costs a second pass).
+PARALLEL_PHASE_MIN = 1 << 21
+
+
+def integrate_phase(rate: F64, mean: float, dt: float, out: F64) -> None:
+    """out_j = x_{j+1} of the canonical blocked phase sum (:mod:`._allan_kernels`) of `rate`.
+
+    With the numba kernels, two or more worker threads and at least
+    :data:`PARALLEL_PHASE_MIN` samples, the first half (whole phase blocks) is summed in full
+    while another thread forms the local block sums of the second half; the carries of the
+    second half are then chained from the first half's end and applied by two threads. Every
+    value is formed by the same operations as in the one-thread kernel, so the result is
+    identical bit for bit.
+    """
+    kern = get_kernels()
+    n = rate.size
+    n_blocks = n // PHASE_BLOCK
+    if backend_name() != "numba" or _worker_count() < 2 or n < PARALLEL_PHASE_MIN:
+        kern["phase"](rate, mean, dt, out, 0.0)
+        return
+    half = (n_blocks // 2) * PHASE_BLOCK
+    tail_blocks = -(-(n - half) // PHASE_BLOCK)
+    ends = np.empty(tail_blocks)
+    first = _pool().submit(kern["phase"], rate[:half], mean, dt, out[:half], 0.0)
+    second = _pool().submit(kern["phase_local"], rate[half:], mean, out[half:], ends)
+    carry = first.result()
+    second.result()
+    chain = np.empty(tail_blocks + 1)
+    chain[0] = carry
+    chain[1:] = ends
+    np.add.accumulate(chain, out=chain)  # C_b of each block of the second half
+    split = tail_blocks // 2
+    cut = half + split * PHASE_BLOCK
+    jobs = [_pool().submit(kern["phase_fix"], out[half:cut], chain[:split], dt),
+            _pool().submit(kern["phase_fix"], out[cut:], chain[split:tail_blocks], dt)]
+    for job in jobs:
+        job.result()
+
+
 def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> F64:
     """Blocked sums of squared differences of order 2 or 3 over positions i < totals_n[t].
 
@@ -158,8 +204,22 @@ def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> 
     offsets, win = _windows(ms, order)
     totals = np.zeros(ms.size)
     n_max = int(totals_n.max(initial=0))
-    step = source.superblock
     groups = _job_groups(ms.size)
+    if isinstance(source, ArrayPhase):  # one kernel call per thread over the whole array
+        x = source.array
+        if len(groups) == 1:
+            kern(x, offsets, win, totals_n.astype(np.int64), order, totals)
+            return totals
+        parts = [totals[g] for g in groups]
+        futures = [_pool().submit(kern, x, offsets, np.ascontiguousarray(win[g]),
+                                  np.ascontiguousarray(totals_n[g]), order, part)
+                   for g, part in zip(groups, parts, strict=True)]
+        for f in futures:
+            f.result()
+        for g, part in zip(groups, parts, strict=True):
+            totals[g] = part
+        return totals
+    step = source.superblock
     for start in range(0, n_max, step):
         n_t = np.clip(totals_n - start, 0, step).astype(np.int64)
         live = n_t > 0

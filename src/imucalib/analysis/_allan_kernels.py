@@ -8,15 +8,20 @@ numba is missing, fails to compile, or ``IMUCALIB_KERNELS=numpy`` is set.
 
 Canonical arithmetic (both backends)
 ------------------------------------
-Phase [1]_ eq. (2): ``x_0 = 0``, ``s_k = s_{k-1} + (y_{k-1} - ȳ)``, ``x_k = s_k·τ0`` (one
-sequential sum; the mean ȳ is removed first, as allantools does, to keep the phase small).
+Phase [1]_ eq. (2), ``x_0 = 0``, ``x_{j+1} = τ0·Σ_{i≤j}(y_i − ȳ)``, summed in phase blocks of
+:data:`PHASE_BLOCK` samples: inside block b the partial sums ``L_j`` restart at zero and run
+sequentially, the block carries ``C_{b+1} = C_b + L_last`` run sequentially, and
+``x_{j+1} = (C_b + L_j)·τ0``. The blocks' sums are independent, so the kernel runs eight of them
+side by side (the sequential sum was bound by the latency of one addition chain). The mean ȳ is
+removed first, as allantools does, to keep the phase small. Calls start at a block boundary
+(the streaming driver reads in multiples of the block).
 
 Differences: second ``d = (x[i+2m] - 2·x[i+m]) + x[i]`` (Allan, total), third
 ``d = ((x[i+3m] - 3·x[i+2m]) + 3·x[i+m]) - x[i]`` (Hadamard, modified-Allan recursion).
 
 Sums of squares of an overlapping estimator are taken in blocks of :data:`BLOCK` consecutive
 terms (the last one zero-padded): each block is reduced by repeated halving
-(``e_i += e_{i+h}``, h = BLOCK/2, …, 1; the first three halvings are fused, which does not change
+(``e_i += e_{i+h}``, h = BLOCK/2, …, 1; the first four halvings are fused, which does not change
 the order) and the block sums are added sequentially. The tree vectorises without re-ordering,
 and its rounding error grows like log₂(BLOCK) instead of BLOCK. Other sums (non-overlapping
 estimators, the modified-Allan running sum) are plain sequential sums.
@@ -43,14 +48,17 @@ from numpy.typing import NDArray
 
 __all__ = [
     "BLOCK",
+    "PHASE_BLOCK",
     "backend_name",
     "get_kernels",
     "set_backend",
 ]
 
-#: Terms per reduction block of the overlapping sums (a power of two ≥ 8).
+#: Terms per reduction block of the overlapping sums (a power of two ≥ 32).
 BLOCK = 1024
-_Q = BLOCK // 8
+_Q = BLOCK // 16
+#: Samples per block of the phase sum (the streaming driver's read size is a multiple of it).
+PHASE_BLOCK = 4000  # not a power of two: eight streams 32 KiB apart would share cache sets
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
@@ -58,11 +66,103 @@ I64 = NDArray[np.int64]
 
 # --------------------------------------------------------------------------- numba sources
 def _phase_nb(rate: F64, mean: float, dt: float, out: F64, carry: float) -> float:
-    s = carry
-    for k in range(rate.size):
-        s += rate[k] - mean
-        out[k] = s * dt
-    return s
+    pb = PHASE_BLOCK
+    n = rate.size
+    n_full = n // pb
+    c = carry
+    b = 0
+    while b < n_full:  # local sums of eight blocks side by side, then their carries
+        g = min(8, n_full - b)
+        o = b * pb
+        if g == 8:
+            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+            for j in range(pb):
+                s0 += rate[o + j] - mean
+                out[o + j] = s0
+                s1 += rate[o + pb + j] - mean
+                out[o + pb + j] = s1
+                s2 += rate[o + 2 * pb + j] - mean
+                out[o + 2 * pb + j] = s2
+                s3 += rate[o + 3 * pb + j] - mean
+                out[o + 3 * pb + j] = s3
+                s4 += rate[o + 4 * pb + j] - mean
+                out[o + 4 * pb + j] = s4
+                s5 += rate[o + 5 * pb + j] - mean
+                out[o + 5 * pb + j] = s5
+                s6 += rate[o + 6 * pb + j] - mean
+                out[o + 6 * pb + j] = s6
+                s7 += rate[o + 7 * pb + j] - mean
+                out[o + 7 * pb + j] = s7
+        else:
+            for u in range(g):
+                s = 0.0
+                for j in range(o + u * pb, o + (u + 1) * pb):
+                    s += rate[j] - mean
+                    out[j] = s
+        for u in range(g):
+            ob = o + u * pb
+            last = out[ob + pb - 1]
+            for j in range(ob, ob + pb):
+                out[j] = (c + out[j]) * dt
+            c = c + last
+        b += g
+    s = 0.0
+    for j in range(n_full * pb, n):  # the last, partial block
+        s += rate[j] - mean
+        out[j] = s
+    for j in range(n_full * pb, n):
+        out[j] = (c + out[j]) * dt
+    if n > n_full * pb:
+        c = c + s
+    return c
+
+
+def _phase_local_nb(rate: F64, mean: float, out: F64, ends: F64) -> None:
+    """Phase pass 1 of a parallel split: out = L_j (local sums), ends[b] = L_last of block b."""
+    pb = PHASE_BLOCK
+    n = rate.size
+    n_blocks = (n + pb - 1) // pb
+    b = 0
+    while b + 8 <= n // pb:
+        o = b * pb
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+        for j in range(pb):
+            s0 += rate[o + j] - mean
+            out[o + j] = s0
+            s1 += rate[o + pb + j] - mean
+            out[o + pb + j] = s1
+            s2 += rate[o + 2 * pb + j] - mean
+            out[o + 2 * pb + j] = s2
+            s3 += rate[o + 3 * pb + j] - mean
+            out[o + 3 * pb + j] = s3
+            s4 += rate[o + 4 * pb + j] - mean
+            out[o + 4 * pb + j] = s4
+            s5 += rate[o + 5 * pb + j] - mean
+            out[o + 5 * pb + j] = s5
+            s6 += rate[o + 6 * pb + j] - mean
+            out[o + 6 * pb + j] = s6
+            s7 += rate[o + 7 * pb + j] - mean
+            out[o + 7 * pb + j] = s7
+        for u in range(8):
+            ends[b + u] = out[o + u * pb + pb - 1]
+        b += 8
+    while b < n_blocks:
+        s = 0.0
+        for j in range(b * pb, min(n, (b + 1) * pb)):
+            s += rate[j] - mean
+            out[j] = s
+        ends[b] = s
+        b += 1
+
+
+def _phase_fix_nb(out: F64, carries: F64, dt: float) -> None:
+    """Phase pass 2 of a parallel split: out_j = (C_b + L_j)·τ0 for block b of j."""
+    pb = PHASE_BLOCK
+    n = out.size
+    for b in range(carries.size):
+        c = carries[b]
+        for j in range(b * pb, min(n, (b + 1) * pb)):
+            out[j] = (c + out[j]) * dt
 
 
 def _tree_nb(buf: F64, h: int) -> float:
@@ -75,7 +175,7 @@ def _tree_nb(buf: F64, h: int) -> float:
 
 def _block2_nb(a: F64, b: F64, c: F64, n: int, buf: F64) -> float:
     q = _Q
-    if n == BLOCK:
+    if n == BLOCK:  # the first four halvings of the tree, fused (same order, fewer stores)
         for i in range(q):
             d0 = (c[i] - 2.0 * b[i]) + a[i]
             d1 = (c[i + q] - 2.0 * b[i + q]) + a[i + q]
@@ -85,8 +185,18 @@ def _block2_nb(a: F64, b: F64, c: F64, n: int, buf: F64) -> float:
             d5 = (c[i + 5 * q] - 2.0 * b[i + 5 * q]) + a[i + 5 * q]
             d6 = (c[i + 6 * q] - 2.0 * b[i + 6 * q]) + a[i + 6 * q]
             d7 = (c[i + 7 * q] - 2.0 * b[i + 7 * q]) + a[i + 7 * q]
-            buf[i] = (((d0 * d0) + (d4 * d4)) + ((d2 * d2) + (d6 * d6))) + (
-                ((d1 * d1) + (d5 * d5)) + ((d3 * d3) + (d7 * d7)))
+            e0 = (c[i + 8 * q] - 2.0 * b[i + 8 * q]) + a[i + 8 * q]
+            e1 = (c[i + 9 * q] - 2.0 * b[i + 9 * q]) + a[i + 9 * q]
+            e2 = (c[i + 10 * q] - 2.0 * b[i + 10 * q]) + a[i + 10 * q]
+            e3 = (c[i + 11 * q] - 2.0 * b[i + 11 * q]) + a[i + 11 * q]
+            e4 = (c[i + 12 * q] - 2.0 * b[i + 12 * q]) + a[i + 12 * q]
+            e5 = (c[i + 13 * q] - 2.0 * b[i + 13 * q]) + a[i + 13 * q]
+            e6 = (c[i + 14 * q] - 2.0 * b[i + 14 * q]) + a[i + 14 * q]
+            e7 = (c[i + 15 * q] - 2.0 * b[i + 15 * q]) + a[i + 15 * q]
+            buf[i] = ((((d0 * d0) + (e0 * e0)) + ((d4 * d4) + (e4 * e4)))
+                      + (((d2 * d2) + (e2 * e2)) + ((d6 * d6) + (e6 * e6)))) + (
+                (((d1 * d1) + (e1 * e1)) + ((d5 * d5) + (e5 * e5)))
+                + (((d3 * d3) + (e3 * e3)) + ((d7 * d7) + (e7 * e7))))
         return _tree_nb(buf, q >> 1)
     for i in range(n):
         d = (c[i] - 2.0 * b[i]) + a[i]
@@ -169,13 +279,45 @@ def _mdev_running_nb(buf: F64, starts: I64, win: I64, n_terms: I64, v: F64,
 
 # --------------------------------------------------------------------------- numpy twins
 def _phase_np(rate: F64, mean: float, dt: float, out: F64, carry: float) -> float:
-    if rate.size == 0:
+    n = rate.size
+    if n == 0:
         return carry
-    z = rate - mean
-    z[0] = carry + z[0]
-    np.cumsum(z, out=z)
-    np.multiply(z, dt, out=out)
-    return float(z[-1])
+    pb = PHASE_BLOCK
+    n_blocks = -(-n // pb)
+    z = np.zeros(n_blocks * pb)
+    np.subtract(rate, mean, out=z[:n])
+    local = np.cumsum(z.reshape(n_blocks, pb), axis=1)  # sequential along each block
+    ends = local[:, pb - 1] if n % pb == 0 else np.append(local[:-1, pb - 1], local[-1, n % pb - 1])
+    chain = np.empty(n_blocks + 1)
+    chain[0] = carry
+    chain[1:] = ends
+    np.add.accumulate(chain, out=chain)  # C_0 = carry, C_{b+1} = C_b + L_last(b)
+    x = (chain[:-1, None] + local) * dt
+    out[:] = x.reshape(-1)[:n]
+    return float(chain[-1])
+
+
+def _phase_local_np(rate: F64, mean: float, out: F64, ends: F64) -> None:
+    n = rate.size
+    if n == 0:
+        return
+    pb = PHASE_BLOCK
+    n_blocks = -(-n // pb)
+    z = np.zeros(n_blocks * pb)
+    np.subtract(rate, mean, out=z[:n])
+    local = np.cumsum(z.reshape(n_blocks, pb), axis=1)
+    out[:] = local.reshape(-1)[:n]
+    ends[:n_blocks] = local[:, pb - 1]
+    if n % pb:
+        ends[n_blocks - 1] = local[-1, n % pb - 1]
+
+
+def _phase_fix_np(out: F64, carries: F64, dt: float) -> None:
+    n = out.size
+    pb = PHASE_BLOCK
+    z = np.zeros(carries.size * pb)
+    z[:n] = out
+    out[:] = ((carries[:, None] + z.reshape(carries.size, pb)) * dt).reshape(-1)[:n]
 
 
 def _diff_np(buf: F64, starts: I64, row: I64, p: int, n: int, order: int) -> F64:
@@ -247,6 +389,8 @@ def _mdev_running_np(buf: F64, starts: I64, win: I64, n_terms: I64, v: F64,
 # --------------------------------------------------------------------------- dispatch
 _NUMPY: dict[str, Callable[..., Any]] = {
     "phase": _phase_np,
+    "phase_local": _phase_local_np,
+    "phase_fix": _phase_fix_np,
     "sumsq_overlap": _sumsq_overlap_np,
     "sum_seq": _sum_seq_np,
     "mdev_running": _mdev_running_np,
@@ -270,6 +414,8 @@ def _compile_numba() -> dict[str, Callable[..., Any]] | None:
         g["_block3_nb"] = jit(_block3_nb)
         kernels: dict[str, Callable[..., Any]] = {
             "phase": jit(_phase_nb),
+            "phase_local": jit(_phase_local_nb),
+            "phase_fix": jit(_phase_fix_nb),
             "sumsq_overlap": jit(_sumsq_overlap_nb),
             "sum_seq": jit(_sum_seq_nb),
             "mdev_running": jit(_mdev_running_nb),
@@ -290,6 +436,8 @@ def _smoke_test(kernels: dict[str, Callable[..., Any]]) -> None:
     n = np.array([8], dtype=np.int64)
     out = np.zeros(1)
     kernels["phase"](x, 0.5, 0.1, np.empty(64), 0.0)
+    kernels["phase_local"](x, 0.5, np.empty(64), np.empty(1))
+    kernels["phase_fix"](np.empty(64), np.zeros(1), 0.1)
     kernels["sumsq_overlap"](x, starts, win, n, 2, out)
     kernels["sumsq_overlap"](x, starts, win, n, 3, out)
     kernels["sum_seq"](x, starts, win, n, 2, 1, out)

@@ -51,7 +51,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import check_positive
 from imucalib.analysis import _allan_engine as eng
-from imucalib.analysis._allan_kernels import get_kernels
 from imucalib.analysis.edf import (
     NOISE_TYPES,
     ONE_SIGMA,
@@ -346,7 +345,9 @@ def canonical_mean(values: NDArray[np.float64]) -> float:
     return acc / values.size
 
 
-def _validate(data: ArrayLike, sample_rate_hz: float) -> tuple[NDArray[np.float64], float]:
+def _validate(data: ArrayLike,
+              sample_rate_hz: float) -> tuple[NDArray[np.float64], float, float]:
+    """Return (samples, sample rate, canonical mean); the mean's sum is the finiteness check."""
     rate = check_positive(sample_rate_hz, "sample_rate_hz")
     try:
         y = np.asarray(data, dtype=np.float64)
@@ -354,22 +355,32 @@ def _validate(data: ArrayLike, sample_rate_hz: float) -> tuple[NDArray[np.float6
         raise InvalidInputError(f"`data` must be numeric; got {type(data).__name__}") from exc
     if y.ndim != 1:
         raise InvalidInputError(f"`data` must be 1-D (one channel); got shape {y.shape}")
-    bad = ~np.isfinite(y)
-    if bad.any():
+    with np.errstate(over="ignore", invalid="ignore"):
+        mean = canonical_mean(y) if y.size else 0.0
+    if not math.isfinite(mean):  # a NaN or infinity anywhere makes the sum non-finite
+        bad = ~np.isfinite(y)
+        if not bad.any():
+            raise InvalidInputError(
+                f"`data` is too large to sum in float64 (largest magnitude "
+                f"{float(np.max(np.abs(y))):g}): rescale it")
         i = int(np.argmax(bad))
         raise InvalidInputError(
             f"`data` has {int(bad.sum())} NaN or infinite sample(s), the first at index {i} "
             f"(t = {i / rate:g} s); an Allan sum across a gap is not defined: split the record "
             "at the gap and analyse the pieces")
-    return y, rate
+    return y, rate, mean
 
 
-def phase_from_rate(y: NDArray[np.float64], sample_rate_hz: float) -> NDArray[np.float64]:
-    """x_0 = 0, x_k = τ0·Σ_{j<k}(y_j − ȳ) with the canonical mean (module docstring) [angle]."""
+def phase_from_rate(y: NDArray[np.float64], sample_rate_hz: float,
+                    mean: float | None = None) -> NDArray[np.float64]:
+    """x_0 = 0, x_k = τ0·Σ_{j<k}(y_j − ȳ) with the canonical mean (module docstring) [angle].
+
+    `mean` is :func:`canonical_mean` of `y` when the caller has it already.
+    """
     x = np.empty(y.size + 1)
     x[0] = 0.0
-    get_kernels()["phase"](np.ascontiguousarray(y), canonical_mean(y), 1.0 / sample_rate_hz,
-                           x[1:], 0.0)
+    y_bar = canonical_mean(y) if mean is None else mean
+    eng.integrate_phase(np.ascontiguousarray(y), y_bar, 1.0 / sample_rate_hz, x[1:])
     return x
 
 
@@ -470,7 +481,7 @@ def compute_deviation(kind: str, data: ArrayLike, sample_rate_hz: float, *,
         NaN/infinite samples (the message gives the first index), not 1-D, too short for any τ
         or for an explicit τ, bad `taus`, `kind`, `data_type` or `confidence`.
     """
-    y, rate = _validate(data, sample_rate_hz)
+    y, rate, mean = _validate(data, sample_rate_hz)
     if data_type not in ("rate", "angle"):
         raise InvalidInputError(f"`data_type` must be 'rate' or 'angle'; got {data_type!r}")
     if kind not in DEVIATION_KINDS:
@@ -480,7 +491,7 @@ def compute_deviation(kind: str, data: ArrayLike, sample_rate_hz: float, *,
     if y.size < n_min:
         raise InvalidInputError(f"data too short: `{kind}` needs at least {n_min} samples; "
                                 f"got {y.size}")
-    x = phase_from_rate(y, rate) if data_type == "rate" else np.ascontiguousarray(y)
+    x = phase_from_rate(y, rate, mean) if data_type == "rate" else np.ascontiguousarray(y)
     res = deviations_from_source(eng.ArrayPhase(x), (kind,), taus, rate, confidence=confidence,
                                  identify_noise=identify_noise, data_type=data_type, unit=unit)
     return res[kind]

@@ -97,13 +97,20 @@ _DIFF_COEF = {1: (2.0, -1.0), 2: (6.0, -4.0, 1.0), 3: (20.0, -15.0, 6.0, -1.0)}
 
 
 def _sw(t: NDArray[np.float64], alpha: int) -> NDArray[np.float64]:
-    """Generalised autocovariance of the twice-integrated phase, eq. (7) of [1] (up to sign)."""
+    """Generalised autocovariance of the twice-integrated phase, eq. (7) of [1] (up to sign).
+
+    Even α: ±|t|^(3−α); odd α: ±t^(3−α)·ln|t| (0 at t = 0); only the requested term is computed.
+    """
     a = np.abs(t)
+    power = 3 - alpha
+    sign = 1.0 if alpha in (0, -4, 1, -3) else -1.0
+    if alpha % 2 == 0:
+        out: NDArray[np.float64] = a**power if sign > 0 else -(a**power)
+        return out
     with np.errstate(divide="ignore", invalid="ignore"):
         log = np.where(a > 0, np.log(np.where(a > 0, a, 1.0)), 0.0)
-    table = {2: -a, 1: t**2 * log, 0: a**3, -1: -(t**4) * log, -2: -(a**5), -3: t**6 * log,
-             -4: a**7}
-    return table[alpha]
+    out = t**power * log if sign > 0 else -(t**power) * log
+    return out
 
 
 def _sx(t: NDArray[np.float64], big_f: float, alpha: int) -> NDArray[np.float64]:

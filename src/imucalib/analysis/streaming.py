@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import check_positive
 from imucalib.analysis import _allan_engine as eng
-from imucalib.analysis._allan_kernels import get_kernels
+from imucalib.analysis._allan_kernels import PHASE_BLOCK, get_kernels
 from imucalib.analysis.allan import (
     _MEAN_CHUNK,
     DataType,
@@ -58,7 +58,8 @@ __all__ = ["AllanStream", "FilePhase", "compute_deviations_streaming"]
 
 F64 = NDArray[np.float64]
 I64 = NDArray[np.int64]
-_IO_CHUNK = 1 << 20  # elements per sequential read/write
+_IO_CHUNK = 256 * PHASE_BLOCK  # elements per sequential read/write (about 2^20)
+assert _IO_CHUNK % PHASE_BLOCK == 0  # phase kernel calls start at a phase-block boundary
 
 
 def _pread(fd: int, out: F64, index: int) -> None:
@@ -238,7 +239,8 @@ class AllanStream:
             self._pending_n += k
             a += k
             if self._pending_n == _MEAN_CHUNK:
-                self._sum += float(np.sum(self._pending))
+                with np.errstate(over="ignore", invalid="ignore"):
+                    self._sum += float(np.sum(self._pending))
                 self._pending_n = 0
 
     def _spill(self) -> None:
@@ -259,15 +261,21 @@ class AllanStream:
         if self._n < n_min:
             raise InvalidInputError(f"data too short: need at least {n_min} samples; got "
                                     f"{self._n}")
+        mean = 0.0
+        if self.data_type == "rate":
+            with np.errstate(over="ignore", invalid="ignore"):
+                mean = (self._sum + float(np.sum(self._pending[:self._pending_n]))) / self._n
+            if not np.isfinite(mean):
+                raise InvalidInputError("the samples are too large to sum in float64: rescale "
+                                        "them")
         if self._fd is None:
             y = np.concatenate(self._chunks)
             self._chunks = []
-            x = phase_from_rate(y, self.sample_rate_hz) if self.data_type == "rate" else y
+            x = phase_from_rate(y, self.sample_rate_hz, mean) if self.data_type == "rate" else y
             self._source = eng.ArrayPhase(x)
         elif self.data_type == "angle":
             self._source = FilePhase(self._fd, self._n, lead_zero=False)
         else:
-            mean = (self._sum + float(np.sum(self._pending[:self._pending_n]))) / self._n
             phase = get_kernels()["phase"]
             buf, carry, dt = np.empty(_IO_CHUNK), 0.0, 1.0 / self.sample_rate_hz
             for a in range(0, self._n, _IO_CHUNK):
