@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from imucalib.cli._app import app, console, fail
 from imucalib.errors import CalibrationError, InvalidInputError
 
-__all__ = ["export", "inspect", "recover"]
+__all__ = ["export", "inspect", "recover", "segments"]
 
 
 @app.command()
@@ -71,3 +71,96 @@ def export(
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(f"wrote {out}", highlight=False)
+
+
+def _imu_arrays(path: Path, unit: str | None) -> tuple[str, Any, Any, Any]:
+    """(source label, time [s], gyro [rad/s], accel [m/s²] or None) of a CSV file or Recording."""
+    import numpy as np
+
+    from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+
+    if path.suffix.lower() in (".h5", ".hdf5"):
+        from imucalib.io.reader import open_recording
+        from imucalib.io.streams import DEVICE_IMU
+
+        with open_recording(path) as rec:
+            units = [s.unit for s in rec.streams if s.device == DEVICE_IMU]
+            if not units:
+                raise InvalidInputError(f"{path}: the Recording has no IMU stream")
+            chosen = unit or units[0]
+            if chosen not in units:
+                raise InvalidInputError(f"{path}: no IMU {chosen!r}; the Recording has {units}")
+            data = rec.read_stream(DEVICE_IMU, chosen)
+            gyro = np.column_stack([data.columns[c] for c in GYRO_COLUMNS])
+            accel = np.column_stack([data.columns[c] for c in ACCEL_COLUMNS])
+            return f"{path} IMU {chosen}", data.time_s, gyro, accel
+    from imucalib.io.csv_import import read_imu_csv
+
+    df = read_imu_csv(path)
+    missing = [c for c in GYRO_COLUMNS if c not in df.columns]
+    if missing:
+        raise InvalidInputError(f"{path}: segmentation needs the gyro columns {list(GYRO_COLUMNS)};"
+                                f" missing {missing} (found {list(df.columns)})")
+    accel_cols = [c for c in ACCEL_COLUMNS if c in df.columns]
+    accel_csv = df[list(ACCEL_COLUMNS)].to_numpy() if len(accel_cols) == 3 else None
+    return str(path), df.index.to_numpy(dtype=float), df[list(GYRO_COLUMNS)].to_numpy(), accel_csv
+
+
+@app.command()
+def segments(
+    path: Annotated[Path, typer.Argument(help="IMU data: a CSV file or a Recording (.h5).")],
+    unit: Annotated[str | None, typer.Option(help="IMU unit of a Recording (default: the "
+                                                  "first).")] = None,
+    window_s: Annotated[float, typer.Option(help="Moving-window length [s].")] = 1.0,
+    min_static_s: Annotated[float, typer.Option(help="Shortest static segment kept [s].")] = 2.0,
+    min_rotating_s: Annotated[float, typer.Option(
+        help="Shortest rotating segment kept [s].")] = 2.0,
+    json_out: Annotated[Path | None, typer.Option("--json", help="Also write the segments "
+                                                                 "as JSON here.")] = None,
+) -> None:
+    """Find the static and constant-rate intervals of IMU data that has no step records."""
+    import json
+
+    import numpy as np
+    from rich.table import Table
+
+    from imucalib import units
+    from imucalib.processing import detect_segments
+
+    try:
+        label, t, gyro, accel = _imu_arrays(path, unit)
+        result = detect_segments(t, gyro, accel_mps2=accel, window_s=window_s,
+                                 min_static_s=min_static_s, min_rotating_s=min_rotating_s)
+    except (CalibrationError, OSError) as exc:
+        raise fail(exc) from exc
+    table = Table(title=f"{len(result.segments)} segments in {label}")
+    for col in ("#", "kind", "start [s]", "end [s]", "duration [s]", "samples",
+                "mean rate [°/s]", "mean force [g]"):
+        table.add_column(col, justify="left" if col == "kind" else "right")
+    rows = []
+    for i, seg in enumerate(result.segments):
+        rate_dps = np.asarray(seg.mean_rate_rps) / units.DEG_PER_S
+        force_g = (None if seg.mean_specific_force_mps2 is None
+                   else np.asarray(seg.mean_specific_force_mps2) / units.G0_MPS2)
+        table.add_row(str(i), seg.kind, f"{seg.start_time_s:.3f}", f"{seg.end_time_s:.3f}",
+                      f"{seg.duration_s:.3f}", str(seg.n_samples),
+                      " ".join(f"{v:+.4f}" for v in rate_dps),
+                      "" if force_g is None else " ".join(f"{v:+.5f}" for v in force_g))
+        rows.append({"kind": seg.kind, "start_index": seg.start_index,
+                     "stop_index": seg.stop_index, "start_time_s": seg.start_time_s,
+                     "end_time_s": seg.end_time_s,
+                     "mean_rate_rps": [float(v) for v in seg.mean_rate_rps],
+                     "mean_specific_force_mps2": None if seg.mean_specific_force_mps2 is None
+                     else [float(v) for v in seg.mean_specific_force_mps2]})
+    console.print(table)
+    console.print(f"gyro noise floor {result.gyro_noise_floor_rps / units.DEG_PER_S:.3g} °/s per "
+                  f"{window_s:g} s window; steady below "
+                  f"{result.steady_threshold_rps / units.DEG_PER_S:.3g} °/s; static below "
+                  f"{result.static_rate_threshold_rps / units.DEG_PER_S:.3g} °/s", highlight=False)
+    if json_out is not None:
+        doc = {"source": label, "window_samples": result.window_samples,
+               "gyro_noise_floor_rps": result.gyro_noise_floor_rps,
+               "steady_threshold_rps": result.steady_threshold_rps,
+               "static_rate_threshold_rps": result.static_rate_threshold_rps, "segments": rows}
+        json_out.write_text(json.dumps(doc, indent=2) + "\n")
+        console.print(f"wrote {json_out}", highlight=False)

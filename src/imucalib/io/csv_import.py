@@ -98,7 +98,11 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
                                 " (use `column_map` to name the time column)")
     for col in df.columns:
         if not pd.api.types.is_numeric_dtype(df[col]):
-            raise InvalidInputError(f"{p}: column {col!r} holds non-numeric values")
+            bad = pd.to_numeric(df[col], errors="coerce").isna() & df[col].notna()
+            row = int(np.argmax(bad.to_numpy()))
+            raise InvalidInputError(
+                f"{p}: column {col!r} holds a non-numeric value {df[col].iloc[row]!r} at data "
+                f"row {row + 1} (numbers expected; a missing value is written NaN)")
         unit = col_units[col]
         if unit in ("1", "counts", "degC", "bool"):
             continue
