@@ -65,6 +65,29 @@ I64 = NDArray[np.int64]
 
 
 # --------------------------------------------------------------------------- numba sources
+def _local8_nb(rate: F64, mean: float, out: F64, o: int) -> None:
+    """Local phase sums of the eight blocks from `o`, side by side (eight addition chains)."""
+    pb = PHASE_BLOCK
+    s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+    for j in range(pb):
+        s0 += rate[o + j] - mean
+        out[o + j] = s0
+        s1 += rate[o + pb + j] - mean
+        out[o + pb + j] = s1
+        s2 += rate[o + 2 * pb + j] - mean
+        out[o + 2 * pb + j] = s2
+        s3 += rate[o + 3 * pb + j] - mean
+        out[o + 3 * pb + j] = s3
+        s4 += rate[o + 4 * pb + j] - mean
+        out[o + 4 * pb + j] = s4
+        s5 += rate[o + 5 * pb + j] - mean
+        out[o + 5 * pb + j] = s5
+        s6 += rate[o + 6 * pb + j] - mean
+        out[o + 6 * pb + j] = s6
+        s7 += rate[o + 7 * pb + j] - mean
+        out[o + 7 * pb + j] = s7
+
+
 def _phase_nb(rate: F64, mean: float, dt: float, out: F64, carry: float) -> float:
     pb = PHASE_BLOCK
     n = rate.size
@@ -75,24 +98,7 @@ def _phase_nb(rate: F64, mean: float, dt: float, out: F64, carry: float) -> floa
         g = min(8, n_full - b)
         o = b * pb
         if g == 8:
-            s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
-            for j in range(pb):
-                s0 += rate[o + j] - mean
-                out[o + j] = s0
-                s1 += rate[o + pb + j] - mean
-                out[o + pb + j] = s1
-                s2 += rate[o + 2 * pb + j] - mean
-                out[o + 2 * pb + j] = s2
-                s3 += rate[o + 3 * pb + j] - mean
-                out[o + 3 * pb + j] = s3
-                s4 += rate[o + 4 * pb + j] - mean
-                out[o + 4 * pb + j] = s4
-                s5 += rate[o + 5 * pb + j] - mean
-                out[o + 5 * pb + j] = s5
-                s6 += rate[o + 6 * pb + j] - mean
-                out[o + 6 * pb + j] = s6
-                s7 += rate[o + 7 * pb + j] - mean
-                out[o + 7 * pb + j] = s7
+            _local8_nb(rate, mean, out, o)
         else:
             for u in range(g):
                 s = 0.0
@@ -125,24 +131,7 @@ def _phase_local_nb(rate: F64, mean: float, out: F64, ends: F64) -> None:
     b = 0
     while b + 8 <= n // pb:
         o = b * pb
-        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
-        for j in range(pb):
-            s0 += rate[o + j] - mean
-            out[o + j] = s0
-            s1 += rate[o + pb + j] - mean
-            out[o + pb + j] = s1
-            s2 += rate[o + 2 * pb + j] - mean
-            out[o + 2 * pb + j] = s2
-            s3 += rate[o + 3 * pb + j] - mean
-            out[o + 3 * pb + j] = s3
-            s4 += rate[o + 4 * pb + j] - mean
-            out[o + 4 * pb + j] = s4
-            s5 += rate[o + 5 * pb + j] - mean
-            out[o + 5 * pb + j] = s5
-            s6 += rate[o + 6 * pb + j] - mean
-            out[o + 6 * pb + j] = s6
-            s7 += rate[o + 7 * pb + j] - mean
-            out[o + 7 * pb + j] = s7
+        _local8_nb(rate, mean, out, o)
         for u in range(8):
             ends[b + u] = out[o + u * pb + pb - 1]
         b += 8
@@ -410,6 +399,7 @@ def _compile_numba() -> dict[str, Callable[..., Any]] | None:
         g = globals()
         # the helpers are resolved by name from this module's globals when numba compiles
         g["_tree_nb"] = inline(_tree_nb)
+        g["_local8_nb"] = inline(_local8_nb)
         g["_block2_nb"] = jit(_block2_nb)
         g["_block3_nb"] = jit(_block3_nb)
         kernels: dict[str, Callable[..., Any]] = {
