@@ -6,7 +6,7 @@ W·z = W·H·x + e with e ~ N(0, I). Diagonal C reduces to dividing each row by 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,7 +16,29 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib._checks import as_array
 from imucalib.errors import InvalidInputError
 
-__all__ = ["Whitener", "as_design", "as_names", "make_whitener"]
+__all__ = ["EstimateAccessors", "Whitener", "as_design", "as_names", "make_whitener"]
+
+
+class EstimateAccessors:
+    """Named views of a solution's estimate, uncertainty and correlation (linear and nonlinear)."""
+
+    param_names: tuple[str, ...]
+    estimate: NDArray[np.float64]
+    covariance: NDArray[np.float64]
+    std: NDArray[np.float64]
+
+    def as_dict(self) -> Mapping[str, float]:
+        """Return {name: estimate}."""
+        return dict(zip(self.param_names, self.estimate.tolist(), strict=True))
+
+    def std_dict(self) -> Mapping[str, float]:
+        """Return {name: standard uncertainty}."""
+        return dict(zip(self.param_names, self.std.tolist(), strict=True))
+
+    def correlation(self) -> NDArray[np.float64]:
+        """Return the correlation matrix of the estimate, shape (p, p)."""
+        d = np.where(self.std > 0, self.std, 1.0)
+        return np.asarray(self.covariance / np.outer(d, d), dtype=np.float64)
 
 
 def as_design(value: ArrayLike, name: str) -> NDArray[np.float64]:

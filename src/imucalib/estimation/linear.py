@@ -38,7 +38,7 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,7 +46,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import InvalidInputError
-from imucalib.estimation._common import Whitener, as_design, as_names, make_whitener
+from imucalib.estimation._common import (
+    EstimateAccessors,
+    Whitener,
+    as_design,
+    as_names,
+    make_whitener,
+)
 from imucalib.estimation.observability import (
     DEFAULT_COND_LIMIT,
     ObservabilityReport,
@@ -57,7 +63,7 @@ __all__ = ["LsqSolution", "solve_weighted_lsq"]
 
 
 @dataclass(frozen=True, eq=False)
-class LsqSolution:
+class LsqSolution(EstimateAccessors):
     """Result of a (weighted) least-squares fit. Arrays are read-only.
 
     Attributes
@@ -105,18 +111,6 @@ class LsqSolution:
     rank: int
     observability: ObservabilityReport
 
-    def as_dict(self) -> Mapping[str, float]:
-        """Return {name: estimate}."""
-        return dict(zip(self.param_names, self.estimate.tolist(), strict=True))
-
-    def std_dict(self) -> Mapping[str, float]:
-        """Return {name: standard uncertainty}."""
-        return dict(zip(self.param_names, self.std.tolist(), strict=True))
-
-    def correlation(self) -> NDArray[np.float64]:
-        """Return the correlation matrix of the estimate, shape (p, p)."""
-        d = np.where(self.std > 0, self.std, 1.0)
-        return np.asarray(self.covariance / np.outer(d, d), dtype=np.float64)
 
 
 def solve_weighted_lsq(

@@ -33,7 +33,7 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import ConvergenceError, InvalidInputError
-from imucalib.estimation._common import as_names, make_whitener
+from imucalib.estimation._common import EstimateAccessors, as_names, make_whitener
 from imucalib.estimation.linear import _fit_statistics, _scaled_svd_factors
 from imucalib.estimation.observability import (
     DEFAULT_COND_LIMIT,
@@ -57,7 +57,7 @@ ResidualFunction = Callable[[NDArray[np.float64]], ArrayLike]
 
 
 @dataclass(frozen=True, eq=False)
-class NlsSolution:
+class NlsSolution(EstimateAccessors):
     """Result of a nonlinear least-squares fit. Arrays are read-only.
 
     Attributes
@@ -114,13 +114,6 @@ class NlsSolution:
     n_evaluations: int
     message: str
 
-    def as_dict(self) -> Mapping[str, float]:
-        """Return {name: estimate}."""
-        return dict(zip(self.param_names, self.estimate.tolist(), strict=True))
-
-    def std_dict(self) -> Mapping[str, float]:
-        """Return {name: standard uncertainty}."""
-        return dict(zip(self.param_names, self.std.tolist(), strict=True))
 
 
 def solve_nonlinear_lsq(
