@@ -154,6 +154,24 @@ class _MotionDriver:
                 )
         return rate, acc
 
+    def _send_limits(self, i: int, rate_rps: float, accel_rps2: float) -> None:
+        raise NotImplementedError  # each dialect sends its own commands
+
+    def set_limits(self, axis: int, *, rate_rps: float, accel_rps2: float) -> None:
+        """Set an axis's rate and acceleration limits on the controller. [rad/s], [rad/s²]
+
+        ACUTROL sets both profilers (position and rate); Aerosmith sends ``VEL`` and ``ACL``.
+
+        Raises
+        ------
+        LimitExceededError
+            If a value exceeds the configured maximum (nothing is sent).
+        """
+        i = self._axis(axis)
+        rate, acc = self._check_limits(i, rate_rps, accel_rps2)
+        self._send_limits(i, rate, acc)
+        self._rate_limit[i], self._accel_limit[i] = rate, acc
+
     def _check_absolute(self, i: int, abs_rate_rps: float, abs_accel_rps2: float) -> None:
         """Refuse a configuration whose limits exceed what the controller reports."""
         lim = self.limits[i]
@@ -368,19 +386,6 @@ class AcutrolTable(_MotionDriver):
         self._send(acl.limit_rate("P", n, r), acl.limit_rate("R", n, r),
                    acl.limit_accel("P", n, a), acl.limit_accel("R", n, a))
 
-    def set_limits(self, axis: int, *, rate_rps: float, accel_rps2: float) -> None:
-        """Set the rate and acceleration limits of both profilers of an axis.
-
-        Raises
-        ------
-        LimitExceededError
-            If a value exceeds the configured maximum (nothing is sent).
-        """
-        i = self._axis(axis)
-        rate, acc = self._check_limits(i, rate_rps, accel_rps2)
-        self._send_limits(i, rate, acc)
-        self._rate_limit[i], self._accel_limit[i] = rate, acc
-
     def move_to(self, axis: int, angle_rad: float) -> None:
         """Position mode: move an axis to an angle and hold it. [rad]"""
         i = self._axis(axis)
@@ -519,19 +524,6 @@ class AerosmithTable(_MotionDriver):
     def _send_limits(self, i: int, rate_rps: float, accel_rps2: float) -> None:
         self._cmd("VEL", rate_rps / units.DEG, axis=i)
         self._cmd("ACL", accel_rps2 / units.DEG, axis=i)
-
-    def set_limits(self, axis: int, *, rate_rps: float, accel_rps2: float) -> None:
-        """Set the velocity and acceleration limits of an axis (``VEL``, ``ACL``).
-
-        Raises
-        ------
-        LimitExceededError
-            If a value exceeds the configured maximum (nothing is sent).
-        """
-        i = self._axis(axis)
-        rate, acc = self._check_limits(i, rate_rps, accel_rps2)
-        self._send_limits(i, rate, acc)
-        self._rate_limit[i], self._accel_limit[i] = rate, acc
 
     def move_to(self, axis: int, angle_rad: float) -> None:
         """Absolute move (``MOV``) and hold. [rad]"""
