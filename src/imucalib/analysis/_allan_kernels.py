@@ -2,9 +2,10 @@
 
 Every kernel exists twice, once as plain Python written for numba (``_*_nb``) and once as numpy
 (``_*_np``). The two perform the same IEEE operations in the same order, so they return
-**bit-identical** results (``tests/analysis/test_kernels.py``); numba is only faster. numba is
-imported on first use, never when :mod:`imucalib` is imported, and the numpy twin is used when
-numba is missing, fails to compile, or ``IMUCALIB_KERNELS=numpy`` is set.
+**bit-identical** results (``tests/analysis/test_kernels_streaming.py``,
+``test_kernel_order.py``); numba is only faster. numba is imported on first use, never when
+:mod:`imucalib` is imported, and the numpy twin is used when numba is missing, fails to
+compile, or ``IMUCALIB_KERNELS=numpy`` is set.
 
 Canonical arithmetic (both backends)
 ------------------------------------
@@ -20,11 +21,15 @@ Differences: second ``d = (x[i+2m] - 2·x[i+m]) + x[i]`` (Allan, total), third
 ``d = ((x[i+3m] - 3·x[i+2m]) + 3·x[i+m]) - x[i]`` (Hadamard, modified-Allan recursion).
 
 Sums of squares of an overlapping estimator are taken in blocks of :data:`BLOCK` consecutive
-terms (the last one zero-padded): each block is reduced by repeated halving
-(``e_i += e_{i+h}``, h = BLOCK/2, …, 1; the first four halvings are fused, which does not change
-the order) and the block sums are added sequentially. The tree vectorises without re-ordering,
-and its rounding error grows like log₂(BLOCK) instead of BLOCK. Other sums (non-overlapping
-estimators, the modified-Allan running sum) are plain sequential sums.
+terms e_0 … e_{BLOCK−1} (the last block zero-padded). Each block has :data:`LANES` lanes: lane
+i sums e_i, e_{i+LANES}, e_{i+2·LANES}, … sequentially; the lanes are then reduced by repeated
+halving (``s_i += s_{i+h}``, h = LANES/2, …, 1), and the block sums are added sequentially.
+The lane loop reads each window front to back and vectorises without re-ordering; the rounding
+error grows like BLOCK/LANES + log₂(LANES) per block instead of BLOCK. In the numba kernels
+``(x[i+2m] − 2·x[i+m])`` is one fused multiply-add: 2·x is exact, so the single rounding of
+the FMA equals the twin's rounding of the subtraction (bit-identical unless |x| ≥ 2^1023,
+where the square overflows anyway). Other sums (non-overlapping estimators, the modified-Allan
+running sum) are plain sequential sums.
 
 Memory layout: a kernel sees one float64 buffer ``buf`` and the positions ``starts[k]`` in it of
 the windows it needs; a job (one τ of one estimator) names its windows by index. The in-memory
@@ -54,9 +59,10 @@ __all__ = [
     "set_backend",
 ]
 
-#: Terms per reduction block of the overlapping sums (a power of two ≥ 32).
+#: Terms per reduction block of the overlapping sums.
 BLOCK = 1024
-_Q = BLOCK // 16
+#: Partial sums (lanes) per block: lane i sums terms i, i + LANES, i + 2·LANES, … in order.
+LANES = 64
 #: Samples per block of the phase sum (the streaming driver's read size is a multiple of it).
 PHASE_BLOCK = 4000  # not a power of two: eight streams 32 KiB apart would share cache sets
 
@@ -162,37 +168,91 @@ def _tree_nb(buf: F64, h: int) -> float:
     return buf[0]
 
 
-def _block2_nb(a: F64, b: F64, c: F64, n: int, buf: F64) -> float:
-    q = _Q
-    if n == BLOCK:  # the first four halvings of the tree, fused (same order, fewer stores)
-        for i in range(q):
-            d0 = (c[i] - 2.0 * b[i]) + a[i]
-            d1 = (c[i + q] - 2.0 * b[i + q]) + a[i + q]
-            d2 = (c[i + 2 * q] - 2.0 * b[i + 2 * q]) + a[i + 2 * q]
-            d3 = (c[i + 3 * q] - 2.0 * b[i + 3 * q]) + a[i + 3 * q]
-            d4 = (c[i + 4 * q] - 2.0 * b[i + 4 * q]) + a[i + 4 * q]
-            d5 = (c[i + 5 * q] - 2.0 * b[i + 5 * q]) + a[i + 5 * q]
-            d6 = (c[i + 6 * q] - 2.0 * b[i + 6 * q]) + a[i + 6 * q]
-            d7 = (c[i + 7 * q] - 2.0 * b[i + 7 * q]) + a[i + 7 * q]
-            e0 = (c[i + 8 * q] - 2.0 * b[i + 8 * q]) + a[i + 8 * q]
-            e1 = (c[i + 9 * q] - 2.0 * b[i + 9 * q]) + a[i + 9 * q]
-            e2 = (c[i + 10 * q] - 2.0 * b[i + 10 * q]) + a[i + 10 * q]
-            e3 = (c[i + 11 * q] - 2.0 * b[i + 11 * q]) + a[i + 11 * q]
-            e4 = (c[i + 12 * q] - 2.0 * b[i + 12 * q]) + a[i + 12 * q]
-            e5 = (c[i + 13 * q] - 2.0 * b[i + 13 * q]) + a[i + 13 * q]
-            e6 = (c[i + 14 * q] - 2.0 * b[i + 14 * q]) + a[i + 14 * q]
-            e7 = (c[i + 15 * q] - 2.0 * b[i + 15 * q]) + a[i + 15 * q]
-            buf[i] = ((((d0 * d0) + (e0 * e0)) + ((d4 * d4) + (e4 * e4)))
-                      + (((d2 * d2) + (e2 * e2)) + ((d6 * d6) + (e6 * e6)))) + (
-                (((d1 * d1) + (e1 * e1)) + ((d5 * d5) + (e5 * e5)))
-                + (((d3 * d3) + (e3 * e3)) + ((d7 * d7) + (e7 * e7))))
-        return _tree_nb(buf, q >> 1)
+def _fma(a: float, b: float, c: float) -> float:  # pragma: no cover - replaced for numba
+    """a·b + c rounded once; the numba build replaces it with the ``llvm.fma.f64`` intrinsic."""
+    raise RuntimeError("_fma is only defined inside the numba kernels")
+
+
+def _reduce_nb(e: F64) -> float:
+    """Reduce one block of BLOCK squared terms in the canonical order (module docstring)."""
+    for r in range(1, BLOCK // LANES):
+        o = r * LANES
+        for i in range(LANES):
+            e[i] += e[o + i]
+    return _tree_nb(e, LANES >> 1)
+
+
+def _chain1_nb(a: F64, b: F64, c: F64, acc: F64) -> float:
+    """Block sum of one full block of d = (c − 2b) + a (2b is exact, so one fused step)."""
+    for i in range(LANES):
+        d = _fma(-2.0, b[i], c[i]) + a[i]
+        acc[i] = d * d
+    for r in range(1, BLOCK // LANES):
+        o = r * LANES
+        for i in range(LANES):
+            d = _fma(-2.0, b[o + i], c[o + i]) + a[o + i]
+            acc[i] += d * d
+    return _tree_nb(acc, LANES >> 1)
+
+
+def _chain2_nb(a: F64, w1: F64, w2: F64, w3: F64, acc0: F64, acc1: F64) -> tuple[float, float]:
+    """Block sums of two chained octaves, m (windows a, w1, w2) and 2m (a, w2, w3)."""
+    for i in range(LANES):
+        x0 = a[i]
+        x2 = w2[i]
+        d = _fma(-2.0, w1[i], x2) + x0
+        acc0[i] = d * d
+        d = _fma(-2.0, x2, w3[i]) + x0
+        acc1[i] = d * d
+    for r in range(1, BLOCK // LANES):
+        o = r * LANES
+        for i in range(LANES):
+            x0 = a[o + i]
+            x2 = w2[o + i]
+            d = _fma(-2.0, w1[o + i], x2) + x0
+            acc0[i] += d * d
+            d = _fma(-2.0, x2, w3[o + i]) + x0
+            acc1[i] += d * d
+    return _tree_nb(acc0, LANES >> 1), _tree_nb(acc1, LANES >> 1)
+
+
+def _chain3_nb(a: F64, w1: F64, w2: F64, w3: F64, w4: F64, acc0: F64, acc1: F64,
+               acc2: F64) -> tuple[float, float, float]:
+    """Block sums of three chained octaves m, 2m, 4m: every window is read once for all three."""
+    for i in range(LANES):
+        x0 = a[i]
+        x2 = w2[i]
+        x3 = w3[i]
+        d = _fma(-2.0, w1[i], x2) + x0
+        acc0[i] = d * d
+        d = _fma(-2.0, x2, x3) + x0
+        acc1[i] = d * d
+        d = _fma(-2.0, x3, w4[i]) + x0
+        acc2[i] = d * d
+    for r in range(1, BLOCK // LANES):
+        o = r * LANES
+        for i in range(LANES):
+            x0 = a[o + i]
+            x2 = w2[o + i]
+            x3 = w3[o + i]
+            d = _fma(-2.0, w1[o + i], x2) + x0
+            acc0[i] += d * d
+            d = _fma(-2.0, x2, x3) + x0
+            acc1[i] += d * d
+            d = _fma(-2.0, x3, w4[o + i]) + x0
+            acc2[i] += d * d
+    return (_tree_nb(acc0, LANES >> 1), _tree_nb(acc1, LANES >> 1),
+            _tree_nb(acc2, LANES >> 1))
+
+
+def _part2_nb(a: F64, b: F64, c: F64, n: int, buf: F64) -> float:
+    """Block sum of a partial (last) block of n < BLOCK second differences, zero-padded."""
     for i in range(n):
-        d = (c[i] - 2.0 * b[i]) + a[i]
+        d = _fma(-2.0, b[i], c[i]) + a[i]
         buf[i] = d * d
     for i in range(n, BLOCK):
         buf[i] = 0.0
-    return _tree_nb(buf, BLOCK >> 1)
+    return _reduce_nb(buf)
 
 
 def _block3_nb(a: F64, b: F64, c: F64, e: F64, n: int, buf: F64) -> float:
@@ -201,31 +261,76 @@ def _block3_nb(a: F64, b: F64, c: F64, e: F64, n: int, buf: F64) -> float:
         buf[i] = d * d
     for i in range(n, BLOCK):
         buf[i] = 0.0
-    return _tree_nb(buf, BLOCK >> 1)
+    return _reduce_nb(buf)
 
 
 def _sumsq_overlap_nb(buf: F64, starts: I64, win: I64, n_terms: I64, order: int,
                       totals: F64) -> None:
-    """totals[t] += blocked tree sums of d² over the n_terms[t] terms of job t."""
-    scratch = np.empty(BLOCK)
+    """totals[t] += blocked sums of d² over the n_terms[t] terms of job t.
+
+    Second differences: consecutive jobs t, t+1 with the same first window and
+    ``win[t+1, 1] == win[t, 2]`` (τ and 2τ, as on an octave grid) are *chained*: up to three of
+    them are computed in one pass over their full blocks, which reads the shared windows once.
+    Every job's block sum is formed by the same operations whether chained or not.
+    """
+    s0 = np.empty(BLOCK)
+    s1 = np.empty(BLOCK)
+    s2 = np.empty(BLOCK)
+    n_jobs = n_terms.size
     n_max = 0
-    for t in range(n_terms.size):
+    for t in range(n_jobs):
         n_max = max(n_max, n_terms[t])
+    link = np.zeros(n_jobs, dtype=np.bool_)
+    if order == 2:
+        for t in range(n_jobs - 1):
+            link[t] = win[t + 1, 0] == win[t, 0] and win[t + 1, 1] == win[t, 2]
     for p in range(0, n_max, BLOCK):
-        for t in range(n_terms.size):
-            n = min(BLOCK, n_terms[t] - p)
-            if n <= 0:
-                continue
-            s0 = starts[win[t, 0]] + p
-            s1 = starts[win[t, 1]] + p
-            s2 = starts[win[t, 2]] + p
-            if order == 2:
-                totals[t] += _block2_nb(buf[s0:s0 + n], buf[s1:s1 + n], buf[s2:s2 + n], n,
-                                        scratch)
+        t = 0
+        while t < n_jobs:
+            g = 1
+            while g < 3 and link[t + g - 1]:
+                g += 1
+            full = True
+            for u in range(t, t + g):
+                if n_terms[u] - p < BLOCK:
+                    full = False
+            o0 = starts[win[t, 0]] + p
+            o1 = starts[win[t, 1]] + p
+            o2 = starts[win[t, 2]] + p
+            if full and g == 3:
+                o3 = starts[win[t + 1, 2]] + p
+                o4 = starts[win[t + 2, 2]] + p
+                r0, r1, r2 = _chain3_nb(buf[o0:o0 + BLOCK], buf[o1:o1 + BLOCK],
+                                        buf[o2:o2 + BLOCK], buf[o3:o3 + BLOCK],
+                                        buf[o4:o4 + BLOCK], s0, s1, s2)
+                totals[t] += r0
+                totals[t + 1] += r1
+                totals[t + 2] += r2
+            elif full and g == 2:
+                o3 = starts[win[t + 1, 2]] + p
+                r0, r1 = _chain2_nb(buf[o0:o0 + BLOCK], buf[o1:o1 + BLOCK],
+                                    buf[o2:o2 + BLOCK], buf[o3:o3 + BLOCK], s0, s1)
+                totals[t] += r0
+                totals[t + 1] += r1
             else:
-                s3 = starts[win[t, 3]] + p
-                totals[t] += _block3_nb(buf[s0:s0 + n], buf[s1:s1 + n], buf[s2:s2 + n],
-                                        buf[s3:s3 + n], n, scratch)
+                for u in range(t, t + g):
+                    n = min(BLOCK, n_terms[u] - p)
+                    if n <= 0:
+                        continue
+                    o0 = starts[win[u, 0]] + p
+                    o1 = starts[win[u, 1]] + p
+                    o2 = starts[win[u, 2]] + p
+                    if order == 3:
+                        o3 = starts[win[u, 3]] + p
+                        totals[u] += _block3_nb(buf[o0:o0 + n], buf[o1:o1 + n],
+                                                buf[o2:o2 + n], buf[o3:o3 + n], n, s0)
+                    elif n == BLOCK:
+                        totals[u] += _chain1_nb(buf[o0:o0 + n], buf[o1:o1 + n],
+                                                buf[o2:o2 + n], s0)
+                    else:
+                        totals[u] += _part2_nb(buf[o0:o0 + n], buf[o1:o1 + n],
+                                               buf[o2:o2 + n], n, s0)
+            t += g
 
 
 def _sum_seq_nb(buf: F64, starts: I64, win: I64, n_terms: I64, order: int, power: int,
@@ -341,12 +446,15 @@ def _sumsq_overlap_np(buf: F64, starts: I64, win: I64, n_terms: I64, order: int,
         n_blocks = -(-n // BLOCK)
         e = np.zeros(n_blocks * BLOCK)
         np.multiply(d, d, out=e[:n])
-        e2 = e.reshape(n_blocks, BLOCK)
-        h = BLOCK // 2
+        e3 = e.reshape(n_blocks, BLOCK // LANES, LANES)
+        acc = e3[:, 0, :].copy()
+        for r in range(1, BLOCK // LANES):  # lane i: terms i, i + LANES, … in order
+            acc += e3[:, r, :]
+        h = LANES // 2
         while h >= 1:
-            e2[:, :h] += e2[:, h:2 * h]
+            acc[:, :h] += acc[:, h:2 * h]
             h //= 2
-        totals[t] = _seq_sum_np(float(totals[t]), e2[:, 0].copy())
+        totals[t] = _seq_sum_np(float(totals[t]), acc[:, 0].copy())
 
 
 def _sum_seq_np(buf: F64, starts: I64, win: I64, n_terms: I64, order: int, power: int,
@@ -398,10 +506,12 @@ def _compile_numba() -> dict[str, Callable[..., Any]] | None:
         inline = numba.njit(cache=True, nogil=True, inline="always")
         g = globals()
         # the helpers are resolved by name from this module's globals when numba compiles
+        g["_fma"] = _fma_intrinsic()
         g["_tree_nb"] = inline(_tree_nb)
         g["_local8_nb"] = inline(_local8_nb)
-        g["_block2_nb"] = jit(_block2_nb)
-        g["_block3_nb"] = jit(_block3_nb)
+        g["_reduce_nb"] = inline(_reduce_nb)
+        for name in ("_chain1_nb", "_chain2_nb", "_chain3_nb", "_part2_nb", "_block3_nb"):
+            g[name] = jit(g[name])
         kernels: dict[str, Callable[..., Any]] = {
             "phase": jit(_phase_nb),
             "phase_local": jit(_phase_local_nb),
@@ -416,6 +526,33 @@ def _compile_numba() -> dict[str, Callable[..., Any]] | None:
         return None
     _STATE["numba"] = kernels
     return kernels
+
+
+def _fma_intrinsic() -> Any:
+    """``_fma(a, b, c)`` = a·b + c rounded once (``llvm.fma.f64``; vectorised by LLVM).
+
+    The kernels use it only as ``_fma(-2.0, b, c)``: 2b is exact in binary floating point, so
+    this equals the numpy twin's ``c - 2.0 * b`` bit for bit (as long as 2b does not overflow,
+    i.e. |b| < 2^1023, where d² would overflow anyway).
+    """
+    from llvmlite import ir
+    from numba.core import cgutils, types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def fma(typingctx: Any, a: Any, b: Any, c: Any) -> Any:
+        sig = types.float64(types.float64, types.float64, types.float64)
+
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+            f64 = ir.DoubleType()
+            fn = cgutils.get_or_insert_function(builder.module,
+                                                ir.FunctionType(f64, [f64, f64, f64]),
+                                                "llvm.fma.f64")
+            return builder.call(fn, list(args))
+
+        return sig, codegen
+
+    return fma
 
 
 def _smoke_test(kernels: dict[str, Callable[..., Any]]) -> None:
