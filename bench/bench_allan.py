@@ -160,6 +160,8 @@ def main() -> None:
     ap.add_argument("--streamed-samples", type=float, default=1e8,
                     help="samples of the streamed run (1e9 for the day-scale check; minutes)")
     ap.add_argument("--skip-1e8", action="store_true", help="do not run 1e8 in memory")
+    ap.add_argument("--sizes", type=float, nargs="+", default=None,
+                    help="in-memory sizes to run instead of 1e6 1e7 (1e8)")
     ap.add_argument("--streamed-only", action="store_true", help="only the streamed run")
     ap.add_argument("--_child", type=float, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -171,7 +173,9 @@ def main() -> None:
         return
     sizes = [10**6, 10**7]
     avail = mem_available_gb()
-    if args.skip_1e8:
+    if args.sizes:
+        sizes = [int(v) for v in args.sizes]
+    elif args.skip_1e8:
         print("1e8 in memory: skipped (--skip-1e8)")
     elif avail >= 10:
         sizes.append(10**8)
