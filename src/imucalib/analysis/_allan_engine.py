@@ -31,6 +31,7 @@ References
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from typing import Protocol
 
@@ -222,42 +223,49 @@ def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> 
     kern = get_kernels()["sumsq_overlap"]
     offsets, win = _windows(ms, order)
     totals = np.zeros(ms.size)
-    n_max = int(totals_n.max(initial=0))
     groups = _job_groups(totals_n)
     if isinstance(source, ArrayPhase):  # one kernel call per thread over the whole array
-        x = source.array
-        if len(groups) == 1:
-            kern(x, offsets, win, totals_n.astype(np.int64), order, totals)
-            return totals
-        parts = [totals[g] for g in groups]
-        futures = [_pool().submit(kern, x, offsets, np.ascontiguousarray(win[g]),
-                                  np.ascontiguousarray(totals_n[g]), order, part)
-                   for g, part in zip(groups, parts, strict=True)]
-        for f in futures:
-            f.result()
-        for g, part in zip(groups, parts, strict=True):
-            totals[g] = part
+        _run_groups(kern, source.array, offsets, win, totals_n.astype(np.int64), order, totals,
+                    groups)
         return totals
+    for buf, starts, n_t in _superblocks(source, offsets, win, totals_n, order):
+        _run_groups(kern, buf, starts, win, n_t, order, totals, groups)
+    return totals
+
+
+def _superblocks(source: PhaseSource, offsets: I64, win: I64, counts: I64,
+                 order: int) -> Iterator[tuple[F64, I64, I64]]:
+    """Per superblock of terms: the windows the live jobs need, their starts, each job's count.
+
+    Jobs with no terms left in a superblock read nothing (their window starts are 0 and unused).
+    """
     step = source.superblock
-    for start in range(0, n_max, step):
-        n_t = np.clip(totals_n - start, 0, step).astype(np.int64)
-        live = n_t > 0
-        need = np.unique(win[live, : order + 1])
+    for start in range(0, int(counts.max(initial=0)), step):
+        n_t = np.clip(counts - start, 0, step).astype(np.int64)
+        need = np.unique(win[n_t > 0, : order + 1])
         buf, starts = source.gather(start, offsets[need], step)
         full = np.zeros(offsets.size, dtype=np.int64)
         full[need] = starts
-        if len(groups) == 1:
-            kern(buf, full, win, n_t, order, totals)
-            continue
-        parts = [totals[g] for g in groups]  # copies that continue each τ's running sum
-        futures = [_pool().submit(kern, buf, full, np.ascontiguousarray(win[g]),
-                                  np.ascontiguousarray(n_t[g]), order, part)
-                   for g, part in zip(groups, parts, strict=True)]
-        for f in futures:
-            f.result()
-        for g, part in zip(groups, parts, strict=True):
-            totals[g] = part
-    return totals
+        yield buf, full, n_t
+
+
+def _run_groups(kern: Callable[..., None], buf: F64, starts: I64, win: I64, n_t: I64,
+                order: int, totals: F64, groups: list[I64]) -> None:
+    """One call of the overlapping-sum kernel per job group (on the pool when there are several).
+
+    Each group works on a copy of its running sums, written back afterwards.
+    """
+    if len(groups) == 1:
+        kern(buf, starts, win, n_t, order, totals)
+        return
+    parts = [totals[g] for g in groups]
+    futures = [_pool().submit(kern, buf, starts, np.ascontiguousarray(win[g]),
+                              np.ascontiguousarray(n_t[g]), order, part)
+               for g, part in zip(groups, parts, strict=True)]
+    for f in futures:
+        f.result()
+    for g, part in zip(groups, parts, strict=True):
+        totals[g] = part
 
 
 def _sum_seq(source: PhaseSource, ms: I64, totals_n: I64, order: int, power: int,
@@ -265,15 +273,8 @@ def _sum_seq(source: PhaseSource, ms: I64, totals_n: I64, order: int, power: int
     kern = get_kernels()["sum_seq"]
     offsets, win = _windows(ms, order)
     acc = np.zeros(ms.size) if acc is None else acc
-    n_max = int(totals_n.max(initial=0))
-    step = source.superblock
-    for start in range(0, n_max, step):
-        n_t = np.clip(totals_n - start, 0, step).astype(np.int64)
-        need = np.unique(win[n_t > 0, : order + 1])
-        buf, starts = source.gather(start, offsets[need], step)
-        full = np.zeros(offsets.size, dtype=np.int64)
-        full[need] = starts
-        kern(buf, full, win, n_t, order, power, acc)
+    for buf, starts, n_t in _superblocks(source, offsets, win, totals_n, order):
+        kern(buf, starts, win, n_t, order, power, acc)
     return acc
 
 
@@ -311,14 +312,8 @@ def sums_mdev(source: PhaseSource, ms: I64) -> F64:
     kern = get_kernels()["mdev_running"]
     offsets, win = _windows(ms, 3)
     n_steps = np.maximum(source.n_phase - 3 * ms, 0).astype(np.int64)
-    step = source.superblock
-    for start in range(0, int(n_steps.max(initial=0)), step):
-        n_t = np.clip(n_steps - start, 0, step).astype(np.int64)
-        need = np.unique(win[n_t > 0])
-        buf, starts = source.gather(start, offsets[need], step)
-        full = np.zeros(offsets.size, dtype=np.int64)
-        full[need] = starts
-        kern(buf, full, win, n_t, v, totals)
+    for buf, starts, n_t in _superblocks(source, offsets, win, n_steps, 3):
+        kern(buf, starts, win, n_t, v, totals)
     return totals
 
 
