@@ -17,6 +17,7 @@ Hierarchy
     - :class:`RecordingCorruptError`: truncated or damaged file
     - :class:`RecordingOpenForWriteError`: a file a crashed writer left open
       (use ``imucalib recover``)
+    - :class:`StorageFullError`: no room left to write (the file is closed cleanly)
   - :class:`DeviceError`: equipment faults
     - :class:`DeviceTimeoutError` (also a ``TimeoutError``)
   - :class:`GuardTripError`: a guard stopped a step
@@ -42,6 +43,7 @@ __all__ = [
     "RecordingError",
     "RecordingFormatError",
     "RecordingOpenForWriteError",
+    "StorageFullError",
     "UnitError",
 ]
 
@@ -103,6 +105,15 @@ class RecordingCorruptError(RecordingError):
 
 class RecordingOpenForWriteError(RecordingError):
     """A recording still marked open by a crashed writer; ``imucalib recover FILE`` fixes it."""
+
+
+class StorageFullError(RecordingError):
+    """Too little room left on the disk (or under the file-size limit) to write a Recording.
+
+    Raised before the write that would not fit, so the file stays consistent and closes
+    cleanly with everything written so far; ``imucalib run --resume FILE`` continues once
+    space is freed.
+    """
 
 
 class DeviceError(CalibrationError):

@@ -19,14 +19,52 @@ Commands
 from __future__ import annotations
 
 import logging
+import os
+import sys
 
 from imucalib.cli import calibrate, plan, recording, run, station, twin  # noqa: F401 (register)
-from imucalib.cli._app import app
+from imucalib.cli._app import app, err_console, fail
+from imucalib.errors import CalibrationError
 
 __all__ = ["app", "main"]
 
 
 def main() -> None:
-    """Entry point of the ``imucalib`` console script."""
+    """Entry point of the ``imucalib`` console script.
+
+    Every command renders imucalib's own errors as one line with exit code 2. This is the last
+    net under them: an unexpected exception is printed as one ``internal error`` line (the
+    traceback only with ``IMUCALIB_DEBUG=1``), also with exit code 2. When HDF5 failed to write
+    a Recording (a disk filled behind the free-space checks), the process ends with
+    :func:`os._exit` so that the HDF5 library cannot crash while it shuts down.
+    """
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-    app()
+    code = 0
+    try:
+        app()
+    except SystemExit as exc:  # typer.Exit and usage errors arrive as their exit codes here
+        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    except KeyboardInterrupt:
+        err_console.print("[red]interrupted[/]", highlight=False)
+        code = 130
+    except CalibrationError as exc:
+        code = fail(exc).exit_code
+    except Exception as exc:
+        if os.environ.get("IMUCALIB_DEBUG"):
+            raise
+        err_console.print(f"[bold red]internal error:[/] {type(exc).__name__}: {exc} (a bug in "
+                          "imucalib; IMUCALIB_DEBUG=1 shows the traceback)", highlight=False,
+                          soft_wrap=True)
+        code = 2
+    _exit(code)
+
+
+def _exit(code: int) -> None:
+    """Leave with `code`; skip interpreter teardown when a Recording had to be abandoned."""
+    from imucalib.io.recording import abandoned_files
+
+    if abandoned_files():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)

@@ -85,7 +85,8 @@ def _report(summary: RunSummary) -> None:
     for trip in summary.trips:
         console.print(f"  trip: {trip}", highlight=False)
     if summary.reason:
-        console.print(f"  stopped: {summary.reason}", highlight=False)
+        console.print(f"  {'stopped' if summary.status != 'done' else 'note'}: {summary.reason}",
+                      highlight=False)
 
 
 @app.command()

@@ -84,7 +84,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib import __version__
 from imucalib.conventions import TIME_COLUMN
-from imucalib.errors import InvalidInputError, RecordingError
+from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io._schema import (
     COMMIT_GROUP,
     DEFAULT_CHUNK_ROWS,
@@ -111,6 +111,7 @@ from imucalib.io._schema import (
     json_dumps,
 )
 from imucalib.io._tables import StepLogTables, create_table
+from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
 
 __all__ = [
     "DEFAULT_CHUNK_ROWS",
@@ -124,7 +125,22 @@ __all__ = [
     "ColumnSpec",
     "RecordingWriter",
     "StreamSpec",
+    "abandoned_files",
 ]
+
+_ABANDONED: list[Path] = []
+
+
+def abandoned_files() -> tuple[Path, ...]:
+    """Files whose writer gave up after HDF5 failed to write (this process).
+
+    After a failed write HDF5 can neither flush nor close the file, and tearing the library
+    down at interpreter exit may crash the process. Such a writer leaves its file as a killed
+    writer would (everything committed before the failure is kept; ``imucalib run --resume`` or
+    ``imucalib recover`` finish it). A program that sees any here should end with
+    :func:`os._exit` after printing its message; the command line does.
+    """
+    return tuple(_ABANDONED)
 
 _COMPRESSIONS = (None, "gzip", "lzf")
 
@@ -173,6 +189,12 @@ class RecordingWriter:
         Column compression; off by default (see ``bench/bench_recording.py``).
     buffer_limit_bytes : int
         Buffered bytes (all streams) above which the writer flushes.
+    reserve_bytes : int
+        Room (free disk space, and what the file-size limit leaves) that every block write must
+        leave free, so that the last flush and the close always fit [bytes]. A write that would
+        not leave it raises :class:`~imucalib.errors.StorageFullError` before touching the file:
+        the rows buffered then are dropped, later appends are refused, and steps, log events,
+        :meth:`flush` and :meth:`close` still work (see ``docs/reliability.md``).
 
     Raises
     ------
@@ -180,6 +202,8 @@ class RecordingWriter:
         For bad specifications or metadata (checked before the file is created).
     RecordingError
         If `path` exists and `overwrite` is false, or the file cannot be created.
+    StorageFullError
+        If less than `reserve_bytes` of room is left where the file is to be created.
 
     Examples
     --------
@@ -205,6 +229,7 @@ class RecordingWriter:
         chunk_rows: int = DEFAULT_CHUNK_ROWS,
         compression: str | None = None,
         buffer_limit_bytes: int = 64 << 20,
+        reserve_bytes: int = DEFAULT_RESERVE_BYTES,
     ) -> None:
         self._path = Path(path)
         meta = check_metadata(metadata or {})
@@ -223,8 +248,13 @@ class RecordingWriter:
                                     f"got {buffer_limit_bytes!r}")
         if self._path.exists() and not overwrite:
             raise RecordingError(f"{self._path} exists; pass overwrite=True to replace it")
+        if not isinstance(reserve_bytes, int) or reserve_bytes < 0:
+            raise InvalidInputError(f"`reserve_bytes` must be a non-negative int; "
+                                    f"got {reserve_bytes!r}")
         self._flush_interval_s = float(flush_interval_s)
         self._buffer_limit_bytes = buffer_limit_bytes
+        self._reserve_bytes = reserve_bytes
+        self._full: StorageFullError | None = None
         self._buffered_bytes = 0
         self._streams: dict[tuple[str, str], _StreamState] = {}
         self._truth_streams: dict[tuple[str, str], _StreamState] = {}
@@ -246,7 +276,8 @@ class RecordingWriter:
 
     @classmethod
     def reopen(cls, path: str | os.PathLike[str], *, flush_interval_s: float = 1.0,
-               buffer_limit_bytes: int = 64 << 20) -> RecordingWriter:
+               buffer_limit_bytes: int = 64 << 20,
+               reserve_bytes: int = DEFAULT_RESERVE_BYTES) -> RecordingWriter:
         """Reopen a cleanly closed Recording to append to its streams, steps and log.
 
         The streams and truth streams are those declared when the file was created; rows
@@ -270,6 +301,9 @@ class RecordingWriter:
         self._path = p
         self._flush_interval_s = float(flush_interval_s)
         self._buffer_limit_bytes = int(buffer_limit_bytes)
+        self._reserve_bytes = int(reserve_bytes)
+        self._full = None
+        self._check_room(0, "append to the file")
         self._buffered_bytes = 0
         self._streams = {}
         self._truth_streams = {}
@@ -442,11 +476,15 @@ class RecordingWriter:
             After :meth:`close`.
         """
         self._check_open(f"append to {device}/{unit}")
+        if self._full is not None:
+            raise StorageFullError(str(self._full))
         self._append(self._streams, "stream", device, unit, columns)
 
     def append_truth(self, device: str, unit: str, columns: Mapping[str, ArrayLike]) -> None:
         """Append rows to a truth stream; same rules as :meth:`append`."""
         self._check_open(f"append to truth stream {device}/{unit}")
+        if self._full is not None:
+            raise StorageFullError(str(self._full))
         self._append(self._truth_streams, "truth stream", device, unit, columns)
 
     def _append(self, table: dict[tuple[str, str], _StreamState], what: str, device: str,
@@ -521,6 +559,8 @@ class RecordingWriter:
         if n == 0:
             return
         n0, n1 = st.n_written, st.n_written + n
+        self._check_room(sum(sum(a.nbytes for a in parts) for parts in st.buffers.values()),
+                         f"rows {n0}:{n1} of stream {st.entry}")
         nbytes = 0
         try:
             for col, ds in st.datasets.items():
@@ -533,13 +573,54 @@ class RecordingWriter:
                 ds.write_direct(block, dest_sel=np.s_[n0:n1])
                 nbytes += block.nbytes
         except (OSError, RuntimeError, ValueError) as exc:
-            raise RecordingError(f"writing stream {st.entry} rows {n0}:{n1} to {self._path} "
-                                 f"failed: {exc}; the rows stay buffered") from exc
+            raise self._abandon(f"writing stream {st.entry} rows {n0}:{n1}", exc) from exc
         for parts in st.buffers.values():
             parts.clear()
         st.n_written = n1
         st.n_buffered = 0
         self._buffered_bytes -= nbytes
+
+    # ------------------------------------------------------------------------------- storage
+    @property
+    def room_bytes(self) -> int:
+        """Bytes the file can still grow by (free space, file-size limit). [bytes]"""
+        return room_bytes(self._path)
+
+    @property
+    def reserve_bytes(self) -> int:
+        """Room every block write leaves free for the last flush and the close. [bytes]"""
+        return self._reserve_bytes
+
+    def _check_room(self, n_bytes: int, what: str) -> None:
+        """Refuse (before touching the file) a write of `n_bytes` that would eat the reserve."""
+        room = room_bytes(self._path)
+        if room - n_bytes >= self._reserve_bytes:
+            return
+        exc = StorageFullError(
+            f"no room to {what} in {self._path}: {format_bytes(room)} left on its filesystem "
+            f"(or under the file-size limit), the write needs {format_bytes(n_bytes)} and "
+            f"{format_bytes(self._reserve_bytes)} must stay free for a clean close; free some "
+            "space, then continue with `imucalib run --resume FILE`")
+        if not hasattr(self, "_streams"):  # creating or reopening: nothing buffered yet
+            raise exc
+        self._full = exc
+        dropped = 0
+        for state in (*self._streams.values(), *self._truth_streams.values()):
+            dropped += state.n_buffered
+            for parts in state.buffers.values():
+                parts.clear()
+            state.n_buffered = 0
+        self._buffered_bytes = 0
+        raise StorageFullError(f"{exc} ({dropped} buffered row(s) not written)")
+
+    def _abandon(self, what: str, exc: BaseException) -> RecordingError:
+        """Give the file up after HDF5 failed to write: no further HDF5 call touches it."""
+        self._closed = True
+        _ABANDONED.append(self._path)
+        return RecordingError(
+            f"{what} to {self._path} failed ({exc}); the file keeps everything committed before "
+            "and is left as a stopped writer leaves it: continue with `imucalib run --resume "
+            "FILE`, or copy it out with `imucalib recover FILE`")
 
     # ------------------------------------------------------------------------- steps and log
     def begin_step(self, kind: str, label: str, t_start_s: float, *,
@@ -609,6 +690,12 @@ class RecordingWriter:
     def flush(self) -> None:
         """Write every buffer and make it durable: after this returns, a killed writer keeps it.
 
+        The order makes a step's record never run ahead of its samples: (1) the stream rows are
+        written and flushed, (2) their commit counts are written and flushed, and only then
+        (3) the step and log rows are written and flushed and (4) their counts committed. A
+        step marked ``done`` after its last sample was appended therefore reaches the file in
+        the same flush as that sample or after it, whatever instant the writer dies at.
+
         Raises
         ------
         RecordingError
@@ -617,24 +704,28 @@ class RecordingWriter:
         self._check_open("flush")
         for st in (*self._streams.values(), *self._truth_streams.values()):
             self._write_stream(st)
-        try:
-            self._tables.write()
-        except (OSError, RuntimeError, ValueError) as exc:
-            raise RecordingError(f"writing steps or log to {self._path} failed: {exc}") from exc
-        counts = np.array(
-            [st.n_written for st in self._streams.values()]
-            + [st.n_written for st in self._truth_streams.values()]
-            + [self._tables.n_steps_written, self._tables.n_log_written], dtype=np.int64)
+        n_streams = len(self._streams) + len(self._truth_streams)
+        counts = self._committed.copy()
+        counts[:n_streams] = ([st.n_written for st in self._streams.values()]
+                              + [st.n_written for st in self._truth_streams.values()])
         try:
             self._file.flush()
-            if not np.array_equal(counts, self._committed):
-                # only after the data are in the file: a crash never commits unwritten rows
-                self._commit_ds[:] = counts
-                self._file.flush()
-                self._committed = counts
-        except (OSError, RuntimeError) as exc:
-            raise RecordingError(f"flushing {self._path} failed: {exc}") from exc
+            self._commit(counts)
+            self._tables.write()
+            self._file.flush()
+            counts = counts.copy()
+            counts[n_streams:] = (self._tables.n_steps_written, self._tables.n_log_written)
+            self._commit(counts)
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise self._abandon("flushing", exc) from exc
         self._last_flush = time.monotonic()
+
+    def _commit(self, counts: NDArray[np.int64]) -> None:
+        """Write new commit counts and flush, when they changed (the data are already durable)."""
+        if not np.array_equal(counts, self._committed):
+            self._commit_ds[:] = counts
+            self._file.flush()
+            self._committed = counts
 
     def close(self) -> None:
         """Flush and close; the file then opens normally. Calling it again does nothing."""

@@ -47,14 +47,15 @@ from __future__ import annotations
 import json
 import logging
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError
 from imucalib.io._schema import StreamSpec
+from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.reader import open_recording
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.recover import recover_recording
@@ -207,8 +208,10 @@ def _drive(run: RunSession, first: int) -> RunSummary:
         try:
             run.writer.log_event(run.now(), "error", "runner",
                                  f"run interrupted: {type(exc).__name__}: {exc}"[:4000])
-        finally:
             run.writer.close()
+        except RecordingError as rec_exc:  # the file failed too: the original cause goes up
+            _log.error("closing %s after %s failed: %s", run.writer.path,
+                       type(exc).__name__, rec_exc)
         raise
     return RunSummary(path=run.writer.path, plan=run.plan.name, status=status,
                       steps_done=run.status.steps_done, steps_invalid=run.status.steps_invalid,
@@ -271,16 +274,36 @@ def _disconnect(station: Station) -> None:
 
 @dataclass(frozen=True)
 class ResumePoint:
-    """Where an interrupted run continues: the plan, its first step not done, the last time."""
+    """Where an interrupted run continues.
+
+    Attributes
+    ----------
+    plan : Plan
+        The run's plan (from the Recording).
+    first_step : int
+        The first plan step not done; ``len(plan.steps)`` when every step is done.
+    last_time_s : float
+        The latest time in the file. [s]
+    interrupted : tuple of int
+        Step rows left ``running`` or ``pending`` by the interruption.
+    uncovered : mapping of int to str
+        Step rows marked ``done`` whose committed samples do not cover their valid window
+        (a writer killed before its samples reached the file), with the reason; they are run
+        again.
+    """
 
     plan: Plan
     first_step: int
     last_time_s: float
     interrupted: tuple[int, ...]
+    uncovered: Mapping[int, str] = field(default_factory=dict)
 
 
 def find_resume_point(path: str | Path) -> ResumePoint:
     """Read a Recording and say where its run continues.
+
+    A plan step counts as done when one of its rows is ``done`` and that row's committed
+    samples cover its valid window (:func:`imucalib.io.coverage.uncovered_done_steps`).
 
     Raises
     ------
@@ -293,11 +316,12 @@ def find_resume_point(path: str | Path) -> ResumePoint:
             raise RecordingError(f"{path} holds no plan (plan_toml); it is not a station run "
                                  "that can be resumed")
         plan = parse_plan(str(meta["plan_toml"]), f"{path} (plan_toml)")
+        uncovered = uncovered_done_steps(rec)
         done: set[int] = set()
         interrupted = []
         for s in rec.steps:
             idx = s.commanded.get("plan_step") if isinstance(s.commanded, dict) else None
-            if s.status == "done" and idx is not None:
+            if s.status == "done" and idx is not None and s.index not in uncovered:
                 done.add(int(idx))
             if s.status in ("running", "pending"):
                 interrupted.append(s.index)
@@ -307,7 +331,7 @@ def find_resume_point(path: str | Path) -> ResumePoint:
         last = max((info.t_last_s for info in rec.streams if info.n_samples), default=0.0)
         last = max([last, *(s.t_end_s for s in rec.steps if math.isfinite(s.t_end_s)),
                     *(e.time_s for e in rec.log)])
-    return ResumePoint(plan, first, float(last), tuple(interrupted))
+    return ResumePoint(plan, first, float(last), tuple(interrupted), uncovered)
 
 
 def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station], *,
@@ -340,7 +364,15 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         report.output.replace(p)
     point = find_resume_point(p)
     if point.first_step >= len(point.plan.steps):
-        raise RecordingError(f"{p}: every step of plan {point.plan.name!r} is already done")
+        if not was_open:
+            raise RecordingError(f"{p}: every step of plan {point.plan.name!r} is already done "
+                                 "and the file is closed; there is nothing to resume")
+        # the runner died while closing (after its last step): recovery finished the close
+        with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s) as writer:
+            writer.log_event(point.last_time_s, "warning", "runner",
+                             "the run had done every step but its file was not closed; closed "
+                             f"by resume (the file as found is kept as {p.stem}.crashed.h5)")
+        return _finished_summary(p, point)
     station = make_station(point.plan, point.last_time_s + 1.0)
     check_plan_against_station(point.plan, station)
     identities = _connect(station, point.plan)
@@ -348,6 +380,11 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         for index in point.interrupted:
             writer.update_step(index, status="aborted",
                                note="interrupted (runner stopped); the run was resumed")
+        for index, reason in point.uncovered.items():
+            writer.update_step(index, status="invalid",
+                               note=f"samples lost when the runner stopped: {reason}"[:2000])
+            writer.log_event(station.clock.now_s(), "warning", "runner",
+                             f"step row {index} was marked done but {reason}; it is run again")
         writer.log_event(station.clock.now_s(), "warning", "runner",
                          f"run resumed at step {point.first_step} "
                          f"({point.plan.step_label(point.first_step)})"
@@ -357,3 +394,15 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         summary = _drive(run, point.first_step)
     _disconnect(station)
     return summary
+
+
+def _finished_summary(path: Path, point: ResumePoint) -> RunSummary:
+    """Return the summary of a run that a resume found complete (every step done)."""
+    with open_recording(path) as rec:
+        steps = rec.steps
+    done = sum(1 for s in steps if s.status == "done")
+    invalid = sum(1 for s in steps if s.status == "invalid")
+    return RunSummary(path=path, plan=point.plan.name, status="done", steps_done=done,
+                      steps_invalid=invalid, trips=(), start_s=point.last_time_s,
+                      end_s=point.last_time_s,
+                      reason="every step was already done; the interrupted close was finished")

@@ -19,8 +19,9 @@ import numpy as np
 
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
-from imucalib.errors import DeviceError
+from imucalib.errors import DeviceError, RecordingError, StorageFullError
 from imucalib.io.recording import RecordingWriter
+from imucalib.io.storage import format_bytes
 from imucalib.io.streams import (
     DEVICE_CENTRIFUGE,
     DEVICE_CHAMBER,
@@ -99,6 +100,10 @@ class RunOptions:
         Twin truth to store under ``/truth`` (never read by analysis).
     station_toml : str
         The station file's text, stored so that a resume can rebuild the same station.
+    min_free_bytes : int
+        Room (free disk space, or what the file-size limit leaves) below which the run stops
+        safely and closes its Recording, checked every tick; also added to the estimated file
+        size in the check before a run starts. [bytes]
     """
 
     tick_s: float = 0.5
@@ -107,6 +112,7 @@ class RunOptions:
     flush_interval_s: float = 1.0
     truth: dict[str, Any] | None = None
     station_toml: str = ""
+    min_free_bytes: int = 128 << 20
 
 
 class StepTrip(Exception):  # noqa: N818 - a signal between the session and the runner
@@ -152,6 +158,23 @@ class RunSession:
         if dt > 0:
             self.station.clock.sleep(dt)
         self.acquire()
+        self.guard_storage()
+
+    def guard_storage(self) -> None:
+        """Stop the run while the Recording can still close cleanly when room runs short.
+
+        Raises
+        ------
+        StorageFullError
+            When less than ``min_free_bytes`` is left for the Recording.
+        """
+        room = self.writer.room_bytes
+        if room < self.opt.min_free_bytes:
+            raise StorageFullError(
+                f"disk nearly full: {format_bytes(room)} left for {self.writer.path} (the run "
+                f"stops below {format_bytes(self.opt.min_free_bytes)}); the equipment was "
+                "stopped safely and the file closed; free some space, then continue with "
+                f"`imucalib run --resume {self.writer.path}`")
 
     def acquire(self) -> None:
         """Poll every device, write its rows, and trip on device faults and alarms."""
@@ -270,6 +293,37 @@ class RunSession:
                                             self.g.chamber_band_degc)
                 if reason:
                     raise StepTrip(reason)
+
+    def await_samples(self, until_s: float) -> None:
+        """Acquire until every IMU has delivered its samples up to `until_s`.
+
+        IMU samples reach the station after the instant they describe (transport latency, the
+        device's own buffering), so when a valid window ends some of its samples are still in
+        transit. A step is marked ``done`` only once they are in the Recording; the data-quality
+        guards apply to them as to the rest of the window.
+
+        Raises
+        ------
+        StepTrip
+            When an IMU's samples up to `until_s` have not arrived within the device time-out.
+        """
+        deadline = self.now() + self.g.device_timeout_s
+        self.recording = True
+        try:
+            while True:
+                late = [name for name, ident in self.ids.items()
+                        if self.last_sample_s[name] < until_s - _period_s(ident)]
+                if not late:
+                    return
+                if self.now() >= deadline:
+                    name = late[0]
+                    raise StepTrip(
+                        f"IMU {name}: samples up to the end of the valid window ({until_s:.3f} s) "
+                        f"did not arrive within {self.g.device_timeout_s:g} s; the last one is "
+                        f"from {self.last_sample_s[name]:.3f} s")
+                self.tick()
+        finally:
+            self.recording = False
 
     # --- step kinds -------------------------------------------------------------------------
     def settle(self, t_cmd: float, settle_s: float, criterion: Callable[[], str | None],
@@ -533,12 +587,16 @@ class RunSession:
                 window = self.run_soak(step)
             elif isinstance(step, WarmUpStep):
                 self.run_warm_up(step)
+            if window is not None:
+                self.await_samples(window[1])
             fields: dict[str, Any] = {"t_end_s": self.now(), "status": "done"}
             if window is not None:
                 fields.update(valid_start_s=window[0], valid_end_s=window[1])
             if note:
                 fields["note"] = note
             self.writer.update_step(row, **fields)
+            # durable now: the flush commits the samples before the step's row (RecordingWriter)
+            self.writer.flush()
             self.status.steps_done += 1
             return "done"
         except StepTrip as trip:
@@ -548,8 +606,12 @@ class RunSession:
         except BaseException as exc:
             self.recording = False
             if not isinstance(exc, StepStop):
-                self.writer.update_step(row, t_end_s=self.now(), status="aborted",
-                                        note=f"interrupted: {type(exc).__name__}: {exc}"[:2000])
+                try:
+                    self.writer.update_step(
+                        row, t_end_s=self.now(), status="aborted",
+                        note=f"interrupted: {type(exc).__name__}: {exc}"[:2000])
+                except RecordingError as rec_exc:  # the file itself failed: keep the cause
+                    _log.error("cannot mark step %d aborted: %s", index, rec_exc)
             raise
 
     def safe_state(self, *, chamber_too: bool = False) -> None:
@@ -624,6 +686,12 @@ class RunSession:
         if self.opt.on_status is not None:
             self.status.time_s = self.now()
             self.opt.on_status(self.status)
+
+
+def _period_s(ident: ImuIdentity) -> float:
+    """One nominal sample period of an IMU (a 10 ms default when its rate is unknown). [s]"""
+    rate = ident.sample_rate_hz
+    return 1.0 / rate if math.isfinite(rate) and rate > 0 else 0.01
 
 
 def _remaining_s(plan: Plan, first: int) -> float:
