@@ -39,6 +39,8 @@ def main() -> None:
     :func:`os._exit` so that the HDF5 library cannot crash while it shuts down.
     """
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    sys.unraisablehook = _unraisable
+    sys.excepthook = _printed_error
     code = 0
     try:
         app()
@@ -59,11 +61,36 @@ def main() -> None:
     _exit(code)
 
 
+_UNRAISABLE: list[str] = []
+
+
+def _unraisable(unraisable: sys.UnraisableHookArgs) -> None:
+    """Keep errors raised while Python frees objects (HDF5 failing to write) off the terminal.
+
+    Python would print them with a traceback; they follow an error already reported (a disk
+    that filled up), so they are logged at debug level and the process ends with
+    :func:`os._exit` (HDF5's own shutdown could crash on the same failed file).
+    """
+    _UNRAISABLE.append(f"{type(unraisable.exc_value).__name__}: {unraisable.exc_value}")
+    logging.getLogger("imucalib.cli").debug("ignored while freeing %r: %s", unraisable.object,
+                                            _UNRAISABLE[-1])
+
+
+def _printed_error(exc_type: type[BaseException], exc: BaseException, tb: object) -> None:
+    """Keep exceptions printed from C code (h5py freeing an object) off the terminal.
+
+    Cython prints an exception raised while an HDF5 object is freed through ``sys.excepthook``
+    before it reports it as unraisable; everything :func:`main` itself meets is caught there.
+    """
+    _UNRAISABLE.append(f"{exc_type.__name__}: {exc}")
+    logging.getLogger("imucalib.cli").debug("printed from C code: %s", _UNRAISABLE[-1])
+
+
 def _exit(code: int) -> None:
-    """Leave with `code`; skip interpreter teardown when a Recording had to be abandoned."""
+    """Leave with `code`; skip interpreter teardown after HDF5 failed to write a file."""
     from imucalib.io.recording import abandoned_files
 
-    if abandoned_files():
+    if abandoned_files() or _UNRAISABLE:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)

@@ -71,6 +71,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 import time
 from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
@@ -131,6 +132,24 @@ __all__ = [
 _ABANDONED: list[Path] = []
 
 
+def _mute_hdf5_teardown(path: Path) -> None:
+    """Drop the errors HDF5 raises while Python frees objects of an abandoned file.
+
+    They are the same failed write again (reported once already), printed by Python as
+    "Exception ignored in ... __dealloc__" with a traceback; every other unraisable exception
+    still reaches the previous hook.
+    """
+    previous = sys.unraisablehook
+    name = str(path)
+
+    def hook(unraisable: Any) -> None:
+        if name in str(unraisable.exc_value):
+            return
+        previous(unraisable)
+
+    sys.unraisablehook = hook
+
+
 def abandoned_files() -> tuple[Path, ...]:
     """Files whose writer gave up after HDF5 failed to write (this process).
 
@@ -143,6 +162,7 @@ def abandoned_files() -> tuple[Path, ...]:
     return tuple(_ABANDONED)
 
 _COMPRESSIONS = (None, "gzip", "lzf")
+_METADATA_SLACK_BYTES = 64 << 10  # B-tree and heap growth that may come with a block write
 
 
 class _StreamState:
@@ -559,8 +579,11 @@ class RecordingWriter:
         if n == 0:
             return
         n0, n1 = st.n_written, st.n_written + n
-        self._check_room(sum(sum(a.nbytes for a in parts) for parts in st.buffers.values()),
-                         f"rows {n0}:{n1} of stream {st.entry}")
+        # HDF5 allocates whole chunks: count every chunk the rows touch, plus metadata slack
+        rows = st.datasets[TIME_COLUMN].chunks[0]
+        n_chunks = -(-n1 // rows) - n0 // rows
+        self._check_room(n_chunks * rows * sum(dt.itemsize for dt in st.dtypes.values())
+                         + _METADATA_SLACK_BYTES, f"write rows {n0}:{n1} of stream {st.entry}")
         nbytes = 0
         try:
             for col, ds in st.datasets.items():
@@ -584,7 +607,8 @@ class RecordingWriter:
     @property
     def room_bytes(self) -> int:
         """Bytes the file can still grow by (free space, file-size limit). [bytes]"""
-        return room_bytes(self._path)
+        allocated = self._file.id.get_filesize() if not self._closed else None
+        return room_bytes(self._path, file_size_bytes=allocated)
 
     @property
     def reserve_bytes(self) -> int:
@@ -593,7 +617,9 @@ class RecordingWriter:
 
     def _check_room(self, n_bytes: int, what: str) -> None:
         """Refuse (before touching the file) a write of `n_bytes` that would eat the reserve."""
-        room = room_bytes(self._path)
+        file = getattr(self, "_file", None)
+        allocated = file.id.get_filesize() if file is not None and file.id.valid else None
+        room = room_bytes(self._path, file_size_bytes=allocated)
         if room - n_bytes >= self._reserve_bytes:
             return
         exc = StorageFullError(
@@ -603,6 +629,12 @@ class RecordingWriter:
             "space, then continue with `imucalib run --resume FILE`")
         if not hasattr(self, "_streams"):  # creating or reopening: nothing buffered yet
             raise exc
+        if room < _METADATA_SLACK_BYTES:  # not even a clean close fits: touch the file no more
+            self._closed = True
+            _ABANDONED.append(self._path)
+            _mute_hdf5_teardown(self._path)
+            raise StorageFullError(f"{exc}; the file could not be closed cleanly and keeps what "
+                                   "was committed before, as a stopped writer leaves it")
         self._full = exc
         dropped = 0
         for state in (*self._streams.values(), *self._truth_streams.values()):
@@ -617,6 +649,7 @@ class RecordingWriter:
         """Give the file up after HDF5 failed to write: no further HDF5 call touches it."""
         self._closed = True
         _ABANDONED.append(self._path)
+        _mute_hdf5_teardown(self._path)
         return RecordingError(
             f"{what} to {self._path} failed ({exc}); the file keeps everything committed before "
             "and is left as a stopped writer leaves it: continue with `imucalib run --resume "
@@ -702,8 +735,12 @@ class RecordingWriter:
             After :meth:`close`, or when HDF5 fails to write (buffered rows are kept).
         """
         self._check_open("flush")
+        full: StorageFullError | None = None
         for st in (*self._streams.values(), *self._truth_streams.values()):
-            self._write_stream(st)
+            try:
+                self._write_stream(st)
+            except StorageFullError as exc:  # the buffers are dropped: commit the rest
+                full = exc
         n_streams = len(self._streams) + len(self._truth_streams)
         counts = self._committed.copy()
         counts[:n_streams] = ([st.n_written for st in self._streams.values()]
@@ -719,6 +756,8 @@ class RecordingWriter:
         except (OSError, RuntimeError, ValueError) as exc:
             raise self._abandon("flushing", exc) from exc
         self._last_flush = time.monotonic()
+        if full is not None:
+            raise full
 
     def _commit(self, counts: NDArray[np.int64]) -> None:
         """Write new commit counts and flush, when they changed (the data are already durable)."""
@@ -731,11 +770,16 @@ class RecordingWriter:
         """Flush and close; the file then opens normally. Calling it again does nothing."""
         if self._closed:
             return
+        already_full = self._full is not None
         try:
             self.flush()
+        except StorageFullError:
+            if not already_full:  # news to the caller: rows buffered now were dropped
+                raise
         finally:
-            self._closed = True
-            self._file.close()
+            if not self._closed:  # not abandoned by a failed write
+                self._closed = True
+                self._file.close()
 
     def __enter__(self) -> RecordingWriter:
         return self

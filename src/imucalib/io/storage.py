@@ -38,31 +38,36 @@ def _fsize_limit() -> int | None:
     return None if soft == resource.RLIM_INFINITY or soft < 0 else int(soft)
 
 
-def room_bytes(path: str | os.PathLike[str]) -> int:
+def room_bytes(path: str | os.PathLike[str], *, file_size_bytes: int | None = None) -> int:
     """Return how many bytes the file at `path` can still grow by. [bytes]
 
     Parameters
     ----------
     path : str or Path
         The file (it may not exist yet; its folder must).
+    file_size_bytes : int, optional
+        The size the file already takes or has reserved, when larger than what the filesystem
+        reports (HDF5 allocates space before it writes it: its end of allocation). [bytes]
 
     Returns
     -------
     int
-        ``min(free space of the filesystem for unprivileged users, RLIMIT_FSIZE − file size)``.
+        ``min(free space for unprivileged users − (file_size_bytes − size on disk),
+        RLIMIT_FSIZE − file_size_bytes)``, never negative.
     """
     p = Path(path)
     folder = p.parent if str(p.parent) else Path(".")
     st = os.statvfs(folder)
-    room = int(st.f_bavail) * int(st.f_frsize)
+    try:
+        on_disk = p.stat().st_size
+    except FileNotFoundError:
+        on_disk = 0
+    size = max(on_disk, file_size_bytes or 0)
+    room = int(st.f_bavail) * int(st.f_frsize) - (size - on_disk)
     limit = _fsize_limit()
     if limit is not None:
-        try:
-            size = p.stat().st_size
-        except FileNotFoundError:
-            size = 0
-        room = min(room, max(limit - size, 0))
-    return room
+        room = min(room, limit - size)
+    return max(room, 0)
 
 
 def format_bytes(n: float) -> str:

@@ -53,7 +53,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from imucalib import units
-from imucalib.errors import InvalidInputError, RecordingError
+from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io._schema import StreamSpec
 from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.reader import open_recording
@@ -206,12 +206,13 @@ def _drive(run: RunSession, first: int) -> RunSummary:
     except BaseException as exc:
         run.safe_state(chamber_too=True)
         try:
-            run.writer.log_event(run.now(), "error", "runner",
-                                 f"run interrupted: {type(exc).__name__}: {exc}"[:4000])
+            if not run.writer.closed:  # a writer that gave its file up after a failed write
+                run.writer.log_event(run.now(), "error", "runner",
+                                     f"run interrupted: {type(exc).__name__}: {exc}"[:4000])
             run.writer.close()
         except RecordingError as rec_exc:  # the file failed too: the original cause goes up
-            _log.error("closing %s after %s failed: %s", run.writer.path,
-                       type(exc).__name__, rec_exc)
+            log = _log.debug if isinstance(rec_exc, StorageFullError) else _log.warning
+            log("closing %s after %s: %s", run.writer.path, type(exc).__name__, rec_exc)
         raise
     return RunSummary(path=run.writer.path, plan=run.plan.name, status=status,
                       steps_done=run.status.steps_done, steps_invalid=run.status.steps_invalid,

@@ -605,7 +605,7 @@ class RunSession:
             raise
         except BaseException as exc:
             self.recording = False
-            if not isinstance(exc, StepStop):
+            if not isinstance(exc, StepStop) and not self.writer.closed:
                 try:
                     self.writer.update_step(
                         row, t_end_s=self.now(), status="aborted",
