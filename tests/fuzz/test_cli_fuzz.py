@@ -1,0 +1,341 @@
+"""Property-based fuzzing of the command line's doors: plans, scenarios, CSV, result JSON, recordings.
+
+Every mutated input must end in exit code 0 (and then no non-finite number in what was written) or
+exit code 2 with a one-line ``error:`` message: never a traceback, never the ``internal error``
+safety net of :func:`imucalib.cli.main`, never a hang. Recordings are fed to one child process
+that opens them one by one under an alarm, so that a hang inside HDF5 is caught as a death by
+SIGALRM. Example counts are bounded so that the suite stays within its time budget; the
+``IMUCALIB_FUZZ_EXAMPLES`` environment variable multiplies them for a longer campaign.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from imucalib.cli import main
+from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
+from imucalib.models.result import triad_parameter_names
+from imucalib.plan import plan_to_toml
+from imucalib.procedures import generate_p1_plan
+
+SCALE = int(os.environ.get("IMUCALIB_FUZZ_EXAMPLES", "1"))
+FUZZ = settings(max_examples=25 * SCALE, deadline=None, derandomize=True,
+                suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                       HealthCheck.too_slow])
+NUMBER = re.compile(r"-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+ODD_NUMBERS = st.sampled_from(["nan", "inf", "-inf", "1e308", "-1e308", "0", "-1", "1e-320",
+                               "\"x\"", "", "9" * 40, "-0.0", "1e9", "true"])
+
+
+def run_cli(*args: str) -> tuple[int, str, str]:
+    """Run :func:`imucalib.cli.main` in this process; return exit code, stdout, stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    argv = sys.argv
+    sys.argv = ["imucalib", *args]
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                main()
+                code = 0
+            except SystemExit as exc:
+                code = exc.code if isinstance(exc.code, int) else 1
+    finally:
+        sys.argv = argv
+    return code, out.getvalue(), err.getvalue()
+
+
+def check_outcome(code: int, out: str, err: str, what: str) -> None:
+    text = out + err
+    assert "Traceback" not in text, f"{what}: traceback\n{text}"
+    assert "internal error" not in text, f"{what}: an unexpected exception\n{text}"
+    assert code in (0, 1, 2), f"{what}: exit {code}\n{text}"
+    if code == 2:
+        assert err.startswith("error: "), f"{what}: exit 2 without a message\n{text}"
+
+
+def assert_finite_csv(path: Path) -> None:
+    text = path.read_text(encoding="utf-8").lower()
+    assert "nan" not in text and "inf" not in text, f"non-finite numbers written to {path}"
+
+
+def mutate_numbers(text: str, data: st.DataObject, n: int = 3) -> str:
+    """Replace up to `n` numbers of `text` with odd values."""
+    spans = [m.span() for m in NUMBER.finditer(text)]
+    if not spans:
+        return text
+    picks = sorted(set(data.draw(st.lists(st.integers(0, len(spans) - 1), min_size=1,
+                                          max_size=n))), reverse=True)
+    for i in picks:
+        a, b = spans[i]
+        text = text[:a] + data.draw(ODD_NUMBERS) + text[b:]
+    return text
+
+
+def mutate_lines(text: str, data: st.DataObject) -> str:
+    """Drop, duplicate or garble a line."""
+    lines = text.splitlines()
+    if not lines:
+        return text
+    i = data.draw(st.integers(0, len(lines) - 1))
+    action = data.draw(st.sampled_from(["drop", "dup", "garble", "truncate"]))
+    if action == "drop":
+        del lines[i]
+    elif action == "dup":
+        lines.insert(i, lines[i])
+    elif action == "garble":
+        lines[i] = data.draw(st.text(max_size=40))
+    else:
+        lines = lines[:i]
+    return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------------------------ plans
+@pytest.fixture(scope="module")
+def plan_text() -> str:
+    plan = generate_p1_plan(name="fz", grade="consumer", rates_dps=(-60.0, 0.0, 60.0),
+                            held_out_rates_dps=(), revolutions=1, static_s=20.0, settle_s=3.0,
+                            record_s=2.0, rate_settle_s=2.0, repetitions=1, warm_up_s=5.0,
+                            sample_rate_hz=200.0, seed=4)
+    return plan_to_toml(plan)
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_plans_are_refused_cleanly(plan_text, tmp_path, data):
+    text = data.draw(st.sampled_from([mutate_numbers, mutate_lines]))(plan_text, data)
+    path = tmp_path / "plan.toml"
+    path.write_text(text, encoding="utf-8")
+    for command in ("validate", "show"):
+        check_outcome(*run_cli("plan", command, str(path)), f"plan {command}\n{text[:2000]}")
+
+
+# -------------------------------------------------------------------------------------- CSV
+CSV_HEADERS = ["time_s,gyro_x_rps,gyro_y_rps,gyro_z_rps,accel_x_mps2,accel_y_mps2,accel_z_mps2",
+               "time_s [s],gyro_x_rps [deg/s],gyro_y_rps [deg/s],gyro_z_rps [deg/s],"
+               "accel_x_mps2 [g],accel_y_mps2 [g],accel_z_mps2 [g]"]
+
+
+def csv_text(data: st.DataObject) -> str:
+    header = data.draw(st.sampled_from(CSV_HEADERS))
+    n = data.draw(st.integers(0, 400))
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**16)))
+    t = np.arange(n) * 0.01
+    cols = [t, *(rng.normal(0, 0.01, n) for _ in range(3)),
+            *(rng.normal(0, 0.05, n) for _ in range(2)), 9.8 + rng.normal(0, 0.05, n)]
+    body = "\n".join(",".join(f"{c[i]:.6g}" for c in cols) for i in range(n))
+    text = header + "\n" + body + ("\n" if n else "")
+    mutation = data.draw(st.sampled_from(["numbers", "lines", "header", "bytes", "none"]))
+    if mutation == "numbers":
+        text = mutate_numbers(text, data)
+    elif mutation == "lines":
+        text = mutate_lines(text, data)
+    elif mutation == "header":
+        names = header.split(",")
+        j = data.draw(st.integers(0, len(names) - 1))
+        names[j] = data.draw(st.sampled_from(["time_s [furlong]", names[0], "gyro_x_rps [deg/h]",
+                                              "", "x y", names[j] + "," + names[j]]))
+        text = ",".join(names) + text[len(header):]
+    elif mutation == "bytes":
+        raw = bytearray(text.encode())
+        for _ in range(data.draw(st.integers(1, 5))):
+            if raw:
+                raw[data.draw(st.integers(0, len(raw) - 1))] = data.draw(st.integers(0, 255))
+        return raw.decode("latin-1")
+    return text
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_csv_through_segments_and_apply(result_file, tmp_path, data):
+    text = csv_text(data)
+    path = tmp_path / "data.csv"
+    path.write_bytes(text.encode("latin-1", errors="replace"))
+    seg_json = tmp_path / "seg.json"
+    seg_json.unlink(missing_ok=True)
+    code, out, err = run_cli("segments", str(path), "--json", str(seg_json))
+    check_outcome(code, out, err, f"segments\n{text[:1000]}")
+    if code == 0:
+        segs = json.loads(seg_json.read_text(encoding="utf-8"))
+        assert all(math.isfinite(v) for s in segs for v in s.values()
+                   if isinstance(v, float)), segs
+    fixed = tmp_path / "fixed.csv"
+    fixed.unlink(missing_ok=True)
+    code, out, err = run_cli("apply", str(result_file), str(path), "--out", str(fixed))
+    check_outcome(code, out, err, f"apply\n{text[:1000]}")
+    if code == 0:
+        assert_finite_csv(fixed)
+
+
+# ------------------------------------------------------------------------------ result JSON
+@pytest.fixture(scope="module")
+def result_file(tmp_path_factory) -> Path:
+    names = (*triad_parameter_names("accel", "triad"),
+             *triad_parameter_names("gyro", "triad", g_sensitivity=True))
+    k = len(names)
+    a = np.random.default_rng(0).normal(size=(k, k))
+    result = CalibrationResult(
+        sensor_id="IMU-0001", procedure="p1", model="triad", param_names=names,
+        values=np.random.default_rng(1).normal(0, 1e-3, k), covariance=a @ a.T * 1e-10,
+        units=dict.fromkeys(names, "1"),
+        residuals={"accel: Z up": ResidualStats((1e-4, -2e-4, 3.5e-5), (1e-3,) * 3, 2000,
+                                                "m/s^2")},
+        provenance=Provenance(plan_hash="ab" * 32, recording_sha256="cd" * 32,
+                              recording="run.h5", software_version="0.1.0",
+                              created_utc="2026-11-23T00:00:00Z", details={}),
+        notes=())
+    path = tmp_path_factory.mktemp("result") / "result.json"
+    path.write_text(result.to_json(), encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def clean_csv(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("csv") / "clean.csv"
+    t = np.arange(200) * 0.01
+    rows = [CSV_HEADERS[0]] + [f"{x:.3f},0.001,0.002,0.003,0.01,0.02,9.81" for x in t]
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return path
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_result_json_through_apply(result_file, clean_csv, tmp_path, data):
+    text = result_file.read_text(encoding="utf-8")
+    how = data.draw(st.sampled_from(["numbers", "lines", "key", "bytes", "value"]))
+    if how == "numbers":
+        text = mutate_numbers(text, data, n=2)
+    elif how == "lines":
+        text = mutate_lines(text, data)
+    elif how in ("key", "value"):
+        obj = json.loads(text)
+        key = data.draw(st.sampled_from(sorted(obj)))
+        if how == "key":
+            del obj[key]
+        else:
+            obj[key] = data.draw(st.one_of(st.none(), st.integers(), st.floats(), st.text(),
+                                           st.lists(st.floats(), max_size=3)))
+        text = json.dumps(obj)
+    raw = text.encode("utf-8")
+    if how == "bytes":
+        raw = bytearray(raw)
+        raw[data.draw(st.integers(0, len(raw) - 1))] = data.draw(st.integers(128, 255))
+    path = tmp_path / "r.json"
+    path.write_bytes(bytes(raw))
+    fixed = tmp_path / "fixed.csv"
+    fixed.unlink(missing_ok=True)
+    code, out, err = run_cli("apply", str(path), str(clean_csv), "--out", str(fixed))
+    check_outcome(code, out, err, f"apply with\n{text[:1500]}")
+    if code == 0:
+        assert_finite_csv(fixed)
+
+
+# ------------------------------------------------------------------------------- scenarios
+SCENARIO = """\
+name = "fz"
+seed = 7
+chunk_s = 10.0
+[site]
+latitude_deg = 52.0
+[table]
+kind = "dual-axis"
+grade = "high"
+feedback_rate_hz = 100.0
+[[imus]]
+name = "IMU-0001"
+grade = "consumer"
+sample_rate_hz = 100.0
+[[steps]]
+kind = "position"
+angles_deg = [0.0, 180.0]
+settle_s = 2.0
+record_s = 3.0
+[[steps]]
+kind = "rate"
+axis = 1
+rate_dps = 60.0
+settle_s = 2.0
+revolutions = 1
+"""
+
+
+@FUZZ
+@given(data=st.data())
+def test_mutated_scenarios_are_refused_or_simulated(tmp_path, data):
+    text = data.draw(st.sampled_from([mutate_numbers, mutate_lines]))(SCENARIO, data)
+    path = tmp_path / "sc.toml"
+    path.write_text(text, encoding="utf-8")
+    out_file = tmp_path / "sc.h5"
+    out_file.unlink(missing_ok=True)
+    code, out, err = run_cli("simulate", str(path), "--out", str(out_file))
+    check_outcome(code, out, err, f"simulate\n{text}")
+
+
+# ------------------------------------------------------------------------------ recordings
+FUZZ_CHILD = Path(__file__).with_name("_open_many.py")
+
+
+@pytest.fixture(scope="module")
+def small_recording(tmp_path_factory) -> Path:
+    from imucalib.io.recording import RecordingWriter
+    from imucalib.io.streams import imu_stream_spec
+
+    path = tmp_path_factory.mktemp("rec") / "small.h5"
+    n = 2000
+    t = np.arange(n) / 200.0
+    cols = {"time_s": t, "device_time_s": t, "counter": np.arange(n),
+            "temperature_degc": np.full(n, 25.0), "saturated": np.zeros(n, dtype=bool)}
+    for c in ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps", "accel_x_mps2", "accel_y_mps2"):
+        cols[c] = np.full(n, 1e-3)
+    cols["accel_z_mps2"] = np.full(n, 9.8)
+    with RecordingWriter(path, streams=[imu_stream_spec("IMU-0001")],
+                         metadata={"operator": "fz"}, chunk_rows=512) as w:
+        w.append("imu", "IMU-0001", cols)
+        i = w.begin_step("static", "level", 0.0, commanded={"plan_step": 0})
+        w.update_step(i, t_end_s=9.9, valid_start_s=1.0, valid_end_s=9.0, status="done")
+        w.log_event(0.0, "info", "fz", "hello")
+    return path
+
+
+def test_damaged_recordings_never_crash_hang_or_export_garbage(small_recording, tmp_path):
+    rng = np.random.default_rng(2026)
+    original = small_recording.read_bytes()
+    files = []
+    for i in range(40 * SCALE):
+        raw = bytearray(original)
+        kind = i % 4
+        if kind == 0:  # flip bytes anywhere
+            for _ in range(int(rng.integers(1, 8))):
+                raw[int(rng.integers(0, len(raw)))] ^= int(rng.integers(1, 256))
+        elif kind == 1:  # zero a block in the metadata region (the first 16 KiB)
+            a = int(rng.integers(0, min(len(raw), 16384) - 64))
+            raw[a:a + 64] = bytes(64)
+        elif kind == 2:  # truncate
+            raw = raw[:int(rng.integers(0, len(raw)))]
+        else:  # random bytes in the data region
+            a = int(rng.integers(len(raw) // 2, len(raw) - 64))
+            raw[a:a + 64] = rng.integers(0, 256, 64, dtype=np.uint8).tobytes()
+        path = tmp_path / f"m{i:03d}.h5"
+        path.write_bytes(bytes(raw))
+        files.append(path)
+    proc = subprocess.run([sys.executable, str(FUZZ_CHILD), str(tmp_path), *map(str, files)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, f"the child died ({proc.returncode}):\n{proc.stderr[-3000:]}"
+    outcomes = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert len(outcomes) == 2 * len(files)
+    for o in outcomes:
+        check_outcome(o["code"], o["out"], o["err"], f"{o['args']}")
+        if o["code"] == 0 and o["args"][0] == "export":
+            assert_finite_csv(Path(o["args"][-1]))
