@@ -77,13 +77,17 @@ class RecordingSummary:
 
     def render(self, console: Console) -> None:
         """Print the summary as rich tables."""
+        from rich.markup import escape
         from rich.table import Table
 
-        console.print(
-            f"[bold]{self.path}[/]  format v{self.format_version}"
-            + ("  [yellow](left open by a crashed writer: run `imucalib recover`)[/]"
-               if self.was_open_for_write else "")
-        )
+        console.print(f"[bold]{escape(str(self.path))}[/]  format v{self.format_version}")
+        if self.was_open_for_write:
+            console.print(
+                f"  [yellow]still marked open for writing: its writer crashed, was killed while "
+                f"closing, or is still running. `imucalib run --resume {escape(str(self.path))}` "
+                "finishes a station run (it recovers and closes the file first); `imucalib "
+                f"recover {escape(str(self.path))}` copies what was flushed into a cleanly "
+                "closed file.[/]", highlight=False)
         for key in ("created_utc", "software_version", "scenario_name"):
             if key in self.metadata:
                 console.print(f"  {key}: {self.metadata[key]}")

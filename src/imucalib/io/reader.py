@@ -32,13 +32,17 @@ from numpy.typing import NDArray
 
 from imucalib.conventions import TIME_COLUMN
 from imucalib.errors import (
+    CalibrationError,
     InvalidInputError,
     RecordingCorruptError,
+    RecordingError,
     RecordingOpenForWriteError,
 )
-from imucalib.io._open import check_format, open_h5
+from imucalib.io._open import open_h5
+from imucalib.io._probe import run_probe
 from imucalib.io._schema import (
     COMMIT_GROUP,
+    FORMAT_VERSION,
     LOG_FIELDS,
     LOG_GROUP,
     STEP_FIELDS,
@@ -49,6 +53,18 @@ from imucalib.io._schema import (
     ColumnSpec,
     decode_attr,
     decode_text,
+)
+from imucalib.io._validate import (
+    H5PY_ERRORS,
+    Layout,
+    check_layout,
+    check_root,
+    check_time_bases,
+    damaged,
+    from_h5py,
+    h5call,
+    parse_columns,
+    touch_all,
 )
 
 if TYPE_CHECKING:
@@ -133,11 +149,17 @@ class _Layout:
         return f"{self.device}/{self.unit}"
 
 
-def open_recording(path: str | os.PathLike[str], *, strict: bool = False) -> Recording:
-    """Open a Recording for reading.
+def open_recording(path: str | os.PathLike[str], *, strict: bool = False, probe: bool = True,
+                   probe_timeout_s: float | None = None) -> Recording:
+    """Open a Recording for reading, after checking its layout and time bases.
 
     A file left open by a crashed (or still running) writer is opened in SWMR-read mode and
     ``recording.was_open_for_write`` is set; it then shows every row flushed before the crash.
+
+    Opening validates the file (see ``docs/recording-format.md``): root attributes, groups,
+    commit counts, stream columns, the committed rows of the steps and log, and every stream's
+    committed ``time_s`` (finite, never decreasing, in ``[0, 1e9]`` s). Any problem raises a
+    typed error naming the file, what was found and what was expected.
 
     Parameters
     ----------
@@ -145,6 +167,12 @@ def open_recording(path: str | os.PathLike[str], *, strict: bool = False) -> Rec
         The ``.h5`` file.
     strict : bool
         Refuse a file a writer left open instead of reading it.
+    probe : bool
+        Read the file's metadata first in a forked child process that is killed after
+        `probe_timeout_s` (damaged HDF5 metadata can make the HDF5 library hang or crash; the
+        probe turns that into :class:`RecordingCorruptError`). It costs about 10-20 ms.
+    probe_timeout_s : float, optional
+        Time limit of the probe [s]; default :data:`imucalib.io._probe.PROBE_TIMEOUT_S` (10 s).
 
     Returns
     -------
@@ -158,30 +186,107 @@ def open_recording(path: str | os.PathLike[str], *, strict: bool = False) -> Rec
     RecordingFormatError
         A foreign HDF5 file (the message names what it holds) or a newer ``format_version``.
     RecordingCorruptError
-        A truncated or garbage file; the message says what is wrong.
+        A truncated, garbage or damaged file; the message says what is wrong and, where it
+        helps, suggests ``imucalib recover``.
     RecordingOpenForWriteError
-        With ``strict=True``, for a file a writer left open (``imucalib recover`` fixes it).
+        With ``strict=True``, for a file a writer left open.
     """
-    p = Path(path)
-    f, was_open = open_h5(p)
+    rec, _ = _open(Path(path), strict=strict, probe=probe, probe_timeout_s=probe_timeout_s,
+                   lenient=False)
+    return rec
+
+
+def open_damaged(path: Path, *, probe: bool = True, probe_timeout_s: float | None = None
+                 ) -> tuple[Recording, RecordingCorruptError | None]:
+    """Open a Recording even if its layout or time bases are damaged (for recovery; private).
+
+    Returns the Recording (its cached layout is empty when damaged, so that it reads the file
+    as it is) and the damage found, if any. Foreign, newer, unopenable files and files that
+    make HDF5 hang or crash still raise.
+    """
+    return _open(path, strict=False, probe=probe, probe_timeout_s=probe_timeout_s, lenient=True)
+
+
+def _checked_layout(p: Path, f: h5py.File, lenient: bool
+                    ) -> Layout | RecordingCorruptError:
     try:
-        version = check_format(f, p)
+        return check_layout(p, f)
+    except RecordingCorruptError as exc:
+        if not lenient:
+            raise
+        return exc
+
+
+def _probe_work(p: Path, lenient: bool) -> Callable[[Callable[[str], None]],
+                                                   Layout | RecordingCorruptError]:
+    """Make the work of a probe's child: the layout check, with `lenient` (recovery) a walk.
+
+    The reader reads nothing the layout check and the root attributes do not cover; recovery
+    also copies every dataset's attributes, so it walks the whole file first.
+    """
+    def work(progress: Callable[[str], None]) -> Layout | RecordingCorruptError:
+        f, _ = _open_h5(p)
+        progress("the root attributes")
+        _root_version(p, f, lenient)  # a foreign file goes no further
+        if lenient:
+            touch_all(f, progress)
+        else:
+            h5call(p, "the root attributes", lambda: dict(f.attrs.items()))
+        progress("the layout (groups, commit counts, stream columns, steps, log, truth)")
+        return _checked_layout(p, f, lenient)
+    return work
+
+
+def _root_version(p: Path, f: h5py.File, lenient: bool) -> int:
+    """Return the format version; with `lenient`, a damaged one counts as the current one."""
+    try:
+        return check_root(p, f)
+    except RecordingCorruptError:
+        if not lenient:
+            raise
+        return FORMAT_VERSION
+
+
+def _open_h5(p: Path) -> tuple[h5py.File, bool]:
+    try:
+        return open_h5(p)
+    except H5PY_ERRORS as exc:
+        if isinstance(exc, RecordingError) or not from_h5py(exc):
+            raise
+        raise RecordingCorruptError(f"{p} cannot be opened by HDF5 ({exc}); it is damaged"
+                                    ) from exc
+
+
+def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, lenient: bool
+          ) -> tuple[Recording, RecordingCorruptError | None]:
+    found = run_probe(p, _probe_work(p, lenient), timeout_s=probe_timeout_s) if probe else None
+    f, was_open = _open_h5(p)
+    try:
         if strict and was_open:
             raise RecordingOpenForWriteError(
-                f"{p} is still marked open for writing (its writer crashed or is still running); "
-                f"run `imucalib recover {p}` to make a cleanly closed copy, or open it with "
-                "strict=False to read it in SWMR mode")
-        rec = Recording(f, p, version, was_open_for_write=was_open)
-        rec.metadata  # noqa: B018 -- fail now, not later, on unreadable attributes
-    except OSError as exc:
-        f.close()
-        raise RecordingCorruptError(
-            f"{p} opened but its structure is unreadable ({exc}); `imucalib recover {p}` copies "
-            "out what is readable") from exc
+                f"{p} is still marked open for writing (its writer crashed, was killed while "
+                f"closing, or is still running); `imucalib run --resume {p}` finishes a station "
+                f"run (it recovers and closes the file first), `imucalib recover {p}` copies "
+                "what was flushed into a cleanly closed file, or open it with strict=False to "
+                "read it in SWMR mode")
+        if found is None:
+            found = _checked_layout(p, f, lenient)
+        damage = found if isinstance(found, RecordingCorruptError) else None
+        layout = None if isinstance(found, RecordingCorruptError) else found
+        if layout is not None:
+            try:
+                check_time_bases(p, f, layout.streams)
+            except RecordingCorruptError as exc:
+                if not lenient:
+                    raise
+                damage, layout = exc, None
+        version = (layout.format_version if layout is not None
+                   else _root_version(p, f, lenient))
+        rec = Recording(f, p, version, was_open_for_write=was_open, layout=layout)
     except BaseException:
         f.close()
         raise
-    return rec
+    return rec, damage
 
 
 def _decode_text_array(values: NDArray[Any]) -> list[str]:
@@ -192,7 +297,7 @@ class Recording:
     """An opened Recording (thin: it reads on demand). Make it with :func:`open_recording`."""
 
     def __init__(self, file: h5py.File, path: Path, format_version: int, *,
-                 was_open_for_write: bool) -> None:
+                 was_open_for_write: bool, layout: Layout | None = None) -> None:
         self._file = file
         self.path = path
         self.format_version = format_version
@@ -201,6 +306,10 @@ class Recording:
         self._datasets: dict[str, h5py.Dataset] = {}
         self._layouts: dict[str, _Layout] = {}
         self._commit_entries: list[str] | None = None
+        if layout is not None:  # validated when opened
+            self._commit_entries = list(layout.commit_entries)
+            for s in layout.streams:
+                self._layouts[s.path] = _Layout(s.device, s.unit, dict(s.columns))
 
     # --------------------------------------------------------------------------- basics
     def close(self) -> None:
@@ -228,16 +337,23 @@ class Recording:
         return ds
 
     def _guard(self, what: str, func: Callable[..., _T], *args: Any) -> _T:
+        """Call ``func(*args)``, turning what h5py raises into :class:`RecordingCorruptError`."""
         try:
             return func(*args)
-        except OSError as exc:
-            raise RecordingCorruptError(
-                f"{self.path}: {what} is unreadable ({exc}); `imucalib recover {self.path}` "
-                "copies out what is readable") from exc
+        except CalibrationError:
+            raise
+        except H5PY_ERRORS as exc:
+            if not from_h5py(exc):
+                raise
+            raise damaged(self.path, f"{what} is unreadable ({exc})",
+                          "to copy out what is readable") from exc
 
     @property
     def metadata(self) -> dict[str, Any]:
         """Root attributes; values of ``*_json`` attributes are decoded."""
+        return self._guard("the root attributes", self._metadata)
+
+    def _metadata(self) -> dict[str, Any]:
         out: dict[str, Any] = {}
         for key, value in self._file.attrs.items():
             v = decode_attr(value)
@@ -251,28 +367,41 @@ class Recording:
 
     def committed_rows(self) -> dict[str, int]:
         """Rows known durable per entry (``"streams/imu/IMU-0001"``, ``"steps"``, ``"log"``)."""
+        return self._guard("the commit counts", self._committed_rows)
+
+    def _committed_rows(self) -> dict[str, int]:
         if self._commit_entries is None:
             if COMMIT_GROUP not in self._file:
                 return {}
-            self._commit_entries = [str(e) for e in json.loads(
-                decode_attr(self._file[COMMIT_GROUP].attrs["entries_json"]))]
+            entries = self._json(decode_attr(self._file[COMMIT_GROUP].attrs.get("entries_json")),
+                                 "/commit `entries_json`")
+            if not isinstance(entries, list):
+                raise damaged(self.path, f"/commit `entries_json` is {entries!r}; expected a "
+                                         "JSON list")
+            self._commit_entries = [str(e) for e in entries]
         rows = self._dataset(f"{COMMIT_GROUP}/rows")[()]
-        return {e: int(n) for e, n in zip(self._commit_entries, rows, strict=True)}
+        if rows.shape != (len(self._commit_entries),):
+            raise damaged(self.path, f"/commit/rows has shape {rows.shape}; expected one count "
+                                     f"for each of the {len(self._commit_entries)} entries")
+        return {e: int(n) for e, n in zip(self._commit_entries, rows.tolist(), strict=True)}
 
     # --------------------------------------------------------------------------- streams
     def _stream_paths(self, base: str) -> list[str]:
-        if base not in self._file:
+        return self._guard(f"/{base}", self._list_streams, base)
+
+    def _list_streams(self, base: str) -> list[str]:
+        group = self._file.get(base)
+        if not isinstance(group, h5py.Group):
             return []
-        group = self._file[base]
-        return [f"{base}/{dev}/{unit}" for dev in sorted(group) for unit in sorted(group[dev])]
+        return [f"{base}/{dev}/{unit}" for dev in sorted(group)
+                if isinstance(group[dev], h5py.Group)
+                for unit in sorted(group[dev]) if isinstance(group[dev][unit], h5py.Group)]
 
     def _layout(self, path: str) -> _Layout:
         layout = self._layouts.get(path)
         if layout is None:
             group = self._file[path]
-            cols = {c["name"]: ColumnSpec(unit=c["unit"], dtype=c["dtype"],
-                                          quantity=c["quantity"], description=c["description"])
-                    for c in json.loads(decode_attr(group.attrs["columns_json"]))}
+            cols = parse_columns(self.path, path, decode_attr(group.attrs.get("columns_json")))
             for name in cols:  # opening through the group is cheaper than by full path
                 self._datasets.setdefault(f"{path}/{name}", group[name])
             device, unit = path.rsplit("/", 2)[-2:]
@@ -322,7 +451,7 @@ class Recording:
         if path in self._layouts:
             return path
         if (not isinstance(device, str) or not isinstance(unit, str) or "/" in device + unit
-                or path not in self._file):
+                or not self._guard(f"/{path}", self._file.__contains__, path)):
             known = ", ".join(p.removeprefix(base + "/") for p in self._stream_paths(base))
             what = "truth stream" if base == TRUTH_STREAMS_GROUP else "stream"
             raise InvalidInputError(f"no {what} {device}/{unit} in {self.path.name}; "
@@ -515,7 +644,7 @@ class Recording:
             cmd = t["commanded"][i]
             out.append(StepRecord(
                 index=int(t["index"][i]), kind=t["kind"][i], label=t["label"][i],
-                commanded=json.loads(cmd) if cmd else None,
+                commanded=self._json(cmd, f"/steps/commanded row {i}") if cmd else None,
                 t_start_s=t["t_start_s"][i], t_end_s=t["t_end_s"][i],
                 valid_start_s=t["valid_start_s"][i], valid_end_s=t["valid_end_s"][i],
                 status=t["status"][i], note=t["note"][i]))
@@ -565,18 +694,28 @@ class Recording:
     @property
     def has_truth(self) -> bool:
         """Whether the file holds a digital-twin truth."""
-        return TRUTH_GROUP in self._file
+        return self._guard("/truth", self._file.__contains__, TRUTH_GROUP)
 
     @property
     def truth(self) -> dict[str, Any]:
         """Digital-twin truth (empty for a real station): JSON values, and arrays exactly."""
+        return self._guard("the truth", self._truth)
+
+    def _json(self, text: str, what: str) -> Any:
+        try:
+            return json.loads(text)
+        except ValueError as exc:
+            raise damaged(self.path, f"{what} is not JSON ({exc}); expected JSON text") from exc
+
+    def _truth(self) -> dict[str, Any]:
         if TRUTH_GROUP not in self._file:
             return {}
         group = self._file[TRUTH_GROUP]
         out: dict[str, Any] = {}
         for key, value in group.attrs.items():
             if key.endswith("_json"):
-                out[key.removesuffix("_json")] = json.loads(decode_attr(value))
+                out[key.removesuffix("_json")] = self._json(decode_attr(value),
+                                                            f"/truth `{key}`")
         if "arrays" in group:
             for key, ds in group["arrays"].items():
                 out[key] = ds[()]

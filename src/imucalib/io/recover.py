@@ -1,18 +1,26 @@
-"""Recover a Recording that a crashed writer left open: copy what it flushed into a clean file.
+"""Recover a Recording that a crashed writer left open, or a damaged one, into a clean file.
 
 Contents
 --------
 :func:`recover_recording`
-    Read the file in SWMR mode, copy every readable object into ``<stem>.recovered.h5``,
-    verify the copy and return a :class:`RecoveryReport`.
+    Read the file (in SWMR mode if a writer left it open), copy every valid object into
+    ``<stem>.recovered.h5``, verify the copy and return a :class:`RecoveryReport`.
 :class:`RecoveryReport`, :class:`RecoveredStream`
     What was copied and what was dropped; ``summary()`` renders it for the CLI.
 
 The original is never modified. Each stream is copied up to its committed row count (see the
 ``/commit`` entry of the format in :mod:`imucalib.io.recording`), capped by the shortest of its
-columns so that they stay aligned; rows a writer had not committed, or that cannot be read, are
-dropped and reported. The copy is written to a temporary name, verified (it must open normally,
-and every column's SHA-256 must match what was read from the original), then renamed.
+columns so that they stay aligned, and cut before the first row whose ``time_s`` is not finite,
+negative, implausibly late or decreasing; rows a writer had not committed, or that cannot be
+read, are dropped and reported. Damage that :func:`~imucalib.io.reader.open_recording` refuses is
+mended where it can be without inventing data: a missing ``/steps`` or ``/log`` is written empty,
+missing step fields get empty values, a ``commanded`` that is not JSON is cleared, an unknown step
+status becomes ``invalid``, infinite step times become NaN, log events with an unknown level or a
+non-finite time are dropped, negative or unreadable commit counts are replaced by what every
+column holds, a damaged ``columns_json`` is rebuilt from the columns' own attributes, and
+unreadable streams or columns are left out; every such change is reported. The copy is written to
+a temporary name, verified (it must pass every check of ``open_recording``, and every column's
+SHA-256 must match what was written), then renamed.
 """
 
 from __future__ import annotations
@@ -20,28 +28,48 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any, TypeVar
 
 import h5py
 import numpy as np
+from numpy.typing import NDArray
 
+from imucalib.conventions import TIME_COLUMN
 from imucalib.errors import InvalidInputError, RecordingCorruptError, RecordingError
 from imucalib.io._schema import (
     COMMIT_GROUP,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    LOG_CHUNK_ROWS,
+    LOG_FIELDS,
     LOG_GROUP,
+    LOG_LEVELS,
+    STEP_FIELDS,
+    STEP_STATUSES,
+    STEPS_CHUNK_ROWS,
     STEPS_GROUP,
     STREAMS_GROUP,
     TRUTH_GROUP,
     TRUTH_STREAMS_GROUP,
+    ColumnSpec,
+    FieldSpec,
     decode_attr,
+    decode_text,
+    dtype_code,
+    json_dumps,
 )
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io._tables import create_table
+from imucalib.io._validate import H5PY_ERRORS, first_bad_time, from_h5py, parse_columns
+from imucalib.io.reader import Recording, open_damaged, open_recording
 
 __all__ = ["RecoveredStream", "RecoveryReport", "recover_recording"]
 
 _BLOCK_ROWS = 1 << 20
+_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -69,6 +97,8 @@ class RecoveryReport:
     tables: tuple[RecoveredStream, ...]  # streams, truth streams, then "steps" and "log"
     unfinished_steps: tuple[int, ...]  # steps whose status was still "running"
     verified: bool
+    damage: str = ""  # the first problem open_recording found in the original ("" for none)
+    notes: tuple[str, ...] = ()  # what else was changed or left out (root, commit, truth)
 
     @property
     def streams(self) -> tuple[RecoveredStream, ...]:
@@ -85,6 +115,10 @@ class RecoveryReport:
         state = ("was left open by its writer" if self.was_open_for_write
                  else "was closed cleanly (copied anyway)")
         lines = [f"recovered {self.source} -> {self.output}", f"  the original {state}"]
+        if self.damage:  # without the file name and the advice to run recover
+            detail = self.damage.split(" is damaged: ", 1)[-1].split("; run `imucalib", 1)[0]
+            lines.append(f"  the original is damaged: {detail}")
+        lines += [f"  {note}" for note in self.notes]
         width = max((len(t.name) for t in self.tables), default=10)
         for t in self.tables:
             line = f"  {t.name:<{width}}  {t.rows_copied:>12,} rows copied"
@@ -107,85 +141,357 @@ def _refresh(ds: h5py.Dataset) -> h5py.Dataset:
     return ds
 
 
-def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int) -> h5py.Dataset:
+def _try(func: Callable[..., _T], *args: Any) -> tuple[_T | None, str]:
+    """``(func(*args), "")``, or ``(None, what h5py said)`` when h5py fails."""
+    try:
+        return func(*args), ""
+    except H5PY_ERRORS as exc:
+        if not from_h5py(exc):
+            raise
+        return None, str(exc)
+
+
+def _raw_attrs(obj: h5py.HLObject) -> dict[str, Any]:
+    return dict(obj.attrs.items())
+
+
+def _set_attrs(obj: h5py.HLObject, attrs: Mapping[str, Any]) -> None:
+    for key, value in attrs.items():
+        obj.attrs[key] = value
+
+
+def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int, attrs: Mapping[str, Any]
+          ) -> h5py.Dataset:
     out = dst.create_dataset(
         name, shape=(n,), maxshape=(None,), chunks=src.chunks, dtype=src.dtype,
         compression=src.compression, compression_opts=src.compression_opts,
         fillvalue=src.fillvalue)
-    for key, value in src.attrs.items():
-        out.attrs[key] = value
+    _set_attrs(out, attrs)
     return out
 
 
-def _copy_table(src: h5py.Group, dst_file: h5py.File, path: str, names: list[str],
-                committed: int | None, hashes: dict[str, str]) -> RecoveredStream:
-    """Copy aligned 1-D columns `names` of group `src` into `dst_file[path]`, block by block."""
-    dsets = [_refresh(src[c]) for c in names]
-    lengths = [d.shape[0] for d in dsets]
-    found = max(lengths, default=0)
-    n = min(lengths, default=0)
-    if committed is not None:
-        n = min(n, committed)
-    dst = dst_file.require_group(path)
-    for key, value in src.attrs.items():
-        dst.attrs[key] = value
-    outs = [_like(dst, c, d, n) for c, d in zip(names, dsets, strict=True)]
-    digests = [hashlib.sha256() for _ in names]
-    copied, note = n, ""
-    for a in range(0, n, _BLOCK_ROWS):
-        b = min(a + _BLOCK_ROWS, n)
+class _Copier:
+    """Copies what is valid of an opened (possibly damaged) Recording into a new file."""
+
+    def __init__(self, rec: Recording, dst: h5py.File) -> None:
+        self.src: h5py.File = rec._file
+        self.dst = dst
+        self.path = rec.path
+        self.hashes: dict[str, str] = {}
+        self.notes: list[str] = []
+        self.tables: list[RecoveredStream] = []
+        self.unfinished: tuple[int, ...] = ()
+        self.committed = self._commit_counts()
+
+    # ------------------------------------------------------------------ pieces
+    def _commit_counts(self) -> dict[str, int]:
+        """Return the trustworthy commit counts (non-negative ints of a readable /commit)."""
+        group, err = _try(self.src.get, COMMIT_GROUP)
+        if not isinstance(group, h5py.Group):
+            self.notes.append(f"/commit unreadable or missing ({err or 'absent'}): every "
+                              "column's rows were taken as written")
+            return {}
         try:
-            blocks = [d[a:b] for d in dsets]
-        except OSError as exc:
-            copied, note = a, f"rows from {a} unreadable: {exc}"
-            break
-        for out, blk, h in zip(outs, blocks, digests, strict=True):
-            out[a:b] = blk
-            h.update(np.ascontiguousarray(blk).tobytes())
-    if copied < n:
-        for out in outs:
-            out.resize((copied,))
-    elif committed is not None and found > n:
-        note = "rows after the last flush"
-    for c, h in zip(names, digests, strict=True):
-        hashes[f"{path}/{c}"] = h.hexdigest()
-    return RecoveredStream(path, copied, found, note)
+            entries = json.loads(decode_attr(group.attrs["entries_json"]))
+            rows = _refresh(group["rows"])[()].tolist()
+        except (*H5PY_ERRORS, ValueError) as exc:
+            self.notes.append(f"/commit unreadable ({exc}): every column's rows were taken as "
+                              "written")
+            return {}
+        if (not isinstance(entries, list) or not isinstance(rows, list)
+                or len(entries) != len(rows)):
+            self.notes.append("/commit counts do not match its entries: every column's rows "
+                              "were taken as written")
+            return {}
+        out = {}
+        for entry, n in zip(entries, rows, strict=True):
+            if isinstance(entry, str) and isinstance(n, int) and n >= 0:
+                out[entry] = n
+            else:
+                self.notes.append(f"/commit count {n!r} of {entry!r} is invalid: its rows were "
+                                  "taken as written")
+        return out
 
+    def root(self) -> None:
+        attrs, err = _try(_raw_attrs, self.src)
+        if attrs is None:
+            self.notes.append(f"root attributes unreadable ({err}): only format and "
+                              "format_version were written")
+            attrs = {}
+        _set_attrs(self.dst, attrs)
+        self.dst.attrs["format"] = FORMAT_NAME
+        self.dst.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        self.dst.attrs["recovered_from"] = str(self.path.name)
+        self.dst.attrs["recovered_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
-def _copy(rec: Recording, dst: h5py.File, hashes: dict[str, str]) -> list[RecoveredStream]:
-    src: h5py.File = rec._file
-    committed = rec.committed_rows()
-    for key, value in src.attrs.items():
-        dst.attrs[key] = value
-    dst.attrs["recovered_from"] = str(rec.path.name)
-    dst.attrs["recovered_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-    tables: list[RecoveredStream] = []
-    dst.require_group(STREAMS_GROUP)
-    if TRUTH_GROUP in src:
-        tg = dst.require_group(TRUTH_GROUP)
-        for key, value in src[TRUTH_GROUP].attrs.items():
+    def truth(self) -> None:
+        group, err = _try(self.src.get, TRUTH_GROUP)
+        if group is None and not err:
+            return
+        if not isinstance(group, h5py.Group):
+            self.notes.append(f"/truth unreadable ({err or 'not a group'}): not copied")
+            return
+        tg = self.dst.require_group(TRUTH_GROUP)
+        attrs, err = _try(_raw_attrs, group)
+        for key, value in (attrs or {}).items():
+            if key.endswith("_json"):
+                try:
+                    json.loads(decode_attr(value))
+                except (TypeError, ValueError):
+                    self.notes.append(f"/truth `{key}` is not JSON: not copied")
+                    continue
             tg.attrs[key] = value
-        if "arrays" in src[TRUTH_GROUP]:
+        if err:
+            self.notes.append(f"/truth attributes unreadable ({err}): not copied")
+        arrays, err = _try(group.get, "arrays")
+        if isinstance(arrays, h5py.Group):
             ag = tg.require_group("arrays")
-            for key, ds in src[TRUTH_GROUP]["arrays"].items():
-                ag.create_dataset(key, data=ds[()])
-        dst.require_group(TRUTH_STREAMS_GROUP)
-    for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
-        for path in rec._stream_paths(base):
-            group = src[path]
-            names = [c["name"] for c in json.loads(decode_attr(group.attrs["columns_json"]))]
-            tables.append(_copy_table(group, dst, path, names, committed.get(path), hashes))
-    for name in (STEPS_GROUP, LOG_GROUP):
-        group = src[name]
-        tables.append(_copy_table(group, dst, name, list(group), committed.get(name), hashes))
-    if COMMIT_GROUP in src:
-        entries = json.loads(decode_attr(src[COMMIT_GROUP].attrs["entries_json"]))
-        copied = {t.name: t.rows_copied for t in tables}
-        cg = dst.create_group(COMMIT_GROUP)
-        cg.attrs["entries_json"] = src[COMMIT_GROUP].attrs["entries_json"]
-        cg.create_dataset("rows", data=np.array([copied.get(e, 0) for e in entries],
-                                                dtype=np.int64))
-    return tables
+            for key in _try(list, arrays)[0] or []:
+                value, err = _try(lambda k=key: arrays[k][()])
+                if value is None:
+                    self.notes.append(f"/truth/arrays/{key} unreadable ({err}): not copied")
+                else:
+                    ag.create_dataset(key, data=value)
+        self.dst.require_group(TRUTH_STREAMS_GROUP)
+
+    def streams(self, rec: Recording) -> None:
+        self.dst.require_group(STREAMS_GROUP)
+        for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
+            group, err = _try(self.src.get, base)
+            if not isinstance(group, h5py.Group):
+                if base == STREAMS_GROUP or err:
+                    self.notes.append(f"/{base} unreadable ({err}): no streams copied" if err
+                                      else f"/{base} missing in the original: no streams copied")
+                continue
+            try:
+                paths = rec._stream_paths(base)
+            except RecordingCorruptError as exc:
+                self.notes.append(f"/{base} unreadable ({exc}): its streams were not copied")
+                continue
+            for path in paths:
+                self.tables.append(self._stream(path))
+
+    def _columns(self, group: h5py.Group, path: str, attrs: dict[str, Any]
+                 ) -> tuple[dict[str, ColumnSpec] | None, str]:
+        """Return the columns from ``columns_json``, or rebuilt from the datasets' units."""
+        try:
+            return parse_columns(self.path, path, decode_attr(attrs.get("columns_json"))), ""
+        except RecordingCorruptError:
+            pass
+        names: list[str] | None = _try(list, group)[0]
+        cols: dict[str, ColumnSpec] = {}
+        for name in sorted(names or [], key=lambda c: c != TIME_COLUMN):
+            ds, _ = _try(group.get, name)
+            if not isinstance(ds, h5py.Dataset):
+                return None, f"its columns_json is damaged and {name} is not a column"
+            a, _ = _try(_raw_attrs, ds)
+            if a is None or not isinstance(decode_attr(a.get("unit")), str):
+                return None, "its columns_json is damaged and its columns carry no units"
+            cols[name] = ColumnSpec(decode_attr(a["unit"]), dtype_code(ds.dtype),
+                                    str(decode_attr(a.get("quantity", "si"))),
+                                    str(decode_attr(a.get("description", ""))))
+        if TIME_COLUMN not in cols:
+            return None, "its columns_json is damaged and it has no time_s"
+        return cols, "columns_json rebuilt from the datasets"
+
+    def _stream(self, path: str) -> RecoveredStream:
+        group, err = _try(self.src.__getitem__, path)
+        attrs, err2 = _try(_raw_attrs, group) if group is not None else (None, err)
+        if group is None or attrs is None:
+            return RecoveredStream(path, 0, 0, f"unreadable ({err or err2}): not copied")
+        cols, note = self._columns(group, path, attrs)
+        if cols is None:
+            return RecoveredStream(path, 0, 0, f"{note}: not copied")
+        notes = [note] if note else []
+        dsets: dict[str, h5py.Dataset] = {}
+        for name, spec in cols.items():
+            ds, err = _try(lambda c=name: _refresh(group[c]))
+            if (not isinstance(ds, h5py.Dataset) or ds.ndim != 1
+                    or dtype_code(ds.dtype) != spec.dtype):
+                if name == TIME_COLUMN:
+                    return RecoveredStream(path, 0, 0, "time_s unreadable: not copied")
+                notes.append(f"column {name} unreadable or of another dtype: dropped")
+                continue
+            dsets[name] = ds
+        lengths = [d.shape[0] for d in dsets.values()]
+        found, n = max(lengths), min(lengths)
+        committed = self.committed.get(path)
+        if committed is not None and committed < n:
+            n = committed
+            if found > n:
+                notes.append("rows after the last flush")
+        bad, err = _try(first_bad_time, dsets[TIME_COLUMN], n)
+        if err:
+            n, bad = 0, None
+            notes.append(f"time_s unreadable ({err}): no rows copied")
+        if bad is not None:
+            n = bad[0]
+            notes.append(f"rows from {n} dropped: time_s row {n} {bad[1]}")
+        kept = {c: s for c, s in cols.items() if c in dsets}
+        device, unit = path.rsplit("/", 2)[-2:]
+        attrs.update(device=device, unit=unit, columns_json=json_dumps(
+            [{"name": c, "unit": s.unit, "dtype": s.dtype, "quantity": s.quantity,
+              "description": s.description} for c, s in kept.items()], "columns"))
+        return self._copy_columns(path, attrs, dsets, kept, n, found, notes)
+
+    def _copy_columns(self, path: str, attrs: dict[str, Any], dsets: dict[str, h5py.Dataset],
+                      cols: dict[str, ColumnSpec], n: int, found: int, notes: list[str]
+                      ) -> RecoveredStream:
+        """Copy rows ``[0, n)`` of the aligned columns `dsets`, block by block, with hashes."""
+        dst = self.dst.require_group(path)
+        _set_attrs(dst, attrs)
+        outs = {}
+        for c, d in dsets.items():
+            col_attrs, _ = _try(_raw_attrs, d)
+            spec = cols[c]
+            outs[c] = _like(dst, c, d, n, col_attrs if col_attrs is not None else {
+                "unit": spec.unit, "quantity": spec.quantity, "description": spec.description})
+        digests = {c: hashlib.sha256() for c in dsets}
+        copied = n
+        for a in range(0, n, _BLOCK_ROWS):
+            b = min(a + _BLOCK_ROWS, n)
+            blocks, err = _try(lambda a=a, b=b: {c: d[a:b] for c, d in dsets.items()})
+            if blocks is None:
+                copied = a
+                notes.append(f"rows from {a} unreadable: {err}")
+                break
+            for c, blk in blocks.items():
+                outs[c][a:b] = blk
+                digests[c].update(np.ascontiguousarray(blk).tobytes())
+        if copied < n:
+            for out in outs.values():
+                out.resize((copied,))
+        for c, h in digests.items():
+            self.hashes[f"{path}/{c}"] = h.hexdigest()
+        return RecoveredStream(path, copied, found, "; ".join(notes))
+
+    def table(self, name: str, fields: Mapping[str, FieldSpec]
+              ) -> tuple[dict[str, NDArray[Any]], int, list[str]]:
+        """Read the rows of ``/steps`` or ``/log`` (missing fields get empty values).
+
+        Returns the columns, the length of the longest field, and notes.
+        """
+        group, err = _try(self.src.get, name)
+        notes = []
+        if not isinstance(group, h5py.Group):
+            notes.append(f"unreadable in the original ({err}): written empty" if err
+                         else "missing in the original: written empty")
+            group = None
+        dsets: dict[str, h5py.Dataset] = {}
+        for field, spec in fields.items():
+            ds = _try(group.get, field)[0] if group is not None else None
+            kind = "S" if spec.kind == "text" else spec.kind[0]
+            if isinstance(ds, h5py.Dataset) and ds.ndim == 1 and ds.dtype.kind == kind:
+                dsets[field] = _refresh(ds)
+            elif group is not None:
+                notes.append(f"field {field} missing or unreadable: filled with empty values")
+        lengths = [d.shape[0] for d in dsets.values()]
+        found, n = max(lengths, default=0), min(lengths, default=0)
+        committed = self.committed.get(name)
+        if committed is not None and committed < n:
+            n = committed
+            if found > n:
+                notes.append("rows after the last flush")
+        data: dict[str, NDArray[Any]] = {}
+        for field, spec in fields.items():
+            values = _try(lambda f=field: dsets[f][:n])[0] if field in dsets else None
+            if values is None:
+                if field in dsets:
+                    notes.append(f"field {field} unreadable: filled with empty values")
+                values = (np.full(n, b"", dtype=spec.dtype) if spec.kind == "text"
+                          else np.full(n, np.nan) if spec.kind == "f8" else np.arange(n))
+            data[field] = np.asarray(values, dtype=spec.dtype)
+        return data, found, notes
+
+    def write_table(self, name: str, fields: Mapping[str, FieldSpec], chunk_rows: int,
+                    data: dict[str, NDArray[Any]], found: int, notes: list[str]) -> None:
+        """Write a repaired ``/steps`` or ``/log`` table and remember its hashes."""
+        group = self.dst.create_group(name)
+        create_table(group, fields, chunk_rows)
+        n = len(next(iter(data.values())))
+        for field, values in data.items():
+            group[field].resize((n,))
+            group[field][:] = values
+            self.hashes[f"{name}/{field}"] = hashlib.sha256(
+                np.ascontiguousarray(group[field][:]).tobytes()).hexdigest()
+        self.tables.append(RecoveredStream(name, n, max(found, n), "; ".join(notes)))
+
+    def steps(self) -> None:
+        data, found, notes = self.table(STEPS_GROUP, STEP_FIELDS)
+        notes += _repair_steps(data)
+        self.unfinished = tuple(int(i) for i in np.flatnonzero(data["status"] == b"running"))
+        self.write_table(STEPS_GROUP, STEP_FIELDS, STEPS_CHUNK_ROWS, data, found, notes)
+
+    def log(self) -> None:
+        data, found, notes = self.table(LOG_GROUP, LOG_FIELDS)
+        levels = np.array([decode_text(v) in LOG_LEVELS for v in data["level"].tolist()],
+                          dtype=bool)
+        keep = np.isfinite(data["time_s"]) & levels
+        if not keep.all():
+            notes.append(f"{int((~keep).sum())} event(s) with an unknown level or a non-finite "
+                         "time dropped")
+            data = {k: v[keep] for k, v in data.items()}
+        self.write_table(LOG_GROUP, LOG_FIELDS, LOG_CHUNK_ROWS, data, found, notes)
+
+    def commit(self) -> None:
+        entries = [t.name for t in self.tables if t.name in (STEPS_GROUP, LOG_GROUP)
+                   or t.name in self.dst]
+        copied = {t.name: t.rows_copied for t in self.tables}
+        cg = self.dst.create_group(COMMIT_GROUP)
+        cg.attrs["entries_json"] = json_dumps(entries, "commit entries")
+        cg.create_dataset("rows", data=np.array([copied[e] for e in entries], dtype=np.int64))
+
+
+def _repair_steps(data: dict[str, NDArray[Any]]) -> list[str]:
+    """Make the steps valid in place: numbering, statuses, commanded JSON, infinite times."""
+    notes = []
+    n = data["index"].shape[0]
+    if not np.array_equal(data["index"], np.arange(n)):
+        data["index"] = np.arange(n, dtype=np.int64)
+        notes.append("step numbers rewritten as 0, 1, 2, …")
+    for i in range(n):
+        status = decode_text(data["status"][i])
+        if status not in STEP_STATUSES:
+            data["status"][i] = b"invalid"
+            notes.append(f"step {i} status {status!r} unknown: set to 'invalid'")
+        cmd = decode_text(data["commanded"][i])
+        if cmd:
+            try:
+                json.loads(cmd)
+            except ValueError:
+                data["commanded"][i] = b""
+                notes.append(f"step {i} commanded state not JSON: cleared")
+    for field in ("t_start_s", "t_end_s", "valid_start_s", "valid_end_s"):
+        inf = np.isinf(data[field])
+        if inf.any():
+            data[field][inf] = np.nan
+            notes.append(f"{int(inf.sum())} infinite {field} set to NaN")
+    return notes
+
+
+def _check_recognizable(rec: Recording) -> None:
+    """Refuse a file whose root attributes are unreadable unless its groups are a recording's."""
+    fmt, err = _try(lambda: rec._file.attrs.get("format"))
+    if not err and decode_attr(fmt) == FORMAT_NAME:
+        return
+    groups = [g for g in (STREAMS_GROUP, STEPS_GROUP, LOG_GROUP, COMMIT_GROUP)
+              if isinstance(_try(rec._file.get, g)[0], h5py.Group)]
+    if STREAMS_GROUP not in groups or len(groups) < 3:
+        raise RecordingCorruptError(
+            f"{rec.path} is damaged beyond recovery: its root attributes are unreadable "
+            f"({err or 'no format'}) and the groups of a recording (/streams and two of /steps, "
+            f"/log, /commit) are not readable either (found {groups}); restore it from a copy")
+
+
+def _copy(rec: Recording, dst: h5py.File) -> _Copier:
+    copier = _Copier(rec, dst)
+    copier.root()
+    copier.truth()
+    copier.streams(rec)
+    copier.steps()
+    copier.log()
+    copier.commit()
+    return copier
 
 
 def _verify(path: Path, tables: list[RecoveredStream], hashes: dict[str, str]) -> None:
@@ -245,14 +551,14 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
     if out.exists() and not overwrite:
         raise RecordingError(f"{out} exists; choose another output path or remove it first")
     tmp = out.with_name(f".{out.name}.partial")
-    hashes: dict[str, str] = {}
-    with open_recording(src) as rec:
+    rec, damage = open_damaged(src)
+    with rec:
         was_open = rec.was_open_for_write
+        _check_recognizable(rec)
         try:
             with h5py.File(tmp, "w", libver="latest") as dst:
-                tables = _copy(rec, dst, hashes)
-            unfinished = tuple(s.index for s in rec.steps if s.status == "running")
-            _verify(tmp, tables, hashes)
+                copier = _copy(rec, dst)
+            _verify(tmp, copier.tables, copier.hashes)
             os.replace(tmp, out)
         except OSError as exc:
             tmp.unlink(missing_ok=True)
@@ -261,4 +567,6 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
             tmp.unlink(missing_ok=True)
             raise
     return RecoveryReport(source=src, output=out, was_open_for_write=was_open,
-                          tables=tuple(tables), unfinished_steps=unfinished, verified=True)
+                          tables=tuple(copier.tables), unfinished_steps=copier.unfinished,
+                          verified=True, damage=str(damage) if damage is not None else "",
+                          notes=tuple(copier.notes))
