@@ -179,35 +179,62 @@ def apply(
     from imucalib.models.result import CalibrationResult
 
     try:
-        try:
-            result = CalibrationResult.from_json(result_path.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise InvalidInputError(f"cannot read {result_path}: {exc}") from exc
+        result = CalibrationResult.load(result_path)
+        _check_out(out, result_path, data)
         n = 0
         if data.suffix.lower() in (".h5", ".hdf5"):
             from imucalib.io.reader import open_recording
 
-            with open_recording(data) as rec, open(out, "w", encoding="utf-8") as fh:
+            with open_recording(data) as rec:
                 unit = imu or result.sensor_id
                 info = rec.stream_info("imu", unit)
-                for i, chunk in enumerate(rec.iter_stream("imu", unit)):
-                    df = pd.DataFrame(chunk.columns, index=pd.Index(chunk.time_s, name="time_s"))
-                    df.attrs["units"] = {c: s.unit for c, s in info.columns.items()}
-                    fixed = correct_imu_frame(df, result)
-                    _write_csv(fixed, fh, header=i == 0)
-                    n += len(fixed)
+                with open(out, "w", encoding="utf-8") as fh:
+                    for i, chunk in enumerate(rec.iter_stream("imu", unit)):
+                        df = pd.DataFrame(chunk.columns,
+                                          index=pd.Index(chunk.time_s, name="time_s"))
+                        df.attrs["units"] = {c: s.unit for c, s in info.columns.items()}
+                        fixed = correct_imu_frame(df, result)
+                        _write_csv(fixed, fh, header=i == 0)
+                        n += len(fixed)
         else:
             from imucalib.io.csv_import import read_imu_csv
 
             df = read_imu_csv(data)
+            _check_triads(data, df.columns, result)
             fixed = correct_imu_frame(df, result)
             with open(out, "w", encoding="utf-8") as fh:
                 _write_csv(fixed, fh, header=True)
             n = len(fixed)
     except CalibrationError as exc:
         raise fail(exc) from exc
+    except OSError as exc:
+        raise fail(InvalidInputError(f"cannot write {out}: {exc.strerror or exc}")) from exc
     console.print(f"wrote {out}: {n:,} corrected samples ({result.procedure} {result.model} "
                   f"result of {result.sensor_id})", highlight=False)
+
+
+def _check_out(out: Path, *inputs: Path) -> None:
+    """Refuse an output path that is one of the inputs (it would be truncated before read)."""
+    for path in inputs:
+        try:
+            same = out.exists() and path.exists() and out.samefile(path)
+        except OSError:
+            same = False
+        if same:
+            raise InvalidInputError(f"--out {out} is the input file {path}; write the "
+                                    "corrected data to another file")
+
+
+def _check_triads(data: Path, columns: Any, result: Any) -> None:
+    """Refuse data holding none of the triads the result corrects (nothing would change)."""
+    from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+
+    wanted = {t: c for t, c in (("gyro", GYRO_COLUMNS), ("accel", ACCEL_COLUMNS))
+              if result.has_triad(t)}
+    if not any(c in columns for cols in wanted.values() for c in cols):
+        raise InvalidInputError(
+            f"{data}: none of the columns the result corrects "
+            f"({', '.join(c for cols in wanted.values() for c in cols)}); found {list(columns)}")
 
 
 def _write_csv(df: object, fh: object, *, header: bool) -> None:

@@ -7,15 +7,44 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from pydantic import ValidationError
 from rich.table import Table
 
 from imucalib.cli._app import app, console, fail
 from imucalib.errors import CalibrationError, ConfigurationError
+from imucalib.plan.budget import format_bytes
+from imucalib.plan.schema import Plan
+from imucalib.sim.scenario import (
+    MAX_RECORD_S,
+    MAX_SAMPLE_RATE_HZ,
+    MIN_SAMPLE_RATE_HZ,
+    format_validation_error,
+)
 
 __all__ = ["plan_app"]
 
+#: Most repetitions `plan new p1` writes (each adds 36 steps and the static record).
+MAX_REPETITIONS = 50
+
 plan_app = typer.Typer(help="Validate, show and describe test plans.", no_args_is_help=True)
 app.add_typer(plan_app, name="plan")
+
+
+def _estimate_line(plan: Plan) -> str:
+    """One line: the estimated recording size, and on which station facts it rests."""
+    from imucalib.plan.budget import estimate_plan_recording
+
+    est = estimate_plan_recording(plan)
+    if plan.twin is not None:
+        n = len(plan.twin.imus)
+        rates = sorted({s.rate_hz for s in est.streams if s.name.startswith("imu/")})
+        basis = (f"on its twin: {n} IMU{'s' if n > 1 else ''} at "
+                 f"{'/'.join(f'{r:g}' for r in rates)} Hz")
+    else:
+        basis = (f"for 1 IMU at the plan's least acquisition rate, "
+                 f"{plan.equipment.acquisition_rate_min_hz:g} Hz; a station's IMUs and rates "
+                 "change it")
+    return f"recording ≈ {format_bytes(est.total_bytes)} over {est.duration_s:,.0f} s ({basis})"
 
 
 @plan_app.command("validate")
@@ -28,7 +57,8 @@ def validate(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(f"{path}: valid plan {plan.name!r}, {len(plan.steps)} steps, "
-                  f"sha256 {plan_hash(plan)[:16]}…", highlight=False)
+                  f"sha256 {plan_hash(plan)[:16]}…; {_estimate_line(plan)}", highlight=False,
+                  soft_wrap=True)
 
 
 @plan_app.command("show")
@@ -50,6 +80,7 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
     total = sum(r.min_duration_s for r in rows)
     console.print(f"{len(rows)} steps; at least {total:,.0f} s ({total / 3600:.2f} h) without "
                   "moves and stability waits", highlight=False)
+    console.print(_estimate_line(plan), highlight=False, soft_wrap=True)
 
 
 @plan_app.command("new")
@@ -58,11 +89,17 @@ def new(
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
     "tactical",
-    repetitions: Annotated[int, typer.Option(help="Complete calibrations.")] = 3,
-    static_s: Annotated[float, typer.Option(help="Level static record [s].")] = 3600.0,
-    sample_rate_hz: Annotated[float, typer.Option(help="Twin IMU output rate [Hz].")] = 1000.0,
-    seed: Annotated[int, typer.Option(help="Seed of the twin.")] = 1,
-    record_s: Annotated[float, typer.Option(help="Allan: each static record [s].")] = 7200.0,
+    repetitions: Annotated[int, typer.Option(help="Complete calibrations.", min=1,
+                                             max=MAX_REPETITIONS)] = 3,
+    static_s: Annotated[float, typer.Option(help="Level static record [s].", min=0.0,
+                                            max=MAX_RECORD_S)] = 3600.0,
+    sample_rate_hz: Annotated[float, typer.Option(help="Twin IMU output rate [Hz].",
+                                                  min=MIN_SAMPLE_RATE_HZ,
+                                                  max=MAX_SAMPLE_RATE_HZ)] = 1000.0,
+    seed: Annotated[int, typer.Option(help="Seed of the twin.", min=-(2**63),
+                                      max=2**63 - 1)] = 1,
+    record_s: Annotated[float, typer.Option(help="Allan: each static record [s].", min=0.0,
+                                            max=MAX_RECORD_S)] = 7200.0,
     temperatures: Annotated[str | None, typer.Option(
         help="Allan: record at these chamber temperatures, e.g. '-10,20,60' [°C].")] = None,
 ) -> None:
@@ -91,8 +128,13 @@ def new(
         else:
             raise ConfigurationError(f"unknown procedure {procedure!r}; known: p1, allan")
         write_plan(plan, out)
+    except ValidationError as exc:  # options the plan's bounds refuse (NaN passes a range)
+        raise fail(ConfigurationError(format_validation_error(
+            exc, f"from `plan new {procedure}` (check the options)", "plan"))) from exc
     except CalibrationError as exc:
         raise fail(exc) from exc
+    except OSError as exc:
+        raise fail(ConfigurationError(f"cannot write {out}: {exc.strerror or exc}")) from exc
     total = sum(r.min_duration_s for r in describe_plan(plan))
     console.print(f"wrote {out}: plan {plan.name!r}, {len(plan.steps)} steps, at least "
                   f"{total / 3600:.2f} h", highlight=False)

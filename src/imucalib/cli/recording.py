@@ -102,6 +102,9 @@ def _imu_arrays(path: Path, unit: str | None) -> tuple[str, Any, Any, Any]:
         raise InvalidInputError(f"{path}: segmentation needs the gyro columns {list(GYRO_COLUMNS)};"
                                 f" missing {missing} (found {list(df.columns)})")
     accel_cols = [c for c in ACCEL_COLUMNS if c in df.columns]
+    if 0 < len(accel_cols) < 3:
+        raise InvalidInputError(f"{path}: the accelerometer columns must all be present "
+                                f"({list(ACCEL_COLUMNS)}) or none; found only {accel_cols}")
     accel_csv = df[list(ACCEL_COLUMNS)].to_numpy() if len(accel_cols) == 3 else None
     return str(path), df.index.to_numpy(dtype=float), df[list(GYRO_COLUMNS)].to_numpy(), accel_csv
 
@@ -162,5 +165,9 @@ def segments(
                "gyro_noise_floor_rps": result.gyro_noise_floor_rps,
                "steady_threshold_rps": result.steady_threshold_rps,
                "static_rate_threshold_rps": result.static_rate_threshold_rps, "segments": rows}
-        json_out.write_text(json.dumps(doc, indent=2) + "\n")
+        try:
+            json_out.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise fail(InvalidInputError(f"cannot write --json {json_out}: "
+                                         f"{exc.strerror or exc}")) from exc
         console.print(f"wrote {json_out}", highlight=False)

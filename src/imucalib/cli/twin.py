@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from imucalib.cli._app import app, console, fail
-from imucalib.errors import CalibrationError
+from imucalib.errors import CalibrationError, ConfigurationError
 
 __all__ = ["scenarios", "simulate"]
 
@@ -33,16 +33,26 @@ def simulate(
     seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing file.")] = False,
 ) -> None:
-    """Run a scenario on the digital twin and write its Recording."""
+    """Run a scenario on the digital twin and write its Recording.
+
+    The recording's size is estimated first; a scenario whose file would not fit in the free
+    space of the output's filesystem is refused before anything is written.
+    """
+    from pydantic import ValidationError
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
+    from imucalib.plan.budget import check_free_space, estimate_scenario_recording
     from imucalib.sim.runner import simulate_scenario
-    from imucalib.sim.scenario import load_scenario
+    from imucalib.sim.scenario import Scenario, format_validation_error, load_scenario
 
     try:
         sc = load_scenario(scenario)
         if seed is not None:
-            sc = sc.model_copy(update={"seed": seed})
+            sc = Scenario.model_validate({**sc.model_dump(), "seed": seed})
+        estimate = estimate_scenario_recording(sc)
+        replaced = out.stat().st_size if overwrite and out.is_file() else 0
+        check_free_space(estimate.total_bytes, out, replaced_bytes=replaced,
+                         what=f"the recording of scenario {sc.name!r}")
         with Progress(
             TextColumn("[bold]{task.description}"),
             BarColumn(),
@@ -61,6 +71,8 @@ def simulate(
                 )
 
             summary = simulate_scenario(sc, out, progress=on_progress, overwrite=overwrite)
+    except ValidationError as exc:  # --seed outside the scenario's bounds
+        raise fail(ConfigurationError(format_validation_error(exc, scenario))) from exc
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(summary.describe(), highlight=False, soft_wrap=True)

@@ -5,12 +5,14 @@ Contents
 :class:`CalibrationResult`
     Frozen, one per IMU unit: parameter values by name, their covariance, units, the model they
     belong to, residual statistics per group, sensor identity, provenance, notes; a versioned
-    JSON form (:meth:`~CalibrationResult.to_json`, :meth:`~CalibrationResult.from_json`) that
-    round-trips exactly.
+    JSON form (:meth:`~CalibrationResult.to_json`, :meth:`~CalibrationResult.from_json`,
+    :meth:`~CalibrationResult.load` for a file) that round-trips exactly.
 :class:`ResidualStats`, :class:`Provenance`
     Parts of it.
 :data:`RESULT_FORMAT`, :data:`RESULT_FORMAT_VERSION`
     The JSON format's name and version (a newer version is refused with a clear message).
+:data:`MAX_RESULT_BYTES`
+    The largest result file read.
 
 Parameter names
 ---------------
@@ -23,15 +25,37 @@ Parameter names
   input units) [m/s² | rad/s].
 
 A result's model (``"triad"`` or ``"per-axis"``) says which set it carries.
+
+Reading a result file
+---------------------
+A result file is checked field by field before anything uses it; each defect is an
+:class:`~imucalib.errors.InvalidInputError` whose one-line message names the file and the field
+(``parameters[3].value``, ``covariance[2][5]``, ``residuals.<group>.n``):
+
+- the file: unreadable, over :data:`MAX_RESULT_BYTES`, not UTF-8, not JSON (or nested too
+  deeply), not an object whose ``format`` is :data:`RESULT_FORMAT`, a ``format_version`` other
+  than an integer 1 … :data:`RESULT_FORMAT_VERSION`;
+- the fields: exactly those :meth:`~CalibrationResult.to_dict` writes, at every level (a missing
+  or an unknown field is refused; ``provenance.details`` alone is free-form);
+- the values: strings where strings belong, numbers that are numbers (not strings, booleans or
+  null) and finite (the JSON extensions NaN and Infinity are refused, in ``details`` too); the
+  parameter names exactly one model's set per triad (G terms only for the gyro of a triad
+  model); known ``input_units``; residual counts that are integers ≥ 0;
+- the covariance: k × k for k parameters, variances ≥ 0, symmetric to a relative 10⁻⁹, each
+  ``std`` equal to √ of its variance to 10⁻⁹ (a hand-edited value is caught), zero rows where
+  a variance is zero, and positive semi-definite (the correlation matrix's smallest eigenvalue
+  ≥ −10⁻⁸).
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Final
+from pathlib import Path
+from typing import Any, Final, NoReturn
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,8 +63,10 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
 from imucalib.models.triad import TriadKind, TriadModel
+from imucalib.units import parse_unit
 
 __all__ = [
+    "MAX_RESULT_BYTES",
     "RESULT_FORMAT",
     "RESULT_FORMAT_VERSION",
     "CalibrationResult",
@@ -52,6 +78,8 @@ __all__ = [
 RESULT_FORMAT: Final = "imucalib-calibration-result"
 RESULT_FORMAT_VERSION: Final = 1
 MODELS: Final = ("triad", "per-axis")
+#: Largest result file :meth:`CalibrationResult.load` reads (a P1 result is about 40 kB). [B]
+MAX_RESULT_BYTES: Final = 16 * 2**20
 
 
 def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False
@@ -260,49 +288,70 @@ class CalibrationResult:
         return json.dumps(self.to_dict(), indent=1, allow_nan=False)
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> CalibrationResult:
-        """Rebuild a result from :meth:`to_dict`'s form.
+    def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>") -> CalibrationResult:
+        """Rebuild a result from :meth:`to_dict`'s form, checking every field.
+
+        Parameters
+        ----------
+        data : mapping
+            The parsed JSON document.
+        source : str
+            What to call the document in messages (the file name).
 
         Raises
         ------
         InvalidInputError
-            A foreign document, a newer format version, or missing or malformed fields.
+            A foreign document, a newer format version, a missing or unknown field, or a field
+            of the wrong type or value (see the module docstring); the message names `source`
+            and the field.
         """
-        if not isinstance(data, Mapping) or data.get("format") != RESULT_FORMAT:
-            got = data.get("format") if isinstance(data, Mapping) else type(data).__name__
-            raise InvalidInputError(f"not an imucalib calibration result: expected format "
-                                    f"{RESULT_FORMAT!r}, got {got!r}")
-        version = data.get("format_version")
-        if not isinstance(version, int) or version > RESULT_FORMAT_VERSION or version < 1:
-            raise InvalidInputError(
-                f"calibration result format_version {version!r} is not supported; this "
-                f"imucalib reads versions 1..{RESULT_FORMAT_VERSION} (upgrade imucalib)")
-        try:
-            params = data["parameters"]
-            prov = data.get("provenance", {})
-            return cls(
-                sensor_id=str(data["sensor_id"]), procedure=str(data["procedure"]),
-                model=str(data["model"]), param_names=tuple(p["name"] for p in params),
-                values=np.array([p["value"] for p in params], dtype=np.float64),
-                covariance=np.array(data["covariance"], dtype=np.float64),
-                units={p["name"]: p["unit"] for p in params},
-                input_units=dict(data["input_units"]),
-                residuals={g: ResidualStats(tuple(r["mean"]), tuple(r["std"]), int(r["n"]),
-                                            str(r["unit"]))
-                           for g, r in data.get("residuals", {}).items()},
-                provenance=Provenance(**{**prov, "details": dict(prov.get("details", {}))}),
-                notes=tuple(data.get("notes", ())), format_version=version)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InvalidInputError(f"malformed calibration result: {exc!r}") from exc
+        return _ResultReader(source).read(cls, data)
 
     @classmethod
-    def from_json(cls, text: str) -> CalibrationResult:
-        """Rebuild a result from :meth:`to_json`'s text."""
+    def from_json(cls, text: str | bytes, source: str = "<text>") -> CalibrationResult:
+        """Rebuild a result from :meth:`to_json`'s text (see :meth:`from_dict`)."""
         try:
             data = json.loads(text)
         except json.JSONDecodeError as exc:
-            raise InvalidInputError(f"calibration result is not valid JSON: {exc}") from exc
-        return cls.from_dict(data)
+            raise InvalidInputError(f"calibration result {source} is not valid JSON: {exc}"
+                                    ) from exc
+        except UnicodeDecodeError as exc:
+            raise InvalidInputError(f"calibration result {source} is not UTF-8 text: {exc}"
+                                    ) from exc
+        except RecursionError as exc:
+            raise InvalidInputError(f"calibration result {source} is not a calibration result: "
+                                    "its JSON nests too deeply") from exc
+        return cls.from_dict(data, source)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> CalibrationResult:
+        """Read a result file written by ``imucalib calibrate`` (:meth:`to_json`'s text).
+
+        Raises
+        ------
+        InvalidInputError
+            A file that cannot be read, is larger than :data:`MAX_RESULT_BYTES`, is not UTF-8
+            text or not valid JSON, or any defect :meth:`from_dict` names.
+        """
+        p = Path(path)
+        try:
+            with open(p, "rb") as fh:
+                raw = fh.read(MAX_RESULT_BYTES + 1)
+        except OSError as exc:
+            raise InvalidInputError(f"cannot read calibration result {p}: "
+                                    f"{exc.strerror or exc}") from exc
+        if len(raw) > MAX_RESULT_BYTES:
+            raise InvalidInputError(f"calibration result {p} is larger than "
+                                    f"{MAX_RESULT_BYTES // 2**20} MiB; a result is a few "
+                                    "kilobytes of JSON")
+        try:
+            text = raw.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise InvalidInputError(
+                f"calibration result {p} is not UTF-8 text: byte 0x{raw[exc.start]:02x} at "
+                f"offset {exc.start} cannot be decoded (expected the JSON `imucalib calibrate` "
+                "writes)") from exc
+        return cls.from_json(text, str(p))
 
     def isclose(self, other: CalibrationResult, *, rtol: float = 0.0, atol: float = 0.0
                 ) -> bool:
@@ -310,3 +359,222 @@ class CalibrationResult:
         return (self.param_names == other.param_names and self.model == other.model
                 and np.allclose(self.values, other.values, rtol=rtol, atol=atol)
                 and np.allclose(self.covariance, other.covariance, rtol=rtol, atol=atol))
+
+
+# --- the reading side: every field of a result document checked, naming the file and field ---
+_FIELDS: Final = ("format", "format_version", "sensor_id", "procedure", "model", "parameters",
+                  "covariance", "input_units", "residuals", "provenance", "notes")
+_PARAMETER_FIELDS: Final = ("name", "value", "unit", "std")
+_RESIDUAL_FIELDS: Final = ("mean", "std", "n", "unit")
+_PROVENANCE_FIELDS: Final = ("plan_hash", "recording_sha256", "recording", "software_version",
+                             "created_utc", "details")
+#: Tolerance of the checks of symmetry, of √diag(covariance) against ``std`` and of the
+#: smallest eigenvalue of the correlation matrix (round-off of a computed covariance).
+_RTOL: Final = 1e-9
+_EIG_TOL: Final = 1e-8
+
+
+def _kind(value: object) -> str:
+    if isinstance(value, bool):
+        return "a boolean"
+    if value is None:
+        return "null"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    text = json.dumps(value, allow_nan=True) if isinstance(value, int | float | str) else ""
+    if len(text) > 40:
+        text = text[:40] + "…"
+    names = {dict: "an object", list: "an array", str: f"the string {text}",
+             int: text, float: text}
+    return names.get(type(value), type(value).__name__)
+
+
+class _ResultReader:
+    """Check a parsed result document field by field; every message names the source."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, where: str, text: str) -> NoReturn:
+        raise InvalidInputError(f"calibration result {self.source}: field {where!r}: {text}")
+
+    def obj(self, value: object, where: str, fields: tuple[str, ...] | None) -> dict[str, Any]:
+        if not isinstance(value, dict):
+            self.fail(where, f"expected an object; got {_kind(value)}")
+        if fields is not None:
+            missing = [f for f in fields if f not in value]
+            extra = sorted(str(k) for k in value if k not in fields)
+            if missing:
+                self.fail(where, f"missing field(s) {missing}")
+            if extra:
+                self.fail(where, f"unknown field(s) {extra}; expected exactly {list(fields)}")
+        return value
+
+    def array(self, value: object, where: str, length: int | None = None) -> list[Any]:
+        if not isinstance(value, list):
+            self.fail(where, f"expected an array; got {_kind(value)}")
+        if length is not None and len(value) != length:
+            self.fail(where, f"expected {length} elements; got {len(value)}")
+        return value
+
+    def text(self, value: object, where: str, *, nonempty: bool = False) -> str:
+        if not isinstance(value, str):
+            self.fail(where, f"expected a string; got {_kind(value)}")
+        if nonempty and not value.strip():
+            self.fail(where, "expected a non-empty string")
+        return value
+
+    def number(self, value: object, where: str, *, nonnegative: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            self.fail(where, f"expected a number; got {_kind(value)}")
+        x = float(value)
+        if not math.isfinite(x):
+            self.fail(where, f"expected a finite number; got {_kind(value)}")
+        if nonnegative and x < 0:
+            self.fail(where, f"expected a number ≥ 0; got {value!r}")
+        return x
+
+    def numbers(self, value: object, where: str, length: int | None = None, *,
+                nonnegative: bool = False) -> list[float]:
+        return [self.number(v, f"{where}[{i}]", nonnegative=nonnegative)
+                for i, v in enumerate(self.array(value, where, length))]
+
+    def unit(self, value: object, where: str) -> str:
+        unit = self.text(value, where, nonempty=True)
+        try:
+            parse_unit(unit)
+        except InvalidInputError:
+            self.fail(where, f"unknown unit {unit!r} (expected e.g. 'rad/s' or 'm/s^2')")
+        return unit
+
+    def free(self, value: object, where: str) -> None:
+        """Refuse NaN and infinities anywhere in a free-form value (JSON has neither)."""
+        if isinstance(value, float) and not math.isfinite(value):
+            self.fail(where, f"expected finite numbers; got {_kind(value)}")
+        if isinstance(value, dict):
+            for k, v in value.items():
+                self.free(v, f"{where}.{k}")
+        elif isinstance(value, list):
+            for i, v in enumerate(value):
+                self.free(v, f"{where}[{i}]")
+
+    # --- the document ---------------------------------------------------------------------
+    def header(self, data: object) -> int:
+        if not isinstance(data, dict) or data.get("format") != RESULT_FORMAT:
+            got = (_kind(data.get("format")) if isinstance(data, dict) and "format" in data
+                   else "no `format` field" if isinstance(data, dict) else _kind(data))
+            raise InvalidInputError(
+                f"{self.source} is not an imucalib calibration result: expected a JSON object "
+                f"with format {RESULT_FORMAT!r}; got {got}")
+        version = data.get("format_version")
+        if isinstance(version, bool) or not isinstance(version, int) \
+                or not 1 <= version <= RESULT_FORMAT_VERSION:
+            raise InvalidInputError(
+                f"calibration result {self.source}: format_version {_kind(version)} is not "
+                f"supported; this imucalib reads versions 1..{RESULT_FORMAT_VERSION} (a newer "
+                "version needs a newer imucalib)")
+        return version
+
+    def names(self, names: list[str], model: str) -> None:
+        triads = {n.split("_")[0] for n in names}
+        unknown = sorted(t for t in triads if t not in ("accel", "gyro"))
+        if unknown or not names:
+            self.fail("parameters", "expected the parameters of the accel and/or gyro triad "
+                      f"(names `accel_…`, `gyro_…`); got {sorted(set(names))[:6]}")
+        for triad in sorted(triads):
+            have = {n for n in names if n.startswith(f"{triad}_")}
+            base = set(triad_parameter_names(triad, model))
+            full = set(triad_parameter_names(triad, model, g_sensitivity=True))
+            if have == base or (triad == "gyro" and model == "triad" and have == full):
+                continue
+            allowed = full if (triad == "gyro" and model == "triad") else base
+            self.fail("parameters", f"the {triad} parameters of a {model} result must be "
+                      f"{sorted(base)}" + (" (and optionally the G terms)"
+                                           if allowed != base else "")
+                      + f"; missing {sorted(base - have)}, unexpected {sorted(have - allowed)}")
+
+    def covariance(self, value: object, std: list[float]) -> NDArray[np.float64]:
+        k = len(std)
+        rows = self.array(value, "covariance", k)
+        cov = np.array([self.numbers(r, f"covariance[{i}]", k) for i, r in enumerate(rows)],
+                       dtype=np.float64).reshape(k, k)
+        diag = np.diag(cov)
+        if np.any(diag < 0):
+            i = int(np.argmax(diag < 0))
+            self.fail(f"covariance[{i}][{i}]",
+                      f"a variance must be ≥ 0; got {float(diag[i])!r}")
+        asym = np.abs(cov - cov.T) > _RTOL * np.maximum(np.abs(cov), np.abs(cov.T))
+        if asym.any():
+            i, j = (int(v) for v in np.argwhere(asym)[0])
+            self.fail("covariance", f"must be symmetric; [{i}][{j}] = {float(cov[i, j])!r} but "
+                      f"[{j}][{i}] = {float(cov[j, i])!r}")
+        for i in range(k):
+            root = math.sqrt(diag[i])
+            if abs(std[i] - root) > _RTOL * max(root, abs(std[i])):
+                self.fail(f"parameters[{i}].std", f"{std[i]!r} disagrees with "
+                          f"√covariance[{i}][{i}] = {root!r} (a hand-edited file?)")
+        scale = np.sqrt(diag)
+        zero = scale == 0.0
+        if np.any(cov[zero] != 0.0):
+            i = int(np.flatnonzero(zero)[0])
+            self.fail("covariance", f"row {i} has a zero variance but non-zero covariances")
+        s = np.where(zero, 1.0, scale)
+        corr = cov / np.outer(s, s)
+        lowest = float(np.linalg.eigvalsh(corr).min()) if k else 0.0
+        if lowest < -_EIG_TOL:
+            self.fail("covariance", "must be positive semi-definite; the correlation matrix "
+                      f"has the eigenvalue {lowest:.3g}")
+        return cov
+
+    def read(self, cls: type[CalibrationResult], data: object) -> CalibrationResult:
+        version = self.header(data)
+        doc = self.obj(data, "(top level)", _FIELDS)
+        sensor_id = self.text(doc["sensor_id"], "sensor_id", nonempty=True)
+        procedure = self.text(doc["procedure"], "procedure")
+        model = self.text(doc["model"], "model")
+        if model not in MODELS:
+            self.fail("model", f"expected one of {list(MODELS)}; got {model!r}")
+        params = [self.obj(p, f"parameters[{i}]", _PARAMETER_FIELDS)
+                  for i, p in enumerate(self.array(doc["parameters"], "parameters"))]
+        names = [self.text(p["name"], f"parameters[{i}].name", nonempty=True)
+                 for i, p in enumerate(params)]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            self.fail("parameters", f"repeated parameter name(s) {dup}")
+        self.names(names, model)
+        values = [self.number(p["value"], f"parameters[{i}].value") for i, p in enumerate(params)]
+        units = {n: self.text(p["unit"], f"parameters[{i}].unit", nonempty=True)
+                 for i, (n, p) in enumerate(zip(names, params, strict=True))}
+        std = [self.number(p["std"], f"parameters[{i}].std", nonnegative=True)
+               for i, p in enumerate(params)]
+        cov = self.covariance(doc["covariance"], std)
+        input_units = self.obj(doc["input_units"], "input_units", None)
+        for key, unit in input_units.items():
+            if key not in ("gyro", "accel"):
+                self.fail(f"input_units.{key}", "expected only the keys 'gyro' and 'accel'")
+            self.unit(unit, f"input_units.{key}")
+        residuals = {}
+        for group, r in self.obj(doc["residuals"], "residuals", None).items():
+            where = f"residuals.{group}"
+            r = self.obj(r, where, _RESIDUAL_FIELDS)
+            mean = self.numbers(r["mean"], f"{where}.mean")
+            spread = self.numbers(r["std"], f"{where}.std", len(mean), nonnegative=True)
+            n = r["n"]
+            if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+                self.fail(f"{where}.n", f"expected a count (an integer ≥ 0); got {_kind(n)}")
+            residuals[group] = ResidualStats(tuple(mean), tuple(spread), n,
+                                             self.text(r["unit"], f"{where}.unit"))
+        prov = self.obj(doc["provenance"], "provenance", _PROVENANCE_FIELDS)
+        texts = {f: self.text(prov[f], f"provenance.{f}") for f in _PROVENANCE_FIELDS[:-1]}
+        details = self.obj(prov["details"], "provenance.details", None)
+        self.free(details, "provenance.details")
+        notes = tuple(self.text(v, f"notes[{i}]")
+                      for i, v in enumerate(self.array(doc["notes"], "notes")))
+        try:
+            return cls(sensor_id=sensor_id, procedure=procedure, model=model,
+                       param_names=tuple(names), values=np.array(values, dtype=np.float64),
+                       covariance=cov, units=units, input_units=dict(input_units),
+                       residuals=residuals, provenance=Provenance(**texts, details=details),
+                       notes=notes, format_version=version)
+        except InvalidInputError as exc:  # pragma: no cover - the checks above come first
+            raise InvalidInputError(f"calibration result {self.source}: {exc}") from exc

@@ -36,7 +36,25 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from imucalib.sim.scenario import TwinEquipment
+from imucalib.sim.scenario import (
+    MAX_ANGLE_DEG,
+    MAX_CENTRIFUGE_RATE_DPS,
+    MAX_RAMP_DEGC_PER_MIN,
+    MAX_RECORD_S,
+    MAX_REVOLUTIONS,
+    MAX_SAMPLE_RATE_HZ,
+    MAX_SETTLE_S,
+    MAX_STEPS,
+    MAX_TABLE_ACCEL_DPS2,
+    MAX_TABLE_RATE_DPS,
+    MAX_TEMPERATURE_DEGC,
+    MAX_TOTAL_S,
+    MAX_WAIT_S,
+    MIN_SAMPLE_RATE_HZ,
+    MIN_TEMPERATURE_DEGC,
+    TwinEquipment,
+    check_record_length,
+)
 
 __all__ = [
     "CentrifugeStep",
@@ -52,8 +70,11 @@ __all__ = [
     "SoakStep",
     "StaticStep",
     "WarmUpStep",
+    "plan_min_duration_s",
     "step_min_duration_s",
 ]
+
+_ANGLE = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
 
 
 class _Model(BaseModel):
@@ -63,11 +84,16 @@ class _Model(BaseModel):
 class PlanLimits(_Model):
     """Limits no command of the plan may exceed (checked before anything moves)."""
 
-    max_rate_dps: float = Field(500.0, gt=0.0, description="table rate limit [°/s]")
-    max_accel_dps2: float = Field(100.0, gt=0.0, description="table acceleration limit [°/s²]")
-    max_centrifuge_rate_dps: float = Field(720.0, gt=0.0, description="centrifuge limit [°/s]")
-    min_temperature_degc: float = Field(-55.0, ge=-100.0, le=200.0)
-    max_temperature_degc: float = Field(125.0, ge=-100.0, le=200.0)
+    max_rate_dps: float = Field(500.0, gt=0.0, le=MAX_TABLE_RATE_DPS,
+                                description="table rate limit [°/s]")
+    max_accel_dps2: float = Field(100.0, gt=0.0, le=MAX_TABLE_ACCEL_DPS2,
+                                  description="table acceleration limit [°/s²]")
+    max_centrifuge_rate_dps: float = Field(720.0, gt=0.0, le=MAX_CENTRIFUGE_RATE_DPS,
+                                           description="centrifuge limit [°/s]")
+    min_temperature_degc: float = Field(-55.0, ge=MIN_TEMPERATURE_DEGC,
+                                        le=MAX_TEMPERATURE_DEGC, description="[°C]")
+    max_temperature_degc: float = Field(125.0, ge=MIN_TEMPERATURE_DEGC,
+                                        le=MAX_TEMPERATURE_DEGC, description="[°C]")
 
     @model_validator(mode="after")
     def _range(self) -> PlanLimits:
@@ -82,30 +108,48 @@ class PlanLimits(_Model):
 class GuardConfig(_Model):
     """Settling criteria and guard thresholds; the defaults are SPEC.md P1's."""
 
-    position_tolerance_arcsec: float = Field(5.0, gt=0.0, description="table deviation [″]")
+    position_tolerance_arcsec: float = Field(5.0, gt=0.0, le=3600.0,
+                                             description="table deviation [″]")
     hold_rate_tolerance_dps: float = Field(
-        0.01, gt=0.0, description="rate of an axis holding a position [°/s]")
-    rate_tolerance_dps: float = Field(0.5, gt=0.0, description="rate deviation [°/s]")
+        0.01, gt=0.0, le=10.0, description="rate of an axis holding a position [°/s]")
+    rate_tolerance_dps: float = Field(0.5, gt=0.0, le=100.0, description="rate deviation [°/s]")
     settle_fluctuation_g: float = Field(
-        0.001, gt=0.0, description="IMU accelerometer fluctuation allowed when settled [g]")
+        0.001, gt=0.0, le=1.0,
+        description="IMU accelerometer fluctuation allowed when settled [g]")
     settle_average_s: float = Field(
-        0.1, gt=0.0, description="block length whose means the fluctuation is taken over [s]")
+        0.1, gt=0.0, le=60.0,
+        description="block length whose means the fluctuation is taken over [s]")
     settle_check_s: float = Field(
-        1.0, gt=0.0, description="span over which the settling criteria must hold [s]")
-    settle_timeout_s: float = Field(300.0, gt=0.0, description="give up settling after [s]")
-    accel_jump_g: float = Field(0.5, gt=0.0, description="sample-to-sample output jump [g]")
-    gyro_jump_dps: float = Field(20.0, gt=0.0, description="sample-to-sample jump [°/s]")
+        1.0, gt=0.0, le=MAX_SETTLE_S,
+        description="span over which the settling criteria must hold [s]")
+    settle_timeout_s: float = Field(300.0, gt=0.0, le=MAX_SETTLE_S,
+                                    description="give up settling after [s]")
+    accel_jump_g: float = Field(0.5, gt=0.0, le=1000.0,
+                                description="sample-to-sample output jump [g]")
+    gyro_jump_dps: float = Field(20.0, gt=0.0, le=100_000.0,
+                                 description="sample-to-sample jump [°/s]")
     max_counter_gap_samples: int = Field(
-        0, ge=0, description="lost samples tolerated inside a valid window")
-    max_crc_errors: int = Field(0, ge=0, description="CRC failures tolerated in a valid window")
+        0, ge=0, le=10**9, description="lost samples tolerated inside a valid window")
+    max_crc_errors: int = Field(0, ge=0, le=10**9,
+                                description="CRC failures tolerated in a valid window")
     trip_on_saturation: bool = True
     chamber_band_degc: float = Field(
-        1.0, gt=0.0, description="chamber air vs setpoint while recording, after a soak [°C]")
-    device_timeout_s: float = Field(5.0, gt=0.0, description="device time-out [s]")
+        1.0, gt=0.0, le=50.0,
+        description="chamber air vs setpoint while recording, after a soak [°C]")
+    device_timeout_s: float = Field(5.0, gt=0.0, le=600.0, description="device time-out [s]")
     recover_timeout_s: float = Field(
-        60.0, gt=0.0, description="after a trip, wait this long for healthy devices [s]")
+        60.0, gt=0.0, le=MAX_SETTLE_S,
+        description="after a trip, wait this long for healthy devices [s]")
     on_trip: Literal["retry", "stop"] = "retry"
     max_retries: int = Field(2, ge=0, le=10)
+
+    @model_validator(mode="after")
+    def _blocks(self) -> GuardConfig:
+        if self.settle_average_s > self.settle_check_s:
+            raise ValueError(f"settle_average_s ({self.settle_average_s:g} s) must not exceed "
+                             f"settle_check_s ({self.settle_check_s:g} s): the fluctuation is "
+                             "taken over block means inside that span")
+        return self
 
 
 class ImuSpecConfig(_Model):
@@ -114,9 +158,12 @@ class ImuSpecConfig(_Model):
     model: str = ""
     maker: str = ""
     grade: Literal["consumer", "tactical", "navigation", ""] = ""
-    accel_accuracy_g: float = Field(0.01, gt=0.0, description="held-out accuracy spec [g]")
-    gyro_accuracy_dps: float = Field(0.5, gt=0.0, description="held-out accuracy spec [°/s]")
-    gyro_noise_dps: float | None = Field(None, gt=0.0, description="gyro noise spec [°/s]")
+    accel_accuracy_g: float = Field(0.01, gt=0.0, le=100.0,
+                                    description="held-out accuracy spec [g]")
+    gyro_accuracy_dps: float = Field(0.5, gt=0.0, le=1000.0,
+                                     description="held-out accuracy spec [°/s]")
+    gyro_noise_dps: float | None = Field(None, gt=0.0, le=1000.0,
+                                         description="gyro noise spec [°/s]")
 
 
 class EquipmentConfig(_Model):
@@ -127,46 +174,68 @@ class EquipmentConfig(_Model):
     a non-perpendicular axis pair tilts the reference rates (gyro misalignments).
     """
 
-    table_position_accuracy_arcsec: float = Field(10.0, ge=0.0, description="[″]")
-    table_orthogonality_arcsec: float = Field(5.0, ge=0.0, description="[″]")
-    acquisition_rate_min_hz: float = Field(100.0, gt=0.0, description="[Hz]")
+    table_position_accuracy_arcsec: float = Field(10.0, ge=0.0, le=3600.0, description="[″]")
+    table_orthogonality_arcsec: float = Field(5.0, ge=0.0, le=3600.0, description="[″]")
+    acquisition_rate_min_hz: float = Field(100.0, ge=MIN_SAMPLE_RATE_HZ, le=MAX_SAMPLE_RATE_HZ,
+                                           description="[Hz]")
 
 
 class _Step(_Model):
     label: str = Field("", max_length=200)
-    tags: tuple[str, ...] = ()
+    tags: tuple[Annotated[str, Field(max_length=64)], ...] = Field((), max_length=32)
 
 
 class SoakStep(_Step):
     """Set the chamber, then wait until chamber and IMU temperatures are stable."""
 
     kind: Literal["soak"]
-    temperature_degc: float
-    ramp_degc_per_min: float | None = Field(None, gt=0.0)
-    band_degc: float = Field(0.5, gt=0.0, description="chamber air within ± of the setpoint")
-    imu_band_degc: float = Field(0.2, gt=0.0, description="IMU temperature span when stable")
-    stable_for_s: float = Field(600.0, gt=0.0)
-    timeout_s: float = Field(7200.0, gt=0.0)
+    temperature_degc: float = Field(ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC,
+                                    description="[°C]")
+    ramp_degc_per_min: float | None = Field(None, gt=0.0, le=MAX_RAMP_DEGC_PER_MIN,
+                                            description="[°C/min]")
+    band_degc: float = Field(0.5, gt=0.0, le=50.0,
+                             description="chamber air within ± of the setpoint [°C]")
+    imu_band_degc: float = Field(0.2, gt=0.0, le=50.0,
+                                 description="IMU temperature span when stable [°C]")
+    stable_for_s: float = Field(600.0, gt=0.0, le=MAX_WAIT_S, description="[s]")
+    timeout_s: float = Field(7200.0, gt=0.0, le=MAX_WAIT_S, description="[s]")
+
+    @model_validator(mode="after")
+    def _reachable(self) -> SoakStep:
+        if self.stable_for_s > self.timeout_s:
+            raise ValueError(f"stable_for_s ({self.stable_for_s:g} s) exceeds timeout_s "
+                             f"({self.timeout_s:g} s): the soak could never end")
+        return self
 
 
 class WarmUpStep(_Step):
     """Power-on warm-up: at least `duration_s`, and until the IMU output has stopped drifting."""
 
     kind: Literal["warm-up"]
-    duration_s: float = Field(gt=0.0)
-    window_s: float = Field(60.0, gt=0.0, description="window whose means are compared")
-    max_gyro_drift_dps: float = Field(0.01, gt=0.0, description="change of consecutive means")
-    max_accel_drift_g: float = Field(0.001, gt=0.0, description="change of consecutive means")
-    timeout_s: float = Field(7200.0, gt=0.0)
+    duration_s: float = Field(gt=0.0, le=MAX_WAIT_S, description="[s]")
+    window_s: float = Field(60.0, gt=0.0, le=MAX_SETTLE_S,
+                            description="window whose means are compared [s]")
+    max_gyro_drift_dps: float = Field(0.01, gt=0.0, le=100.0,
+                                      description="change of consecutive means [°/s]")
+    max_accel_drift_g: float = Field(0.001, gt=0.0, le=10.0,
+                                     description="change of consecutive means [g]")
+    timeout_s: float = Field(7200.0, gt=0.0, le=MAX_WAIT_S, description="[s]")
+
+    @model_validator(mode="after")
+    def _reachable(self) -> WarmUpStep:
+        if self.duration_s > self.timeout_s:
+            raise ValueError(f"duration_s ({self.duration_s:g} s) exceeds timeout_s "
+                             f"({self.timeout_s:g} s): the warm-up could never end")
+        return self
 
 
 class PositionStep(_Step):
     """Move the table to angles (one per axis), settle, record."""
 
     kind: Literal["position"]
-    angles_deg: tuple[float, ...] = Field(min_length=1, max_length=2)
-    settle_s: float = Field(30.0, ge=0.0)
-    record_s: float = Field(10.0, gt=0.0)
+    angles_deg: tuple[_ANGLE, ...] = Field(min_length=1, max_length=2, description="[°]")
+    settle_s: float = Field(30.0, ge=0.0, le=MAX_SETTLE_S, description="[s]")
+    record_s: float = Field(10.0, gt=0.0, le=MAX_RECORD_S, description="[s]")
 
 
 class RateStep(_Step):
@@ -174,10 +243,11 @@ class RateStep(_Step):
 
     kind: Literal["rate"]
     axis: int = Field(0, ge=0, le=1)
-    rate_dps: float
-    settle_s: float = Field(20.0, ge=0.0)
-    revolutions: int | None = Field(None, ge=1)
-    record_s: float | None = Field(None, gt=0.0)
+    rate_dps: float = Field(ge=-MAX_TABLE_RATE_DPS, le=MAX_TABLE_RATE_DPS,
+                            description="within limits.max_rate_dps [°/s]")
+    settle_s: float = Field(20.0, ge=0.0, le=MAX_SETTLE_S, description="[s]")
+    revolutions: int | None = Field(None, ge=1, le=MAX_REVOLUTIONS)
+    record_s: float | None = Field(None, gt=0.0, le=MAX_RECORD_S, description="[s]")
 
     @model_validator(mode="after")
     def _length(self) -> RateStep:
@@ -185,6 +255,7 @@ class RateStep(_Step):
             raise ValueError("`revolutions` needs a non-zero `rate_dps`; use `record_s` at 0 °/s")
         if (self.revolutions is None) == (self.record_s is None):
             raise ValueError("give exactly one of `revolutions` and `record_s`")
+        check_record_length(self.revolutions, self.record_s, self.rate_dps)
         return self
 
 
@@ -192,11 +263,12 @@ class CentrifugeStep(_Step):
     """Spin the centrifuge (or position its arm at rest), settle, record."""
 
     kind: Literal["centrifuge"]
-    rate_dps: float = 0.0
-    arm_position_deg: float | None = None
-    settle_s: float = Field(10.0, ge=0.0)
-    revolutions: int | None = Field(None, ge=1)
-    record_s: float | None = Field(None, gt=0.0)
+    rate_dps: float = Field(0.0, ge=-MAX_CENTRIFUGE_RATE_DPS, le=MAX_CENTRIFUGE_RATE_DPS,
+                            description="within limits.max_centrifuge_rate_dps [°/s]")
+    arm_position_deg: _ANGLE | None = Field(None, description="[°]")
+    settle_s: float = Field(10.0, ge=0.0, le=MAX_SETTLE_S, description="[s]")
+    revolutions: int | None = Field(None, ge=1, le=MAX_REVOLUTIONS)
+    record_s: float | None = Field(None, gt=0.0, le=MAX_RECORD_S, description="[s]")
 
     @model_validator(mode="after")
     def _length(self) -> CentrifugeStep:
@@ -206,6 +278,7 @@ class CentrifugeStep(_Step):
             raise ValueError("give exactly one of `revolutions` and `record_s`")
         if self.arm_position_deg is not None and self.rate_dps != 0.0:
             raise ValueError("`arm_position_deg` positions the arm at rest; `rate_dps` must be 0")
+        check_record_length(self.revolutions, self.record_s, self.rate_dps)
         return self
 
 
@@ -213,7 +286,7 @@ class StaticStep(_Step):
     """Record where the table is, nothing moving (the long static record of P1 step 2)."""
 
     kind: Literal["static"]
-    duration_s: float = Field(gt=0.0)
+    duration_s: float = Field(gt=0.0, le=MAX_RECORD_S, description="[s]")
 
 
 class OperatorCheckStep(_Step):
@@ -234,15 +307,15 @@ class Plan(_Model):
     """A test plan."""
 
     name: str = Field(min_length=1, max_length=200)
-    description: str = ""
-    procedure: str = Field("", description="analysis that applies: p1, allan, …")
+    description: str = Field("", max_length=2000)
+    procedure: str = Field("", max_length=64, description="analysis that applies: p1, allan, …")
     imu: ImuSpecConfig = Field(default_factory=ImuSpecConfig)
     limits: PlanLimits = Field(default_factory=PlanLimits)
     guards: GuardConfig = Field(default_factory=GuardConfig)
     equipment: EquipmentConfig = Field(default_factory=EquipmentConfig)
     twin: TwinEquipment | None = Field(
         None, description="the twin station to run this plan on with --station sim")
-    steps: tuple[PlanStep, ...] = Field(min_length=1)
+    steps: tuple[PlanStep, ...] = Field(min_length=1, max_length=MAX_STEPS)
 
     @model_validator(mode="after")
     def _within_limits(self) -> Plan:
@@ -261,6 +334,10 @@ class Plan(_Model):
                 raise ValueError(
                     f"{where}: temperature_degc {step.temperature_degc:g} is outside limits "
                     f"[{lim.min_temperature_degc:g}, {lim.max_temperature_degc:g}] °C")
+        total = plan_min_duration_s(self)
+        if total > MAX_TOTAL_S:
+            raise ValueError(f"the steps take at least {total:.6g} s ({total / 86400:.3g} days); "
+                             f"a plan may last at most {MAX_TOTAL_S:g} s (14 days)")
         return self
 
     def step_label(self, index: int) -> str:
@@ -282,3 +359,8 @@ def step_min_duration_s(step: PlanStep) -> float:
             return step.settle_s + step.revolutions * 360.0 / abs(step.rate_dps)
         return step.settle_s + (step.record_s or 0.0)
     return 0.0
+
+
+def plan_min_duration_s(plan: Plan) -> float:
+    """Return the least time the whole plan takes: the sum of :func:`step_min_duration_s`. [s]"""
+    return sum(step_min_duration_s(step) for step in plan.steps)

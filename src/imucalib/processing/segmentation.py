@@ -198,6 +198,10 @@ def detect_segments(
     if t.size < 2:
         raise InvalidInputError(f"`time_s` must have at least 2 samples; got {t.size}")
     dt = float(np.median(np.diff(t)))
+    if not win / dt < 1e15:  # before round(): an infinite ratio cannot be rounded
+        raise InvalidInputError(f"the record must be at least three windows long; got "
+                                f"{t.size} samples, {t[-1] - t[0]:.6g} s, for `window_s` = "
+                                f"{win:g} s")
     w = round(win / dt)
     if w < _MIN_WINDOW:
         raise InvalidInputError(f"`window_s` must span at least {_MIN_WINDOW} samples; got {w} "

@@ -41,6 +41,23 @@ from imucalib.errors import ConfigurationError
 
 __all__ = [
     "BUILTIN_SCENARIOS",
+    "MAX_ANGLE_DEG",
+    "MAX_CENTRIFUGE_RATE_DPS",
+    "MAX_IMUS",
+    "MAX_RAMP_DEGC_PER_MIN",
+    "MAX_RECORD_S",
+    "MAX_REVOLUTIONS",
+    "MAX_SAMPLE_RATE_HZ",
+    "MAX_SETTLE_S",
+    "MAX_STEPS",
+    "MAX_TABLE_ACCEL_DPS2",
+    "MAX_TABLE_RATE_DPS",
+    "MAX_TEMPERATURE_DEGC",
+    "MAX_TIME_CONSTANT_S",
+    "MAX_TOTAL_S",
+    "MAX_WAIT_S",
+    "MIN_SAMPLE_RATE_HZ",
+    "MIN_TEMPERATURE_DEGC",
     "CentrifugeConfig",
     "CentrifugeStep",
     "ChamberConfig",
@@ -56,7 +73,48 @@ __all__ = [
     "TwinEquipment",
     "format_validation_error",
     "load_scenario",
+    "step_min_duration_s",
 ]
+
+# --- Bounds of every duration, count, rate and temperature (docs/twin.md, docs/station.md) ---
+# Plans (imucalib.plan.schema) use the same numbers. Each is a physical or station limit with
+# margin, so that no input can ask for an absurd run: a file of terabytes, a wait of centuries.
+
+#: Longest settle (dwell) before a record: an hour; tables settle in seconds. [s]
+MAX_SETTLE_S = 3600.0
+#: Longest single record or static step: 7 days (an Allan record of a navigation IMU is 1–3). [s]
+MAX_RECORD_S = 7 * 86400.0
+#: Longest wait or time-out (soak, warm-up, stability): 2 days. [s]
+MAX_WAIT_S = 2 * 86400.0
+#: Longest plan or scenario, summed least step durations: 14 days. [s]
+MAX_TOTAL_S = 14 * 86400.0
+#: Longest thermal time constant (chamber air, IMU): a day. [s]
+MAX_TIME_CONSTANT_S = 86400.0
+#: Most steps in a plan or scenario (the default P1 plan has 110).
+MAX_STEPS = 10_000
+#: Most IMUs on one fixture.
+MAX_IMUS = 64
+#: Most whole revolutions one step records.
+MAX_REVOLUTIONS = 100_000
+#: Fastest rate-table rate (real tables: a few thousand °/s at most). [°/s]
+MAX_TABLE_RATE_DPS = 10_000.0
+#: Highest rate-table acceleration. [°/s²]
+MAX_TABLE_ACCEL_DPS2 = 100_000.0
+#: Fastest centrifuge rate (about 1700 rpm). [°/s]
+MAX_CENTRIFUGE_RATE_DPS = 10_000.0
+#: Largest commanded table or arm angle in magnitude (a turn either way). [°]
+MAX_ANGLE_DEG = 360.0
+#: Temperature range of thermal chambers (real ones: about −75 … +180 °C). [°C]
+MIN_TEMPERATURE_DEGC = -100.0
+MAX_TEMPERATURE_DEGC = 200.0
+#: Fastest chamber ramp (thermal-shock chambers reach tens of °C/min). [°C/min]
+MAX_RAMP_DEGC_PER_MIN = 100.0
+#: IMU output data rates accepted. [Hz]
+MIN_SAMPLE_RATE_HZ = 1.0
+MAX_SAMPLE_RATE_HZ = 100_000.0
+
+_ANGLE = Annotated[float, Field(ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)]
+_ARM = Annotated[float, Field(ge=-5.0, le=5.0)]
 
 
 class _Model(BaseModel):
@@ -78,8 +136,9 @@ class TableConfig(_Model):
 
     kind: Literal["none", "single-axis", "dual-axis"] = "none"
     grade: Literal["ideal", "lab", "high"] = "high"
-    max_rate_dps: float | None = Field(None, gt=0.0)
-    feedback_rate_hz: float = Field(100.0, gt=0.0, le=10000.0)
+    max_rate_dps: float | None = Field(None, gt=0.0, le=MAX_TABLE_RATE_DPS)
+    feedback_rate_hz: float = Field(100.0, ge=MIN_SAMPLE_RATE_HZ, le=10000.0,
+                                    description="controller feedback rate [Hz]")
 
 
 class ChamberConfig(_Model):
@@ -87,11 +146,18 @@ class ChamberConfig(_Model):
 
     enabled: bool = False
     initial_temperature_degc: float = Field(25.0, ge=-70.0, le=180.0)
-    min_temperature_degc: float = -55.0
-    max_temperature_degc: float = 125.0
-    max_ramp_degc_per_min: float = Field(5.0, gt=0.0)
-    air_time_constant_s: float = Field(120.0, gt=0.0)
+    min_temperature_degc: float = Field(-55.0, ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC)
+    max_temperature_degc: float = Field(125.0, ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC)
+    max_ramp_degc_per_min: float = Field(5.0, gt=0.0, le=MAX_RAMP_DEGC_PER_MIN)
+    air_time_constant_s: float = Field(120.0, gt=0.0, le=MAX_TIME_CONSTANT_S)
     stability_noise_degc: float = Field(0.05, ge=0.0, le=5.0)
+
+    @model_validator(mode="after")
+    def _range(self) -> ChamberConfig:
+        if self.min_temperature_degc >= self.max_temperature_degc:
+            raise ValueError(f"min_temperature_degc ({self.min_temperature_degc:g}) must be "
+                             f"below max_temperature_degc ({self.max_temperature_degc:g})")
+        return self
 
 
 class CentrifugeConfig(_Model):
@@ -99,10 +165,12 @@ class CentrifugeConfig(_Model):
 
     enabled: bool = False
     static_radius_m: float = Field(1.0, gt=0.0, le=20.0)
-    unbalance_c0_m_s2: float = 0.0
-    unbalance_c_per_kg_m_s2_per_kg: float = 0.0
-    load_kg: float = Field(0.0, ge=0.0)
-    max_rate_dps: float = Field(720.0, gt=0.0)
+    unbalance_c0_m_s2: float = Field(0.0, ge=-1e-3, le=1e-3,
+                                     description="shift c0·ω² of the rotor [m·s²]")
+    unbalance_c_per_kg_m_s2_per_kg: float = Field(0.0, ge=-1e-3, le=1e-3,
+                                                  description="[m·s²/kg]")
+    load_kg: float = Field(0.0, ge=0.0, le=1000.0)
+    max_rate_dps: float = Field(720.0, gt=0.0, le=MAX_CENTRIFUGE_RATE_DPS)
 
 
 class FixtureConfig(_Model):
@@ -110,7 +178,7 @@ class FixtureConfig(_Model):
 
     kind: Literal["single", "hexahedral", "array"] = "single"
     half_edge_m: float = Field(0.05, gt=0.0, le=1.0)
-    lever_arm_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    lever_arm_m: tuple[_ARM, _ARM, _ARM] = Field((0.0, 0.0, 0.0), description="[m]")
     spacing_m: float = Field(0.05, gt=0.0, le=1.0)
 
 
@@ -119,35 +187,36 @@ class ImuConfig(_Model):
 
     name: str = Field(min_length=1, max_length=64)
     grade: Literal["consumer", "tactical", "navigation"] = "tactical"
-    sample_rate_hz: float | None = Field(None, gt=0.0, le=100000.0)
-    seed: int | None = None
+    sample_rate_hz: float | None = Field(None, ge=MIN_SAMPLE_RATE_HZ, le=MAX_SAMPLE_RATE_HZ,
+                                         description="output data rate [Hz]")
+    seed: int | None = Field(None, ge=0, lt=2**63)
     drift_ppm: float = Field(0.0, ge=-1000.0, le=1000.0)
     jitter_s: float = Field(0.0, ge=0.0, le=0.1)
     latency_s: float = Field(0.0, ge=0.0, le=1.0)
     drop_probability: float = Field(0.0, ge=0.0, lt=1.0)
-    thermal_time_constant_s: float = Field(600.0, gt=0.0)
+    thermal_time_constant_s: float = Field(600.0, gt=0.0, le=MAX_TIME_CONSTANT_S)
     self_heating_degc: float = Field(0.0, ge=0.0, le=50.0)
     nonlinear: bool = True
 
 
 class _Step(_Model):
-    label: str = ""
+    label: str = Field("", max_length=200)
 
 
 class StaticStep(_Step):
     """Record with nothing moving."""
 
     kind: Literal["static"]
-    duration_s: float = Field(gt=0.0)
+    duration_s: float = Field(gt=0.0, le=MAX_RECORD_S)
 
 
 class PositionStep(_Step):
     """Move the table to angles, settle, record."""
 
     kind: Literal["position"]
-    angles_deg: tuple[float, ...] = Field(min_length=1, max_length=2)
-    settle_s: float = Field(30.0, ge=0.0)
-    record_s: float = Field(10.0, gt=0.0)
+    angles_deg: tuple[_ANGLE, ...] = Field(min_length=1, max_length=2)
+    settle_s: float = Field(30.0, ge=0.0, le=MAX_SETTLE_S)
+    record_s: float = Field(10.0, gt=0.0, le=MAX_RECORD_S)
 
 
 class RateStep(_Step):
@@ -155,10 +224,10 @@ class RateStep(_Step):
 
     kind: Literal["rate"]
     axis: int = Field(0, ge=0, le=1)
-    rate_dps: float
-    settle_s: float = Field(20.0, ge=0.0)
-    revolutions: int | None = Field(None, ge=1)
-    record_s: float | None = Field(None, gt=0.0)
+    rate_dps: float = Field(ge=-MAX_TABLE_RATE_DPS, le=MAX_TABLE_RATE_DPS)
+    settle_s: float = Field(20.0, ge=0.0, le=MAX_SETTLE_S)
+    revolutions: int | None = Field(None, ge=1, le=MAX_REVOLUTIONS)
+    record_s: float | None = Field(None, gt=0.0, le=MAX_RECORD_S)
 
     @model_validator(mode="after")
     def _one_length(self) -> RateStep:
@@ -166,6 +235,7 @@ class RateStep(_Step):
             raise ValueError("`revolutions` needs a non-zero `rate_dps`; use `record_s` at 0 °/s")
         if self.revolutions is None and self.record_s is None:
             raise ValueError("give `revolutions` or `record_s`")
+        check_record_length(self.revolutions, self.record_s, self.rate_dps)
         return self
 
 
@@ -173,20 +243,20 @@ class SoakStep(_Step):
     """Set the chamber temperature and wait."""
 
     kind: Literal["soak"]
-    temperature_degc: float
-    duration_s: float = Field(gt=0.0)
-    ramp_degc_per_min: float | None = Field(None, gt=0.0)
+    temperature_degc: float = Field(ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC)
+    duration_s: float = Field(gt=0.0, le=MAX_WAIT_S)
+    ramp_degc_per_min: float | None = Field(None, gt=0.0, le=MAX_RAMP_DEGC_PER_MIN)
 
 
 class CentrifugeStep(_Step):
     """Run the centrifuge at a rate (or position its arm at rest), settle, record."""
 
     kind: Literal["centrifuge"]
-    rate_dps: float = 0.0
-    arm_position_deg: float | None = None
-    settle_s: float = Field(10.0, ge=0.0)
-    revolutions: int | None = Field(None, ge=1)
-    record_s: float | None = Field(None, gt=0.0)
+    rate_dps: float = Field(0.0, ge=-MAX_CENTRIFUGE_RATE_DPS, le=MAX_CENTRIFUGE_RATE_DPS)
+    arm_position_deg: _ANGLE | None = None
+    settle_s: float = Field(10.0, ge=0.0, le=MAX_SETTLE_S)
+    revolutions: int | None = Field(None, ge=1, le=MAX_REVOLUTIONS)
+    record_s: float | None = Field(None, gt=0.0, le=MAX_RECORD_S)
 
     @model_validator(mode="after")
     def _one_length(self) -> CentrifugeStep:
@@ -194,6 +264,7 @@ class CentrifugeStep(_Step):
             raise ValueError("`revolutions` needs a non-zero `rate_dps`; use `record_s` at rest")
         if self.revolutions is None and self.record_s is None:
             raise ValueError("give `revolutions` or `record_s`")
+        check_record_length(self.revolutions, self.record_s, self.rate_dps)
         return self
 
 
@@ -203,6 +274,29 @@ Step = Annotated[
 ]
 
 
+def check_record_length(revolutions: int | None, record_s: float | None, rate_dps: float
+                        ) -> None:
+    """Refuse a record of whole revolutions longer than :data:`MAX_RECORD_S` (a slow rate)."""
+    if revolutions is not None and rate_dps != 0.0:
+        length = revolutions * 360.0 / abs(rate_dps)
+        if length > MAX_RECORD_S:
+            raise ValueError(f"{revolutions} revolution(s) at {rate_dps:g} °/s take "
+                             f"{length:.4g} s; a record may last at most {MAX_RECORD_S:g} s "
+                             "(7 days)")
+
+
+def step_min_duration_s(step: StaticStep | PositionStep | RateStep | SoakStep
+                        | CentrifugeStep) -> float:
+    """Return the least time a scenario step takes (moves and settling excluded). [s]"""
+    if isinstance(step, StaticStep | SoakStep):
+        return step.duration_s
+    if isinstance(step, PositionStep):
+        return step.settle_s + step.record_s
+    if step.revolutions is not None and step.rate_dps != 0.0:
+        return step.settle_s + step.revolutions * 360.0 / abs(step.rate_dps)
+    return step.settle_s + (step.record_s or 0.0)
+
+
 class TwinEquipment(_Model):
     """The twin station without a step list: site, equipment, fixture and IMUs.
 
@@ -210,13 +304,13 @@ class TwinEquipment(_Model):
     :class:`Scenario` adds the steps, and a test plan can carry one as its ``[twin]`` table.
     """
 
-    seed: int = 0
+    seed: int = Field(0, ge=-(2**63), lt=2**63)
     site: SiteConfig = Field(default_factory=SiteConfig)
     table: TableConfig = Field(default_factory=TableConfig)
     chamber: ChamberConfig = Field(default_factory=ChamberConfig)
     centrifuge: CentrifugeConfig = Field(default_factory=CentrifugeConfig)
     fixture: FixtureConfig = Field(default_factory=FixtureConfig)
-    imus: tuple[ImuConfig, ...] = Field(min_length=1)
+    imus: tuple[ImuConfig, ...] = Field(min_length=1, max_length=MAX_IMUS)
 
     @model_validator(mode="after")
     def _consistent_equipment(self) -> TwinEquipment:
@@ -238,9 +332,9 @@ class TwinEquipment(_Model):
 class Scenario(TwinEquipment):
     """A complete twin scenario: the equipment and the steps to run on it."""
 
-    name: str = Field(min_length=1)
-    description: str = ""
-    steps: tuple[Step, ...] = Field(min_length=1)
+    name: str = Field(min_length=1, max_length=200)
+    description: str = Field("", max_length=2000)
+    steps: tuple[Step, ...] = Field(min_length=1, max_length=MAX_STEPS)
     store_truth_streams: bool = False
     chunk_s: float = Field(10.0, gt=0.0, le=600.0)
 
@@ -260,19 +354,43 @@ class Scenario(TwinEquipment):
                 )
             if isinstance(step, SoakStep) and not self.chamber.enabled:
                 raise ValueError(f"{where}: a soak step needs `chamber.enabled = true`")
+            if isinstance(step, SoakStep) and not (
+                    self.chamber.min_temperature_degc <= step.temperature_degc
+                    <= self.chamber.max_temperature_degc):
+                raise ValueError(
+                    f"{where}: temperature_degc {step.temperature_degc:g} is outside the "
+                    f"chamber's range [{self.chamber.min_temperature_degc:g}, "
+                    f"{self.chamber.max_temperature_degc:g}] °C")
             if isinstance(step, CentrifugeStep) and not self.centrifuge.enabled:
                 raise ValueError(f"{where}: a centrifuge step needs `centrifuge.enabled = true`")
+            if isinstance(step, CentrifugeStep) and \
+                    abs(step.rate_dps) > self.centrifuge.max_rate_dps:
+                raise ValueError(f"{where}: rate_dps {step.rate_dps:g} exceeds "
+                                 f"centrifuge.max_rate_dps {self.centrifuge.max_rate_dps:g}")
+        total = sum(step_min_duration_s(step) for step in self.steps)
+        if total > MAX_TOTAL_S:
+            raise ValueError(f"the steps take at least {total:.6g} s ({total / 86400:.3g} days); "
+                             f"a scenario may last at most {MAX_TOTAL_S:g} s (14 days)")
         return self
 
 
 def format_validation_error(exc: ValidationError, source: str, what: str = "scenario") -> str:
     """Render a pydantic error as one line per problem, naming the field path."""
     lines = [f"invalid {what} {source}:"]
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err["loc"]) or "(top level)"
+    errors = exc.errors()
+    for err in errors:
+        if err["type"] == "too_short" and any(
+                len(e["loc"]) > len(err["loc"]) and e["loc"][:len(err["loc"])] == err["loc"]
+                for e in errors):
+            continue  # pydantic's echo of an invalid item: "at least 1 item … not 0"
+        loc = ".".join(str(p) for p in err["loc"])
         got = err.get("input")
-        got_txt = "" if isinstance(got, dict | list) else f" (got {got!r})"
-        lines.append(f"  {loc}: {err['msg']}{got_txt}")
+        msg = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "value_error":  # a model check: its message names the fields
+            lines.append(f"  {loc + ': ' if loc else ''}{msg}")
+            continue
+        got_txt = "" if isinstance(got, dict | list | tuple) else f" (got {got!r})"
+        lines.append(f"  {loc or '(top level)'}: {msg}{got_txt}")
     return "\n".join(lines)
 
 

@@ -1,0 +1,394 @@
+"""Disk budget: how many bytes the recording of a plan or a scenario will take, before it runs.
+
+Contents
+--------
+:class:`StationFacts`
+    What a station records besides the plan: its IMUs' output rates, the table's axes and
+    feedback rate, a centrifuge, a chamber and its rate; :meth:`StationFacts.of_twin` for a
+    twin station.
+:func:`estimate_recording_bytes`
+    A plan and station facts → bytes (an ``int``), for a station run to compare with its free
+    disk space.
+:func:`estimate_plan_recording`, :func:`estimate_scenario_recording`, :func:`estimate_recording`
+    The same, itemised per stream (:class:`RecordingEstimate`, :class:`StreamEstimate`).
+:func:`check_free_space`
+    Refuse (:class:`~imucalib.errors.LimitExceededError`) an estimate larger than the free space
+    of the filesystem that will hold the file.
+:func:`format_bytes`
+    ``1408433271`` → ``"1.41 GB"`` (decimal units, as disk sizes are quoted).
+
+Model
+-----
+Acquisition is continuous: every stream is written from the first step to the last, through
+warm-ups, soaks, settles and operator checks. The duration is the least one of the steps
+(:func:`~imucalib.plan.schema.plan_min_duration_s`,
+:func:`~imucalib.sim.scenario.step_min_duration_s`: warm-up and static durations, soak
+stability spans, settle plus record times, whole revolutions at the commanded rate) plus
+:data:`MOVE_ALLOWANCE_S` per position, rate or centrifuge step for the move and the settling
+beyond ``settle_s`` (on the twin these took 0.5–2.3 s a step). Stability waits beyond the least
+span and a guard trip's retry of a step are not foreseen.
+
+Each stream holds ``⌊rate · duration⌋ + 1`` rows of the canonical layout
+(:mod:`imucalib.io.streams`: an IMU row is 81 bytes, a two-axis table row 40, a chamber row 24);
+every column is stored in chunks of 65 536 rows, allocated whole, so the last chunk counts in
+full. The steps table and the event log are chunked tables too (one row per step, about three
+events per step), and :data:`METADATA_BYTES` covers the HDF5 metadata, the plan and the truth.
+Against recordings the twin wrote (``docs/station.md``, ``docs/twin.md``) the estimate is 0.98–1.0
+of the file size.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Final
+
+import numpy as np
+
+from imucalib.errors import ConfigurationError, LimitExceededError
+from imucalib.io._schema import (
+    DEFAULT_CHUNK_ROWS,
+    LOG_CHUNK_ROWS,
+    LOG_FIELDS,
+    STEP_FIELDS,
+    STEPS_CHUNK_ROWS,
+    FieldSpec,
+    StreamSpec,
+)
+from imucalib.io.streams import (
+    DEVICE_CENTRIFUGE,
+    DEVICE_TABLE,
+    chamber_stream_spec,
+    imu_stream_spec,
+    imu_truth_stream_spec,
+    motion_stream_spec,
+)
+from imucalib.plan.schema import (
+    CentrifugeStep,
+    Plan,
+    PositionStep,
+    RateStep,
+    SoakStep,
+    plan_min_duration_s,
+)
+
+if TYPE_CHECKING:
+    from imucalib.sim.scenario import Scenario, TwinEquipment
+
+__all__ = [
+    "METADATA_BYTES",
+    "MOVE_ALLOWANCE_S",
+    "RecordingEstimate",
+    "StationFacts",
+    "StreamEstimate",
+    "check_free_space",
+    "estimate_plan_recording",
+    "estimate_recording",
+    "estimate_recording_bytes",
+    "estimate_scenario_recording",
+    "format_bytes",
+]
+
+#: Time allowed per position, rate or centrifuge step for the move and extra settling. [s]
+MOVE_ALLOWANCE_S: Final = 1.0
+#: Allowance for the HDF5 object headers, chunk indexes, metadata, plan text and truth. [B]
+METADATA_BYTES: Final = 512 * 1024
+#: Event-log rows per step (start, end, a note) plus a few per run.
+_EVENTS_PER_STEP: Final = 3
+_EVENTS_PER_RUN: Final = 10
+
+
+@dataclass(frozen=True)
+class StationFacts:
+    """What a station records, besides what the plan says.
+
+    Attributes
+    ----------
+    imu_sample_rates_hz : tuple of float
+        Output data rate of each IMU recorded. [Hz]
+    table_axes : int
+        Axes of the rate table (0: none).
+    centrifuge : bool
+        Whether a centrifuge (one axis) is recorded.
+    feedback_rate_hz : float
+        Rate of the table's and the centrifuge's feedback rows. [Hz]
+    chamber : bool
+        Whether a thermal chamber is recorded.
+    chamber_rate_hz : float
+        Rate of the chamber's rows. [Hz]
+    imu_truth : bool
+        Whether the twin's per-sample truth streams are written too (scenarios only).
+    """
+
+    imu_sample_rates_hz: tuple[float, ...]
+    table_axes: int = 0
+    centrifuge: bool = False
+    feedback_rate_hz: float = 100.0
+    chamber: bool = False
+    chamber_rate_hz: float = 1.0
+    imu_truth: bool = False
+
+    def __post_init__(self) -> None:
+        rates = (*self.imu_sample_rates_hz, self.feedback_rate_hz, self.chamber_rate_hz)
+        if not all(math.isfinite(r) and r > 0 for r in rates):
+            raise ConfigurationError(f"station rates must be finite and > 0; got IMUs "
+                                     f"{list(self.imu_sample_rates_hz)} Hz, feedback "
+                                     f"{self.feedback_rate_hz} Hz, chamber "
+                                     f"{self.chamber_rate_hz} Hz")
+        if self.table_axes < 0:
+            raise ConfigurationError(f"`table_axes` must be ≥ 0; got {self.table_axes}")
+
+    @classmethod
+    def of_twin(cls, twin: TwinEquipment) -> StationFacts:
+        """Return the facts of a twin station (a plan's ``[twin]`` or a scenario)."""
+        from imucalib.models.imu import GRADES
+
+        rates = tuple(imu.sample_rate_hz if imu.sample_rate_hz is not None
+                      else GRADES[imu.grade].sample_rate_hz for imu in twin.imus)
+        axes = {"none": 0, "single-axis": 1, "dual-axis": 2}[twin.table.kind]
+        truth = bool(getattr(twin, "store_truth_streams", False))
+        return cls(imu_sample_rates_hz=rates, table_axes=axes,
+                   centrifuge=twin.centrifuge.enabled,
+                   feedback_rate_hz=twin.table.feedback_rate_hz, chamber=twin.chamber.enabled,
+                   imu_truth=truth)
+
+
+@dataclass(frozen=True)
+class StreamEstimate:
+    """One stream's share of the estimate."""
+
+    name: str
+    rate_hz: float
+    rows: int
+    row_bytes: int
+    bytes: int
+
+
+@dataclass(frozen=True)
+class RecordingEstimate:
+    """The estimated size of a recording, per stream.
+
+    Attributes
+    ----------
+    duration_s : float
+        Recorded span (the least duration of the steps). [s]
+    streams : tuple of StreamEstimate
+        Each stream's rows and bytes.
+    tables_bytes : int
+        Steps table, event log and :data:`METADATA_BYTES`. [B]
+    """
+
+    duration_s: float
+    streams: tuple[StreamEstimate, ...]
+    tables_bytes: int
+
+    @property
+    def total_bytes(self) -> int:
+        """The estimated file size. [B]"""
+        return self.tables_bytes + sum(s.bytes for s in self.streams)
+
+    def describe(self) -> str:
+        """Return one line: the total, the span and the streams."""
+        parts = ", ".join(f"{s.name} {s.rows:,} rows × {s.row_bytes} B at {s.rate_hz:g} Hz"
+                          for s in self.streams)
+        return (f"about {format_bytes(self.total_bytes)} over {self.duration_s:,.0f} s "
+                f"({self.duration_s / 3600:.2f} h): {parts}")
+
+
+def format_bytes(n: float) -> str:
+    """Return a byte count in kB, MB, GB or TB (powers of 1000), three significant digits."""
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if abs(n) >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n:.0f} B"
+
+
+def _row_bytes(spec: StreamSpec) -> int:
+    return sum(np.dtype(c.dtype).itemsize for c in spec.columns.values())
+
+
+def _chunked(rows: int, row_bytes: int, chunk_rows: int) -> int:
+    return math.ceil(rows / chunk_rows) * chunk_rows * row_bytes
+
+
+def _stream(spec: StreamSpec, rate_hz: float, duration_s: float) -> StreamEstimate:
+    rows = math.floor(rate_hz * duration_s) + 1
+    size = _row_bytes(spec)
+    return StreamEstimate(spec.name, rate_hz, rows, size,
+                          _chunked(rows, size, DEFAULT_CHUNK_ROWS))
+
+
+def _table_bytes(fields: Mapping[str, FieldSpec]) -> int:
+    return sum(f.max_bytes if f.kind == "text" else np.dtype(f.kind).itemsize
+               for f in fields.values())
+
+
+def estimate_recording(duration_s: float, n_steps: int, facts: StationFacts
+                       ) -> RecordingEstimate:
+    """Return the estimated recording of `duration_s` of continuous acquisition.
+
+    Parameters
+    ----------
+    duration_s : float
+        Recorded span. [s]
+    n_steps : int
+        Rows of the steps table (one per step attempt).
+    facts : StationFacts
+        What is recorded, at which rates.
+
+    Returns
+    -------
+    RecordingEstimate
+
+    Raises
+    ------
+    ConfigurationError
+        For a negative or non-finite duration or step count.
+    """
+    if not (math.isfinite(duration_s) and duration_s >= 0) or n_steps < 0:
+        raise ConfigurationError(f"`duration_s` must be finite and ≥ 0 and `n_steps` ≥ 0; got "
+                                 f"{duration_s} s and {n_steps}")
+    streams = []
+    for i, rate in enumerate(facts.imu_sample_rates_hz):
+        name = f"IMU-{i + 1:04d}"
+        streams.append(_stream(imu_stream_spec(name), rate, duration_s))
+        if facts.imu_truth:
+            streams.append(_stream(imu_truth_stream_spec(name), rate, duration_s))
+    if facts.table_axes:
+        axes = [f"axis{i}" for i in range(facts.table_axes)]
+        streams.append(_stream(motion_stream_spec(DEVICE_TABLE, "main", axes),
+                               facts.feedback_rate_hz, duration_s))
+    if facts.centrifuge:
+        streams.append(_stream(motion_stream_spec(DEVICE_CENTRIFUGE, "main", ["spin"]),
+                               facts.feedback_rate_hz, duration_s))
+    if facts.chamber:
+        streams.append(_stream(chamber_stream_spec("main"), facts.chamber_rate_hz, duration_s))
+    events = _EVENTS_PER_STEP * n_steps + _EVENTS_PER_RUN
+    tables = (_chunked(max(n_steps, 1), _table_bytes(STEP_FIELDS), STEPS_CHUNK_ROWS)
+              + _chunked(events, _table_bytes(LOG_FIELDS), LOG_CHUNK_ROWS) + METADATA_BYTES)
+    return RecordingEstimate(float(duration_s), tuple(streams), tables)
+
+
+def _facts_from_plan(plan: Plan) -> StationFacts:
+    """Facts a plan without ``[twin]`` implies: one IMU at its least acquisition rate."""
+    axes = max((len(s.angles_deg) for s in plan.steps if isinstance(s, PositionStep)),
+               default=0)
+    if axes == 0 and any(isinstance(s, RateStep) for s in plan.steps):
+        axes = 1 + max(s.axis for s in plan.steps if isinstance(s, RateStep))
+    return StationFacts(
+        imu_sample_rates_hz=(plan.equipment.acquisition_rate_min_hz,), table_axes=axes,
+        centrifuge=any(isinstance(s, CentrifugeStep) for s in plan.steps),
+        chamber=any(isinstance(s, SoakStep) for s in plan.steps))
+
+
+def estimate_plan_recording(plan: Plan, facts: StationFacts | None = None
+                            ) -> RecordingEstimate:
+    """Return the estimated recording of a plan's run.
+
+    Parameters
+    ----------
+    plan : Plan
+        The plan.
+    facts : StationFacts, optional
+        The station's; by default those of the plan's ``[twin]``, or, without one, a single IMU
+        at ``equipment.acquisition_rate_min_hz`` with the devices the steps need.
+    """
+    if facts is None:
+        facts = (StationFacts.of_twin(plan.twin) if plan.twin is not None
+                 else _facts_from_plan(plan))
+    moves = sum(isinstance(s, PositionStep | RateStep | CentrifugeStep) for s in plan.steps)
+    return estimate_recording(plan_min_duration_s(plan) + MOVE_ALLOWANCE_S * moves,
+                              len(plan.steps), facts)
+
+
+def estimate_recording_bytes(plan: Plan, *, imu_sample_rate_hz: float | Sequence[float],
+                             n_imus: int = 1, table_axes: int = 0, centrifuge: bool = False,
+                             feedback_rate_hz: float = 100.0, chamber: bool = False,
+                             chamber_rate_hz: float = 1.0) -> int:
+    """Return the bytes a plan's recording on a station will take (module docstring).
+
+    Parameters
+    ----------
+    plan : Plan
+        The plan to run.
+    imu_sample_rate_hz : float or sequence of float
+        The IMUs' output data rate, one for all `n_imus`, or one per IMU. [Hz]
+    n_imus : int
+        IMUs recorded (ignored when `imu_sample_rate_hz` is a sequence).
+    table_axes : int
+        Axes of the rate table (0: none).
+    centrifuge : bool
+        Whether a centrifuge is recorded.
+    feedback_rate_hz : float
+        Table and centrifuge feedback rate. [Hz]
+    chamber : bool
+        Whether a chamber is recorded.
+    chamber_rate_hz : float
+        Chamber reading rate. [Hz]
+
+    Returns
+    -------
+    int
+        The estimated file size. [B]
+    """
+    rates = (tuple(float(r) for r in imu_sample_rate_hz)
+             if isinstance(imu_sample_rate_hz, Sequence)
+             else (float(imu_sample_rate_hz),) * n_imus)
+    facts = StationFacts(imu_sample_rates_hz=rates, table_axes=table_axes,
+                         centrifuge=centrifuge, feedback_rate_hz=feedback_rate_hz,
+                         chamber=chamber, chamber_rate_hz=chamber_rate_hz)
+    return estimate_plan_recording(plan, facts).total_bytes
+
+
+def estimate_scenario_recording(scenario: Scenario) -> RecordingEstimate:
+    """Return the estimated recording ``imucalib simulate`` writes for `scenario`."""
+    from imucalib.sim.scenario import CentrifugeStep as Spin
+    from imucalib.sim.scenario import PositionStep as Position
+    from imucalib.sim.scenario import RateStep as Rate
+    from imucalib.sim.scenario import step_min_duration_s
+
+    moves = sum(isinstance(s, Position | Rate | Spin) for s in scenario.steps)
+    duration = (sum(step_min_duration_s(s) for s in scenario.steps)
+                + MOVE_ALLOWANCE_S * moves)
+    return estimate_recording(duration, len(scenario.steps), StationFacts.of_twin(scenario))
+
+
+def check_free_space(estimate_bytes: int, path: str | os.PathLike[str], *,
+                     replaced_bytes: int = 0, what: str = "the recording") -> int:
+    """Refuse a recording larger than the free space where `path` will be written.
+
+    Parameters
+    ----------
+    estimate_bytes : int
+        The estimated size. [B]
+    path : str or Path
+        The file to write (its nearest existing folder is measured).
+    replaced_bytes : int
+        Bytes freed before writing (an existing file that is overwritten). [B]
+    what : str
+        What is written, for the message.
+
+    Returns
+    -------
+    int
+        The free space counted. [B]
+
+    Raises
+    ------
+    LimitExceededError
+        If `estimate_bytes` exceeds the free space; the message names both.
+    """
+    folder = Path(path).absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    free = shutil.disk_usage(folder).free + max(replaced_bytes, 0)
+    if estimate_bytes > free:
+        raise LimitExceededError(
+            f"{what} needs about {format_bytes(estimate_bytes)} but {folder} has only "
+            f"{format_bytes(free)} free; free some space, write elsewhere (--out) or shorten "
+            "the steps")
+    return free
