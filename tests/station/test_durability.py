@@ -259,7 +259,12 @@ def test_disk_guard_stops_the_equipment_safely(tmp_path):
     plan = tiny_plan()
     station = SimStation(plan.twin)
     path = tmp_path / "g.h5"
-    options = RunOptions(tick_s=2.0, min_free_bytes=10 << 40)  # 10 TiB: trips at the first tick
+    options = RunOptions(tick_s=2.0)
+
+    def disk_fills_up() -> None:  # as seen by the guard: 10 TiB must stay free from t = 20 s
+        options.min_free_bytes = 10 << 40
+
+    station.at(20.0, disk_fills_up)
     with pytest.raises(StorageFullError, match=r"disk nearly full: .* left for .*g\.h5 \(the run "
                        r"stops below 10995 GB\); the equipment was stopped safely"):
         run_plan(plan, station, path, options=options)
@@ -273,7 +278,7 @@ def _can_mount_tmpfs(folder: Path) -> bool:
     if os.geteuid() != 0 or shutil.which("mount") is None:
         return False
     folder.mkdir()
-    ok = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=32m", "tmpfs", str(folder)],
+    ok = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64m", "tmpfs", str(folder)],
                         capture_output=True).returncode == 0
     return ok
 
@@ -289,7 +294,7 @@ def test_a_small_tmpfs_filling_up_mid_run(reference, tmp_path):
         station = SimStation(plan.twin)
         filler = disk / "filler"
 
-        def fill() -> None:  # another program takes all but 12 MB of the 32 MB disk
+        def fill() -> None:  # another program takes all but 12 MB of the 64 MB disk
             free = shutil.disk_usage(disk).free
             filler.write_bytes(b"\0" * max(free - (12 << 20), 0))
 
@@ -312,3 +317,15 @@ def test_a_small_tmpfs_filling_up_mid_run(reference, tmp_path):
     got, ref = window_data(tmp_path / "t.h5"), window_data(ref_path)
     for k in done & set(ref):
         np.testing.assert_array_equal(got[k][1], ref[k][1])
+
+
+def test_a_run_that_would_not_fit_is_refused_before_anything_moves(tmp_path):
+    plan = tiny_plan()
+    station = SimStation(plan.twin)
+    free = shutil.disk_usage(tmp_path).free
+    with pytest.raises(StorageFullError, match=r"not enough room for the run: its recording "
+                       r"needs about .* MB and .* must stay free, but .* has .* \(free space, or "
+                       r"what the file-size limit leaves\); free some space or write elsewhere"):
+        run_plan(plan, station, tmp_path / "x.h5", options=RunOptions(min_free_bytes=free))
+    assert not (tmp_path / "x.h5").exists()
+    assert station.table.status().modes == ("off", "off")  # nothing moved

@@ -83,6 +83,7 @@ __all__ = [
     "RunStatus",
     "RunSummary",
     "check_plan_against_station",
+    "check_room_for_run",
     "find_resume_point",
     "resume_run",
     "run_plan",
@@ -163,6 +164,38 @@ def _identities(station: Station) -> list[ImuIdentity]:
     return out
 
 
+def check_room_for_run(plan: Plan, station: Station, identities: list[ImuIdentity],
+                       path: str | Path, min_free_bytes: int) -> None:
+    """Refuse, before anything moves, a run whose Recording would not fit where it is written.
+
+    The plan's estimated file size (:func:`imucalib.plan.budget.estimate_plan_recording`, with
+    the station's IMUs and devices) plus `min_free_bytes` must fit in the room left
+    (:func:`imucalib.io.storage.room_bytes`: free space and the file-size limit).
+
+    Raises
+    ------
+    StorageFullError
+        Naming the estimate, the reserve and the room.
+    """
+    from imucalib.io.storage import format_bytes, room_bytes
+    from imucalib.plan.budget import StationFacts, estimate_plan_recording
+
+    rates = tuple(i.sample_rate_hz if math.isfinite(i.sample_rate_hz) and i.sample_rate_hz > 0
+                  else 1000.0 for i in identities)
+    facts = StationFacts(imu_sample_rates_hz=rates or (1000.0,),
+                         table_axes=len(station.table.axis_names) if station.table else 0,
+                         centrifuge=station.centrifuge is not None,
+                         chamber=station.chamber is not None)
+    need = estimate_plan_recording(plan, facts).total_bytes
+    room = room_bytes(path)
+    if need + min_free_bytes > room:
+        raise StorageFullError(
+            f"not enough room for the run: its recording needs about {format_bytes(need)} and "
+            f"{format_bytes(min_free_bytes)} must stay free, but {Path(path).parent} has "
+            f"{format_bytes(room)} (free space, or what the file-size limit leaves); free some "
+            "space or write elsewhere (--out)")
+
+
 def _connect(station: Station, plan: Plan) -> list[ImuIdentity]:
     for dev in (station.table, station.centrifuge):
         if dev is not None:
@@ -239,6 +272,11 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
     if Path(path).exists() and not overwrite:
         raise RecordingError(f"{path} exists; pass overwrite=True to replace it")
     identities = _connect(station, plan)
+    try:
+        check_room_for_run(plan, station, identities, path, opt.min_free_bytes)
+    except StorageFullError:
+        _disconnect(station)
+        raise
     meta: dict[str, str | int | float | bool] = {
         "plan_toml": plan_to_toml(plan), "plan_hash": plan_hash(plan),
         "station_json": json.dumps(station.describe()),
@@ -377,6 +415,12 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
     station = make_station(point.plan, point.last_time_s + 1.0)
     check_plan_against_station(point.plan, station)
     identities = _connect(station, point.plan)
+    rest = point.plan.model_copy(update={"steps": point.plan.steps[point.first_step:]})
+    try:
+        check_room_for_run(rest, station, identities, p, opt.min_free_bytes)
+    except StorageFullError:
+        _disconnect(station)
+        raise
     with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s) as writer:
         for index in point.interrupted:
             writer.update_step(index, status="aborted",
