@@ -7,6 +7,10 @@ Contents
 :mod:`imucalib.plan.io`
     :func:`load_plan`, :func:`parse_plan`, :func:`plan_to_toml`, :func:`write_plan`,
     :func:`plan_hash`, :func:`plan_json_schema`, :func:`describe_plan`.
+:mod:`imucalib.plan.budget`
+    The size of a plan's (or a scenario's) recording before it runs,
+    :func:`~imucalib.plan.budget.estimate_recording_bytes`, and the free-space check
+    (imported on its own: it needs the Recording layouts).
 """
 
 from __future__ import annotations

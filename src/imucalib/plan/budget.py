@@ -20,13 +20,25 @@ Contents
 Model
 -----
 Acquisition is continuous: every stream is written from the first step to the last, through
-warm-ups, soaks, settles and operator checks. The duration is the least one of the steps
-(:func:`~imucalib.plan.schema.plan_min_duration_s`,
-:func:`~imucalib.sim.scenario.step_min_duration_s`: warm-up and static durations, soak
-stability spans, settle plus record times, whole revolutions at the commanded rate) plus
-:data:`MOVE_ALLOWANCE_S` per position, rate or centrifuge step for the move and the settling
-beyond ``settle_s`` (on the twin these took 0.5–2.3 s a step). Stability waits beyond the least
-span and a guard trip's retry of a step are not foreseen.
+warm-ups, soaks, settles and operator checks, so the size follows the run's duration
+(:func:`plan_run_duration_s`), step by step:
+
+- static and warm-up: their duration (a warm-up at least one drift window, ``window_s``: the
+  runner compares the means of two windows);
+- position, rate, centrifuge: the settle phase, ``settle_s`` counted from the command but at
+  least :data:`MIN_SETTLE_PHASE_S` (the move and the settling check), then the record
+  (``record_s`` or whole revolutions at the commanded rate), plus :data:`MOVE_ALLOWANCE_S`
+  (acquisition ticks, the end of a revolution);
+- soak: the chamber's ramp to the new setpoint, then the IMU's first-order approach to it
+  until its temperature span over ``stable_for_s`` is within ``imu_band_degc`` — for a step ΔT
+  and a thermal time constant τ that is t = τ·ln(ΔT·(1 − e^(−W/τ)) / band) — then
+  ``stable_for_s`` W; never beyond ``timeout_s``;
+- operator checks: nothing.
+
+A scenario (``imucalib simulate``) runs by its own steps' durations
+(:func:`~imucalib.sim.scenario.step_min_duration_s`: settle after the move, soaks of a fixed
+``duration_s``) plus :data:`MOVE_ALLOWANCE_S` per motion step. A guard trip's retry of a step is
+not foreseen.
 
 Each stream holds ``⌊rate · duration⌋ + 1`` rows of the canonical layout
 (:mod:`imucalib.io.streams`: an IMU row is 81 bytes, a two-axis table row 40, a chamber row 24);
@@ -73,7 +85,8 @@ from imucalib.plan.schema import (
     PositionStep,
     RateStep,
     SoakStep,
-    plan_min_duration_s,
+    WarmUpStep,
+    step_min_duration_s,
 )
 
 if TYPE_CHECKING:
@@ -81,6 +94,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "METADATA_BYTES",
+    "MIN_SETTLE_PHASE_S",
     "MOVE_ALLOWANCE_S",
     "RecordingEstimate",
     "StationFacts",
@@ -91,10 +105,14 @@ __all__ = [
     "estimate_recording_bytes",
     "estimate_scenario_recording",
     "format_bytes",
+    "plan_run_duration_s",
 ]
 
-#: Time allowed per position, rate or centrifuge step for the move and extra settling. [s]
+#: Time allowed per position, rate or centrifuge step for ticks and the move's end. [s]
 MOVE_ALLOWANCE_S: Final = 1.0
+#: Least settle phase of a plan's motion step: a move and the settling check take about this
+#: long on the twin's tables however short ``settle_s`` is (8–10 s for 180° at 2 s). [s]
+MIN_SETTLE_PHASE_S: Final = 10.0
 #: Allowance for the HDF5 object headers, chunk indexes, metadata, plan text and truth. [B]
 METADATA_BYTES: Final = 512 * 1024
 #: Event-log rows per step (start, end, a note) plus a few per run.
@@ -122,6 +140,12 @@ class StationFacts:
         Rate of the chamber's rows. [Hz]
     imu_truth : bool
         Whether the twin's per-sample truth streams are written too (scenarios only).
+    initial_temperature_degc : float
+        Chamber temperature before the first soak. [°C]
+    chamber_ramp_degc_per_min : float
+        The chamber's fastest setpoint ramp. [°C/min]
+    imu_thermal_time_constant_s : float
+        Longest thermal time constant of the IMUs (their approach to the chamber air). [s]
     """
 
     imu_sample_rates_hz: tuple[float, ...]
@@ -131,14 +155,19 @@ class StationFacts:
     chamber: bool = False
     chamber_rate_hz: float = 1.0
     imu_truth: bool = False
+    initial_temperature_degc: float = 20.0
+    chamber_ramp_degc_per_min: float = 5.0
+    imu_thermal_time_constant_s: float = 600.0
 
     def __post_init__(self) -> None:
-        rates = (*self.imu_sample_rates_hz, self.feedback_rate_hz, self.chamber_rate_hz)
+        rates = (*self.imu_sample_rates_hz, self.feedback_rate_hz, self.chamber_rate_hz,
+                 self.chamber_ramp_degc_per_min, self.imu_thermal_time_constant_s)
         if not all(math.isfinite(r) and r > 0 for r in rates):
-            raise ConfigurationError(f"station rates must be finite and > 0; got IMUs "
-                                     f"{list(self.imu_sample_rates_hz)} Hz, feedback "
-                                     f"{self.feedback_rate_hz} Hz, chamber "
-                                     f"{self.chamber_rate_hz} Hz")
+            raise ConfigurationError(
+                f"station rates and time constants must be finite and > 0; got IMUs "
+                f"{list(self.imu_sample_rates_hz)} Hz, feedback {self.feedback_rate_hz} Hz, "
+                f"chamber {self.chamber_rate_hz} Hz and {self.chamber_ramp_degc_per_min} °C/min, "
+                f"IMU thermal time constant {self.imu_thermal_time_constant_s} s")
         if self.table_axes < 0:
             raise ConfigurationError(f"`table_axes` must be ≥ 0; got {self.table_axes}")
 
@@ -154,7 +183,11 @@ class StationFacts:
         return cls(imu_sample_rates_hz=rates, table_axes=axes,
                    centrifuge=twin.centrifuge.enabled,
                    feedback_rate_hz=twin.table.feedback_rate_hz, chamber=twin.chamber.enabled,
-                   imu_truth=truth)
+                   imu_truth=truth,
+                   initial_temperature_degc=twin.chamber.initial_temperature_degc,
+                   chamber_ramp_degc_per_min=twin.chamber.max_ramp_degc_per_min,
+                   imu_thermal_time_constant_s=max(i.thermal_time_constant_s
+                                                   for i in twin.imus))
 
 
 @dataclass(frozen=True)
@@ -285,6 +318,36 @@ def _facts_from_plan(plan: Plan) -> StationFacts:
         chamber=any(isinstance(s, SoakStep) for s in plan.steps))
 
 
+def _soak_s(step: SoakStep, from_degc: float, facts: StationFacts) -> float:
+    """Ramp, IMU approach and stable span of a soak (module docstring), within its time-out."""
+    ramp = facts.chamber_ramp_degc_per_min
+    if step.ramp_degc_per_min is not None:
+        ramp = min(ramp, step.ramp_degc_per_min)
+    delta = abs(step.temperature_degc - from_degc)
+    tau, span = facts.imu_thermal_time_constant_s, step.stable_for_s
+    ratio = delta * -math.expm1(-span / tau) / step.imu_band_degc
+    approach = tau * math.log(ratio) if ratio > 1.0 else 0.0
+    return min(60.0 * delta / ramp + approach + span, step.timeout_s)
+
+
+def plan_run_duration_s(plan: Plan, facts: StationFacts) -> float:
+    """Return the expected duration of a plan's run on a station (module docstring). [s]"""
+    total = 0.0
+    chamber_degc = facts.initial_temperature_degc
+    for step in plan.steps:
+        if isinstance(step, SoakStep):
+            total += _soak_s(step, chamber_degc, facts)
+            chamber_degc = step.temperature_degc
+        elif isinstance(step, WarmUpStep):
+            total += max(step.duration_s, step.window_s)
+        elif isinstance(step, PositionStep | RateStep | CentrifugeStep):
+            record = step_min_duration_s(step) - step.settle_s
+            total += max(step.settle_s, MIN_SETTLE_PHASE_S) + record + MOVE_ALLOWANCE_S
+        else:
+            total += step_min_duration_s(step)
+    return total
+
+
 def estimate_plan_recording(plan: Plan, facts: StationFacts | None = None
                             ) -> RecordingEstimate:
     """Return the estimated recording of a plan's run.
@@ -300,9 +363,7 @@ def estimate_plan_recording(plan: Plan, facts: StationFacts | None = None
     if facts is None:
         facts = (StationFacts.of_twin(plan.twin) if plan.twin is not None
                  else _facts_from_plan(plan))
-    moves = sum(isinstance(s, PositionStep | RateStep | CentrifugeStep) for s in plan.steps)
-    return estimate_recording(plan_min_duration_s(plan) + MOVE_ALLOWANCE_S * moves,
-                              len(plan.steps), facts)
+    return estimate_recording(plan_run_duration_s(plan, facts), len(plan.steps), facts)
 
 
 def estimate_recording_bytes(plan: Plan, *, imu_sample_rate_hz: float | Sequence[float],

@@ -337,7 +337,7 @@ class Plan(_Model):
         total = plan_min_duration_s(self)
         if total > MAX_TOTAL_S:
             raise ValueError(f"the steps take at least {total:.6g} s ({total / 86400:.3g} days); "
-                             f"a plan may last at most {MAX_TOTAL_S:g} s (14 days)")
+                             f"a plan may last at most {MAX_TOTAL_S:.0f} s (14 days)")
         return self
 
     def step_label(self, index: int) -> str:
