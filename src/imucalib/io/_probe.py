@@ -15,6 +15,8 @@ HDF5 at that moment (the child would otherwise inherit a lock it can never take)
 
 from __future__ import annotations
 
+import faulthandler
+import gc
 import os
 import pickle
 import select
@@ -49,6 +51,8 @@ def _send(fd: int, kind: bytes, payload: bytes) -> None:
 def _child(fd: int, work: Callable[[Callable[[str], None]], Any]) -> None:
     """Body of the child: never returns."""
     code = 0
+    faulthandler.disable()  # a crash is reported by the parent, not dumped here
+    gc.disable()  # free none of the parent's objects here (an HDF5 file could be flushed)
     try:
         try:
             result: tuple[Any, ...] = ("ok", work(lambda what: _send(fd, b"P", what.encode())))

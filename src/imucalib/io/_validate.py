@@ -96,6 +96,7 @@ H5PY_ERRORS: Final = (OSError, LookupError, RuntimeError, ValueError, TypeError)
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$")
 _COLUMN_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,62}$")
 _H5PY_DIR = os.path.dirname(h5py.__file__)
+_MAX_TEXT = "1e9"  # MAX_TIME_S in messages
 _MAX_DEPTH = 8  # deeper than any Recording (truth/streams/<device>/<unit>/<column> is 5)
 
 
@@ -231,8 +232,28 @@ def check_root(p: Path, f: h5py.File) -> int:
     return raw
 
 
-def _group(p: Path, f: h5py.File, name: str) -> h5py.Group:
-    obj = h5call(p, f"/{name}", f.get, name)
+_Links = dict[str, set[str]]  # the link names of each group listed so far, by path
+
+
+def _child(p: Path, group: h5py.Group, name: str, path: str, links: _Links
+           ) -> h5py.HLObject | None:
+    """``group[name]``, or None if `group` has no such link (a damaged one raises instead).
+
+    ``group.get`` would take an unreadable link table for a missing name; listing the links
+    first tells the two apart. Each group is listed once (`links` remembers).
+    """
+    parent = path.rsplit("/", 1)[0] if "/" in path else ""
+    names = links.get(parent)
+    if names is None:
+        names = links[parent] = h5call(p, f"/{parent}" if parent else "the root group", set,
+                                       group)
+    if name not in names:
+        return None
+    return h5call(p, f"/{path}", group.__getitem__, name)
+
+
+def _group(p: Path, f: h5py.File, name: str, links: _Links) -> h5py.Group:
+    obj = _child(p, f, name, name, links)
     if obj is None:
         raise damaged(p, f"the group /{name} is missing; expected the groups /streams, /steps, "
                          "/log and /commit of a recording")
@@ -241,8 +262,8 @@ def _group(p: Path, f: h5py.File, name: str) -> h5py.Group:
     return obj
 
 
-def _commit(p: Path, f: h5py.File) -> tuple[tuple[str, ...], dict[str, int]]:
-    group = _group(p, f, COMMIT_GROUP)
+def _commit(p: Path, f: h5py.File, links: _Links) -> tuple[tuple[str, ...], dict[str, int]]:
+    group = _group(p, f, COMMIT_GROUP, links)
     attrs = h5call(p, "the attributes of /commit", _some_attrs, group, ("entries_json",))
     if "entries_json" not in attrs:
         raise damaged(p, "/commit has no `entries_json` attribute; expected the JSON list of "
@@ -253,7 +274,7 @@ def _commit(p: Path, f: h5py.File) -> tuple[tuple[str, ...], dict[str, int]]:
             or len(set(entries)) != len(entries)):
         raise damaged(p, f"/commit `entries_json` is {_short(str(entries))}; expected a JSON "
                          "list of distinct entry names")
-    ds = h5call(p, "/commit/rows", group.get, "rows")
+    ds = _child(p, group, "rows", "commit/rows", links)
     if not isinstance(ds, h5py.Dataset):
         raise damaged(p, "/commit/rows is missing; expected one row count per entry")
     if ds.ndim != 1 or ds.dtype.kind not in "iu":
@@ -358,11 +379,11 @@ def _stream(p: Path, f: h5py.File, path: str, committed: int) -> StreamLayout:
 
 # ----------------------------------------------------------------------------- tables
 def _table(p: Path, f: h5py.File, name: str, fields: Mapping[str, FieldSpec],
-           committed: int) -> dict[str, NDArray[Any]]:
-    group = _group(p, f, name)
+           committed: int, links: _Links) -> dict[str, NDArray[Any]]:
+    group = _group(p, f, name, links)
     out: dict[str, NDArray[Any]] = {}
     for field, spec in fields.items():
-        ds = h5call(p, f"/{name}/{field}", group.get, field)
+        ds = _child(p, group, field, f"{name}/{field}", links)
         if ds is None:
             raise damaged(p, f"the field /{name}/{field} is missing; expected the fields "
                              f"{list(fields)}")
@@ -377,7 +398,8 @@ def _table(p: Path, f: h5py.File, name: str, fields: Mapping[str, FieldSpec],
         if ds.shape[0] < committed:
             raise damaged(p, f"/{name}/{field} holds {ds.shape[0]} rows but {committed} are "
                              f"committed; expected every field of /{name} to hold them")
-        out[field] = h5call(p, f"/{name}/{field}", ds.__getitem__, slice(0, committed))
+        rows = () if ds.shape[0] == committed else slice(0, committed)  # () reads faster
+        out[field] = h5call(p, f"/{name}/{field}", ds.__getitem__, rows)
     return out
 
 
@@ -410,8 +432,8 @@ def _check_log(p: Path, t: dict[str, NDArray[Any]]) -> None:
                              f"of {list(LOG_LEVELS)}")
 
 
-def _check_truth(p: Path, f: h5py.File) -> None:
-    group = h5call(p, "/truth", f.get, TRUTH_GROUP)
+def _check_truth(p: Path, f: h5py.File, links: _Links) -> None:
+    group = _child(p, f, TRUTH_GROUP, TRUTH_GROUP, links)
     if group is None:
         return
     if not isinstance(group, h5py.Group):
@@ -419,10 +441,10 @@ def _check_truth(p: Path, f: h5py.File) -> None:
     for key, value in h5call(p, "the attributes of /truth", _attrs, group).items():
         if key.endswith("_json"):
             _json(p, value, f"/truth `{key}`", "JSON text")
-    arrays = h5call(p, "/truth/arrays", group.get, "arrays")
+    arrays = _child(p, group, "arrays", "truth/arrays", links)
     if arrays is not None:
         for key in h5call(p, "/truth/arrays", lambda: list(arrays)):
-            ds = h5call(p, f"/truth/arrays/{key}", arrays.get, key)
+            ds = _child(p, arrays, key, f"truth/arrays/{key}", links)
             if not isinstance(ds, h5py.Dataset):
                 raise damaged(p, f"/truth/arrays/{key} is not a dataset; expected an array")
 
@@ -439,11 +461,13 @@ def check_layout(p: Path, f: h5py.File) -> Layout:
         The first problem found, naming the object, what it holds and what was expected.
     """
     version = check_root(p, f)
+    links: _Links = {}
     for name in REQUIRED_GROUPS:
-        _group(p, f, name)
-    entries, committed = _commit(p, f)
+        _group(p, f, name, links)
+    entries, committed = _commit(p, f, links)
     paths = _stream_paths(p, f, STREAMS_GROUP)
-    if h5call(p, "/truth/streams", lambda: TRUTH_STREAMS_GROUP in f):
+    truth = _child(p, f, TRUTH_GROUP, TRUTH_GROUP, links)
+    if isinstance(truth, h5py.Group) and _child(p, truth, "streams", TRUTH_STREAMS_GROUP, links):
         paths += _stream_paths(p, f, TRUTH_STREAMS_GROUP)
     known = {*paths, STEPS_GROUP, LOG_GROUP}
     for entry in entries:
@@ -455,9 +479,9 @@ def check_layout(p: Path, f: h5py.File) -> Layout:
             raise damaged(p, f"/commit has no count for {entry}; expected one for every "
                              "stream, steps and log")
     streams = tuple(_stream(p, f, path, committed[path]) for path in paths)
-    _check_steps(p, _table(p, f, STEPS_GROUP, STEP_FIELDS, committed[STEPS_GROUP]))
-    _check_log(p, _table(p, f, LOG_GROUP, LOG_FIELDS, committed[LOG_GROUP]))
-    _check_truth(p, f)
+    _check_steps(p, _table(p, f, STEPS_GROUP, STEP_FIELDS, committed[STEPS_GROUP], links))
+    _check_log(p, _table(p, f, LOG_GROUP, LOG_FIELDS, committed[LOG_GROUP], links))
+    _check_truth(p, f, links)
     return Layout(version, entries, committed, streams)
 
 
@@ -469,7 +493,7 @@ def _describe_time(t: NDArray[np.float64], k: int, prev: float) -> str:
     if v < 0:
         return f"is {v!r}, negative"
     if v > MAX_TIME_S:
-        return f"is {v!r}, after {MAX_TIME_S:g} s"
+        return f"is {v!r}, later than {_MAX_TEXT} s"
     return f"is {v!r}, before the previous time stamp {prev!r}"
 
 
@@ -507,8 +531,8 @@ def check_time_bases(p: Path, f: h5py.File, streams: tuple[StreamLayout, ...]) -
         bad = h5call(p, f"{s.label} time_s", first_bad_time, ds, s.committed)
         if bad is not None:
             row, what = bad
-            raise damaged(p, f"{s.label} time_s row {row} {what}; expected finite times in "
-                             f"0…{MAX_TIME_S:g} s that never decrease",
+            raise damaged(p, f"{s.label} time_s row {row} {what}; expected finite times from 0 "
+                             f"to {_MAX_TEXT} s that never decrease",
                           f"to copy out the rows before row {row}")
 
 

@@ -87,7 +87,7 @@ class RecordingSummary:
                 f"closing, or is still running. `imucalib run --resume {escape(str(self.path))}` "
                 "finishes a station run (it recovers and closes the file first); `imucalib "
                 f"recover {escape(str(self.path))}` copies what was flushed into a cleanly "
-                "closed file.[/]", highlight=False)
+                "closed file.[/]", highlight=False, soft_wrap=True)
         for key in ("created_utc", "software_version", "scenario_name"):
             if key in self.metadata:
                 console.print(f"  {key}: {self.metadata[key]}")

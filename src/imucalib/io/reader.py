@@ -13,6 +13,13 @@ Contents
 Time windows are half-open: ``t_start_s <= time_s < t_end_s``. They are located by bisection on
 the ``time_s`` dataset (single-element reads, then one block), so only the rows needed are read.
 The format is described in :mod:`imucalib.io.recording`.
+
+Opening validates the file (:mod:`imucalib.io._validate`): the layout, the commit counts, the
+committed rows of the steps and log, and every stream's committed time base. The layout is first
+read in a forked child process with a time limit (:mod:`imucalib.io._probe`), because damaged
+HDF5 metadata can make the HDF5 library hang or crash. Every problem, and every h5py exception
+met later while reading, becomes a :class:`~imucalib.errors.RecordingError` with one line naming
+the file, what was found and what was expected.
 """
 
 from __future__ import annotations

@@ -254,7 +254,7 @@ class _Copier:
                     ag.create_dataset(key, data=value)
         self.dst.require_group(TRUTH_STREAMS_GROUP)
 
-    def streams(self, rec: Recording) -> None:
+    def streams(self) -> None:
         self.dst.require_group(STREAMS_GROUP)
         for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
             group, err = _try(self.src.get, base)
@@ -263,13 +263,16 @@ class _Copier:
                     self.notes.append(f"/{base} unreadable ({err}): no streams copied" if err
                                       else f"/{base} missing in the original: no streams copied")
                 continue
-            try:
-                paths = rec._stream_paths(base)
-            except RecordingCorruptError as exc:
-                self.notes.append(f"/{base} unreadable ({exc}): its streams were not copied")
-                continue
-            for path in paths:
-                self.tables.append(self._stream(path))
+            devices, err = _try(lambda g=group: sorted(g))
+            if devices is None:
+                self.notes.append(f"/{base} unreadable ({err}): no streams copied")
+            for dev in devices or []:
+                units, err = _try(lambda g=group, d=dev: sorted(g[d]))
+                if units is None:
+                    self.notes.append(f"/{base}/{dev} unreadable ({err}): its streams were not "
+                                      "copied")
+                for unit in units or []:
+                    self.tables.append(self._stream(f"{base}/{dev}/{unit}"))
 
     def _columns(self, group: h5py.Group, path: str, attrs: dict[str, Any]
                  ) -> tuple[dict[str, ColumnSpec] | None, str]:
@@ -297,12 +300,17 @@ class _Copier:
     def _stream(self, path: str) -> RecoveredStream:
         group, err = _try(self.src.__getitem__, path)
         attrs, err2 = _try(_raw_attrs, group) if group is not None else (None, err)
-        if group is None or attrs is None:
-            return RecoveredStream(path, 0, 0, f"unreadable ({err or err2}): not copied")
+        if not isinstance(group, h5py.Group) or attrs is None:
+            return RecoveredStream(path, 0, 0, f"unreadable ({err or err2 or 'not a group'}): "
+                                               "not copied")
         cols, note = self._columns(group, path, attrs)
         if cols is None:
             return RecoveredStream(path, 0, 0, f"{note}: not copied")
         notes = [note] if note else []
+        present: list[str] = _try(list, group)[0] or []
+        undeclared = sorted(set(present) - set(cols))
+        if undeclared:
+            notes.append(f"{', '.join(undeclared)} not declared in columns_json: not copied")
         dsets: dict[str, h5py.Dataset] = {}
         for name, spec in cols.items():
             ds, err = _try(lambda c=name: _refresh(group[c]))
@@ -373,7 +381,9 @@ class _Copier:
         """
         group, err = _try(self.src.get, name)
         notes = []
-        if not isinstance(group, h5py.Group):
+        if isinstance(group, h5py.Group):
+            err = _try(list, group)[1]  # a damaged link table fails here, not field by field
+        if not isinstance(group, h5py.Group) or err:
             notes.append(f"unreadable in the original ({err}): written empty" if err
                          else "missing in the original: written empty")
             group = None
@@ -487,7 +497,7 @@ def _copy(rec: Recording, dst: h5py.File) -> _Copier:
     copier = _Copier(rec, dst)
     copier.root()
     copier.truth()
-    copier.streams(rec)
+    copier.streams()
     copier.steps()
     copier.log()
     copier.commit()
