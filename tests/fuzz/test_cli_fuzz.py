@@ -44,6 +44,16 @@ ODD_NUMBERS = st.sampled_from(["nan", "inf", "-inf", "1e308", "-1e308", "0", "-1
                                "\"x\"", "", "9" * 40, "-0.0", "1e9", "true"])
 
 
+def _numbers(doc: object) -> list[float]:
+    """Every number in a JSON document (nested lists and objects)."""
+    if isinstance(doc, bool) or doc is None or isinstance(doc, str):
+        return []
+    if isinstance(doc, int | float):
+        return [float(doc)]
+    items = doc.values() if isinstance(doc, dict) else doc
+    return [v for item in items for v in _numbers(item)]
+
+
 def run_cli(*args: str) -> tuple[int, str, str]:
     """Run :func:`imucalib.cli.main` in this process; return exit code, stdout, stderr."""
     out, err = io.StringIO(), io.StringIO()
@@ -172,9 +182,8 @@ def test_mutated_csv_through_segments_and_apply(result_file, tmp_path, data):
     code, out, err = run_cli("segments", str(path), "--json", str(seg_json))
     check_outcome(code, out, err, f"segments\n{text[:1000]}")
     if code == 0:
-        segs = json.loads(seg_json.read_text(encoding="utf-8"))
-        assert all(math.isfinite(v) for s in segs for v in s.values()
-                   if isinstance(v, float)), segs
+        doc = json.loads(seg_json.read_text(encoding="utf-8"))
+        assert all(math.isfinite(v) for v in _numbers(doc)), doc
     fixed = tmp_path / "fixed.csv"
     fixed.unlink(missing_ok=True)
     code, out, err = run_cli("apply", str(result_file), str(path), "--out", str(fixed))

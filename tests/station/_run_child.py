@@ -6,6 +6,7 @@ Usage: python _run_child.py PLAN.toml OUT.h5 MODE [ARG]
   MODE "close"      SIGKILL itself when the writer starts its final close
   MODE "fsize N T [M]"  at station time T [s] limit the file to N bytes more than it holds
                     (N < 0: fewer), with min_free_bytes M; the run goes on
+  MODE "stall"      run, then wait (for the test's SIGKILL) when the writer starts its final close
   MODE "none"       run to the end
 The exit code is the CLI's convention: 0 done, 1 aborted, 2 an imucalib error (printed).
 """
@@ -16,6 +17,7 @@ import os
 import resource
 import signal
 import sys
+import time
 
 from imucalib.cli import _exit, _printed_error, _unraisable
 from imucalib.errors import CalibrationError
@@ -39,10 +41,13 @@ def main() -> None:
                 os.kill(os.getpid(), signal.SIGKILL)
 
         options.on_status = on_status
-    elif mode[0] == "close":
+    elif mode[0] in ("close", "stall"):
         original = RecordingWriter.close
 
         def close(self):
+            if mode[0] == "stall":
+                while True:
+                    time.sleep(1.0)
             os.kill(os.getpid(), signal.SIGKILL)
             original(self)
 

@@ -180,7 +180,7 @@ def test_kill_right_after_each_step_is_done_then_resume(reference, tmp_path):
 def test_kill_at_a_random_instant_then_resume(reference, tmp_path, seed):
     _plan, plan_file, ref_path = reference
     path = tmp_path / "r.h5"
-    proc = child(plan_file, path, "none")
+    proc = child(plan_file, path, "stall")  # a late kill lands before the close, not after it
     deadline = time.monotonic() + 60
     while not path.exists():  # the imports take about 1.5 s
         assert time.monotonic() < deadline and proc.poll() is None
