@@ -177,7 +177,8 @@ def open_recording(path: str | os.PathLike[str], *, strict: bool = False, probe:
     probe : bool
         Read the file's metadata first in a forked child process that is killed after
         `probe_timeout_s` (damaged HDF5 metadata can make the HDF5 library hang or crash; the
-        probe turns that into :class:`RecordingCorruptError`). It costs about 10-20 ms.
+        probe turns that into :class:`RecordingCorruptError`). It costs about 20 ms
+        (docs/recording-format.md, "Cost of opening").
     probe_timeout_s : float, optional
         Time limit of the probe [s]; default :data:`imucalib.io._probe.PROBE_TIMEOUT_S` (10 s).
 
