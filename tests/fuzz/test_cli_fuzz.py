@@ -5,7 +5,8 @@ exit code 2 with a one-line ``error:`` message: never a traceback, never the ``i
 safety net of :func:`imucalib.cli.main`, never a hang. Recordings are fed to one child process
 that opens them one by one under an alarm, so that a hang inside HDF5 is caught as a death by
 SIGALRM. Example counts are bounded so that the suite stays within its time budget; the
-``IMUCALIB_FUZZ_EXAMPLES`` environment variable multiplies them for a longer campaign.
+``IMUCALIB_FUZZ_EXAMPLES`` environment variable multiplies them for a longer campaign, and
+``IMUCALIB_FUZZ_TALLY=FILE`` appends each outcome (command, exit code) to FILE as a JSON line.
 """
 
 from __future__ import annotations
@@ -71,7 +72,14 @@ def run_cli(*args: str) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
+TALLY = os.environ.get("IMUCALIB_FUZZ_TALLY")  # a file: one JSON line per CLI outcome
+
+
 def check_outcome(code: int, out: str, err: str, what: str) -> None:
+    if TALLY:
+        with open(TALLY, "a", encoding="utf-8") as f:
+            f.write(json.dumps({"what": what.split()[0] if what.split() else what,
+                                "code": code}) + "\n")
     text = out + err
     assert "Traceback" not in text, f"{what}: traceback\n{text}"
     assert "internal error" not in text, f"{what}: an unexpected exception\n{text}"
