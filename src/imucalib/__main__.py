@@ -1,0 +1,5 @@
+"""``python -m imucalib``: the ``imucalib`` command."""
+
+from imucalib.cli import main
+
+main()
