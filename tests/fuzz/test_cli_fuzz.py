@@ -302,6 +302,20 @@ def test_mutated_scenarios_are_refused_or_simulated(tmp_path, data):
     out_file.unlink(missing_ok=True)
     code, out, err = run_cli("simulate", str(path), "--out", str(out_file))
     check_outcome(code, out, err, f"simulate\n{text}")
+    if code == 0:
+        assert_finite_recording(out_file, f"simulate\n{text}")
+
+
+def assert_finite_recording(path: Path, what: str) -> None:
+    """Every floating-point sample of every stream of a written recording is finite."""
+    from imucalib.io import open_recording
+
+    with open_recording(path) as rec:
+        for info in rec.streams:
+            for name, values in rec.read_stream(info.device, info.unit).columns.items():
+                if values.dtype.kind == "f":
+                    assert np.isfinite(values).all(), \
+                        f"{what}: non-finite {info.device}/{info.unit}/{name}"
 
 
 # ------------------------------------------------------------------------------ recordings

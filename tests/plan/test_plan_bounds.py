@@ -74,6 +74,9 @@ DAY = 86400.0
      "steps.0.soak: stable_for_s (7200 s) exceeds timeout_s (3600 s): the soak could never end"),
     ({"steps": step("soak", temperature_degc=20.0, ramp_degc_per_min=1e4)},
      "steps.0.soak.ramp_degc_per_min: Input should be less than or equal to 600 (got 10000.0)"),
+    ({"steps": step("soak", temperature_degc=20.0, ramp_degc_per_min=1e-320)},
+     "steps.0.soak.ramp_degc_per_min: Input should be greater than or equal to 0.01 (got "
+     "1e-320)"),
     ({"steps": step("warm-up", duration_s=1e9)},
      "steps.0.warm-up.duration_s: Input should be less than or equal to 172800 (got "
      "1000000000.0)"),

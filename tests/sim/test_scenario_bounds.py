@@ -77,6 +77,12 @@ def refused(tmp_path, changes: dict[str, Any], message: str) -> None:
     ({"table": {"kind": "none"}, "centrifuge": {"enabled": True, "unbalance_c0_m_s2": 1.0},
       "steps": [{"kind": "centrifuge", "rate_dps": 100.0, "revolutions": 1}]},
      "centrifuge.unbalance_c0_m_s2: Input should be less than or equal to 0.001 (got 1.0)"),
+    ({"imus": [{"name": "IMU-1", "thermal_time_constant_s": 1e-320}]},  # NaN temperatures
+     "imus.0.thermal_time_constant_s: Input should be greater than or equal to 1 (got 1e-320)"),
+    ({"chamber": {"enabled": True, "air_time_constant_s": 0.5}},
+     "chamber.air_time_constant_s: Input should be greater than or equal to 1 (got 0.5)"),
+    ({"chunk_s": 1e-320},  # found by the fuzz suite: a denormal chunk never ends a simulation
+     "chunk_s: Input should be greater than or equal to 0.1 (got 1e-320)"),
     ({"imus": [{"name": f"IMU-{i}"} for i in range(65)], "fixture": {"kind": "array"}},
      "imus: Tuple should have at most 64 items after validation, not 65"),
 ])

@@ -50,6 +50,7 @@ from imucalib.sim.scenario import (
     MAX_TEMPERATURE_DEGC,
     MAX_TOTAL_S,
     MAX_WAIT_S,
+    MIN_RAMP_DEGC_PER_MIN,
     MIN_SAMPLE_RATE_HZ,
     MIN_TEMPERATURE_DEGC,
     TwinEquipment,
@@ -191,7 +192,8 @@ class SoakStep(_Step):
     kind: Literal["soak"]
     temperature_degc: float = Field(ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC,
                                     description="[°C]")
-    ramp_degc_per_min: float | None = Field(None, gt=0.0, le=MAX_RAMP_DEGC_PER_MIN,
+    ramp_degc_per_min: float | None = Field(None, ge=MIN_RAMP_DEGC_PER_MIN,
+                                            le=MAX_RAMP_DEGC_PER_MIN,
                                             description="[°C/min]")
     band_degc: float = Field(0.5, gt=0.0, le=50.0,
                              description="chamber air within ± of the setpoint [°C]")

@@ -56,8 +56,10 @@ __all__ = [
     "MAX_TIME_CONSTANT_S",
     "MAX_TOTAL_S",
     "MAX_WAIT_S",
+    "MIN_RAMP_DEGC_PER_MIN",
     "MIN_SAMPLE_RATE_HZ",
     "MIN_TEMPERATURE_DEGC",
+    "MIN_TIME_CONSTANT_S",
     "CentrifugeConfig",
     "CentrifugeStep",
     "ChamberConfig",
@@ -90,6 +92,9 @@ MAX_WAIT_S = 2 * 86400.0
 MAX_TOTAL_S = 14 * 86400.0
 #: Longest thermal time constant (chamber air, IMU): a day. [s]
 MAX_TIME_CONSTANT_S = 86400.0
+#: Shortest thermal time constant: a second (shorter ones overflow the closed-form chamber model
+#: and no chamber or IMU housing is that fast). [s]
+MIN_TIME_CONSTANT_S = 1.0
 #: Most steps in a plan or scenario (the default P1 plan has 110).
 MAX_STEPS = 10_000
 #: Most IMUs on one fixture.
@@ -110,6 +115,9 @@ MAX_TEMPERATURE_DEGC = 200.0
 #: Fastest chamber ramp: 10 °C/s (thermal-shock chambers move an item between zones in seconds;
 #: the driver tests' fast chamber ramps at 2 °C/s). [°C/min]
 MAX_RAMP_DEGC_PER_MIN = 600.0
+#: Slowest chamber ramp asked for: 0.01 °C/min (a degree in 100 minutes; real controllers
+#: stop at about 0.1). [°C/min]
+MIN_RAMP_DEGC_PER_MIN = 0.01
 #: IMU output data rates accepted. [Hz]
 MIN_SAMPLE_RATE_HZ = 1.0
 MAX_SAMPLE_RATE_HZ = 100_000.0
@@ -150,7 +158,7 @@ class ChamberConfig(_Model):
     min_temperature_degc: float = Field(-55.0, ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC)
     max_temperature_degc: float = Field(125.0, ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC)
     max_ramp_degc_per_min: float = Field(5.0, gt=0.0, le=MAX_RAMP_DEGC_PER_MIN)
-    air_time_constant_s: float = Field(120.0, gt=0.0, le=MAX_TIME_CONSTANT_S)
+    air_time_constant_s: float = Field(120.0, ge=MIN_TIME_CONSTANT_S, le=MAX_TIME_CONSTANT_S)
     stability_noise_degc: float = Field(0.05, ge=0.0, le=5.0)
 
     @model_validator(mode="after")
@@ -195,7 +203,8 @@ class ImuConfig(_Model):
     jitter_s: float = Field(0.0, ge=0.0, le=0.1)
     latency_s: float = Field(0.0, ge=0.0, le=1.0)
     drop_probability: float = Field(0.0, ge=0.0, lt=1.0)
-    thermal_time_constant_s: float = Field(600.0, gt=0.0, le=MAX_TIME_CONSTANT_S)
+    thermal_time_constant_s: float = Field(600.0, ge=MIN_TIME_CONSTANT_S,
+                                           le=MAX_TIME_CONSTANT_S)
     self_heating_degc: float = Field(0.0, ge=0.0, le=50.0)
     nonlinear: bool = True
 
@@ -246,7 +255,8 @@ class SoakStep(_Step):
     kind: Literal["soak"]
     temperature_degc: float = Field(ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC)
     duration_s: float = Field(gt=0.0, le=MAX_WAIT_S)
-    ramp_degc_per_min: float | None = Field(None, gt=0.0, le=MAX_RAMP_DEGC_PER_MIN)
+    ramp_degc_per_min: float | None = Field(None, ge=MIN_RAMP_DEGC_PER_MIN,
+                                            le=MAX_RAMP_DEGC_PER_MIN)
 
 
 class CentrifugeStep(_Step):
@@ -337,7 +347,8 @@ class Scenario(TwinEquipment):
     description: str = Field("", max_length=2000)
     steps: tuple[Step, ...] = Field(min_length=1, max_length=MAX_STEPS)
     store_truth_streams: bool = False
-    chunk_s: float = Field(10.0, gt=0.0, le=600.0)
+    chunk_s: float = Field(10.0, ge=0.1, le=600.0,
+                           description="simulated time generated per chunk [s]")
 
     @model_validator(mode="after")
     def _consistent(self) -> Scenario:
