@@ -366,7 +366,7 @@ def test_damaged_recordings_never_crash_hang_or_export_garbage(small_recording, 
         path.write_bytes(bytes(raw))
         files.append(path)
     proc = subprocess.run([sys.executable, str(FUZZ_CHILD), str(tmp_path), *map(str, files)],
-                          capture_output=True, text=True, timeout=600)
+                          capture_output=True, text=True, timeout=600 * SCALE)
     assert proc.returncode == 0, f"the child died ({proc.returncode}):\n{proc.stderr[-3000:]}"
     outcomes = [json.loads(line) for line in proc.stdout.splitlines()]
     assert len(outcomes) == 2 * len(files)
