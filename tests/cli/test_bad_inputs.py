@@ -130,10 +130,10 @@ def test_plan_bounds_and_estimate(tmp_path):
     path = plan_file(tmp_path, settle_s=30.0, record_s=600.0)
     result = runner.invoke(app, ["plan", "validate", str(path)])
     assert result.exit_code == 0, result.output
-    assert "recording ≈ 10.2 MB over 631 s (for 1 IMU at the plan's least acquisition rate, " \
+    assert "recording ≈ 10.6 MB over 631 s (for 1 IMU at the plan's least acquisition rate, " \
            "100 Hz; a station's IMUs and rates change it)" in " ".join(result.output.split())
     result = runner.invoke(app, ["plan", "show", str(path)])
-    assert result.exit_code == 0 and "recording ≈ 10.2 MB" in result.output
+    assert result.exit_code == 0 and "recording ≈ 10.6 MB" in result.output
 
 
 def test_plan_new_refuses_options_beyond_the_bounds(tmp_path):
@@ -171,7 +171,7 @@ def test_simulate_refuses_a_file_larger_than_the_free_space(tmp_path, monkeypatc
     path.write_text(tomli_w.dumps(SCENARIO), encoding="utf-8")
     monkeypatch.setattr(budget_module.shutil, "disk_usage", lambda p: Usage(0, 0, 12_000_000))
     refused(["simulate", path, "--out", tmp_path / "s.h5"],
-            f"the recording of scenario 's' needs about 28.8 MB but {tmp_path} has only 12 MB "
+            f"the recording of scenario 's' needs about 29.3 MB but {tmp_path} has only 12 MB "
             "free; free some space, write elsewhere (--out) or shorten the steps")
     assert not (tmp_path / "s.h5").exists()
     monkeypatch.setattr(budget_module.shutil, "disk_usage", lambda p: Usage(0, 0, 10**10))

@@ -216,7 +216,7 @@ DAMAGES: dict[str, Damage] = {
     # 8. layout
     "format-version-missing": (
         _edit(lambda f: f.attrs.__delitem__("format_version")), RecordingCorruptError,
-        r"^{path} is damaged: its root has no `format_version` attribute; expected the int 1"),
+        r"^{path} is damaged: its root has no `format_version` attribute; expected the int 2"),
     "format-version-str": (_set_attr("/", "format_version", "1"), RecordingCorruptError,
                            r"its `format_version` attribute is str '1'; expected a positive int"),
     "columns-json-not-json": (_set_attr("streams/table/main", "columns_json", "[{"),

@@ -204,9 +204,9 @@ def test_other_format_name(tmp_path):
 def test_newer_format_version(recording):
     path, _ = recording
     with h5py.File(path, "r+") as f:
-        f.attrs["format_version"] = 2
-    with pytest.raises(RecordingFormatError, match=r"format_version 2, newer than imucalib .* "
-                                                   r"reads \(up to 1\); upgrade imucalib"):
+        f.attrs["format_version"] = 3
+    with pytest.raises(RecordingFormatError, match=r"format_version 3, newer than imucalib .* "
+                                                   r"reads \(up to 2\); upgrade imucalib"):
         open_recording(path)
 
 

@@ -97,7 +97,7 @@ def test_metadata_truth_steps_log_round_trip(recording, helpers):
                 assert meta[key] == json.loads(value)
             else:
                 assert meta[key] == value and type(meta[key]) is type(value)
-        assert meta["format"] == FORMAT_NAME and rec.format_version == 1
+        assert meta["format"] == FORMAT_NAME and rec.format_version == FORMAT_VERSION
         assert meta["created_utc"].endswith("Z")
         truth = rec.truth
         assert truth["bias_rps"].tobytes() == np.array([1e-4, 2e-4, -3e-4]).tobytes()

@@ -32,7 +32,7 @@ from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
 
 CHUNK = 65536
-STEPS_TABLE = 64 * (8 + 64 + 256 + 8192 + 4 * 8 + 32 + 2048)  # one chunk of the steps table
+STEPS_TABLE = 64 * (8 + 64 + 256 + 8192 + 4 * 8 + 32 + 2048 + 512 + 4096 + 2048)  # one chunk
 LOG_TABLE = 256 * (8 + 16 + 128 + 4096)  # one chunk of the event log
 
 
@@ -53,7 +53,7 @@ def test_rows_are_stored_in_whole_chunks():
                                               CHUNK * 24]
     assert est.tables_bytes == STEPS_TABLE + LOG_TABLE + METADATA_BYTES
     assert est.total_bytes == sum(s.bytes for s in est.streams) + est.tables_bytes
-    assert est.describe().startswith("about 22.4 MB over 100 s (0.03 h): imu/IMU-0001 "
+    assert est.describe().startswith("about 22.8 MB over 100 s (0.03 h): imu/IMU-0001 "
                                      "100,001 rows × 81 B at 1000 Hz")
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -36,6 +36,7 @@ __all__ = [
     "STEPS_CHUNK_ROWS",
     "STEPS_GROUP",
     "STEP_FIELDS",
+    "STEP_FIELDS_V1",
     "STEP_STATUSES",
     "STREAMS_GROUP",
     "TRUTH_GROUP",
@@ -48,10 +49,14 @@ __all__ = [
     "dtype_code",
     "encode_text",
     "json_dumps",
+    "parse_string_list",
+    "step_fields",
+    "string_list_json",
 ]
 
 FORMAT_NAME: Final = "imucalib-recording"
-FORMAT_VERSION: Final = 1
+#: Version 2 added the step fields ``role``, ``tags`` and ``units``; version 1 files still read.
+FORMAT_VERSION: Final = 2
 
 #: Rows per chunk of a stream column: 64 Ki rows = 512 KiB of float64.
 DEFAULT_CHUNK_ROWS: Final = 1 << 16
@@ -101,7 +106,8 @@ class FieldSpec:
         return np.dtype(self.kind)
 
 
-STEP_FIELDS: Final[dict[str, FieldSpec]] = {
+#: The ``/steps`` fields of format version 1.
+STEP_FIELDS_V1: Final[dict[str, FieldSpec]] = {
     "index": FieldSpec("i8"),
     "kind": FieldSpec("text", 64),
     "label": FieldSpec("text", 256),
@@ -113,6 +119,22 @@ STEP_FIELDS: Final[dict[str, FieldSpec]] = {
     "status": FieldSpec("text", 32),
     "note": FieldSpec("text", 2048),
 }
+
+#: The ``/steps`` fields of the current format (version 2): version 1's, then
+#: ``role`` (what the step is for in its procedure, e.g. ``"p1.accel-position"``; 128 characters
+#: of any UTF-8), ``tags`` (a JSON list of strings) and ``units`` (a JSON list of the IMU unit
+#: names the step concerns; ``[]`` for every IMU of the file).
+STEP_FIELDS: Final[dict[str, FieldSpec]] = {
+    **STEP_FIELDS_V1,
+    "role": FieldSpec("text", 512),
+    "tags": FieldSpec("text", 4096),
+    "units": FieldSpec("text", 2048),
+}
+
+
+def step_fields(format_version: int) -> dict[str, FieldSpec]:
+    """Return the ``/steps`` fields of a format version (1, or 2 and later)."""
+    return STEP_FIELDS_V1 if format_version < 2 else STEP_FIELDS
 
 LOG_FIELDS: Final[dict[str, FieldSpec]] = {
     "time_s": FieldSpec("f8"),
@@ -284,6 +306,52 @@ def decode_attr(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return [decode_attr(v) for v in value.tolist()] if value.dtype.kind in "OS" else value
     return value
+
+
+def string_list_json(values: object, where: str, *, names: bool = False) -> str:
+    """JSON text of a list of strings (UTF-8, not escaped), for the step fields ``tags``/``units``.
+
+    Parameters
+    ----------
+    values : sequence of str
+        The strings; a single ``str`` is refused (it is almost always a forgotten tuple).
+    where : str
+        What is checked, for messages.
+    names : bool
+        Each string must also be a valid unit name (:func:`check_name`).
+
+    Raises
+    ------
+    InvalidInputError
+        For a non-sequence, a non-string item, NUL characters or (with `names`) a bad name.
+    """
+    if isinstance(values, str | bytes) or not isinstance(values, Sequence):
+        raise InvalidInputError(f"{where} must be a sequence of strings (e.g. a tuple); "
+                                f"got {type(values).__name__} {values!r}")
+    items = list(values)
+    for k, item in enumerate(items):
+        if not isinstance(item, str):
+            raise InvalidInputError(f"{where}[{k}] must be a string; got {type(item).__name__}")
+        encode_text(item, f"{where}[{k}]")
+        if names:
+            check_name(item, f"{where}[{k}]")
+    return json.dumps(items, ensure_ascii=False) if items else "[]"
+
+
+def parse_string_list(text: str) -> tuple[str, ...]:
+    """Decode the JSON list of strings of a ``tags`` or ``units`` field (``""`` reads as empty).
+
+    Raises
+    ------
+    ValueError
+        If `text` is neither empty nor a JSON list of strings.
+    """
+    if not text:
+        return ()
+    value = json.loads(text)
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise ValueError("not a JSON list of strings")
+    return tuple(value)
 
 
 def _json_default(obj: Any) -> Any:

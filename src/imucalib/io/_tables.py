@@ -3,6 +3,10 @@
 :class:`StepLogTables` keeps the steps and pending log events in memory, validates every field
 (text is refused, never truncated, when longer than its fixed-length field) and writes the changed
 rows to their datasets on :meth:`StepLogTables.write`, which the writer calls at each flush.
+
+A reopened file keeps the step fields of its own format version: in a version 1 file the step's
+``role``, ``tags`` and ``units`` have no field and are not stored (the reader derives them as it
+does for every version 1 file, see :mod:`imucalib.io._v1`).
 """
 
 from __future__ import annotations
@@ -26,11 +30,13 @@ from imucalib.io._schema import (
     check_time,
     encode_text,
     json_dumps,
+    string_list_json,
 )
 
 __all__ = ["UPDATABLE_STEP_FIELDS", "StepLogTables", "create_table"]
 
 UPDATABLE_STEP_FIELDS = tuple(k for k in STEP_FIELDS if k != "index")
+_LIST_FIELDS = {"tags": False, "units": True}  # field -> items must be unit names
 
 
 def create_table(group: h5py.Group, fields: Mapping[str, FieldSpec], chunk_rows: int) -> None:
@@ -56,7 +62,9 @@ def _encode_commanded(value: Any, where: str) -> str:
 class StepLogTables:
     """Steps and log events of a Recording being written (all validation happens here)."""
 
-    def __init__(self, steps_group: h5py.Group, log_group: h5py.Group) -> None:
+    def __init__(self, steps_group: h5py.Group, log_group: h5py.Group,
+                 step_fields: Mapping[str, FieldSpec] = STEP_FIELDS) -> None:
+        self._fields = dict(step_fields)
         self._steps_group = steps_group
         self._log_group = log_group
         self._steps: list[dict[str, Any]] = []
@@ -68,10 +76,10 @@ class StepLogTables:
     def load_existing(self) -> None:
         """Take over the rows already in the datasets (reopening a closed Recording)."""
         n = self._steps_group["index"].shape[0]
-        cols = {name: self._steps_group[name][:n] for name in STEP_FIELDS}
+        cols = {name: self._steps_group[name][:n] for name in self._fields}
         for i in range(n):
             row: dict[str, Any] = {}
-            for name, spec in STEP_FIELDS.items():
+            for name, spec in self._fields.items():
                 value = cols[name][i]
                 if spec.kind == "text":
                     row[name] = value.decode("utf-8") if isinstance(value, bytes) else str(value)
@@ -89,7 +97,7 @@ class StepLogTables:
         return len(self._steps)
 
     def begin_step(self, kind: str, label: str, t_start_s: float, commanded: Any, status: str,
-                   note: str) -> int:
+                   note: str, role: str = "", tags: Any = (), units: Any = ()) -> int:
         """Validate and add a step; return its index."""
         index = len(self._steps)
         row: dict[str, Any] = {
@@ -97,8 +105,9 @@ class StepLogTables:
             "t_start_s": check_time(t_start_s, "`t_start_s`"), "t_end_s": math.nan,
             "valid_start_s": math.nan, "valid_end_s": math.nan, "status": "", "note": "",
         }
-        self._set_step_fields(row, {"kind": kind, "label": label, "commanded": commanded,
-                                    "status": status, "note": note})
+        fields = {"kind": kind, "label": label, "commanded": commanded, "status": status,
+                  "note": note, "role": role, "tags": tags, "units": units}
+        self._set_step_fields(row, fields)
         self._steps.append(row)
         self._mark_steps_dirty(index)
         return index
@@ -124,6 +133,8 @@ class StepLogTables:
             spec = STEP_FIELDS[key]
             if key == "commanded":
                 value = _encode_commanded(value, where)
+            if key in _LIST_FIELDS:
+                value = string_list_json(value, where, names=_LIST_FIELDS[key])
             if key == "status" and value not in STEP_STATUSES:
                 raise InvalidInputError(f"{where} must be one of {STEP_STATUSES}; got {value!r}")
             if spec.kind == "text":
@@ -132,7 +143,8 @@ class StepLogTables:
                 value = check_time(value, where)
             else:
                 value = check_optional_time(value, where)
-            row[key] = value
+            if key in self._fields:  # a version 1 file has no role, tags or units
+                row[key] = value
         for lo, hi in (("t_start_s", "t_end_s"), ("valid_start_s", "valid_end_s")):
             if row[hi] < row[lo]:
                 raise InvalidInputError(f"step {i}: `{hi}` ({row[hi]!r} s) is before `{lo}` "
@@ -162,7 +174,7 @@ class StepLogTables:
             return
         rows = self._steps[start:]
         n1 = len(self._steps)
-        for name, spec in STEP_FIELDS.items():
+        for name, spec in self._fields.items():
             ds = self._steps_group[name]
             if ds.shape[0] != n1:
                 ds.resize((n1,))

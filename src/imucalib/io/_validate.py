@@ -11,8 +11,10 @@ error, one line naming the file, what was found and what was expected, at the fi
   column specifications, ``time_s`` first, one 1-D dataset per column of the declared dtype and
   nothing else, every column holding at least the committed rows;
 - ``/steps`` and ``/log``: every field present as a 1-D dataset of the right kind holding the
-  committed rows; in the committed rows, steps numbered 0, 1, 2, …, known statuses, ``commanded``
-  empty or JSON, step times finite or NaN; known log levels and finite log times;
+  committed rows (the step fields of the file's format version); in the committed rows, steps
+  numbered 0, 1, 2, …, known statuses, ``commanded`` empty or JSON, ``tags`` and ``units``
+  (version 2) empty or JSON lists of strings, step times finite or NaN; known log levels and
+  finite log times;
 - ``/truth``: ``*_json`` attributes that decode.
 
 :func:`check_time_bases` then reads each stream's committed ``time_s`` in blocks (no more than
@@ -51,7 +53,6 @@ from imucalib.io._schema import (
     LOG_GROUP,
     LOG_LEVELS,
     QUANTITIES,
-    STEP_FIELDS,
     STEP_STATUSES,
     STEPS_GROUP,
     STREAMS_GROUP,
@@ -62,6 +63,8 @@ from imucalib.io._schema import (
     decode_attr,
     decode_text,
     dtype_code,
+    parse_string_list,
+    step_fields,
 )
 
 __all__ = [
@@ -414,6 +417,14 @@ def _check_steps(p: Path, t: dict[str, NDArray[Any]]) -> None:
         cmd = decode_text(t["commanded"][i])
         if cmd:
             _json(p, cmd, f"/steps/commanded row {i}", "JSON text or an empty string")
+        for field in ("tags", "units"):
+            if field in t:
+                text = decode_text(t[field][i])
+                try:
+                    parse_string_list(text)
+                except ValueError:
+                    raise damaged(p, f"/steps/{field} row {i} is {_short(text)}; expected a "
+                                     "JSON list of strings or an empty string") from None
         for field in ("t_start_s", "t_end_s", "valid_start_s", "valid_end_s"):
             if math.isinf(float(t[field][i])):
                 raise damaged(p, f"/steps/{field} row {i} is {float(t[field][i])}; expected a "
@@ -479,7 +490,8 @@ def check_layout(p: Path, f: h5py.File) -> Layout:
             raise damaged(p, f"/commit has no count for {entry}; expected one for every "
                              "stream, steps and log")
     streams = tuple(_stream(p, f, path, committed[path]) for path in paths)
-    _check_steps(p, _table(p, f, STEPS_GROUP, STEP_FIELDS, committed[STEPS_GROUP], links))
+    _check_steps(p, _table(p, f, STEPS_GROUP, step_fields(version), committed[STEPS_GROUP],
+                            links))
     _check_log(p, _table(p, f, LOG_GROUP, LOG_FIELDS, committed[LOG_GROUP], links))
     _check_truth(p, f, links)
     return Layout(version, entries, committed, streams)

@@ -99,9 +99,14 @@ class RecordingSummary:
             table.add_row(f"{s.device}/{s.unit}", f"{s.n_samples:,}", f"{s.duration_s:,.3f}",
                           f"{s.sample_rate_hz:,.3f}", str(s.time_gaps), cg, cols)
         console.print(table)
-        steps = Table("#", "kind", "label", "valid window [s]", "status", title="Steps")
+        steps = Table("#", "kind", "label", "role", "tags", "valid window [s]", "status",
+                      title="Steps")
         for st in self.steps:
-            steps.add_row(str(st.index), st.kind, st.label,
+            tags = ", ".join(st.tags)
+            if st.units:
+                tags += (", " if tags else "") + "units: " + " ".join(st.units)
+            steps.add_row(str(st.index), st.kind, escape(st.label), escape(st.role or "—"),
+                          escape(tags or "—"),
                           f"{st.valid_start_s:,.3f} – {st.valid_end_s:,.3f}", st.status)
         console.print(steps)
         console.print(f"{self.n_events} logged event(s)")

@@ -52,7 +52,6 @@ from imucalib.io._schema import (
     FORMAT_VERSION,
     LOG_FIELDS,
     LOG_GROUP,
-    STEP_FIELDS,
     STEPS_GROUP,
     STREAMS_GROUP,
     TRUTH_GROUP,
@@ -60,7 +59,10 @@ from imucalib.io._schema import (
     ColumnSpec,
     decode_attr,
     decode_text,
+    parse_string_list,
+    step_fields,
 )
+from imucalib.io._v1 import v1_plan, v1_role_and_tags
 from imucalib.io._validate import (
     H5PY_ERRORS,
     Layout,
@@ -114,7 +116,12 @@ class StreamData:
 
 @dataclass(frozen=True)
 class StepRecord:
-    """One executed plan step, as recorded."""
+    """One executed plan step, as recorded.
+
+    ``role``, ``tags`` and ``units`` are stored since format version 2; for a version 1 file the
+    reader derives ``role`` and ``tags`` from the step's ``commanded`` state or the stored plan,
+    and ``units`` is empty (``docs/recording-format.md``, "Reading version 1").
+    """
 
     index: int
     kind: str
@@ -126,11 +133,33 @@ class StepRecord:
     valid_end_s: float  # NaN until known [s]
     status: str
     note: str
+    role: str = ""  # e.g. "p1.accel-position" (imucalib.io.step_roles); "" when none
+    tags: tuple[str, ...] = ()
+    units: tuple[str, ...] = ()  # IMU unit names the step concerns; () = every IMU
 
     @property
     def has_valid_window(self) -> bool:
         """Whether both ends of the valid window are known."""
         return math.isfinite(self.valid_start_s) and math.isfinite(self.valid_end_s)
+
+    def tag_value(self, key: str) -> str | None:
+        """Return the value of the first ``"key=value"`` tag, or None.
+
+        Examples
+        --------
+        >>> StepRecord(0, "static", "", None, 0.0, 1.0, 0.0, 1.0, "done", "",
+        ...            tags=("calibration", "repetition=2")).tag_value("repetition")
+        '2'
+        """
+        prefix = f"{key}="
+        for tag in self.tags:
+            if tag.startswith(prefix):
+                return tag[len(prefix):]
+        return None
+
+    def concerns(self, unit: str) -> bool:
+        """Whether the step concerns IMU `unit` (every step with no ``units`` does)."""
+        return not self.units or unit in self.units
 
 
 @dataclass(frozen=True)
@@ -645,18 +674,35 @@ class Recording:
 
     @property
     def steps(self) -> list[StepRecord]:
-        """The executed steps, in order."""
-        t = self._guard("the steps table", self._table, STEPS_GROUP, STEP_FIELDS)
+        """The executed steps, in order (those of a version 1 file with derived roles and tags)."""
+        fields = step_fields(self.format_version)
+        t = self._guard("the steps table", self._table, STEPS_GROUP, fields)
+        v1 = self.format_version < 2
+        plan = v1_plan(self.metadata) if v1 and t["index"] else None
         out = []
         for i in range(len(t["index"])):
             cmd = t["commanded"][i]
+            commanded = self._json(cmd, f"/steps/commanded row {i}") if cmd else None
+            if plan is not None:
+                role, tags = v1_role_and_tags(t["kind"][i], commanded, plan)
+                units: tuple[str, ...] = ()
+            else:
+                role = t["role"][i]
+                tags = self._string_list(t["tags"][i], f"/steps/tags row {i}")
+                units = self._string_list(t["units"][i], f"/steps/units row {i}")
             out.append(StepRecord(
                 index=int(t["index"][i]), kind=t["kind"][i], label=t["label"][i],
-                commanded=self._json(cmd, f"/steps/commanded row {i}") if cmd else None,
-                t_start_s=t["t_start_s"][i], t_end_s=t["t_end_s"][i],
+                commanded=commanded, t_start_s=t["t_start_s"][i], t_end_s=t["t_end_s"][i],
                 valid_start_s=t["valid_start_s"][i], valid_end_s=t["valid_end_s"][i],
-                status=t["status"][i], note=t["note"][i]))
+                status=t["status"][i], note=t["note"][i], role=role, tags=tags, units=units))
         return out
+
+    def _string_list(self, text: str, what: str) -> tuple[str, ...]:
+        try:
+            return parse_string_list(text)
+        except ValueError as exc:
+            raise damaged(self.path, f"{what} is {text[:40]!r} ({exc}); expected a JSON list "
+                                     "of strings") from exc
 
     def step(self, step_index: int) -> StepRecord:
         """One step by index."""

@@ -10,14 +10,14 @@ Contents
 :data:`LOG_FIELDS`, :data:`STEP_STATUSES`, :data:`LOG_LEVELS`, :data:`EXTRA_UNITS`
     Format constants.
 
-File format, version 1
+File format, version 2
 ----------------------
 An HDF5 file (``libver="latest"``, superblock v3) written in SWMR mode. Everything is created
 before SWMR starts; afterwards the writer only appends to and overwrites datasets, so everything
 known at creation is stored then.
 
 Root attributes
-    ``format`` = ``"imucalib-recording"``; ``format_version`` = 1 (int); ``created_utc``
+    ``format`` = ``"imucalib-recording"``; ``format_version`` = 2 (int); ``created_utc``
     (ISO 8601, ``Z``); ``software_version`` (``imucalib.__version__``); and the caller's metadata,
     one attribute per key (str, int, float or bool). Keys ending in ``_json`` hold JSON text;
     the conventional keys are ``plan_toml``, ``station_json``, ``environment_json``,
@@ -38,9 +38,12 @@ Root attributes
     The executed plan steps as one 1-D dataset per field (row ``i`` is step ``index == i``):
     ``index`` (int64), ``kind``, ``label``, ``commanded`` (JSON text), ``t_start_s``, ``t_end_s``,
     ``valid_start_s``, ``valid_end_s`` (float64, NaN until known), ``status`` (one of
-    :data:`STEP_STATUSES`), ``note``. Text fields are fixed-length UTF-8 with the capacities of
-    :data:`STEP_FIELDS`; longer text is refused, never truncated. Rows are overwritten in place
-    when a step is updated.
+    :data:`STEP_STATUSES`), ``note``, and (since version 2) ``role`` (what the step is for in its
+    procedure, e.g. ``"p1.accel-position"``), ``tags`` (JSON list of strings) and ``units``
+    (JSON list of the IMU unit names the step concerns; ``[]``: every IMU). Text fields are
+    fixed-length UTF-8 with the capacities of :data:`STEP_FIELDS`; longer text is refused, never
+    truncated. Rows are overwritten in place when a step is updated. A version 1 file has the
+    fields up to ``note`` only (``docs/recording-format.md`` says how readers map it).
 ``/log/<field>``
     Events: ``time_s`` (float64), ``level`` (one of :data:`LOG_LEVELS`), ``source``, ``message``.
 ``/truth`` (digital twin only; analysis code never reads it)
@@ -110,6 +113,7 @@ from imucalib.io._schema import (
     check_metadata,
     decode_attr,
     json_dumps,
+    step_fields,
 )
 from imucalib.io._tables import StepLogTables, create_table
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
@@ -344,7 +348,8 @@ class RecordingWriter:
                 table = (self._truth_streams if entry.startswith(TRUTH_STREAMS_GROUP + "/")
                          else self._streams)
                 table[(st.spec.device, st.spec.unit)] = st
-            self._tables = StepLogTables(f[STEPS_GROUP], f[LOG_GROUP])
+            version = int(decode_attr(f.attrs["format_version"]))
+            self._tables = StepLogTables(f[STEPS_GROUP], f[LOG_GROUP], step_fields(version))
             self._tables.load_existing()
             f.swmr_mode = True
         except BaseException:
@@ -657,8 +662,9 @@ class RecordingWriter:
 
     # ------------------------------------------------------------------------- steps and log
     def begin_step(self, kind: str, label: str, t_start_s: float, *,
-                   commanded: Mapping[str, Any] | str | None = None, status: str = "running",
-                   note: str = "") -> int:
+                   commanded: Mapping[str, Any] | str | None = None, note: str = "",
+                   role: str = "", tags: Sequence[str] = (), units: Sequence[str] = (),
+                   status: str = "running") -> int:
         """Record the start of a plan step and return its index (0, 1, 2, … in call order).
 
         Parameters
@@ -671,10 +677,17 @@ class RecordingWriter:
             Start time on the recording's time base [s].
         commanded : mapping or JSON str, optional
             Commanded state (positions, rates, temperatures), stored as JSON text.
-        status : str
-            One of :data:`STEP_STATUSES`.
         note : str
             Free text.
+        role : str
+            What the step is for in its procedure, e.g. ``"p1.accel-position"`` (``""``: none);
+            the roles are listed in ``docs/recording-format.md``.
+        tags : sequence of str
+            The step's tags, e.g. ``("calibration", "six-position", "rep2")``.
+        units : sequence of str
+            The IMU unit names the step concerns; empty: every IMU of the file.
+        status : str
+            One of :data:`STEP_STATUSES`.
 
         Returns
         -------
@@ -684,10 +697,12 @@ class RecordingWriter:
         Raises
         ------
         InvalidInputError
-            For a bad status, a non-finite time, or text longer than its field.
+            For a bad status, a non-finite time, text longer than its field, tags or units that
+            are not a sequence of strings, or a unit name that is not one.
         """
         self._check_open("begin a step")
-        index = self._tables.begin_step(kind, label, t_start_s, commanded, status, note)
+        index = self._tables.begin_step(kind, label, t_start_s, commanded, status, note,
+                                        role, tags, units)
         self._maybe_flush()
         return index
 

@@ -14,13 +14,17 @@ columns so that they stay aligned, and cut before the first row whose ``time_s``
 negative, implausibly late or decreasing; rows a writer had not committed, or that cannot be
 read, are dropped and reported. Damage that :func:`~imucalib.io.reader.open_recording` refuses is
 mended where it can be without inventing data: a missing ``/steps`` or ``/log`` is written empty,
-missing step fields get empty values, a ``commanded`` that is not JSON is cleared, an unknown step
+missing step fields get empty values, a ``commanded`` that is not JSON is cleared (and ``tags`` or
+``units`` that are not JSON lists of strings), an unknown step
 status becomes ``invalid``, infinite step times become NaN, log events with an unknown level or a
 non-finite time are dropped, negative or unreadable commit counts are replaced by what every
 column holds, a damaged ``columns_json`` is rebuilt from the columns' own attributes, and
 unreadable streams or columns are left out; every such change is reported. The copy is written to
 a temporary name, verified (it must pass every check of ``open_recording``, and every column's
 SHA-256 must match what was written), then renamed.
+
+The copy keeps the original's format version (a version 1 file stays version 1, with its step
+fields); a file whose root attributes cannot be read is copied as the current version.
 """
 
 from __future__ import annotations
@@ -48,7 +52,6 @@ from imucalib.io._schema import (
     LOG_FIELDS,
     LOG_GROUP,
     LOG_LEVELS,
-    STEP_FIELDS,
     STEP_STATUSES,
     STEPS_CHUNK_ROWS,
     STEPS_GROUP,
@@ -61,6 +64,8 @@ from imucalib.io._schema import (
     decode_text,
     dtype_code,
     json_dumps,
+    parse_string_list,
+    step_fields,
 )
 from imucalib.io._tables import create_table
 from imucalib.io._validate import H5PY_ERRORS, first_bad_time, from_h5py, parse_columns
@@ -177,6 +182,7 @@ class _Copier:
         self.src: h5py.File = rec._file
         self.dst = dst
         self.path = rec.path
+        self.version = int(rec.format_version)
         self.hashes: dict[str, str] = {}
         self.notes: list[str] = []
         self.tables: list[RecoveredStream] = []
@@ -220,7 +226,7 @@ class _Copier:
             attrs = {}
         _set_attrs(self.dst, attrs)
         self.dst.attrs["format"] = FORMAT_NAME
-        self.dst.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        self.dst.attrs["format_version"] = np.int64(min(self.version, FORMAT_VERSION))
         self.dst.attrs["recovered_from"] = str(self.path.name)
         self.dst.attrs["recovered_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
@@ -427,10 +433,11 @@ class _Copier:
         self.tables.append(RecoveredStream(name, n, max(found, n), "; ".join(notes)))
 
     def steps(self) -> None:
-        data, found, notes = self.table(STEPS_GROUP, STEP_FIELDS)
+        fields = step_fields(self.version)
+        data, found, notes = self.table(STEPS_GROUP, fields)
         notes += _repair_steps(data)
         self.unfinished = tuple(int(i) for i in np.flatnonzero(data["status"] == b"running"))
-        self.write_table(STEPS_GROUP, STEP_FIELDS, STEPS_CHUNK_ROWS, data, found, notes)
+        self.write_table(STEPS_GROUP, fields, STEPS_CHUNK_ROWS, data, found, notes)
 
     def log(self) -> None:
         data, found, notes = self.table(LOG_GROUP, LOG_FIELDS)
@@ -471,6 +478,14 @@ def _repair_steps(data: dict[str, NDArray[Any]]) -> list[str]:
             except ValueError:
                 data["commanded"][i] = b""
                 notes.append(f"step {i} commanded state not JSON: cleared")
+        for field in ("tags", "units"):
+            if field not in data:
+                continue
+            try:
+                parse_string_list(decode_text(data[field][i]))
+            except ValueError:
+                data[field][i] = b""
+                notes.append(f"step {i} {field} not a JSON list of strings: cleared")
     for field in ("t_start_s", "t_end_s", "valid_start_s", "valid_end_s"):
         inf = np.isinf(data[field])
         if inf.any():

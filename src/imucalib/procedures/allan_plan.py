@@ -2,7 +2,8 @@
 
 :func:`generate_allan_plan` writes: an operator check (the IMU static on an isolated base), a
 warm-up, then for each temperature (or once at ambient) an optional chamber soak and a long
-static record (kind ``"static"``, tags ``"allan"`` and ``"T<temperature>"``). ``imucalib
+static record (kind ``"static"``, role ``"allan.static"``, tags ``"allan"`` and
+``"T<temperature>"``). ``imucalib
 calibrate`` on its recording runs :func:`~imucalib.procedures.allan.analyze_allan_recording`:
 OADEV with confidence intervals and the noise-term fit per axis, for each record.
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
+from imucalib.io.step_roles import ALLAN_STATIC
 from imucalib.plan.schema import (
     ImuSpecConfig,
     OperatorCheckStep,
@@ -87,7 +89,8 @@ def generate_allan_plan(*, name: str = "allan", grade: str = "tactical",
                                   stable_for_s=soak_stable_s, timeout_s=4 * 3600.0,
                                   label=f"soak {temp:+g} °C", tags=(tag,)))
         steps.append(StaticStep(kind="static", duration_s=record_s,
-                                label=f"static record ({tag})", tags=("allan", tag)))
+                                label=f"static record ({tag})", role=ALLAN_STATIC,
+                                tags=("allan", tag)))
     twin = TwinEquipment(
         seed=seed, site=SiteConfig(latitude_deg=latitude_deg),
         chamber=ChamberConfig(enabled=temperatures_degc is not None,

@@ -47,6 +47,7 @@ from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.io.reader import open_recording
 from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
+from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.p1_fit import (
     P1Fit,
     TriadFit,
@@ -85,7 +86,9 @@ class P1Options:
     significance : float
         p-value of the χ² test below which the model is too simple.
     accel_accuracy_g, gyro_accuracy_dps : float or None
-        Held-out limits; None: the plan's ``[imu]`` values.
+        Held-out limits; None: the ``[imu]`` values of the plan stored in the recording, or
+        without one the defaults of :class:`~imucalib.plan.schema.ImuSpecConfig` (0.01 g,
+        0.5 °/s).
     repeatability_cv : float
         CV limit of scale factors (SPEC.md P1: 1 %).
     repeatability_k : float
@@ -93,8 +96,12 @@ class P1Options:
     hash_recording : bool
         Put the recording's SHA-256 into the provenance (reads the whole file once).
     type_b : bool
-        Add the plan's equipment accuracy (``[equipment]``: table position accuracy and axis
-        perpendicularity, uniform distributions) to the misalignment variances (GUM Type B).
+        Add the equipment accuracy (table position accuracy and axis perpendicularity, uniform
+        distributions) to the misalignment variances (GUM Type B).
+    table_position_accuracy_arcsec, table_orthogonality_arcsec : float or None
+        The equipment accuracy for `type_b`; None: the ``[equipment]`` values of the plan stored
+        in the recording, or without one the defaults of
+        :class:`~imucalib.plan.schema.EquipmentConfig` (10″, 5″). [″]
     """
 
     model: Literal["triad", "per-axis"] = "triad"
@@ -110,6 +117,8 @@ class P1Options:
     repeatability_k: float = 3.0
     hash_recording: bool = True
     type_b: bool = True
+    table_position_accuracy_arcsec: float | None = None
+    table_orthogonality_arcsec: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,7 +196,7 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
     ]
     cov = fit.covariance
     if opt.type_b:
-        cov, text = _add_type_b(fit.param_names, cov, obs)
+        cov, text = _add_type_b(fit.param_names, cov, obs, opt)
         notes.append(text)
     return CalibrationResult(
         sensor_id=obs.sensor_id, procedure="p1", model=fit.model,
@@ -196,20 +205,38 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
         provenance=provenance, notes=tuple(notes))
 
 
-def _add_type_b(names: tuple[str, ...], cov: np.ndarray, obs: P1Observations
-                ) -> tuple[np.ndarray, str]:
+def _equipment(obs: P1Observations, opt: P1Options) -> tuple[float, float, str]:
+    """Return the table position accuracy and perpendicularity [″], and where they come from."""
+    eq = obs.plan.equipment if obs.plan is not None else EquipmentConfig()
+    pos, perp = opt.table_position_accuracy_arcsec, opt.table_orthogonality_arcsec
+    source = ("P1Options" if pos is not None and perp is not None
+              else "the plan's [equipment]" if obs.plan is not None
+              else "defaults: the recording holds no plan")
+    return (eq.table_position_accuracy_arcsec if pos is None else pos,
+            eq.table_orthogonality_arcsec if perp is None else perp, source)
+
+
+def _imu_spec(obs: P1Observations) -> ImuSpecConfig:
+    """Return the IMU specification of the stored plan, or the defaults without one."""
+    return obs.plan.imu if obs.plan is not None else ImuSpecConfig()
+
+
+def _add_type_b(names: tuple[str, ...], cov: np.ndarray, obs: P1Observations,
+                opt: P1Options) -> tuple[np.ndarray, str]:
     """Add the equipment's Type B variances to the misalignments (uniform, u = a/√3)."""
-    eq = obs.plan.equipment
-    u_pos = eq.table_position_accuracy_arcsec * units.ARCSEC / math.sqrt(3.0)
-    u_perp = eq.table_orthogonality_arcsec * units.ARCSEC / math.sqrt(3.0)
+    pos_arcsec, perp_arcsec, source = _equipment(obs, opt)
+    u_pos = pos_arcsec * units.ARCSEC / math.sqrt(3.0)
+    u_perp = perp_arcsec * units.ARCSEC / math.sqrt(3.0)
     out = cov.copy()
     for i, name in enumerate(names):
         parts = name.split("_")
         if len(parts) == 3 and parts[1] == "M" and parts[2][0] != parts[2][1]:
             out[i, i] += (u_pos if parts[0] == "accel" else u_perp) ** 2
-    text = (f"Type B (GUM): table position accuracy {eq.table_position_accuracy_arcsec:g}″ and "
-            f"axis perpendicularity {eq.table_orthogonality_arcsec:g}″ (uniform) added to the "
+    text = (f"Type B (GUM): table position accuracy {pos_arcsec:g}″ and "
+            f"axis perpendicularity {perp_arcsec:g}″ (uniform) added to the "
             "accelerometer and gyro misalignment variances")
+    if obs.plan is None or source == "P1Options":
+        text += f" ({source})"
     return out, text
 
 
@@ -293,7 +320,7 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
     prov = provenance or Provenance(software_version=__version__,
                                     created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
     result = _result(fit, obs, opt, prov, residuals, [])
-    spec = obs.plan.imu
+    spec = _imu_spec(obs)
     accel_err, gyro_err = _held_out(result, obs)
     checks.append(check_accuracy("held-out accelerometer accuracy", accel_err,
                                  limit=opt.accel_accuracy_g or spec.accel_accuracy_g, unit="g",

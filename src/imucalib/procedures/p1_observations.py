@@ -30,6 +30,19 @@ to the platform frame. For measured angles, rot_tp = Π R_{n_i}(θ_i) and
   revolutions the input is ω_b = (ω + Ω_t·a_t)·a_b (the horizontal Earth rate and gravity cancel,
   their components along the axis stay) and f_b = (g_t·a_t)·a_b.
 
+Which windows
+-------------
+The recording's steps say what each window is for (:mod:`imucalib.io.step_roles`): the six
+positions ``p1.accel-position``, the level static record ``p1.gyro-bias``, the calibration rates
+``p1.gyro-rate``, and the verification's ``p1.held-out-position`` and ``p1.held-out-rate``. A
+step without a role gets the one its tags imply (:func:`~imucalib.io.step_roles.role_from_tags`:
+plans written before roles, and version 1 recordings, whose reader does the same). A rate
+step's spinning axis and rate come from its ``commanded`` state (``axis``, ``rate_dps``); when
+the recording does not give them (an import), from the table feedback: the axis turning
+fastest and its measured mean rate. The plan stored in the recording is not needed; when
+present it supplies the IMU specification and equipment accuracies that
+:func:`~imucalib.procedures.p1.analyze_p1` uses (``P1Options`` otherwise).
+
 Contents
 --------
 :func:`extract_p1_observations`, :class:`P1Processing`, :class:`P1Observations`,
@@ -51,7 +64,16 @@ from scipy.spatial.transform import Rotation
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TABLE_AXIS_VECTORS
 from imucalib.errors import ConfigurationError, InvalidInputError, RecordingError
-from imucalib.io.reader import Recording
+from imucalib.io.reader import Recording, StepRecord
+from imucalib.io.step_roles import (
+    P1_ACCEL_POSITION,
+    P1_GYRO_BIAS,
+    P1_GYRO_RATE,
+    P1_HELD_OUT_POSITION,
+    P1_HELD_OUT_RATE,
+    P1_ROLES,
+    role_from_tags,
+)
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 from imucalib.plan.io import parse_plan
@@ -116,12 +138,16 @@ class WindowObservation:
     Attributes
     ----------
     step_index, plan_step : int
-        Row in the Recording's steps and index in the plan.
+        Row in the Recording's steps and index in the plan (the row when the recording does
+        not say: ``commanded["plan_step"]``).
     kind : {"static", "rate"}
     role : {"calibration", "verification"}
+        What the fit does with the window (from the step role: held-out roles verify).
     repetition : int
-        The ``rep<k>`` tag (1 when absent).
+        The ``rep<k>`` or ``repetition=<k>`` tag (1 when absent).
     tags : tuple of str
+        The step's tags, with ``"six-position"`` or ``"gyro-bias"`` added when its role is
+        ``p1.accel-position`` or ``p1.gyro-bias`` (the fit selects by these tags).
     label : str
     gyro_mean_rps, accel_mps2 : ndarray, shape (3,)
         Window means (whole revolutions for a rate point). [rad/s], [m/s²]
@@ -148,6 +174,8 @@ class WindowObservation:
     allan_fit : ndarray, shape (3, 6), or None
         Per channel (gyro x, y, z, accel x, y, z) the fitted N̂, Ĉ_B, K̂ of the window's Allan
         variance (:func:`~imucalib.processing.statistics.compute_window_statistics`).
+    step_role : str
+        The step's role (:mod:`imucalib.io.step_roles`), e.g. ``"p1.accel-position"``.
     """
 
     step_index: int
@@ -175,14 +203,19 @@ class WindowObservation:
     duration_s: float
     t_start_s: float = 0.0
     allan_fit: _F64 | None = None
+    step_role: str = ""
 
 
 @dataclass(frozen=True, eq=False)
 class P1Observations:
-    """Every usable window of one IMU in a P1 Recording, with the site and processing facts."""
+    """Every usable window of one IMU in a P1 Recording, with the site and processing facts.
+
+    ``plan`` is the plan stored in the recording, or None when it holds none (the analysis then
+    takes the IMU specification and equipment accuracies from its options or their defaults).
+    """
 
     sensor_id: str
-    plan: Plan
+    plan: Plan | None
     windows: tuple[WindowObservation, ...]
     gravity_mps2: float
     earth_rate_t_rps: _F64
@@ -286,29 +319,59 @@ def _meta_json(rec: Recording, key: str) -> dict[str, Any]:
     return value if isinstance(value, dict) else {}
 
 
-def _role(tags: Sequence[str]) -> str | None:
-    if "verification" in tags:
-        return "verification"
-    if "calibration" in tags:
-        return "calibration"
-    return None
+#: The tag the fit selects a window by, implied by its role.
+_ROLE_TAGS = {P1_ACCEL_POSITION: "six-position", P1_GYRO_BIAS: "gyro-bias"}
+_RATE_ROLES = (P1_GYRO_RATE, P1_HELD_OUT_RATE)
+_HELD_OUT_ROLES = (P1_HELD_OUT_POSITION, P1_HELD_OUT_RATE)
+#: A rate point whose rate the recording does not give is static below this measured rate.
+_STATIC_RATE_DPS = 0.01
 
 
 def _repetition(tags: Sequence[str]) -> int:
     for t in tags:
         if t.startswith("rep") and t[3:].isdigit():
             return int(t[3:])
+        if t.startswith("repetition=") and t[len("repetition="):].isdigit():
+            return int(t[len("repetition="):])
     return 1
 
 
+def _step_role(step: StepRecord, procedure: str) -> str:
+    """Return the step's P1 role: recorded, else implied by its tags; ``""`` if none."""
+    role = step.role or role_from_tags(step.kind, step.tags, procedure)
+    return role if role in P1_ROLES else ""
+
+
+def _window_tags(step: StepRecord, role: str) -> tuple[str, ...]:
+    implied = _ROLE_TAGS.get(role)
+    return step.tags if implied is None or implied in step.tags else (*step.tags, implied)
+
+
+def _plan_step(step: StepRecord) -> int:
+    cmd = step.commanded if isinstance(step.commanded, dict) else {}
+    value = cmd.get("plan_step")
+    return value if isinstance(value, int) and not isinstance(value, bool) else step.index
+
+
+def _commanded_number(step: StepRecord, key: str) -> float | None:
+    cmd = step.commanded if isinstance(step.commanded, dict) else {}
+    value = cmd.get(key)
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def _stored_plan(rec: Recording) -> Plan | None:
+    """Return the plan stored in the recording (``plan_toml``), or None."""
+    text = rec.metadata.get("plan_toml")
+    return parse_plan(str(text), f"{rec.path} (plan_toml)") if text else None
+
+
 class _Extractor:
-    def __init__(self, rec: Recording, sensor_id: str, opt: P1Processing) -> None:
-        self.rec, self.sensor, self.opt = rec, sensor_id, opt
+    def __init__(self, rec: Recording, sensor_id: str, opt: P1Processing,
+                 plan: Plan | None) -> None:
+        self.rec, self.sensor, self.opt, self.plan = rec, sensor_id, opt, plan
         meta = rec.metadata
-        if "plan_toml" not in meta:
-            raise RecordingError(f"{rec.path} holds no plan (plan_toml): the P1 analysis needs "
-                                 "the plan's step tags")
-        self.plan = parse_plan(str(meta["plan_toml"]), f"{rec.path} (plan_toml)")
         tables = [s for s in rec.streams if s.device == DEVICE_TABLE]
         if not tables:
             raise RecordingError(f"{rec.path} has no table stream: P1 needs the table feedback")
@@ -376,8 +439,8 @@ class _Extractor:
         self.cutoff_hz = res.cutoff_hz
         return res.values
 
-    def observe_long_static(self, step: Any, role: str, tags: tuple[str, ...]
-                            ) -> WindowObservation:
+    def observe_long_static(self, step: StepRecord, role: str, tags: tuple[str, ...],
+                            step_role: str) -> WindowObservation:
         """Observe a long static window in blocks of :data:`CHUNK_ROWS` rows (bounded memory).
 
         The mean and the scatter are accumulated exactly over the blocks (each block's time
@@ -420,9 +483,9 @@ class _Extractor:
         rot = table_rotation(self.axis_names, mean_angles)
         mean = acc.mean
         return WindowObservation(
-            step_index=step.index, plan_step=int(step.commanded["plan_step"]), kind="static",
+            step_index=step.index, plan_step=_plan_step(step), kind="static",
             role=role, repetition=_repetition(tags), tags=tags, label=step.label,
-            gyro_mean_rps=mean[:3], accel_mean_mps2=mean[3:],
+            step_role=step_role, gyro_mean_rps=mean[:3], accel_mean_mps2=mean[3:],
             gyro_se_rps=stats.standard_error[:3], accel_se_mps2=stats.standard_error[3:],
             gyro_std_rps=acc.std[:3], accel_std_mps2=acc.std[3:],
             rate_b_rps=np.asarray(rot.inv().apply(self.earth_t), dtype=np.float64),
@@ -433,12 +496,16 @@ class _Extractor:
             allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
                                  stats.random_walk]))
 
-    def observe(self, step: Any, role: str, tags: tuple[str, ...]) -> WindowObservation:
-        if step.kind != "rate":
+    def observe(self, step: StepRecord, step_role: str) -> WindowObservation:
+        """Reduce one step's valid window to a :class:`WindowObservation` (module docstring)."""
+        role = "verification" if step_role in _HELD_OUT_ROLES else "calibration"
+        tags = _window_tags(step, step_role)
+        spins = step_role in _RATE_ROLES
+        if not spins:
             i0, i1 = self.rec.row_range(DEVICE_IMU, self.sensor, step.valid_start_s,
                                         step.valid_end_s)
             if i1 - i0 > CHUNK_ROWS:
-                return self.observe_long_static(step, role, tags)
+                return self.observe_long_static(step, role, tags, step_role)
         t, raw, n_out = self.imu_window(step.index)
         stats = compute_window_statistics(raw, self.sample_rate_hz)
         filt = self.filtered(raw)
@@ -455,10 +522,9 @@ class _Extractor:
         # the filtered signal holds nothing above the cut-off: the interpolation bound uses it
         sync = synchronize(t, filt, fb_t, max_alignment_error_s=self.opt.max_alignment_error_s,
                            signal_bandwidth_hz=self.cutoff_hz)
-        plan_step = self.plan.steps[int(step.commanded["plan_step"])]
-        axis = getattr(plan_step, "axis", None) if step.kind == "rate" else None
+        axis, rate_dps = self.spin(step, rates) if spins else (None, 0.0)
         n_rev = 0
-        if axis is not None and getattr(plan_step, "rate_dps", 0.0) != 0.0:
+        if axis is not None and rate_dps != 0.0:
             # at constant rate the table angle is linear in time: interpolated onto the IMU
             # times it gives every IMU sample its angle, so the whole-revolution mean uses all
             # samples whatever the feedback rate (the IMU-onto-table interpolation above
@@ -491,9 +557,9 @@ class _Extractor:
             t0, span = float(fb_t[0]), float(fb_t[-1] - fb_t[0])
             resid_std = filt.std(axis=0, ddof=1)
         return WindowObservation(
-            step_index=step.index, plan_step=int(step.commanded["plan_step"]), kind=kind,
+            step_index=step.index, plan_step=_plan_step(step), kind=kind,
             role=role, repetition=_repetition(tags), tags=tags, label=step.label,
-            gyro_mean_rps=np.asarray(mean[:3], dtype=np.float64),
+            step_role=step_role, gyro_mean_rps=np.asarray(mean[:3], dtype=np.float64),
             accel_mean_mps2=np.asarray(mean[3:], dtype=np.float64),
             gyro_se_rps=stats.standard_error[:3], accel_se_mps2=stats.standard_error[3:],
             gyro_std_rps=resid_std[:3], accel_std_mps2=resid_std[3:],
@@ -504,6 +570,30 @@ class _Extractor:
             alignment_error_s=float(sync.alignment_error_s), duration_s=span, t_start_s=t0,
             allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
                                  stats.random_walk]))
+
+    def spin(self, step: StepRecord, rates_rps: _F64) -> tuple[int | None, float]:
+        """Return the spinning table axis and commanded rate [°/s] of a rate step.
+
+        From ``commanded`` (``axis``, ``rate_dps``); what it lacks, from the table feedback
+        `rates_rps` (n, axes): the axis turning fastest, and its measured mean rate (0 below
+        :data:`_STATIC_RATE_DPS`).
+        """
+        axis_value = _commanded_number(step, "axis")
+        rate_dps = _commanded_number(step, "rate_dps")
+        mean_dps = np.degrees(np.mean(rates_rps, axis=0))
+        if axis_value is None:
+            axis = int(np.argmax(np.abs(mean_dps)))
+        else:
+            axis = int(axis_value)
+            if not (axis_value == axis and 0 <= axis < len(self.axis_names)):
+                raise RecordingError(
+                    f"step {step.index} ({step.label}): commanded axis {axis_value:g} is not "
+                    f"one of the table's axes {list(range(len(self.axis_names)))} "
+                    f"({', '.join(self.axis_names)})")
+        if rate_dps is None:
+            measured = float(mean_dps[axis])
+            rate_dps = measured if abs(measured) >= _STATIC_RATE_DPS else 0.0
+        return axis, rate_dps
 
     def spin_axis_b(self, axis: int, angles: _F64) -> _F64:
         inner = table_rotation(self.axis_names[axis + 1:], angles[axis + 1:])
@@ -532,8 +622,8 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     Parameters
     ----------
     rec : Recording
-        An open Recording of a P1 plan run (the plan's step tags say which windows calibrate
-        and which verify).
+        An open Recording of a P1 run: its steps' roles (or tags) say which windows calibrate
+        and which verify; no plan is needed.
     sensor_id : str, optional
         The IMU; the only one when omitted.
     processing : P1Processing, optional
@@ -545,7 +635,8 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     Raises
     ------
     RecordingError
-        No plan, no table or IMU stream, no latitude, or a window without enough data.
+        No step with a P1 role (nor a plan), no table or IMU stream, no latitude, or a window
+        without enough data.
     InvalidInputError
         NaN in a window, an alignment error above the limit (LimitExceededError).
     """
@@ -556,25 +647,26 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
             raise InvalidInputError(f"{rec.path} has {len(imus)} IMU streams {imus}; name one "
                                     "with `sensor_id`")
         sensor_id = imus[0]
-    ex = _Extractor(rec, sensor_id, opt)
+    plan = _stored_plan(rec)
+    steps = [(step, _step_role(step, plan.procedure if plan else "")) for step in rec.steps
+             if step.concerns(sensor_id)]
+    if plan is None and not any(role for _, role in steps):
+        raise RecordingError(f"{rec.path} holds no plan (plan_toml) and none of its steps has a "
+                             f"P1 role ({', '.join(P1_ROLES)}) or P1 tags: nothing says which "
+                             "windows calibrate and which verify")
+    ex = _Extractor(rec, sensor_id, opt, plan)
     windows: list[WindowObservation] = []
     skipped: list[str] = []
-    for step in rec.steps:
+    for step, role in steps:
         if step.status != "done" or not step.has_valid_window:
             if step.status in ("invalid", "aborted"):
                 skipped.append(f"step {step.index} ({step.label}): {step.status}"
                                + (f" — {step.note}" if step.note else ""))
             continue
-        idx = step.commanded.get("plan_step") if isinstance(step.commanded, dict) else None
-        if idx is None or not 0 <= int(idx) < len(ex.plan.steps):
-            continue
-        tags = tuple(ex.plan.steps[int(idx)].tags)
-        role = _role(tags)
-        if role is None or step.kind not in ("position", "static", "rate"):
-            continue
-        windows.append(ex.observe(step, role, tags))
+        if role:
+            windows.append(ex.observe(step, role))
     if not windows:
-        why = "; ".join(skipped) if skipped else "the plan has no tagged measurement steps"
+        why = "; ".join(skipped) if skipped else "no step has a P1 measurement role"
         raise RecordingError(f"{rec.path}: no completed calibration or verification window for "
                              f"{sensor_id} ({why})")
     noise = estimate_noise(windows)

@@ -18,6 +18,12 @@ check of the mounting, a warm-up, then ``repetitions`` complete calibrations, ea
 
 every step also tagged ``"rep<k>"``. The steps the fit uses carry ``"calibration"``.
 
+Each measuring step also has a role (:mod:`imucalib.io.step_roles`), stored with the executed
+step so that the analysis needs no plan: ``"p1.accel-position"`` (the six positions),
+``"p1.gyro-bias"`` (the level static record), ``"p1.gyro-rate"`` (calibration rates),
+``"p1.held-out-position"`` and ``"p1.held-out-rate"`` (verification). The operator check, the
+warm-up and the moves to a start position have none.
+
 The plan carries a ``[twin]`` table describing a simulated station for it (a high-grade dual-axis
 table and one IMU of the chosen grade), so that ``imucalib run PLAN --station sim`` runs it.
 """
@@ -27,6 +33,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
+from imucalib.io.step_roles import (
+    P1_ACCEL_POSITION,
+    P1_GYRO_BIAS,
+    P1_GYRO_RATE,
+    P1_HELD_OUT_POSITION,
+    P1_HELD_OUT_RATE,
+)
 from imucalib.plan.schema import (
     GuardConfig,
     ImuSpecConfig,
@@ -143,12 +156,13 @@ def generate_p1_plan(
             steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
                                       settle_s=settle_s, record_s=record_s,
                                       label=f"{tag} {up} (pitch {pitch:g}, roll {roll:g})",
+                                      role=P1_ACCEL_POSITION,
                                       tags=("calibration", "six-position", tag)))
         steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=settle_s,
                                   record_s=1.0, label=f"{tag} level for the static record",
                                   tags=(tag,)))
         steps.append(StaticStep(kind="static", duration_s=static_s,
-                                label=f"{tag} level static (gyro bias)",
+                                label=f"{tag} level static (gyro bias)", role=P1_GYRO_BIAS,
                                 tags=("calibration", "gyro-bias", tag)))
         groups = [(0, 0.0, "pitch (Y)"), (1, 0.0, "roll (X)")]
         if z_rates:
@@ -157,8 +171,8 @@ def generate_p1_plan(
             steps.append(PositionStep(kind="position", angles_deg=(0.0, roll_deg), settle_s=5.0,
                                       record_s=1.0, label=f"{tag} start of {group} rates",
                                       tags=(tag,)))
-            for rate, role in [*((r, "calibration") for r in rates_dps),
-                               *((r, "verification") for r in held_out_rates_dps)]:
+            for rate, use in [*((r, "calibration") for r in rates_dps),
+                              *((r, "verification") for r in held_out_rates_dps)]:
                 if rate == 0.0:
                     length: dict[str, float | int] = {"record_s": record_s}
                 else:
@@ -166,11 +180,14 @@ def generate_p1_plan(
                 steps.append(RateStep(kind="rate", axis=axis, rate_dps=rate,
                                       settle_s=rate_settle_s,
                                       label=f"{tag} {group} {rate:+g} °/s",
-                                      tags=(role, "rate", tag), **length))
+                                      role=(P1_GYRO_RATE if use == "calibration"
+                                            else P1_HELD_OUT_RATE),
+                                      tags=(use, "rate", tag), **length))
         for pitch, roll in P1_HELD_OUT_POSITIONS_DEG:
             steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
                                       settle_s=settle_s, record_s=record_s,
                                       label=f"{tag} held-out (pitch {pitch:g}, roll {roll:g})",
+                                      role=P1_HELD_OUT_POSITION,
                                       tags=("verification", "position", tag)))
     max_rate = max(abs(r) for r in (*rates_dps, *held_out_rates_dps))
     twin = TwinEquipment(

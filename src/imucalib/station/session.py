@@ -563,7 +563,8 @@ class RunSession:
         step = self.plan.steps[index]
         label = self.plan.step_label(index)
         commanded = {**step.model_dump(mode="json"), "plan_step": index, "attempt": attempt}
-        row = self.writer.begin_step(step.kind, label, self.now(), commanded=commanded)
+        row = self.writer.begin_step(step.kind, label, self.now(), commanded=commanded,
+                                     role=step.role, tags=step.tags, units=tuple(self.ids))
         self.status.step_index, self.status.step_label, self.status.attempt = index, label, attempt
         self.writer.log_event(self.now(), "info", "runner",
                               f"step {index} ({label}) started, attempt {attempt + 1}")

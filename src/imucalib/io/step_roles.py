@@ -1,0 +1,94 @@
+"""Step roles: what a recorded step is for in its procedure (the ``role`` field of ``/steps``).
+
+A role is ``"<procedure>.<purpose>"``. Plan generators set them, the runner stores them with each
+executed step, and an analysis selects its windows by them, so that a Recording explains itself
+without the plan that made it (``docs/recording-format.md``, "Step roles").
+
+P1 (two-dimensional calibration on a dual-axis table):
+
+:data:`P1_ACCEL_POSITION` ``"p1.accel-position"``
+    One of the six static positions; calibrates the accelerometer triad (and gives the gyro
+    static rows).
+:data:`P1_GYRO_BIAS` ``"p1.gyro-bias"``
+    The long level static record; the gyro bias and the noise model of the window means.
+:data:`P1_GYRO_RATE` ``"p1.gyro-rate"``
+    A calibration rate point (``commanded`` gives ``axis``, ``rate_dps`` and ``revolutions``);
+    a zero rate is observed as a static window.
+:data:`P1_HELD_OUT_POSITION` ``"p1.held-out-position"``
+    A position kept out of the fit, for the accelerometer accuracy verification.
+:data:`P1_HELD_OUT_RATE` ``"p1.held-out-rate"``
+    A rate kept out of the fit, for the gyro accuracy verification.
+
+Allan: :data:`ALLAN_STATIC` ``"allan.static"``, a static record whose noise is characterised.
+
+Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
+
+:func:`role_from_tags` gives the role that the generators now set from what older plans said with
+tags alone; it maps version 1 Recordings, which had no ``role`` field, and steps of hand-written
+plans that carry the tags but no role.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Final
+
+__all__ = [
+    "ALLAN_STATIC",
+    "P1_ACCEL_POSITION",
+    "P1_GYRO_BIAS",
+    "P1_GYRO_RATE",
+    "P1_HELD_OUT_POSITION",
+    "P1_HELD_OUT_RATE",
+    "P1_ROLES",
+    "role_from_tags",
+]
+
+P1_ACCEL_POSITION: Final = "p1.accel-position"
+P1_GYRO_BIAS: Final = "p1.gyro-bias"
+P1_GYRO_RATE: Final = "p1.gyro-rate"
+P1_HELD_OUT_POSITION: Final = "p1.held-out-position"
+P1_HELD_OUT_RATE: Final = "p1.held-out-rate"
+#: Every P1 role.
+P1_ROLES: Final = (P1_ACCEL_POSITION, P1_GYRO_BIAS, P1_GYRO_RATE, P1_HELD_OUT_POSITION,
+                   P1_HELD_OUT_RATE)
+ALLAN_STATIC: Final = "allan.static"
+
+
+def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:
+    """Return the role a step of `kind` with `tags` has under the generators' rules, or ``""``.
+
+    Parameters
+    ----------
+    kind : str
+        The step kind (``"position"``, ``"static"``, ``"rate"``, …).
+    tags : sequence of str
+        The step's tags, e.g. ``("calibration", "six-position", "rep1")``.
+    procedure : str
+        The plan's ``procedure`` (``"p1"``, ``"allan"``), or ``""`` when unknown: then the
+        distinctive tags decide.
+
+    Examples
+    --------
+    >>> role_from_tags("position", ("calibration", "six-position", "rep1"), "p1")
+    'p1.accel-position'
+    >>> role_from_tags("rate", ("verification", "rate", "rep2"))
+    'p1.held-out-rate'
+    >>> role_from_tags("static", ("allan", "T+20"), "allan")
+    'allan.static'
+    """
+    tagset = set(tags)
+    if procedure in ("allan", "") and kind == "static" and "allan" in tagset:
+        return ALLAN_STATIC
+    if procedure not in ("p1", ""):
+        return ""
+    if kind == "position" and "six-position" in tagset:
+        return P1_ACCEL_POSITION
+    if kind == "static" and "gyro-bias" in tagset:
+        return P1_GYRO_BIAS
+    if "verification" in tagset:
+        return {"position": P1_HELD_OUT_POSITION, "static": P1_HELD_OUT_POSITION,
+                "rate": P1_HELD_OUT_RATE}.get(kind, "")
+    if kind == "rate" and "calibration" in tagset:
+        return P1_GYRO_RATE
+    return ""

@@ -1,0 +1,70 @@
+"""P1 reads what it needs from the recorded steps (roles, tags, commanded), not from the plan."""
+
+from __future__ import annotations
+
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+
+from imucalib.errors import RecordingError
+from imucalib.io import open_recording
+from imucalib.plan import parse_plan
+from imucalib.procedures.p1 import P1Options, analyze_p1
+
+FAST = P1Options(hash_recording=False)
+
+
+def test_a_station_run_stores_each_steps_role_tags_and_units(tactical_run):
+    with open_recording(tactical_run) as rec:
+        assert rec.format_version == 2
+        plan = parse_plan(rec.metadata["plan_toml"])
+        steps = rec.steps
+    for step in steps:
+        planned = plan.steps[step.commanded["plan_step"]]
+        assert (step.role, step.tags) == (planned.role, planned.tags)
+        assert step.commanded["tags"] == list(planned.tags)
+        assert step.units == ("IMU-0001",)
+    assert {s.role for s in steps} == {"", "p1.accel-position", "p1.gyro-bias", "p1.gyro-rate",
+                                       "p1.held-out-rate", "p1.held-out-position"}
+
+
+def test_a_recording_without_its_plan_calibrates_the_same(tactical_run, tmp_path):
+    """Without the plan: the same windows and estimates; limits and Type B from the defaults
+    (which the generated plan also uses)."""
+    bare = tmp_path / "bare.h5"
+    shutil.copyfile(tactical_run, bare)
+    with h5py.File(bare, "r+") as f:
+        del f.attrs["plan_toml"]
+    with_plan = analyze_p1(tactical_run, options=FAST)
+    without = analyze_p1(bare, options=FAST)
+    assert without.observations.plan is None
+    np.testing.assert_array_equal(without.result.values, with_plan.result.values)
+    np.testing.assert_array_equal(without.result.covariance, with_plan.result.covariance)
+    assert [c.passed for c in without.checks] == [c.passed for c in with_plan.checks]
+    assert sorted(without.per_repetition) == [1, 2]
+
+
+def test_the_equipment_accuracy_can_be_given_as_options(tactical_run):
+    plan_b = analyze_p1(tactical_run, options=FAST).result
+    no_b = analyze_p1(tactical_run, options=P1Options(hash_recording=False, type_b=False)).result
+    zero = analyze_p1(tactical_run, options=P1Options(
+        hash_recording=False, table_position_accuracy_arcsec=0.0,
+        table_orthogonality_arcsec=0.0)).result
+    np.testing.assert_allclose(zero.covariance, no_b.covariance, rtol=1e-12)
+    assert plan_b.sigma("accel_M_xy") > zero.sigma("accel_M_xy")
+    assert any("(P1Options)" in n for n in zero.notes)
+
+
+def test_steps_without_roles_or_a_plan_say_so(tactical_run, tmp_path):
+    bare = tmp_path / "bare.h5"
+    shutil.copyfile(tactical_run, bare)
+    with h5py.File(bare, "r+") as f:
+        del f.attrs["plan_toml"]
+        n = f["steps/role"].shape[0]
+        f["steps/role"][:n] = np.full(n, b"", dtype=f["steps/role"].dtype)
+        f["steps/tags"][:n] = np.full(n, b"[]", dtype=f["steps/tags"].dtype)
+    with pytest.raises(RecordingError, match=r"holds no plan \(plan_toml\) and none of its "
+                                             r"steps has a P1 role"):
+        analyze_p1(bare, options=FAST)
