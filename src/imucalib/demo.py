@@ -28,7 +28,7 @@ from rich.table import Table
 from imucalib.errors import CalibrationError
 
 if TYPE_CHECKING:
-    from imucalib.procedures.p1 import P1Analysis
+    from imucalib.procedures.p1.analysis import P1Analysis
 
 __all__ = ["main"]
 

@@ -15,7 +15,7 @@ from imucalib.cli._app import app, console, fail
 from imucalib.errors import CalibrationError, ConfigurationError, InvalidInputError
 
 if TYPE_CHECKING:
-    from imucalib.procedures.p1 import P1Analysis
+    from imucalib.procedures.p1.analysis import P1Analysis
 
 __all__ = ["apply", "calibrate", "render_calibration", "run_calibration"]
 
@@ -41,7 +41,7 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
     """Analyse a recording with its plan's procedure; write the result and the report JSON."""
     from imucalib.io.reader import open_recording
     from imucalib.plan.io import parse_plan
-    from imucalib.procedures.p1 import P1Options, analyze_p1
+    from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 
     with open_recording(recording) as rec:
         plan_toml = rec.metadata.get("plan_toml")
@@ -104,7 +104,7 @@ def run_noise_characterization(recording: Path, imu: str | None, out: Path | Non
                                ) -> tuple[Any, list[Path]]:
     """Analyse an Allan recording; write its JSON, Kalibr/OpenVINS YAML, table and figures."""
     from imucalib.io.noise_export import format_noise_table, write_kalibr_yaml, write_openvins_yaml
-    from imucalib.procedures.allan import analyze_allan_recording
+    from imucalib.procedures.allan.analysis import analyze_allan_recording
     from imucalib.report.allan_figure import save_allan_figures
 
     result = analyze_allan_recording(recording, unit=imu)

@@ -43,7 +43,7 @@ from imucalib.estimation import (
 )
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names
-from imucalib.procedures.p1_observations import P1Observations, WindowObservation
+from imucalib.procedures.p1.observations import P1Observations, WindowObservation
 
 __all__ = [
     "MIN_EXCITATION",

@@ -1,7 +1,7 @@
 """Procedure P1 end to end: a Recording → calibrated parameters, checks and a decision.
 
-:func:`analyze_p1` runs the chain of SPEC.md P1: observations (:mod:`.p1_observations`), the
-fit of the chosen model (:mod:`.p1_fit`), then the verification of
+:func:`analyze_p1` runs the chain of SPEC.md P1: observations (:mod:`.observations`), the
+fit of the chosen model (:mod:`.fit`), then the verification of
 :mod:`imucalib.analysis.verification`:
 
 - residuals of the calibration windows against the seed's limits (0.002 g, 0.1 °/s) and a χ²
@@ -47,7 +47,7 @@ from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.io.reader import open_recording
 from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
-from imucalib.procedures.p1_fit import (
+from imucalib.procedures.p1.fit import (
     P1Fit,
     TriadFit,
     _stack_covariance,
@@ -56,7 +56,7 @@ from imucalib.procedures.p1_fit import (
     observation_covariance,
     predict_outputs,
 )
-from imucalib.procedures.p1_observations import (
+from imucalib.procedures.p1.observations import (
     P1Observations,
     P1Processing,
     WindowObservation,
