@@ -65,7 +65,7 @@ from imucalib.processing import (
     reject_outliers_grubbs,
     synchronize,
 )
-from imucalib.sim.earth import Site
+from imucalib.models.earth import Site
 
 __all__ = [
     "P1Observations",
