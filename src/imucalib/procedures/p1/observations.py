@@ -53,6 +53,7 @@ from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TABLE_AXIS_VECTORS
 from imucalib.errors import ConfigurationError, InvalidInputError, RecordingError
 from imucalib.io.reader import Recording
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
+from imucalib.models.earth import Site
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 from imucalib.plan.io import parse_plan
 from imucalib.plan.schema import Plan
@@ -65,7 +66,6 @@ from imucalib.processing import (
     reject_outliers_grubbs,
     synchronize,
 )
-from imucalib.models.earth import Site
 
 __all__ = [
     "P1Observations",
