@@ -175,7 +175,7 @@ def apply(
     """Correct a recording's IMU stream, or a CSV file, with a calibration result."""
     import pandas as pd
 
-    from imucalib.models.apply import correct_imu_frame
+    from imucalib.models.correct import correct_imu_frame
     from imucalib.models.result import CalibrationResult
 
     try:
