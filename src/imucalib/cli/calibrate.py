@@ -103,7 +103,7 @@ class _AllanProcedure(Exception):  # noqa: N818 - a control-flow signal, not an 
 def run_noise_characterization(recording: Path, imu: str | None, out: Path | None
                                ) -> tuple[Any, list[Path]]:
     """Analyse an Allan recording; write its JSON, Kalibr/OpenVINS YAML, table and figures."""
-    from imucalib.io.noise_export import format_noise_table, write_kalibr_yaml, write_openvins_yaml
+    from imucalib.exports.noise import format_noise_table, write_kalibr_yaml, write_openvins_yaml
     from imucalib.procedures.allan.analysis import analyze_allan_recording
     from imucalib.report.allan_figure import save_allan_figures
 
@@ -127,7 +127,7 @@ def run_noise_characterization(recording: Path, imu: str | None, out: Path | Non
 
 def render_noise_characterization(result: Any, written: list[Path]) -> None:
     """Print each record's noise-term table and the files written."""
-    from imucalib.io.noise_export import format_noise_table
+    from imucalib.exports.noise import format_noise_table
 
     for seg in result.segments:
         temp = "" if seg.temperature_degc is None else f", {seg.temperature_degc:.1f} °C"

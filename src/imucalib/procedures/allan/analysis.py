@@ -51,9 +51,9 @@ from imucalib.analysis import (
     fit_noise_terms,
 )
 from imucalib.analysis.allan import TauSpec
+from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import InvalidInputError
-from imucalib.io.noise_export import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.io.reader import Recording, open_recording
 from imucalib.units import parse_unit
 
