@@ -168,6 +168,16 @@ class NoiseCharacterization:
     created_utc: str = ""
     format_version: int = FORMAT_VERSION
 
+    @property
+    def procedure(self) -> str:
+        """``"allan"`` (:class:`~imucalib.procedures.common.procedure.ProcedureResult`)."""
+        return "allan"
+
+    @property
+    def passed(self) -> None:
+        """None: a noise characterisation decides nothing."""
+        return None
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (the body of :meth:`to_json`)."""
         return {"format": _FORMAT_NAME, "format_version": self.format_version,

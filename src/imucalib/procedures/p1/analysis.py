@@ -124,6 +124,21 @@ class P1Analysis:
     crlb_ratio: dict[str, float]
     observations: P1Observations
 
+    @property
+    def procedure(self) -> str:
+        """``"p1"`` (:class:`~imucalib.procedures.common.procedure.ProcedureResult`)."""
+        return "p1"
+
+    @property
+    def unit(self) -> str:
+        """The calibrated IMU."""
+        return self.result.sensor_id
+
+    @property
+    def passed(self) -> bool:
+        """The decision."""
+        return self.decision.passed
+
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-able report: the result, the checks and the decision."""
         return {
