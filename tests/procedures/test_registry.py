@@ -101,3 +101,16 @@ def test_p1_options_are_checked():
         p1.analyze("x.h5", options={"model": "full"})
     with pytest.raises(InvalidInputError, match="takes no options"):
         registry.get("allan").analyze("x.h5", options={"model": "triad"})
+
+
+def test_the_demo_imports_no_cli_module():
+    import ast
+    from pathlib import Path
+
+    import imucalib.demo
+
+    tree = ast.parse(Path(imucalib.demo.__file__).read_text(encoding="utf-8"))
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert not any(m and m.startswith("imucalib.cli") for m in imported)
+    assert "imucalib.procedures" in imported and "imucalib.exports.outputs" in imported
