@@ -1,6 +1,6 @@
 """Procedure P1 end to end: a Recording → calibrated parameters, checks and a decision.
 
-:func:`analyze_p1` runs the chain of SPEC.md P1: observations (:mod:`.observations`), the
+:func:`analyze_p1` runs the chain of P1 (docs/p1.md): observations (:mod:`.observations`), the
 fit of the chosen model (:mod:`.fit`), then the verification of
 :mod:`imucalib.analysis.verification`:
 
@@ -12,7 +12,8 @@ fit of the chosen model (:mod:`.fit`), then the verification of
   parameters near zero);
 - the Kalman refinement of the same observations (P1 step 4), reported with its largest
   difference from least squares in standard deviations;
-- the Cramér–Rao bound of the design with the same observation covariance (standards.md §5);
+- the Cramér–Rao bound of the design with the same observation covariance
+  (docs/processing-estimation.md);
 
 and one decision under :data:`~imucalib.analysis.verification.DECISION_RULE`. The calibration
 itself (:class:`~imucalib.models.result.CalibrationResult`) is the fit of every repetition's
@@ -81,13 +82,13 @@ class P1Options:
     correlated : bool
         Weight with the full covariance of the window means (recommended).
     residual_accel_g, residual_gyro_dps : float
-        Residual limits of SPEC.md P1 rule 5.
+        Residual limits of P1 rule 5 (docs/p1.md, verification).
     significance : float
         p-value of the χ² test below which the model is too simple.
     accel_accuracy_g, gyro_accuracy_dps : float or None
         Held-out limits; None: the plan's ``[imu]`` values.
     repeatability_cv : float
-        CV limit of scale factors (SPEC.md P1: 1 %).
+        CV limit of scale factors (P1 rule 6: 1 %; docs/p1.md).
     repeatability_k : float
         Spread limit of other parameters, in their typical standard uncertainty.
     hash_recording : bool

@@ -2,7 +2,7 @@
 
 Models (``model`` argument)
 ---------------------------
-``"per-axis"`` — the seed's model (SPEC.md P1), cross-coupling neglected, per axis i:
+``"per-axis"`` — the seed's model (docs/p1.md), cross-coupling neglected, per axis i:
     accelerometer  a_out,i = K_i·(a_ref,i + b_i), from the six positions;
     gyro           ω_out,i = K_i·(ω_ref,i + b_i), from the rate points turning about axis i and the
     static windows (whose reference is the Earth-rate projection, so b_i excludes Earth rate).
