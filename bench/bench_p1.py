@@ -31,8 +31,8 @@ import numpy as np
 
 from imucalib import units
 from imucalib.models import ImuModel, NoiseModel, TriadModel, sample_imu_model
-from imucalib.procedures.p1_fit import fit_triad
-from imucalib.procedures.p1_observations import WindowObservation, table_rotation
+from imucalib.procedures.p1.fit import fit_triad
+from imucalib.procedures.p1.observations import WindowObservation, table_rotation
 from imucalib.sim import Site, TwinRig, single_imu_fixture
 from imucalib.sim.synth import SimImu
 from imucalib.sim.table import RateTableSpec, SimRateTable
@@ -180,7 +180,7 @@ def make_recording(path: Path) -> None:
 def analyse_child(path: Path) -> None:
     """Run in a child process: analyse and print samples, seconds and peak RSS."""
     from imucalib.io import open_recording
-    from imucalib.procedures.p1 import P1Options, analyze_p1
+    from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 
     with open_recording(path) as rec:
         n = rec.stream_info("imu", "IMU-0001").n_samples

@@ -33,8 +33,8 @@ from collections.abc import Callable  # noqa: E402
 import numpy as np  # noqa: E402
 
 from imucalib import units  # noqa: E402
+from imucalib.models.earth import Site  # noqa: E402
 from imucalib.models.imu import sample_imu_model  # noqa: E402
-from imucalib.sim.earth import Site  # noqa: E402
 from imucalib.sim.fixture import array_fixture, single_imu_fixture  # noqa: E402
 from imucalib.sim.rig import TwinRig  # noqa: E402
 from imucalib.sim.synth import SimImu  # noqa: E402

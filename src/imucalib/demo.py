@@ -28,7 +28,7 @@ from rich.table import Table
 from imucalib.errors import CalibrationError
 
 if TYPE_CHECKING:
-    from imucalib.procedures.p1 import P1Analysis
+    from imucalib.procedures.p1.analysis import P1Analysis
 
 __all__ = ["main"]
 
@@ -61,16 +61,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="one repetition, 10 min static")
     args = parser.parse_args(argv)
     console = Console()
-    from imucalib.cli.calibrate import render_calibration, run_calibration
+    from imucalib.exports.outputs import write_outputs
     from imucalib.io.reader import open_recording
     from imucalib.plan import describe_plan, write_plan
-    from imucalib.procedures import generate_p1_plan
+    from imucalib.procedures import registry
+    from imucalib.procedures.p1.analysis import P1Analysis
+    from imucalib.report.console import render_result
     from imucalib.station.runner import RunOptions, run_plan
     from imucalib.station.sim import SimStation
 
     try:
         args.out.mkdir(parents=True, exist_ok=True)
-        plan = generate_p1_plan(grade="tactical", sample_rate_hz=200.0, seed=args.seed,
+        p1 = registry.get("p1")
+        plan = p1.generate_plan(grade="tactical", sample_rate_hz=200.0, seed=args.seed,
                                 repetitions=1 if args.quick else 3,
                                 static_s=600.0 if args.quick else 3600.0,
                                 warm_up_s=300.0 if args.quick else None)
@@ -92,8 +95,9 @@ def main(argv: list[str] | None = None) -> int:
         if summary.status != "done":
             raise CalibrationError(f"the run did not complete: {summary.reason}")
         console.rule("[bold]3. Calibrate and verify")
-        analysis, result_path, report_path = run_calibration(path, None, "triad", args.out)
-        render_calibration(analysis, result_path, report_path)
+        analysis = p1.analyze(path, options={"model": "triad"})
+        assert isinstance(analysis, P1Analysis)
+        render_result(console, analysis, write_outputs(analysis, args.out, name=path.stem))
         console.rule("[bold]4. Against the truth")
         with open_recording(path) as rec:
             truth = rec.truth

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from imucalib.cli import app
-from imucalib.io import export_csv
+from imucalib.exports.streams import export_csv
 from imucalib.models.result import CalibrationResult
 from imucalib.plan import load_plan
 

@@ -8,15 +8,9 @@ import pytest
 import scipy.io
 
 from imucalib.errors import InvalidInputError
-from imucalib.io import (
-    ColumnSpec,
-    RecordingWriter,
-    StreamSpec,
-    export_csv,
-    export_mat,
-    open_recording,
-)
-from imucalib.io import export as export_module
+from imucalib.exports import streams as export_module
+from imucalib.exports.streams import export_csv, export_mat
+from imucalib.io import ColumnSpec, RecordingWriter, StreamSpec, open_recording
 
 
 def test_csv_whole_stream_exact_with_units(recording, tmp_path):

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from imucalib.errors import InvalidInputError, UnitError
 from imucalib.models import apply_triad, sample_imu_model
-from imucalib.models.apply import correct_imu, correct_imu_frame
+from imucalib.models.correct import correct_imu, correct_imu_frame
 from imucalib.models.result import (
     RESULT_FORMAT_VERSION,
     CalibrationResult,

@@ -14,7 +14,7 @@ from imucalib.io import open_recording
 from imucalib.models import ImuModel
 from imucalib.plan import load_plan
 from imucalib.procedures import generate_allan_plan
-from imucalib.procedures.allan import NoiseCharacterization
+from imucalib.procedures.allan.analysis import NoiseCharacterization
 from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
 

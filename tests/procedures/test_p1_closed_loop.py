@@ -8,7 +8,7 @@ import pytest
 from imucalib.io import open_recording
 from imucalib.models import ImuModel
 from imucalib.models.result import CalibrationResult
-from imucalib.procedures.p1 import P1Options, analyze_p1
+from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 
 
 def truth_vector(result: CalibrationResult, model: ImuModel) -> np.ndarray:

@@ -13,8 +13,8 @@ from imucalib.errors import (
     UnitError,
 )
 from imucalib.io import open_recording
-from imucalib.models.apply import correct_imu
-from imucalib.procedures.p1 import P1Options, analyze_p1
+from imucalib.models.correct import correct_imu
+from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 from imucalib.station.runner import run_plan
 from imucalib.station.sim import SimStation
 

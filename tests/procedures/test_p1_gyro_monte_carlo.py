@@ -25,13 +25,13 @@ import pytest
 from imucalib import units
 from imucalib.conventions import TABLE_AXIS_VECTORS
 from imucalib.models import ImuModel, NoiseModel, TriadModel, sample_imu_model
-from imucalib.procedures.p1_fit import fit_triad
-from imucalib.procedures.p1_observations import (
+from imucalib.procedures.p1.fit import fit_triad
+from imucalib.procedures.p1.observations import (
     WindowObservation,
     site_vectors,
     table_rotation,
 )
-from imucalib.procedures.p1_plan import P1_SIX_POSITIONS_DEG
+from imucalib.procedures.p1.plan import P1_SIX_POSITIONS_DEG
 from imucalib.processing import compute_integer_revolution_window
 from imucalib.sim import Site, TwinRig, single_imu_fixture
 from imucalib.sim.synth import SimImu

@@ -18,9 +18,9 @@ import pytest
 from imucalib import units
 from imucalib.estimation import compute_six_position_accel_crlb
 from imucalib.models import ImuModel, NoiseModel, TriadModel, sample_imu_model
-from imucalib.procedures.p1_fit import fit_triad
-from imucalib.procedures.p1_observations import WindowObservation, table_rotation
-from imucalib.procedures.p1_plan import P1_SIX_POSITIONS_DEG
+from imucalib.procedures.p1.fit import fit_triad
+from imucalib.procedures.p1.observations import WindowObservation, table_rotation
+from imucalib.procedures.p1.plan import P1_SIX_POSITIONS_DEG
 from imucalib.sim import Site, TwinRig, single_imu_fixture
 from imucalib.sim.synth import SimImu
 from imucalib.sim.table import RateTableSpec, SimRateTable

@@ -11,7 +11,7 @@ import pytest
 from imucalib.errors import RecordingError
 from imucalib.io import open_recording
 from imucalib.plan import parse_plan
-from imucalib.procedures.p1 import P1Options, analyze_p1
+from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 
 FAST = P1Options(hash_recording=False)
 

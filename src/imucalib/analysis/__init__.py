@@ -17,6 +17,9 @@ Contents
 :mod:`imucalib.analysis.noise_fit`
     :func:`fit_noise_terms`, :class:`NoiseFit`, :class:`NoiseTerm`, :func:`read_slope_lines`,
     :func:`term_avar`, :func:`make_noise_term`, :data:`FIT_TERMS`, :data:`FLICKER_FACTOR`.
+:mod:`imucalib.analysis.noise_parameters`
+    :class:`ImuNoiseParameters`, :func:`noise_parameters_from_fits` (the densities a VIO filter
+    takes; imported from its module).
 :mod:`imucalib.analysis.noise_units`
     :func:`convert_noise_term`, :class:`UnitValue`, :data:`DENSITY_CONVENTION`.
 :func:`kernel_backend`, :func:`set_kernel_backend`

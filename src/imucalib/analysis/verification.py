@@ -1,6 +1,6 @@
 """Verification of a calibration: residuals, held-out accuracy, repeatability, the decision.
 
-Pure functions over numbers; the procedures gather them (:mod:`imucalib.procedures.p1`).
+Pure functions over numbers; the procedures gather them (:mod:`imucalib.procedures.p1.analysis`).
 
 Contents
 --------

@@ -85,7 +85,7 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
 
 @plan_app.command("new")
 def new(
-    procedure: Annotated[str, typer.Argument(help="Procedure: p1 or allan.")],
+    procedure: Annotated[str, typer.Argument(help="Procedure: p1 or allan (the registry's).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
     "tactical",
@@ -105,28 +105,22 @@ def new(
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
+    from imucalib.procedures import registry
 
     try:
-        if procedure == "p1":
-            from imucalib.procedures import generate_p1_plan
-
-            plan = generate_p1_plan(grade=grade, repetitions=repetitions, static_s=static_s,
-                                    sample_rate_hz=sample_rate_hz, seed=seed)
-        elif procedure == "allan":
-            from imucalib.procedures import generate_allan_plan
-
-            temps = None
-            if temperatures is not None:
-                try:
-                    temps = [float(t) for t in temperatures.split(",") if t.strip()]
-                except ValueError as exc:
-                    raise ConfigurationError(
-                        f"--temperatures must be numbers separated by commas; got "
-                        f"{temperatures!r}") from exc
-            plan = generate_allan_plan(grade=grade, record_s=record_s, temperatures_degc=temps,
-                                       sample_rate_hz=sample_rate_hz, seed=seed)
-        else:
-            raise ConfigurationError(f"unknown procedure {procedure!r}; known: p1, allan")
+        proc = registry.get(procedure)
+        temps = None
+        if temperatures is not None and "temperatures_degc" in proc.plan_options:
+            try:
+                temps = [float(t) for t in temperatures.split(",") if t.strip()]
+            except ValueError as exc:
+                raise ConfigurationError(
+                    f"--temperatures must be numbers separated by commas; got "
+                    f"{temperatures!r}") from exc
+        given = {"grade": grade, "repetitions": repetitions, "static_s": static_s,
+                 "sample_rate_hz": sample_rate_hz, "seed": seed, "record_s": record_s,
+                 "temperatures_degc": temps}
+        plan = proc.generate_plan(**{k: v for k, v in given.items() if k in proc.plan_options})
         write_plan(plan, out)
     except ValidationError as exc:  # options the plan's bounds refuse (NaN passes a range)
         raise fail(ConfigurationError(format_validation_error(

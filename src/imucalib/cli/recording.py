@@ -51,7 +51,7 @@ def export(
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
 ) -> None:
     """Export a stream, or one step of it, as CSV or MAT (chosen by the file suffix)."""
-    from imucalib.io.export import export_csv, export_mat
+    from imucalib.exports.streams import export_csv, export_mat
     from imucalib.io.reader import open_recording
 
     device, _, unit = stream.partition("/")

@@ -1,4 +1,4 @@
-"""The Recording (crash-safe HDF5 file of a station run): writer, reader, recovery, exports.
+"""The Recording (crash-safe HDF5 file of a station run): writer, reader, recovery.
 
 Contents
 --------
@@ -9,13 +9,12 @@ Contents
     Read one (:mod:`imucalib.io.reader`).
 :func:`recover_recording`, :class:`RecoveryReport`
     Copy what a crashed writer flushed into a cleanly closed file (:mod:`imucalib.io.recover`).
-:func:`export_csv`, :func:`export_mat`
-    Export a stream or a step of it (:mod:`imucalib.io.export`).
+
+A stream or a step of it is exported to CSV or MAT by :mod:`imucalib.exports.streams`.
 """
 
 from __future__ import annotations
 
-from imucalib.io.export import export_csv, export_mat
 from imucalib.io.reader import (
     LogEvent,
     Recording,
@@ -46,8 +45,6 @@ __all__ = [
     "StreamData",
     "StreamInfo",
     "StreamSpec",
-    "export_csv",
-    "export_mat",
     "open_recording",
     "recover_recording",
 ]

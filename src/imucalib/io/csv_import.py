@@ -1,4 +1,4 @@
-"""Read IMU data from CSV: the exports of :mod:`imucalib.io.export` and plain vendor files.
+"""Read IMU data from CSV: the exports of :mod:`imucalib.exports.streams` and plain vendor files.
 
 Contents
 --------
@@ -10,7 +10,7 @@ Contents
 
 Accepted headers
 ----------------
-- ``name [unit]`` (what :func:`~imucalib.io.export.export_csv` writes): the unit is taken from
+- ``name [unit]`` (what :func:`~imucalib.exports.streams.export_csv` writes): the unit is taken from
   the brackets; it must be one :func:`imucalib.units.parse_unit` knows, or one of the units
   without an SI factor that a Recording accepts (``degC``, ``bool``, ``K``, …);
 - a bare canonical name (``gyro_x_rps``, ``accel_y_mps2``, ``time_s``): the unit its suffix

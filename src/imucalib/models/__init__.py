@@ -14,6 +14,11 @@ Contents
     :class:`SensorSpec` (range, resolution, bandwidth), :class:`OutputChain`.
 :mod:`imucalib.models.imu`
     :class:`ImuModel`, :data:`GRADES`, :func:`sample_imu_model`.
+:mod:`imucalib.models.earth`
+    :class:`Site` (Earth rate, normal gravity, the table's heading), imported from its module.
+:mod:`imucalib.models.correct`
+    :func:`correct_imu`, :func:`correct_imu_frame` (a calibration result applied to data),
+    imported from its module.
 """
 
 from __future__ import annotations

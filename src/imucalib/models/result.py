@@ -158,7 +158,7 @@ class CalibrationResult:
         The unit of each parameter.
     input_units : mapping of str to str
         The units of the data the result applies to (``{"gyro": "rad/s", "accel": "m/s^2"}``);
-        :func:`imucalib.models.apply.correct_imu` refuses others.
+        :func:`imucalib.models.correct.correct_imu` refuses others.
     residuals : mapping of str to ResidualStats
         Residual statistics per group of observations.
     provenance : Provenance

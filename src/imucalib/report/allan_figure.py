@@ -7,7 +7,8 @@ Contents
     the fitted total, each fitted term's line (its asymptote, labelled with its value) and the
     Allan minimum. Returns a matplotlib ``Figure``; saves PNG/PDF/SVG when given a path.
 :func:`save_allan_figures`
-    Both triads of every record of a :class:`~imucalib.procedures.allan.NoiseCharacterization`.
+    Both triads of every record of a
+    :class:`~imucalib.procedures.allan.analysis.NoiseCharacterization`.
 
 matplotlib is imported inside the functions (object-oriented API with the Agg canvas: no
 pyplot, no global backend change), never when imucalib is imported. Deviations are shown in °/h
@@ -26,10 +27,10 @@ import numpy as np
 from imucalib import units
 from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
 from imucalib.errors import InvalidInputError
-from imucalib.io.noise_export import TABLE_ROWS
+from imucalib.exports.noise import TABLE_ROWS
 
 if TYPE_CHECKING:
-    from imucalib.procedures.allan import NoiseCharacterization, SegmentNoise
+    from imucalib.procedures.allan.analysis import NoiseCharacterization, SegmentNoise
 
 __all__ = ["plot_allan_triad", "save_allan_figures"]
 
@@ -90,7 +91,7 @@ def plot_allan_triad(segment: SegmentNoise, sensor: str, *,
     Parameters
     ----------
     segment : SegmentNoise
-        A record of :func:`imucalib.procedures.allan.analyze_allan_recording`.
+        A record of :func:`imucalib.procedures.allan.analysis.analyze_allan_recording`.
     sensor : {"gyro", "accel"}
         Which triad.
     path : path, optional

@@ -19,9 +19,12 @@ time, so memory is bounded by the longest step, not the file:
 
 Reference inputs
 ----------------
-The table geometry comes from the axis names (:data:`imucalib.conventions.TABLE_AXIS_VECTORS`:
-pitch about −y, roll about x, azimuth about z), outer axis first, with the IMU body frame equal
-to the platform frame. For measured angles, rot_tp = Π R_{n_i}(θ_i) and
+From :mod:`imucalib.procedures.common.reference` (shared with the other procedures; the window
+statistics from :mod:`~imucalib.procedures.common.windows`, the noise model of window means from
+:mod:`~imucalib.procedures.common.noise`). The table geometry comes from the axis names
+(:data:`imucalib.conventions.TABLE_AXIS_VECTORS`: pitch about −y, roll about x, azimuth about z),
+outer axis first, with the IMU body frame equal to the platform frame. For measured angles,
+rot_tp = Π R_{n_i}(θ_i) and
 
 - static: specific force f_b = rot_tpᵀ·[0, 0, g] (P1: g·[sin θ, sin φ cos θ, cos θ cos φ]) and
   angular rate ω_b = rot_tpᵀ·Ω_t (Earth rate at the site's latitude and heading);
@@ -60,10 +63,9 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
-from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TABLE_AXIS_VECTORS
-from imucalib.errors import ConfigurationError, InvalidInputError, RecordingError
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+from imucalib.errors import InvalidInputError, RecordingError
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.io.step_roles import (
     P1_ACCEL_POSITION,
@@ -75,9 +77,14 @@ from imucalib.io.step_roles import (
     role_from_tags,
 )
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
-from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.models.noise import NoiseModel
 from imucalib.plan.io import parse_plan
 from imucalib.plan.schema import Plan
+from imucalib.procedures.common.noise import estimate_noise, window_mean_se
+from imucalib.procedures.common.reference import axis_vector as _axis_vector
+from imucalib.procedures.common.reference import site_vectors, spin_axis_b, table_rotation
+from imucalib.procedures.common.windows import RunningMoments as _Moments
+from imucalib.procedures.common.windows import harmonic_residual_std as _harmonic_residual_std
 from imucalib.processing import (
     compute_integer_revolution_window,
     compute_window_statistics,
@@ -87,7 +94,6 @@ from imucalib.processing import (
     reject_outliers_grubbs,
     synchronize,
 )
-from imucalib.sim.earth import Site
 
 __all__ = [
     "P1Observations",
@@ -245,65 +251,6 @@ class P1Observations:
 #: Rows per block of a long static window (bounded memory).
 CHUNK_ROWS = 1 << 18
 _ALLAN_POINTS = 1 << 19
-
-
-class _Moments:
-    """Exact running mean and scatter of rows (n, k), shifted by the first block's mean."""
-
-    def __init__(self) -> None:
-        self.n = 0
-        self._shift: _F64 | None = None
-        self._sum: _F64 | None = None
-        self._sum_f: _F64 | None = None
-        self._sum_f2: _F64 | None = None
-
-    def add(self, raw: _F64, filtered: _F64) -> None:
-        if self._shift is None:
-            self._shift = raw.mean(axis=0)
-            k = raw.shape[1]
-            self._sum, self._sum_f, self._sum_f2 = np.zeros(k), np.zeros(k), np.zeros(k)
-        assert self._sum is not None and self._sum_f is not None and self._sum_f2 is not None
-        self._sum += (raw - self._shift).sum(axis=0)
-        d = filtered - self._shift
-        self._sum_f += d.sum(axis=0)
-        self._sum_f2 += (d * d).sum(axis=0)
-        self.n += raw.shape[0]
-
-    @property
-    def mean(self) -> _F64:
-        assert self._shift is not None and self._sum is not None
-        return np.asarray(self._shift + self._sum / self.n, dtype=np.float64)
-
-    @property
-    def std(self) -> _F64:
-        """Standard deviation of the filtered rows about their mean (ddof = 1)."""
-        assert self._sum_f is not None and self._sum_f2 is not None
-        var = (self._sum_f2 - self._sum_f**2 / self.n) / max(self.n - 1, 1)
-        return np.asarray(np.sqrt(np.maximum(var, 0.0)), dtype=np.float64)
-
-
-def table_rotation(axis_names: Sequence[str], angles_rad: Sequence[float] | _F64) -> Rotation:
-    """Return rot_tp for measured axis angles (outer axis first; module docstring)."""
-    rot = Rotation.identity()
-    for name, angle in zip(axis_names, angles_rad, strict=True):
-        rot = rot * Rotation.from_rotvec(float(angle) * _axis_vector(name))
-    return rot
-
-
-def _axis_vector(name: str) -> _F64:
-    try:
-        return np.asarray(TABLE_AXIS_VECTORS[name], dtype=np.float64)
-    except KeyError:
-        raise ConfigurationError(
-            f"unknown table axis {name!r}: the P1 analysis knows {sorted(TABLE_AXIS_VECTORS)}"
-        ) from None
-
-
-def site_vectors(latitude_deg: float, heading_deg: float, gravity_mps2: float | None
-                 ) -> tuple[float, _F64]:
-    """Return (g, Earth rate in t) for a site: the given g or normal gravity. [m/s²], [rad/s]"""
-    site = Site(latitude_deg=latitude_deg, heading_deg=heading_deg, gravity_mps2=gravity_mps2)
-    return site.local_gravity_mps2, site.earth_rate_t_rps
 
 
 def _meta_json(rec: Recording, key: str) -> dict[str, Any]:
@@ -596,23 +543,7 @@ class _Extractor:
         return axis, rate_dps
 
     def spin_axis_b(self, axis: int, angles: _F64) -> _F64:
-        inner = table_rotation(self.axis_names[axis + 1:], angles[axis + 1:])
-        return np.asarray(inner.inv().apply(_axis_vector(self.axis_names[axis])),
-                          dtype=np.float64)
-
-
-def _harmonic_residual_std(values: _F64, angle_rad: _F64) -> _F64:
-    """Return the standard deviation about the mean and the once-per-revolution harmonic.
-
-    At a rate point the calibrated model predicts the mean and a once-per-revolution term (the
-    g-sensitivity to the gravity turning in the IMU, the horizontal Earth rate); the residual
-    scatter is what remains.
-    """
-    A = np.column_stack([np.ones_like(angle_rad), np.sin(angle_rad), np.cos(angle_rad)])
-    coef, *_ = np.linalg.lstsq(A, values, rcond=None)
-    resid = values - A @ coef
-    dof = max(values.shape[0] - 3, 1)
-    return np.asarray(np.sqrt(np.sum(resid**2, axis=0) / dof), dtype=np.float64)
+        return spin_axis_b(self.axis_names, axis, angles)
 
 
 def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
@@ -685,36 +616,6 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                           notes=tuple(notes), skipped=tuple(skipped), noise=noise)
 
 
-_FLICKER_FACTOR = 2.0 * math.log(2.0) / math.pi  # Allan plateau² of flicker per B² (IEEE 952)
-
-
-def estimate_noise(windows: Sequence[WindowObservation], *, min_duration_s: float = 120.0
-                   ) -> dict[str, NoiseModel]:
-    """Fit gyro and accelerometer noise models to the longest static record.
-
-    The record's overlapping Allan variance is fitted with σ²(τ) ≈ N²/τ + C_B + K²τ/3 (the
-    ``allan-fit`` of :func:`~imucalib.processing.statistics.compute_window_statistics`);
-    B = √(C_B/(2 ln 2/π)). Empty when no static window lasts `min_duration_s`. [s]
-    """
-    static = [w for w in windows if w.kind == "static" and w.allan_fit is not None
-              and w.duration_s >= min_duration_s]
-    if not static:
-        return {}
-    best = max(static, key=lambda w: w.duration_s)
-    assert best.allan_fit is not None
-    fit = np.nan_to_num(best.allan_fit, nan=0.0)
-    out = {}
-    for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6))):
-        n, c_b, k = fit[0, cols], fit[1, cols], fit[2, cols]
-        out[triad] = NoiseModel(white_density=np.maximum(n, 0.0),
-                                bias_instability=np.sqrt(np.maximum(c_b, 0.0) / _FLICKER_FACTOR),
-                                random_walk=np.maximum(k, 0.0))
-    return out
-
-
 def _with_model_se(w: WindowObservation, noise: Mapping[str, NoiseModel]) -> WindowObservation:
-    tau = np.array([max(w.duration_s, 1e-3)])
-    gyro = compute_theoretical_adev(noise["gyro"], tau)[0]
-    accel = compute_theoretical_adev(noise["accel"], tau)[0]
-    return dataclasses.replace(w, gyro_se_rps=np.maximum(gyro, 1e-300),
-                               accel_se_mps2=np.maximum(accel, 1e-300))
+    gyro, accel = window_mean_se(noise, w.duration_s)
+    return dataclasses.replace(w, gyro_se_rps=gyro, accel_se_mps2=accel)

@@ -3,8 +3,8 @@
 :func:`generate_allan_plan` writes: an operator check (the IMU static on an isolated base), a
 warm-up, then for each temperature (or once at ambient) an optional chamber soak and a long
 static record (kind ``"static"``, role ``"allan.static"``, tags ``"allan"`` and
-``"T<temperature>"``). ``imucalib
-calibrate`` on its recording runs :func:`~imucalib.procedures.allan.analyze_allan_recording`:
+``"T<temperature>"``). ``imucalib calibrate`` on its recording runs
+:func:`~.analysis.analyze_allan_recording`:
 OADEV with confidence intervals and the noise-term fit per axis, for each record.
 
 The plan carries a ``[twin]`` table: one IMU on a fixed plate (in a chamber when temperatures

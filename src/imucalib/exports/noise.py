@@ -2,8 +2,6 @@
 
 Contents
 --------
-:class:`ImuNoiseParameters`, :func:`noise_parameters_from_fits`
-    The four continuous-time densities of a VIO filter, from per-axis noise fits.
 :func:`format_kalibr_yaml`, :func:`write_kalibr_yaml`
     Kalibr's ``imu.yaml``.
 :func:`format_openvins_yaml`, :func:`write_openvins_yaml`
@@ -12,7 +10,7 @@ Contents
 :func:`format_noise_table`
     Datasheet-style table (``"text"``, ``"csv"`` or ``"markdown"``).
 
-Conversions (standards.md §0; :mod:`imucalib.analysis.noise_units`)
+Conversions (docs/noise.md §5; :mod:`imucalib.analysis.noise_units`)
 -------------------------------------------------------------------
 Kalibr and OpenVINS model the white noise as a continuous-time process of density σ_c and
 discretise it as σ_d = σ_c/√Δt; the bias as a random walk ḃ = σ_b·w(t). So
@@ -27,8 +25,10 @@ YAML key                        value                           unit
 ``update_rate``                 sample rate                      Hz
 ==============================  ==============================  ==============================
 
-No factor √2 enters: Kalibr's σ_c *is* the two-sided N (a one-sided datasheet density ND is
-√2·N, and ARW[°/√h] = 60·N[°/√s]). A triad gives one number per key: the largest axis by default
+The densities (:class:`~imucalib.analysis.noise_parameters.ImuNoiseParameters`) come from
+:func:`~imucalib.analysis.noise_parameters.noise_parameters_from_fits`. No factor √2 enters:
+Kalibr's σ_c *is* the two-sided N (a one-sided datasheet density ND is √2·N, and
+ARW[°/√h] = 60·N[°/√s]). A triad gives one number per key: the largest axis by default
 (``combine="max"``, conservative) or the RMS over axes. A random walk that the fit did not detect
 is exported as its 1σ scale (the uncertainty of the absent term) and flagged in a YAML comment;
 Kalibr and OpenVINS need a non-zero value. Their authors advise inflating Allan values for real
@@ -41,103 +41,24 @@ import csv
 import io as _io
 import math
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from imucalib._checks import check_positive
 from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
+from imucalib.analysis.noise_parameters import ImuNoiseParameters
 from imucalib.errors import InvalidInputError
 
 __all__ = [
     "TABLE_ROWS",
-    "ImuNoiseParameters",
     "format_kalibr_yaml",
     "format_noise_table",
     "format_openvins_yaml",
-    "noise_parameters_from_fits",
     "write_kalibr_yaml",
     "write_openvins_yaml",
 ]
-
-
-@dataclass(frozen=True)
-class ImuNoiseParameters:
-    """Continuous-time noise densities of one IMU (two-sided = Kalibr convention), SI."""
-
-    gyroscope_noise_density: float  # [rad/s/√Hz]
-    gyroscope_random_walk: float  # [rad/s²/√Hz]
-    accelerometer_noise_density: float  # [m/s²/√Hz]
-    accelerometer_random_walk: float  # [m/s³/√Hz]
-    update_rate_hz: float  # [Hz]
-    notes: tuple[str, ...] = field(default=())
-
-    def __post_init__(self) -> None:
-        for name in ("gyroscope_noise_density", "gyroscope_random_walk",
-                     "accelerometer_noise_density", "accelerometer_random_walk",
-                     "update_rate_hz"):
-            check_positive(getattr(self, name), name)
-
-
-def _combine(values: Sequence[float], how: str) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    if how == "max":
-        return float(arr.max())
-    return float(math.sqrt(np.mean(arr**2)))
-
-
-def _pick(fits: Sequence[NoiseFit], sensor: str, name: str, how: str,
-          notes: list[str]) -> float:
-    if not fits:
-        raise InvalidInputError(f"no {sensor} fits given")
-    values = []
-    for k, fit in enumerate(fits):
-        if fit.sensor != sensor:
-            raise InvalidInputError(f"{sensor} fit {k} is a {fit.sensor!r} fit")
-        term = fit.term(name)
-        if term.detected and term.value_si > 0:
-            values.append(term.value_si)
-        else:
-            values.append(term.std_si)
-            notes.append(f"{sensor} axis {k}: {name} not detected; its 1-sigma scale "
-                         f"{term.std_si:.4g} {term.unit_si} is used")
-    return _combine(values, how)
-
-
-def noise_parameters_from_fits(gyro: Sequence[NoiseFit], accel: Sequence[NoiseFit],
-                               update_rate_hz: float, *, combine: str = "max",
-                               noise_inflation: float = 1.0,
-                               walk_inflation: float = 1.0) -> ImuNoiseParameters:
-    """Kalibr/OpenVINS densities from the per-axis fits of a gyro and an accelerometer triad.
-
-    Uses the fitted ``white`` (N) and ``random_walk`` (K) terms (module docstring), combined
-    over axes by ``"max"`` or ``"rms"``, times the inflation factors.
-
-    Raises
-    ------
-    InvalidInputError
-        Missing fits, a fit of the wrong sensor or without these terms, a bad `combine`.
-    """
-    if combine not in ("max", "rms"):
-        raise InvalidInputError(f"`combine` must be 'max' or 'rms'; got {combine!r}")
-    check_positive(noise_inflation, "noise_inflation")
-    check_positive(walk_inflation, "walk_inflation")
-    notes: list[str] = []
-    out = ImuNoiseParameters(
-        gyroscope_noise_density=noise_inflation * _pick(gyro, "gyro", "white", combine, notes),
-        gyroscope_random_walk=walk_inflation * _pick(gyro, "gyro", "random_walk", combine,
-                                                     notes),
-        accelerometer_noise_density=noise_inflation * _pick(accel, "accel", "white", combine,
-                                                            notes),
-        accelerometer_random_walk=walk_inflation * _pick(accel, "accel", "random_walk",
-                                                         combine, notes),
-        update_rate_hz=update_rate_hz,
-        notes=(f"combined over axes by {combine}; inflation: noise x{noise_inflation:g}, "
-               f"random walk x{walk_inflation:g}", *notes))
-    return out
 
 
 def _header(params: ImuNoiseParameters) -> list[str]:

@@ -1,7 +1,7 @@
 """Procedure P1 end to end: a Recording → calibrated parameters, checks and a decision.
 
-:func:`analyze_p1` runs the chain of SPEC.md P1: observations (:mod:`.p1_observations`), the
-fit of the chosen model (:mod:`.p1_fit`), then the verification of
+:func:`analyze_p1` runs the chain of P1 (docs/p1.md): observations (:mod:`.observations`), the
+fit of the chosen model (:mod:`.fit`), then the verification of
 :mod:`imucalib.analysis.verification`:
 
 - residuals of the calibration windows against the seed's limits (0.002 g, 0.1 °/s) and a χ²
@@ -12,7 +12,8 @@ fit of the chosen model (:mod:`.p1_fit`), then the verification of
   parameters near zero);
 - the Kalman refinement of the same observations (P1 step 4), reported with its largest
   difference from least squares in standard deviations;
-- the Cramér–Rao bound of the design with the same observation covariance (standards.md §5);
+- the Cramér–Rao bound of the design with the same observation covariance
+  (docs/processing-estimation.md);
 
 and one decision under :data:`~imucalib.analysis.verification.DECISION_RULE`. The calibration
 itself (:class:`~imucalib.models.result.CalibrationResult`) is the fit of every repetition's
@@ -48,7 +49,7 @@ from imucalib.io.reader import open_recording
 from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
 from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig
-from imucalib.procedures.p1_fit import (
+from imucalib.procedures.p1.fit import (
     P1Fit,
     TriadFit,
     _stack_covariance,
@@ -57,7 +58,7 @@ from imucalib.procedures.p1_fit import (
     observation_covariance,
     predict_outputs,
 )
-from imucalib.procedures.p1_observations import (
+from imucalib.procedures.p1.observations import (
     P1Observations,
     P1Processing,
     WindowObservation,
@@ -82,7 +83,7 @@ class P1Options:
     correlated : bool
         Weight with the full covariance of the window means (recommended).
     residual_accel_g, residual_gyro_dps : float
-        Residual limits of SPEC.md P1 rule 5.
+        Residual limits of P1 rule 5 (docs/p1.md, verification).
     significance : float
         p-value of the χ² test below which the model is too simple.
     accel_accuracy_g, gyro_accuracy_dps : float or None
@@ -90,7 +91,7 @@ class P1Options:
         without one the defaults of :class:`~imucalib.plan.schema.ImuSpecConfig` (0.01 g,
         0.5 °/s).
     repeatability_cv : float
-        CV limit of scale factors (SPEC.md P1: 1 %).
+        CV limit of scale factors (P1 rule 6: 1 %; docs/p1.md).
     repeatability_k : float
         Spread limit of other parameters, in their typical standard uncertainty.
     hash_recording : bool
@@ -132,6 +133,21 @@ class P1Analysis:
     kalman_max_difference_sigma: float
     crlb_ratio: dict[str, float]
     observations: P1Observations
+
+    @property
+    def procedure(self) -> str:
+        """``"p1"`` (:class:`~imucalib.procedures.common.procedure.ProcedureResult`)."""
+        return "p1"
+
+    @property
+    def unit(self) -> str:
+        """The calibrated IMU."""
+        return self.result.sensor_id
+
+    @property
+    def passed(self) -> bool:
+        """The decision."""
+        return self.decision.passed
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-able report: the result, the checks and the decision."""

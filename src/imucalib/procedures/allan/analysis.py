@@ -51,9 +51,9 @@ from imucalib.analysis import (
     fit_noise_terms,
 )
 from imucalib.analysis.allan import TauSpec
+from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import InvalidInputError
-from imucalib.io.noise_export import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.io.reader import Recording, open_recording
 from imucalib.units import parse_unit
 
@@ -167,6 +167,16 @@ class NoiseCharacterization:
     software_version: str = __version__
     created_utc: str = ""
     format_version: int = FORMAT_VERSION
+
+    @property
+    def procedure(self) -> str:
+        """``"allan"`` (:class:`~imucalib.procedures.common.procedure.ProcedureResult`)."""
+        return "allan"
+
+    @property
+    def passed(self) -> None:
+        """None: a noise characterisation decides nothing."""
+        return None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (the body of :meth:`to_json`)."""

@@ -1,4 +1,4 @@
-"""Tests of imucalib.sim.earth: reference values, frame conventions, stationary projections."""
+"""Tests of imucalib.models.earth: reference values, frame conventions, stationary projections."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from imucalib.errors import InvalidInputError
-from imucalib.sim.earth import (
+from imucalib.models.earth import (
     Site,
     earth_rate_n_rps,
     gravity_n_mps2,

@@ -11,13 +11,12 @@ import pytest
 
 from imucalib import units
 from imucalib.analysis import NoiseFit, NoiseTerm, compute_oadev, fit_noise_terms, make_noise_term
+from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.errors import InvalidInputError
-from imucalib.io.noise_export import (
-    ImuNoiseParameters,
+from imucalib.exports.noise import (
     format_kalibr_yaml,
     format_noise_table,
     format_openvins_yaml,
-    noise_parameters_from_fits,
     write_kalibr_yaml,
     write_openvins_yaml,
 )

@@ -2,7 +2,7 @@
 
 Models (``model`` argument)
 ---------------------------
-``"per-axis"`` — the seed's model (SPEC.md P1), cross-coupling neglected, per axis i:
+``"per-axis"`` — the seed's model (docs/p1.md), cross-coupling neglected, per axis i:
     accelerometer  a_out,i = K_i·(a_ref,i + b_i), from the six positions;
     gyro           ω_out,i = K_i·(ω_ref,i + b_i), from the rate points turning about axis i and the
     static windows (whose reference is the Earth-rate projection, so b_i excludes Earth rate).
@@ -11,7 +11,8 @@ Models (``model`` argument)
 ``"triad"`` — the full linear triad model of :class:`~imucalib.models.triad.TriadModel`:
     accelerometer  y = b + (I + M)·f            (12 parameters; six positions, 18 observations)
     gyro           y = b + (I + M)·ω + G·f      (21 parameters with g-sensitivity, else 12)
-    as z = y − x = b + M·x (+ G·f), rows ordered by window then axis (standards.md §3.4).
+    as z = y − x = b + M·x (+ G·f), rows ordered by window then axis, built by
+    :func:`~imucalib.procedures.common.design.build_design` (docs/p1.md).
 
 Observations are window means weighted by their standard errors (correlated noise included), so
 the covariance is not rescaled by the residuals (known noise); the fit's χ² then tests the model.
@@ -36,14 +37,11 @@ from numpy.typing import NDArray
 from imucalib import units
 from imucalib.conventions import AXES
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
-from imucalib.estimation import (
-    build_triad_design,
-    compute_window_mean_covariance,
-    solve_weighted_lsq,
-)
+from imucalib.estimation import compute_window_mean_covariance, solve_weighted_lsq
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names
-from imucalib.procedures.p1_observations import P1Observations, WindowObservation
+from imucalib.procedures.common.design import build_design
+from imucalib.procedures.p1.observations import P1Observations, WindowObservation
 
 __all__ = [
     "MIN_EXCITATION",
@@ -173,16 +171,11 @@ def _per_axis_fit(triad: str, x: _F64, y: _F64, se: _F64, masks: Sequence[NDArra
 
 def _triad_fit(triad: str, x: _F64, y: _F64, se: _F64, f: _F64 | None,
                windows: tuple[WindowObservation, ...], cov: _F64 | None) -> TriadFit:
-    design = build_triad_design(x)
+    terms = ("bias", "scale_misalignment") if f is None else (
+        "bias", "scale_misalignment", "g_sensitivity")
+    design = build_design(x, terms, specific_force_b=f)
     H = np.array(design.H)
     names = [f"{triad}_{n}" for n in design.param_names]
-    if f is not None:
-        G = np.zeros((H.shape[0], 9))
-        for k in range(x.shape[0]):
-            for i in range(3):
-                G[3 * k + i, 3 * i:3 * i + 3] = f[k]
-        H = np.hstack([H, G])
-        names += [f"{triad}_G_{i}{j}" for i in AXES for j in AXES]
     z = (y - x).ravel()
     sigma = se.ravel()
     sol = solve_weighted_lsq(H, z, param_names=names, scale_covariance=False,

@@ -1,0 +1,15 @@
+"""Outputs in one place: every file a calibration or a recording is written to.
+
+Contents
+--------
+:mod:`imucalib.exports.outputs`
+    :func:`write_outputs`: a procedure result → its named output files (result JSON, report
+    JSON, noise YAML, tables, figures) in a folder; :data:`OUTPUT_FORMATS`.
+:mod:`imucalib.exports.streams`
+    :func:`export_csv`, :func:`export_mat`: a stream of a Recording (or a step of it) as CSV or
+    MAT.
+:mod:`imucalib.exports.noise`
+    Kalibr and OpenVINS YAML, the datasheet-style noise table.
+
+Each is imported from its module (this package imports nothing eagerly).
+"""

@@ -1,0 +1,188 @@
+"""Write every output file of a procedure result: :func:`write_outputs`.
+
+A result (:class:`~imucalib.procedures.common.procedure.ProcedureResult`) is written into one
+folder as ``<name>.<unit>.<procedure><suffix>``, one file (or folder) per output format, by
+default the formats its procedure lists in ``outputs``, in that order. The formats
+(:data:`OUTPUT_FORMATS`):
+
+=================  =============================  ================================================
+format             file                           content
+=================  =============================  ================================================
+``result-json``    ``….result.json``              the calibration result
+                                                  (:class:`~imucalib.models.result.CalibrationResult`),
+                                                  which ``imucalib apply`` reads
+``report-json``    ``….report.json``              the whole result: checks, decision, per
+                                                  repetition (``result.to_dict()``)
+``parameters-csv`` ``….parameters.csv``           one row per parameter: value, standard
+                                                  uncertainty, SI unit
+``noise-json``     ``….json``                     the versioned noise characterisation
+``kalibr-yaml``    ``…[.k].kalibr.yaml``          Kalibr ``imu.yaml``, per static record k
+``openvins-yaml``  ``…[.k].openvins.yaml``        OpenVINS ``kalibr_imu_chain.yaml``, per record
+``noise-table``    ``…[.k].table.md``             the datasheet-style noise table, per record
+``figures``        ``….figures/``                 Allan deviation figures (PNG)
+=================  =============================  ================================================
+
+The record index ``.k`` appears only when the characterisation holds more than one record.
+
+Contents
+--------
+:func:`write_outputs`, :data:`OUTPUT_FORMATS`
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import ProcedureResult
+
+__all__ = ["OUTPUT_FORMATS", "write_outputs"]
+
+_Writer = Callable[[Any, Path, str], list[Path]]
+
+
+def _calibration(result: Any, fmt: str) -> Any:
+    from imucalib.models.result import CalibrationResult
+
+    cal = getattr(result, "result", None)
+    if not isinstance(cal, CalibrationResult):
+        raise InvalidInputError(f"output {fmt!r} needs a calibration result; a "
+                                f"{result.procedure} result holds none")
+    return cal
+
+
+def _noise(result: Any, fmt: str) -> Any:
+    from imucalib.procedures.allan.analysis import NoiseCharacterization
+
+    if not isinstance(result, NoiseCharacterization):
+        raise InvalidInputError(f"output {fmt!r} needs a noise characterisation; got a "
+                                f"{result.procedure} result")
+    return result
+
+
+def _result_json(result: Any, folder: Path, stem: str) -> list[Path]:
+    path = folder / f"{stem}.result.json"
+    path.write_text(_calibration(result, "result-json").to_json() + "\n", encoding="utf-8")
+    return [path]
+
+
+def _report_json(result: Any, folder: Path, stem: str) -> list[Path]:
+    path = folder / f"{stem}.report.json"
+    path.write_text(json.dumps(result.to_dict(), indent=1, allow_nan=True) + "\n",
+                    encoding="utf-8")
+    return [path]
+
+
+def _parameters_csv(result: Any, folder: Path, stem: str) -> list[Path]:
+    cal = _calibration(result, "parameters-csv")
+    path = folder / f"{stem}.parameters.csv"
+    std = cal.std()
+    with open(path, "w", encoding="utf-8", newline="") as fh:
+        out = csv.writer(fh, lineterminator="\n")
+        out.writerow(["parameter", "value", "std_uncertainty", "unit"])
+        for name in cal.param_names:
+            out.writerow([name, repr(cal.value(name)), repr(std[name]), cal.units.get(name, "")])
+    return [path]
+
+
+def _noise_json(result: Any, folder: Path, stem: str) -> list[Path]:
+    return [_noise(result, "noise-json").save(folder / f"{stem}.json")]
+
+
+def _per_record(fmt: str, write: Callable[[Path, Any], Path], suffix: str) -> _Writer:
+    def writer(result: Any, folder: Path, stem: str) -> list[Path]:
+        segments = _noise(result, fmt).segments
+        written = []
+        for i, seg in enumerate(segments):
+            index = "" if len(segments) == 1 else f".{i}"
+            written.append(write(folder / f"{stem}{index}{suffix}", seg))
+        return written
+
+    return writer
+
+
+def _kalibr(path: Path, seg: Any) -> Path:
+    from imucalib.exports.noise import write_kalibr_yaml
+
+    return write_kalibr_yaml(path, seg.noise_parameters())
+
+
+def _openvins(path: Path, seg: Any) -> Path:
+    from imucalib.exports.noise import write_openvins_yaml
+
+    return write_openvins_yaml(path, seg.noise_parameters())
+
+
+def _table(path: Path, seg: Any) -> Path:
+    from imucalib.exports.noise import format_noise_table
+
+    path.write_text(format_noise_table(seg.fits(), fmt="markdown") + "\n", encoding="utf-8")
+    return path
+
+
+def _figures(result: Any, folder: Path, stem: str) -> list[Path]:
+    from imucalib.report.allan_figure import save_allan_figures
+
+    return list(save_allan_figures(_noise(result, "figures"), folder / f"{stem}.figures"))
+
+
+#: Output format → writer(result, folder, stem) returning the paths written.
+OUTPUT_FORMATS: dict[str, _Writer] = {
+    "result-json": _result_json,
+    "report-json": _report_json,
+    "parameters-csv": _parameters_csv,
+    "noise-json": _noise_json,
+    "kalibr-yaml": _per_record("kalibr-yaml", _kalibr, ".kalibr.yaml"),
+    "openvins-yaml": _per_record("openvins-yaml", _openvins, ".openvins.yaml"),
+    "noise-table": _per_record("noise-table", _table, ".table.md"),
+    "figures": _figures,
+}
+
+
+def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
+                  formats: Sequence[str] | None = None, *, name: str) -> list[Path]:
+    """Name and write the output files of a procedure result (module docstring).
+
+    Parameters
+    ----------
+    result : ProcedureResult
+        What a procedure's ``analyze`` returned.
+    folder : path
+        Where to write (created when missing).
+    formats : sequence of str, optional
+        Formats of :data:`OUTPUT_FORMATS`; default: the procedure's ``outputs``.
+    name : str
+        First part of every file name, usually the recording's stem.
+
+    Returns
+    -------
+    list of Path
+        The files (and figure files) written, in the order of `formats`.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown format, or one the result cannot give (a noise table of a calibration).
+    ConfigurationError
+        The result names an unregistered procedure.
+    """
+    from imucalib.procedures import registry
+
+    procedure = registry.get(result.procedure)
+    chosen = tuple(procedure.outputs if formats is None else formats)
+    unknown = [f for f in chosen if f not in OUTPUT_FORMATS]
+    if unknown:
+        raise InvalidInputError(f"unknown output format(s) {unknown}; known: "
+                                f"{', '.join(OUTPUT_FORMATS)}")
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = f"{name}.{result.unit}.{result.procedure}"
+    written: list[Path] = []
+    for fmt in chosen:
+        written += OUTPUT_FORMATS[fmt](result, out, stem)
+    return written

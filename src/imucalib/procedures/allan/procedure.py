@@ -1,0 +1,60 @@
+"""The Allan procedure as a :class:`~imucalib.procedures.common.procedure.Procedure` (``"allan"``).
+
+The plan is :func:`~imucalib.procedures.allan.plan.generate_allan_plan`; the analysis
+:func:`~imucalib.procedures.allan.analysis.analyze_allan_recording`, imported when first used.
+Its result, :class:`~imucalib.procedures.allan.analysis.NoiseCharacterization`, writes the
+versioned noise JSON, Kalibr and OpenVINS YAML, a datasheet table per record, and figures.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.allan.analysis import NoiseCharacterization
+
+__all__ = ["PROCEDURE", "AllanProcedure"]
+
+
+class AllanProcedure:
+    """Noise characterisation (IEEE 952 Annex C) of the static records of a recording."""
+
+    name = "allan"
+    description = ("noise characterisation: Allan deviations and noise terms of long static "
+                   "records, optionally at several temperatures")
+    plan_options = frozenset({"grade", "record_s", "temperatures_degc", "sample_rate_hz",
+                              "seed"})
+    analysis_options: frozenset[str] = frozenset()
+    outputs = ("noise-json", "kalibr-yaml", "openvins-yaml", "noise-table", "figures")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.allan.plan.generate_allan_plan` (its keywords)."""
+        from imucalib.procedures.allan.plan import generate_allan_plan
+
+        return generate_allan_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None
+                ) -> NoiseCharacterization:
+        """Run :func:`~imucalib.procedures.allan.analysis.analyze_allan_recording`.
+
+        Raises
+        ------
+        InvalidInputError
+            Any option (this procedure takes none).
+        """
+        from imucalib.procedures.allan.analysis import analyze_allan_recording
+
+        if options:
+            raise InvalidInputError(f"procedure allan takes no options; got {sorted(options)}")
+        return analyze_allan_recording(recording, unit=unit)
+
+
+#: The registered Allan procedure.
+PROCEDURE = AllanProcedure()

@@ -1,0 +1,120 @@
+"""The protocols a procedure implements: :class:`Procedure` and :class:`ProcedureResult`.
+
+A procedure is a folder of :mod:`imucalib.procedures` (``p1/``, ``allan/``, …) whose
+``procedure`` module holds one object satisfying :class:`Procedure`, registered by name in
+:mod:`imucalib.procedures.registry`. ``imucalib plan new``, ``imucalib calibrate``, the demo and
+the tests reach a procedure only through the registry; the output files of its result are named
+and written by :func:`imucalib.exports.outputs.write_outputs`. docs/procedures.md says how to add
+one.
+
+Contents
+--------
+:class:`Procedure`, :class:`ProcedureResult`
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+
+__all__ = ["Procedure", "ProcedureResult"]
+
+
+@runtime_checkable
+class ProcedureResult(Protocol):
+    """What every procedure's analysis returns, whatever else it holds.
+
+    Attributes
+    ----------
+    procedure : str
+        The registered name of the procedure that made it (``"p1"``, ``"allan"``).
+    unit : str
+        The IMU it is about (its stream's unit name, e.g. ``"IMU-0001"``).
+    passed : bool or None
+        The procedure's decision; None for a procedure that decides nothing (a noise
+        characterisation).
+    """
+
+    @property
+    def procedure(self) -> str:
+        """Registered name of the procedure that made it."""
+        ...
+
+    @property
+    def unit(self) -> str:
+        """The IMU it is about."""
+        ...
+
+    @property
+    def passed(self) -> bool | None:
+        """The decision, or None."""
+        ...
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the whole result as JSON-able data."""
+        ...
+
+
+@runtime_checkable
+class Procedure(Protocol):
+    """One calibration or characterisation procedure: its plan and its analysis.
+
+    Attributes
+    ----------
+    name : str
+        Registry name; also the plan's ``procedure`` field and the prefix of its step roles
+        (``"p1.accel-position"``).
+    description : str
+        One line for listings.
+    plan_options : frozenset of str
+        The ``imucalib plan new`` options :meth:`generate_plan` takes (``grade``, ``seed``, …).
+    analysis_options : frozenset of str
+        The keys :meth:`analyze` accepts in `options` (P1: ``model``).
+    outputs : tuple of str
+        The output formats of its result that :func:`~imucalib.exports.outputs.write_outputs`
+        writes by default, in order (:data:`~imucalib.exports.outputs.OUTPUT_FORMATS`).
+    """
+
+    @property
+    def name(self) -> str:
+        """Registry name."""
+        ...
+
+    @property
+    def description(self) -> str:
+        """One line for listings."""
+        ...
+
+    @property
+    def plan_options(self) -> frozenset[str]:
+        """``plan new`` options of :meth:`generate_plan`."""
+        ...
+
+    @property
+    def analysis_options(self) -> frozenset[str]:
+        """Keys :meth:`analyze` accepts."""
+        ...
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        """Default output formats, in order."""
+        ...
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return the procedure's default plan (keyword options: its generator's)."""
+        ...
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None
+                ) -> ProcedureResult:
+        """Analyse a recording of this procedure's plan.
+
+        For one IMU (`unit`; the only one when omitted), with the procedure's `options` (keys in
+        :attr:`analysis_options`).
+        """
+        ...

@@ -1,0 +1,73 @@
+"""P1 as a :class:`~imucalib.procedures.common.procedure.Procedure` (registered as ``"p1"``).
+
+The plan is :func:`~imucalib.procedures.p1.plan.generate_p1_plan`; the analysis
+:func:`~imucalib.procedures.p1.analysis.analyze_p1` (observations, fit, verification, decision),
+imported when first used. Its result, :class:`~imucalib.procedures.p1.analysis.P1Analysis`,
+writes the calibration result JSON and the full report JSON.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.p1.analysis import P1Analysis
+
+__all__ = ["PROCEDURE", "P1Procedure"]
+
+#: The models ``model`` may name (docs/p1.md).
+MODELS = ("triad", "per-axis")
+
+
+class P1Procedure:
+    """Procedure P1: two-dimensional calibration of an IMU on a dual-axis table."""
+
+    name = "p1"
+    description = ("two-dimensional calibration on a dual-axis table: six positions, a static "
+                   "record, rate points, held-out checks, repetitions")
+    plan_options = frozenset({"grade", "repetitions", "static_s", "sample_rate_hz", "seed"})
+    analysis_options = frozenset({"model"})
+    outputs = ("result-json", "report-json")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.p1.plan.generate_p1_plan` (its keywords)."""
+        from imucalib.procedures.p1.plan import generate_p1_plan
+
+        return generate_p1_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None
+                ) -> P1Analysis:
+        """Run :func:`~imucalib.procedures.p1.analysis.analyze_p1` on a recording.
+
+        `options` may set ``model`` (``"triad"``, the default, or ``"per-axis"``). An open
+        Recording is analysed through its path (the provenance hashes the file).
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option or model.
+        """
+        from imucalib.procedures.p1.analysis import P1Options, analyze_p1
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure p1 takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        model = opts.get("model", "triad")
+        if model not in MODELS:
+            raise InvalidInputError(f"--model must be 'triad' or 'per-axis'; got {model!r}")
+        path = Path(recording.path if hasattr(recording, "path") else recording)
+        return analyze_p1(path, unit, P1Options(model=model))
+
+
+#: The registered P1 procedure.
+PROCEDURE = P1Procedure()

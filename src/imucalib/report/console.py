@@ -1,0 +1,102 @@
+"""A procedure result on the terminal (rich tables), for ``imucalib calibrate`` and the demo.
+
+Contents
+--------
+:func:`render_result`
+    Dispatch on the result's procedure: :func:`render_calibration` (P1: the parameters, the
+    checks, the decision) or :func:`render_noise_characterization` (Allan: each record's noise
+    terms); a procedure without a renderer gets its decision and the files written.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+from imucalib import units
+
+__all__ = ["render_calibration", "render_noise_characterization", "render_result"]
+
+# display unit of each parameter symbol: (unit text, SI value of one display unit)
+_DISPLAY = {
+    ("accel", "bias"): ("µg", units.UG), ("accel", "b"): ("µg", units.UG),
+    ("gyro", "bias"): ("°/h", units.DEG_PER_H), ("gyro", "b"): ("°/h", units.DEG_PER_H),
+    ("accel", "K"): ("ppm of 1", units.PPM), ("gyro", "K"): ("ppm of 1", units.PPM),
+    ("accel", "M"): ("ppm | µrad", units.PPM), ("gyro", "M"): ("ppm | µrad", units.PPM),
+    ("gyro", "G"): ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2),
+}
+
+
+def _display(name: str, value: float, sigma: float) -> tuple[str, str, str]:
+    triad, symbol = name.split("_")[0], name.split("_")[1]
+    unit, scale = _DISPLAY.get((triad, symbol), ("SI", 1.0))
+    shown = value - 1.0 if symbol == "K" else value  # a scale factor as its deviation from 1
+    return f"{shown / scale:+.4f}", f"{sigma / scale:.4f}", unit
+
+
+def _wrote(console: Console, written: Sequence[Path]) -> None:
+    console.print("wrote " + "\n      ".join(str(p) for p in written), highlight=False)
+
+
+def render_calibration(console: Console, analysis: Any, written: Sequence[Path]) -> None:
+    """Print a P1 analysis: the parameters, the checks, the decision and the files written."""
+    result = analysis.result
+    repeat = {r.name: r for c in analysis.checks if c.name == "repeatability" for r in c.rows}
+    table = Table("parameter", "value", "std. uncertainty", "unit", "repeatability",
+                  title=f"{result.sensor_id}: {result.procedure.upper()} {result.model} model")
+    std = result.std()
+    for name in result.param_names:
+        value, sigma, unit = _display(name, result.value(name), std[name])
+        row = repeat.get(name)
+        rep = "—" if row is None else ("[green]pass[/]" if row.passed else "[red]FAIL[/]")
+        table.add_row(name, value, sigma, unit, rep)
+    console.print(table)
+    checks = Table("check", "verdict", "summary", title="verification")
+    for c in analysis.checks:
+        verdict = ("not assessed" if c.passed is None
+                   else "[green]pass[/]" if c.passed else "[red]FAIL[/]")
+        checks.add_row(c.name, verdict, c.summary)
+    console.print(checks)
+    if not math.isnan(analysis.kalman_max_difference_sigma):
+        console.print(f"Kalman refinement agrees with least squares to "
+                      f"{analysis.kalman_max_difference_sigma:.2g} σ; reported σ / Cramér–Rao "
+                      f"bound: {max(analysis.crlb_ratio.values()):.4f}", highlight=False)
+    colour = "green" if analysis.decision.passed else "red"
+    console.print(f"[bold {colour}]{analysis.decision.summary()}[/]", highlight=False)
+    _wrote(console, written)
+
+
+def render_noise_characterization(console: Console, result: Any, written: Sequence[Path]
+                                  ) -> None:
+    """Print each record's noise-term table and the files written."""
+    from imucalib.exports.noise import format_noise_table
+
+    for seg in result.segments:
+        temp = "" if seg.temperature_degc is None else f", {seg.temperature_degc:.1f} °C"
+        console.print(f"[bold]{seg.label}[/]: {seg.n_samples:,} samples at "
+                      f"{seg.sample_rate_hz:g} Hz{temp}", highlight=False)
+        console.print(format_noise_table(seg.fits(), fmt="text"), highlight=False,
+                      soft_wrap=True)
+    _wrote(console, written)
+
+
+def _render_other(console: Console, result: Any, written: Sequence[Path]) -> None:
+    verdict = {None: "no decision", True: "PASS", False: "FAIL"}[result.passed]
+    console.print(f"{result.procedure} result for {result.unit}: {verdict}", highlight=False)
+    _wrote(console, written)
+
+
+_RENDERERS: dict[str, Callable[[Console, Any, Sequence[Path]], None]] = {
+    "p1": render_calibration,
+    "allan": render_noise_characterization,
+}
+
+
+def render_result(console: Console, result: Any, written: Sequence[Path]) -> None:
+    """Print a procedure result (module docstring)."""
+    _RENDERERS.get(result.procedure, _render_other)(console, result, written)

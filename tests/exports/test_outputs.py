@@ -1,0 +1,70 @@
+"""write_outputs: every output file of a procedure result, named and written in one place."""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pytest
+
+from imucalib.errors import InvalidInputError
+from imucalib.exports.outputs import OUTPUT_FORMATS, write_outputs
+from imucalib.models.result import CalibrationResult, triad_parameter_names
+
+
+@dataclass
+class _P1Like:
+    """Stands for a P1Analysis: a calibration result plus a report."""
+
+    result: CalibrationResult
+    procedure: str = "p1"
+    passed: bool = True
+
+    @property
+    def unit(self) -> str:
+        return self.result.sensor_id
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"result": self.result.to_dict(), "decision": {"passed": self.passed}}
+
+
+def _p1_like() -> _P1Like:
+    names = (*triad_parameter_names("accel", "per-axis"),
+             *triad_parameter_names("gyro", "per-axis"))
+    values = np.r_[np.ones(3), np.zeros(3), np.ones(3), np.arange(3) * 1e-5]
+    res = CalibrationResult(sensor_id="IMU-7", procedure="p1", model="per-axis",
+                            param_names=names, values=values,
+                            covariance=np.diag(np.arange(1, 13) * 1e-10),
+                            units=dict.fromkeys(names, "1"))
+    return _P1Like(res)
+
+
+def test_p1_outputs_are_named_after_the_recording_unit_and_procedure(tmp_path):
+    result = _p1_like()
+    written = write_outputs(result, tmp_path / "new", name="run")
+    assert [p.name for p in written] == ["run.IMU-7.p1.result.json", "run.IMU-7.p1.report.json"]
+    back = CalibrationResult.from_json(written[0].read_text())
+    np.testing.assert_array_equal(back.values, result.result.values)
+    assert json.loads(written[1].read_text())["decision"] == {"passed": True}
+
+
+def test_parameters_csv_on_request(tmp_path):
+    result = _p1_like()
+    (path,) = write_outputs(result, tmp_path, ["parameters-csv"], name="run")
+    rows = list(csv.reader(path.open()))
+    assert rows[0] == ["parameter", "value", "std_uncertainty", "unit"]
+    assert len(rows) == 13 and rows[1][0] == result.result.param_names[0]
+    assert float(rows[12][1]) == pytest.approx(2e-5)
+    assert float(rows[12][2]) == pytest.approx(np.sqrt(12e-10))
+
+
+def test_refuses_unknown_and_impossible_formats(tmp_path):
+    result = _p1_like()
+    with pytest.raises(InvalidInputError, match=r"unknown output format\(s\) \['pdf'\]"):
+        write_outputs(result, tmp_path, ["pdf"], name="run")
+    with pytest.raises(InvalidInputError, match="'kalibr-yaml' needs a noise characterisation"):
+        write_outputs(result, tmp_path, ["kalibr-yaml"], name="run")
+    assert set(OUTPUT_FORMATS) >= {"result-json", "report-json", "noise-json", "figures"}

@@ -1,0 +1,116 @@
+"""The procedure registry: names, lookup, registration, and which procedure a recording is."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import pytest
+
+from imucalib.errors import ConfigurationError, InvalidInputError
+from imucalib.procedures import registry
+from imucalib.procedures.common.procedure import Procedure, ProcedureResult
+
+
+def test_builtins_are_known_and_satisfy_the_protocol():
+    assert registry.names()[:2] == ("p1", "allan")
+    for name in ("p1", "allan"):
+        proc = registry.get(name)
+        assert isinstance(proc, Procedure) and proc.name == name and proc.description
+        assert proc.outputs
+    assert registry.get("p1").analysis_options == {"model"}
+    with pytest.raises(ConfigurationError, match="unknown procedure 'p9'; known: p1, allan"):
+        registry.get("p9")
+
+
+def test_importing_the_registry_imports_no_analysis():
+    code = ("import sys, imucalib.procedures.registry as r; r.get('p1'); r.get('allan'); "
+            "print(any(m.startswith(('imucalib.procedures.p1.analysis', "
+            "'imucalib.procedures.allan.analysis', 'imucalib.estimation')) "
+            "for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "False"
+
+
+class _Dummy:
+    name = "p-test"
+    description = "a test procedure"
+    plan_options: frozenset[str] = frozenset()
+    analysis_options: frozenset[str] = frozenset()
+    outputs = ("report-json",)
+
+    def generate_plan(self, **options):
+        raise NotImplementedError
+
+    def analyze(self, recording, *, unit=None, options=None):
+        return SimpleNamespace(procedure=self.name, unit=unit or "IMU-1", passed=None,
+                               to_dict=lambda: {"ok": 1})
+
+
+def test_register_a_new_procedure(monkeypatch):
+    monkeypatch.setattr(registry, "_registered", dict(registry._registered))
+    proc = registry.register(_Dummy())
+    assert registry.get("p-test") is proc and registry.names()[-1] == "p-test"
+    with pytest.raises(ConfigurationError, match="already registered"):
+        registry.register(_Dummy())
+    with pytest.raises(ConfigurationError, match="is not a Procedure"):
+        registry.register(object())  # type: ignore[arg-type]
+    bad = _Dummy()
+    bad.name = "a.b"
+    with pytest.raises(ConfigurationError, match="hold no dot"):
+        registry.register(bad)
+    assert isinstance(proc.analyze("x"), ProcedureResult)
+
+
+def test_step_roles_name_the_procedure():
+    assert registry.procedure_of_roles(["warm-up", "p1.accel-position", None,
+                                        "p1.gyro-rate"]) == "p1"
+    assert registry.procedure_of_roles(["allan.record"]) == "allan"
+    assert registry.procedure_of_roles(["warm-up", "x9.thing"]) is None
+    with pytest.raises(ConfigurationError, match="several procedures"):
+        registry.procedure_of_roles(["p1.accel-position", "allan.record"])
+
+
+def _rec(steps=(), plan_toml=None):
+    meta = {} if plan_toml is None else {"plan_toml": plan_toml}
+    return SimpleNamespace(path="r.h5", steps=list(steps), metadata=meta)
+
+
+def test_identify_prefers_roles_then_the_plan():
+    from imucalib.plan.io import plan_to_toml
+
+    plan = plan_to_toml(registry.get("allan").generate_plan(record_s=600.0))
+    roles = [SimpleNamespace(role="p1.accel-position")]
+    assert registry.identify(_rec(roles, plan)) == "p1"
+    assert registry.identify(_rec([SimpleNamespace()], plan)) == "allan"
+    with pytest.raises(ConfigurationError, match="holds no plan"):
+        registry.identify(_rec())
+    plan9 = plan.replace('procedure = "allan"', 'procedure = "p9"')
+    assert plan9 != plan
+    with pytest.raises(ConfigurationError, match="plan procedure 'p9' has no analysis here"):
+        registry.identify(_rec([], plan9))
+
+
+def test_p1_options_are_checked():
+    p1 = registry.get("p1")
+    with pytest.raises(InvalidInputError, match="got \\['colour'\\]"):
+        p1.analyze("x.h5", options={"colour": "red"})
+    with pytest.raises(InvalidInputError, match="'triad' or 'per-axis'; got 'full'"):
+        p1.analyze("x.h5", options={"model": "full"})
+    with pytest.raises(InvalidInputError, match="takes no options"):
+        registry.get("allan").analyze("x.h5", options={"model": "triad"})
+
+
+def test_the_demo_imports_no_cli_module():
+    import ast
+    from pathlib import Path
+
+    import imucalib.demo
+
+    tree = ast.parse(Path(imucalib.demo.__file__).read_text(encoding="utf-8"))
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert not any(m and m.startswith("imucalib.cli") for m in imported)
+    assert "imucalib.procedures" in imported and "imucalib.exports.outputs" in imported
