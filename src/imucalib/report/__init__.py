@@ -6,6 +6,10 @@ Contents
 --------
 :mod:`imucalib.report.allan_figure`
     :func:`plot_allan_triad`, :func:`save_allan_figures`.
+:mod:`imucalib.report.noise_table`
+    :func:`~imucalib.report.noise_table.format_noise_table` (the datasheet-style noise table).
+:mod:`imucalib.report.console`
+    The terminal rendering of procedure results.
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ import numpy as np
 from imucalib import units
 from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
 from imucalib.errors import InvalidInputError
-from imucalib.exports.noise import TABLE_ROWS
+from imucalib.report.noise_table import TABLE_ROWS
 
 if TYPE_CHECKING:
     from imucalib.procedures.allan.analysis import NoiseCharacterization, SegmentNoise

@@ -74,7 +74,7 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
 def render_noise_characterization(console: Console, result: Any, written: Sequence[Path]
                                   ) -> None:
     """Print each record's noise-term table and the files written."""
-    from imucalib.exports.noise import format_noise_table
+    from imucalib.report.noise_table import format_noise_table
 
     for seg in result.segments:
         temp = "" if seg.temperature_degc is None else f", {seg.temperature_degc:.1f} °C"

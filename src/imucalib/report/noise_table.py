@@ -1,0 +1,109 @@
+"""The datasheet-style noise table of per-axis Allan fits (report and exports show it).
+
+Contents
+--------
+:data:`TABLE_ROWS`, :func:`format_noise_table`. Units and conventions: docs/noise.md.
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import math
+from collections.abc import Mapping
+
+from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
+from imucalib.errors import InvalidInputError
+
+__all__ = ["TABLE_ROWS", "format_noise_table"]
+
+
+#: Rows of the datasheet table per sensor: (parameter, term, unit, note prefix, source).
+TABLE_ROWS: dict[str, tuple[tuple[str, str, str, str, str], ...]] = {
+    "gyro": (
+        ("Angle random walk", "white", "°/√h", "ARW", "fit"),
+        ("Noise density (one-sided)", "white", "(°/s)/√Hz", "one-sided", "fit"),
+        ("Bias instability (0.664 applied)", "bias_instability", "°/h", "", "fit"),
+        ("Allan minimum (no factor)", "bias_instability_allan_minimum", "°/h", "", "reading"),
+        ("Rate random walk", "random_walk", "°/h/√h", "RRW", "fit"),
+        ("Rate ramp", "rate_ramp", "°/h²", "", "fit"),
+        ("Quantization", "quantization", "″", "", "fit"),
+    ),
+    "accel": (
+        ("Velocity random walk", "white", "m/s/√h", "VRW", "fit"),
+        ("Noise density (one-sided)", "white", "µg/√Hz", "one-sided", "fit"),
+        ("Bias instability (0.664 applied)", "bias_instability", "µg", "", "fit"),
+        ("Allan minimum (no factor)", "bias_instability_allan_minimum", "µg", "", "reading"),
+        ("Acceleration random walk", "random_walk", "µg/√h", "", "fit"),
+        ("Acceleration ramp", "rate_ramp", "µg/h", "", "fit"),
+        ("Quantization", "quantization", "m/s", "", "fit"),
+    ),
+}
+
+
+def _cell(term: NoiseTerm | None, unit: str, note: str) -> str:
+    if term is None:
+        return "—"
+    for u in term.display:
+        if u.unit == unit and u.note.startswith(note):
+            if not term.detected:
+                return f"< {2 * u.std:.3g} (n.d.)" if math.isfinite(u.std) else "n.d."
+            if math.isfinite(u.std):
+                return f"{u.value:.4g} ± {u.std:.2g}"
+            return f"{u.value:.4g}"
+    raise InvalidInputError(f"no unit {unit!r} ({note}) for term {term.name!r}")
+
+
+def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> str:
+    """Datasheet-style table of per-axis fits, e.g. ``{"gyro_x": fit, …, "accel_z": fit}``.
+
+    One row per parameter of :data:`TABLE_ROWS` (the units users see on datasheets: ARW in
+    °/√h, one-sided density in (°/s)/√Hz or µg/√Hz, bias instability in °/h or µg with the
+    0.664 factor, the raw Allan minimum beside it, …), one column per channel with value ± standard
+    uncertainty; ``< 2u (n.d.)`` marks a term the fit did not detect, ``—`` one not fitted.
+    Sensors are grouped; the last line states the convention.
+
+    Raises
+    ------
+    InvalidInputError
+        No fits, or `fmt` not ``"text"``, ``"csv"``, ``"markdown"``.
+    """
+    if fmt not in ("text", "csv", "markdown"):
+        raise InvalidInputError(f"`fmt` must be 'text', 'csv' or 'markdown'; got {fmt!r}")
+    if not fits:
+        raise InvalidInputError("`fits` is empty")
+    rows: list[list[str]] = []
+    for sensor in ("gyro", "accel"):
+        chans = [name for name, f in fits.items() if f.sensor == sensor]
+        if not chans:
+            continue
+        rows.append(["parameter", "unit", *chans])
+        for label, term_name, unit, note, source in TABLE_ROWS[sensor]:
+            cells = []
+            for ch in chans:
+                f = fits[ch]
+                if source == "reading":
+                    term = f.reading(term_name)
+                else:
+                    term = next((t for t in f.terms if t.name == term_name), None)
+                cells.append(_cell(term, unit, note))
+            rows.append([label, unit, *cells])
+    foot = ("Densities: N two-sided (IEEE 952; = Kalibr sigma_c); the noise-density row is the "
+            "one-sided datasheet value sqrt(2)*N. Uncertainties are 1-sigma.")
+    if fmt == "csv":
+        buf = _io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerows(rows)
+        return buf.getvalue()
+    if fmt == "markdown":
+        out: list[str] = []
+        for row in rows:
+            if row[0] == "parameter" and out:
+                out.append("")
+            out.append("| " + " | ".join(row) + " |")
+            if row[0] == "parameter":
+                out.append("|" + "---|" * len(row))
+        return "\n".join([*out, "", foot]) + "\n"
+    widths = [max(len(r[i]) for r in rows if i < len(r)) for i in range(max(map(len, rows)))]
+    text = ["  ".join(c.ljust(widths[i]) for i, c in enumerate(r)).rstrip() for r in rows]
+    return "\n".join([*text, foot]) + "\n"
