@@ -24,28 +24,32 @@ Station: :class:`StationConfig`, :func:`load_station_config`, :func:`parse_stati
 
 from __future__ import annotations
 
-from imucalib.drivers.base import DeviceCheck
-from imucalib.drivers.chambers import EspecP300Chamber, WatlowF4TChamber
-from imucalib.drivers.clock import MonotonicClock
-from imucalib.drivers.fake import FakeRegisterLink, FakeTransport
-from imucalib.drivers.imus import CsvLineImu, PacketImu
-from imucalib.drivers.modbus import ModbusTcpLink, RegisterLink
-from imucalib.drivers.motion import AcutrolTable, AerosmithTable, AxisLimits
-from imucalib.drivers.station import DriverStation, load_driver_station
-from imucalib.drivers.station_config import (
-    StationConfig,
-    load_station_config,
-    parse_station_config,
-)
-from imucalib.drivers.transport import (
-    SerialTransport,
-    TcpTransport,
-    Transport,
-    TransportSpec,
-    VisaTransport,
-    open_transport,
-    parse_transport_url,
-)
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from imucalib.drivers.base import DeviceCheck
+    from imucalib.drivers.chambers import EspecP300Chamber, WatlowF4TChamber
+    from imucalib.drivers.clock import MonotonicClock
+    from imucalib.drivers.fake import FakeRegisterLink, FakeTransport
+    from imucalib.drivers.imus import CsvLineImu, PacketImu
+    from imucalib.drivers.modbus import ModbusTcpLink, RegisterLink
+    from imucalib.drivers.motion import AcutrolTable, AerosmithTable, AxisLimits
+    from imucalib.drivers.station import DriverStation, load_driver_station
+    from imucalib.drivers.station_config import (
+        StationConfig,
+        load_station_config,
+        parse_station_config,
+    )
+    from imucalib.drivers.transport import (
+        SerialTransport,
+        TcpTransport,
+        Transport,
+        TransportSpec,
+        VisaTransport,
+        open_transport,
+        parse_transport_url,
+    )
 
 __all__ = [
     "AcutrolTable",
@@ -74,3 +78,42 @@ __all__ = [
     "parse_station_config",
     "parse_transport_url",
 ]
+
+#: Module of each public name, imported on first access (PEP 562): importing one module of this
+#: package does not import the others (docs/architecture.md, "Layers").
+_LAZY = {
+    "AcutrolTable": "imucalib.drivers.motion",
+    "AerosmithTable": "imucalib.drivers.motion",
+    "AxisLimits": "imucalib.drivers.motion",
+    "CsvLineImu": "imucalib.drivers.imus",
+    "DeviceCheck": "imucalib.drivers.base",
+    "DriverStation": "imucalib.drivers.station",
+    "EspecP300Chamber": "imucalib.drivers.chambers",
+    "FakeRegisterLink": "imucalib.drivers.fake",
+    "FakeTransport": "imucalib.drivers.fake",
+    "ModbusTcpLink": "imucalib.drivers.modbus",
+    "MonotonicClock": "imucalib.drivers.clock",
+    "PacketImu": "imucalib.drivers.imus",
+    "RegisterLink": "imucalib.drivers.modbus",
+    "SerialTransport": "imucalib.drivers.transport",
+    "StationConfig": "imucalib.drivers.station_config",
+    "TcpTransport": "imucalib.drivers.transport",
+    "Transport": "imucalib.drivers.transport",
+    "TransportSpec": "imucalib.drivers.transport",
+    "VisaTransport": "imucalib.drivers.transport",
+    "WatlowF4TChamber": "imucalib.drivers.chambers",
+    "load_driver_station": "imucalib.drivers.station",
+    "load_station_config": "imucalib.drivers.station_config",
+    "open_transport": "imucalib.drivers.transport",
+    "parse_station_config": "imucalib.drivers.station_config",
+    "parse_transport_url": "imucalib.drivers.transport",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name from its module on first access."""
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -21,17 +21,21 @@ Contents
 
 from __future__ import annotations
 
-from imucalib.station.devices import ChamberDevice, Clock, ImuSource, MotionDevice, Station
-from imucalib.station.operator import AutoOperator, Operator, OperatorAnswer, ScriptedOperator
-from imucalib.station.runner import (
-    RunSummary,
-    check_plan_against_station,
-    find_resume_point,
-    resume_run,
-    run_plan,
-)
-from imucalib.station.session import RunOptions, RunSession, RunStatus
-from imucalib.station.sim import SimStation
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from imucalib.station.devices import ChamberDevice, Clock, ImuSource, MotionDevice, Station
+    from imucalib.station.operator import AutoOperator, Operator, OperatorAnswer, ScriptedOperator
+    from imucalib.station.runner import (
+        RunSummary,
+        check_plan_against_station,
+        find_resume_point,
+        resume_run,
+        run_plan,
+    )
+    from imucalib.station.session import RunOptions, RunSession, RunStatus
+    from imucalib.station.sim import SimStation
 
 __all__ = [
     "AutoOperator",
@@ -53,3 +57,35 @@ __all__ = [
     "resume_run",
     "run_plan",
 ]
+
+#: Module of each public name, imported on first access (PEP 562): importing one module of this
+#: package does not import the others (docs/architecture.md, "Layers").
+_LAZY = {
+    "AutoOperator": "imucalib.station.operator",
+    "ChamberDevice": "imucalib.station.devices",
+    "Clock": "imucalib.station.devices",
+    "ImuSource": "imucalib.station.devices",
+    "MotionDevice": "imucalib.station.devices",
+    "Operator": "imucalib.station.operator",
+    "OperatorAnswer": "imucalib.station.operator",
+    "RunOptions": "imucalib.station.session",
+    "RunSession": "imucalib.station.session",
+    "RunStatus": "imucalib.station.session",
+    "RunSummary": "imucalib.station.runner",
+    "ScriptedOperator": "imucalib.station.operator",
+    "SimStation": "imucalib.station.sim",
+    "Station": "imucalib.station.devices",
+    "check_plan_against_station": "imucalib.station.runner",
+    "find_resume_point": "imucalib.station.runner",
+    "resume_run": "imucalib.station.runner",
+    "run_plan": "imucalib.station.runner",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name from its module on first access."""
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

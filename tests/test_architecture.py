@@ -1,0 +1,90 @@
+"""The layers of docs/architecture.md: no module imports a package above its own.
+
+Every ``import imucalib.X`` / ``from imucalib.X import …`` / ``from imucalib import X`` in
+``src/imucalib`` (at any depth, deferred imports inside functions included) is checked against the
+layer ranks below; a package may import its own modules and packages of a lower rank only. A
+light-package check imports single modules in a fresh interpreter and looks at ``sys.modules``.
+"""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "imucalib"
+
+#: Layer of each top-level module or package (docs/architecture.md, "Layers").
+RANK = {
+    "errors": 0,
+    "units": 1, "conventions": 1, "_checks": 1,
+    "models": 2,
+    "io": 3, "processing": 3, "estimation": 3, "analysis": 3,
+    "plan": 4,
+    "sim": 5,
+    "station": 6,
+    "drivers": 7, "procedures": 7,
+    "report": 8,
+    "exports": 9,
+    "demo": 10, "cli": 10,
+    "__main__": 11, "__init__": 11,
+}
+
+
+def _top(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+def _imports(path: Path) -> list[tuple[str, int]]:
+    """(top-level imucalib package imported, line) for every import in `path`."""
+    out: list[tuple[str, int]] = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            if node.module == "imucalib":
+                out += [(alias.name, node.lineno) for alias in node.names]
+            elif node.module.startswith("imucalib."):
+                out.append((_top(node.module), node.lineno))
+        elif isinstance(node, ast.Import):
+            out += [(_top(a.name), node.lineno) for a in node.names
+                    if a.name.startswith("imucalib.")]
+    return out
+
+
+def test_every_top_level_module_has_a_layer():
+    names = {p.stem if p.is_file() else p.name for p in SRC.iterdir()
+             if (p.suffix == ".py" or (p.is_dir() and (p / "__init__.py").exists()))}
+    assert names - set(RANK) == set(), "add the new package to RANK and docs/architecture.md"
+
+
+def test_no_module_imports_a_higher_layer():
+    upward = []
+    for path in sorted(SRC.rglob("*.py")):
+        me = _top("imucalib." + ".".join(path.relative_to(SRC).with_suffix("").parts))
+        for target, line in _imports(path):
+            if target != me and target in RANK and RANK[target] >= RANK[me]:
+                upward.append(f"{path.relative_to(SRC.parent)}:{line}: {me} (layer {RANK[me]}) "
+                              f"imports {target} (layer {RANK[target]})")
+    assert upward == [], "imports against the flow:\n" + "\n".join(upward)
+
+
+@pytest.mark.parametrize(("module", "must_not_load"), [
+    ("imucalib.drivers.watlow_f4t", "imucalib.sim"),
+    ("imucalib.drivers.acl", "imucalib.sim"),
+    ("imucalib.drivers.transport", "imucalib.station"),
+    ("imucalib.station.devices", "imucalib.sim"),
+    ("imucalib.plan", "imucalib.sim"),
+    ("imucalib.io", "imucalib.plan"),
+    ("imucalib.procedures.registry", "imucalib.procedures.p1.analysis"),
+])
+def test_importing_one_module_loads_no_unrelated_layer(module, must_not_load):
+    code = (f"import sys, {module}; "
+            f"print(sorted(m for m in sys.modules if m == {must_not_load!r} "
+            f"or m.startswith({must_not_load + '.'!r})))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]", f"importing {module} loaded {done.stdout.strip()}"
