@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
+from imucalib.plan.equipment import ChamberConfig, ImuConfig, SiteConfig, TwinEquipment
 from imucalib.plan.schema import (
     ImuSpecConfig,
     OperatorCheckStep,
@@ -25,7 +26,6 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
-from imucalib.sim.scenario import ChamberConfig, ImuConfig, SiteConfig, TwinEquipment
 
 __all__ = ["generate_allan_plan"]
 

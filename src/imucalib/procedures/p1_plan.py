@@ -27,6 +27,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
+from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
     GuardConfig,
     ImuSpecConfig,
@@ -39,7 +40,6 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
-from imucalib.sim.scenario import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 
 __all__ = [
     "P1_HELD_OUT_POSITIONS_DEG",
