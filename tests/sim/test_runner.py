@@ -54,7 +54,7 @@ def test_every_step_is_recorded_done_with_its_window(p1_file):
         assert all(s.status == "done" for s in steps)
         for s in steps:
             assert s.t_start_s <= s.valid_start_s < s.valid_end_s <= s.t_end_s + 1e-12
-        # the station runner acquires one more tick (2 s, simulate's) after the last step
+        # the station runner acquires one more tick (2 s on the twin) after the last step
         assert summary.virtual_duration_s == pytest.approx(steps[-1].t_end_s + 2.0)
         assert {e.source for e in rec.log} == {"runner"}
         assert all(e.level == "info" for e in rec.log)

@@ -239,8 +239,8 @@ def _drive(run: RunSession, first: int, truth: TruthSource | None = None) -> Run
     status, reason = "done", ""
     tick = run.tick
 
-    def tick_and_notify(until_s: float | None = None) -> None:
-        tick(until_s)
+    def tick_and_notify(until_s: float | None = None, span_s: float | None = None) -> None:
+        tick(until_s, span_s)
         _write_truth(run, truth)
         run._notify()
 
@@ -297,6 +297,8 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
     opt = options or RunOptions()
     if not opt.tick_s > 0:
         raise InvalidInputError(f"`tick_s` must be > 0; got {opt.tick_s!r}")
+    if opt.idle_tick_s is not None and not opt.idle_tick_s > 0:
+        raise InvalidInputError(f"`idle_tick_s` must be > 0; got {opt.idle_tick_s!r}")
     check_plan_against_station(plan, station)
     if Path(path).exists() and not overwrite:
         raise RecordingError(f"{path} exists; pass overwrite=True to replace it")

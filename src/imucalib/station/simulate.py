@@ -42,9 +42,10 @@ from imucalib.station.sim import SimStation
 __all__ = ["SIMULATE_TICK_S", "ProgressCallback", "SimulationSummary",
            "estimate_scenario_recording", "scenario_station_and_plan", "simulate_scenario"]
 
-#: Station time between acquisitions and guard checks of a simulated run. Longer than
-#: ``imucalib run``'s 0.5 s: the twin's cost is mostly per generated block, and every criterion
-#: (settling over 1 s, a device time-out of 5 s) still holds at 2 s. [s]
+#: Station time between acquisitions and guard checks of a simulated run: 2 s, as
+#: ``imucalib run --station sim`` (0.5 s on equipment); the twin's cost is mostly per generated
+#: block. While nothing is decided (a dwell, a record of fixed length) the ticks are the
+#: scenario's ``chunk_s``. [s]
 SIMULATE_TICK_S = 2.0
 
 ProgressCallback = Callable[[float, float], None]
@@ -146,7 +147,8 @@ def simulate_scenario(sc: Scenario, path: str | Path, *,
     flush_interval_s : float
         Wall-clock interval between flushes of the writer. [s]
     tick_s : float
-        Station time between acquisitions and guard checks. [s]
+        Station time between acquisitions and guard checks (``sc.chunk_s`` while nothing is
+        decided: ``RunOptions.idle_tick_s``). [s]
 
     Returns
     -------
@@ -174,7 +176,8 @@ def simulate_scenario(sc: Scenario, path: str | Path, *,
             done = status.time_s - start_s
             report(done, max(total_s, done))
 
-    options = RunOptions(tick_s=tick_s, truth=station.truth, flush_interval_s=flush_interval_s,
+    options = RunOptions(tick_s=tick_s, idle_tick_s=max(sc.chunk_s, tick_s),
+                         truth=station.truth, flush_interval_s=flush_interval_s,
                          on_status=on_status)
     run = run_plan(plan, station, path, options=options, overwrite=overwrite,
                    truth_source=station,
