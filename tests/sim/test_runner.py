@@ -233,3 +233,9 @@ def test_toml_scenario_round_trip(tmp_path):
                           steps=(StaticStep(kind="static", duration_s=5.0),))
     summary = simulate_scenario(sc, tmp_path / "mine.h5")
     assert summary.samples == {"imu/IMU-9": 700}  # 5 s, then the run's last tick of 2 s
+
+
+def test_the_builtin_centrifuge_runs_to_the_end_within_its_gyro_range(tmp_path):
+    summary = simulate_scenario(load_scenario("centrifuge"), tmp_path / "c.h5")
+    assert summary.status == "done", summary.reason
+    assert [s.status for s in summary.steps] == ["done"] * 9

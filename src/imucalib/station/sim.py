@@ -511,6 +511,19 @@ class SimStation:
             values["max_temperature_degc"] = chamber.spec.max_temp_degc
         return PlanLimits.model_validate(values)
 
+    def position_tolerance_arcsec(self) -> float:
+        """Return the table deviation this twin's encoders let a held position show. [″]
+
+        It is 3 × (encoder error (an RMS) + resolution + position noise) of the worst axis: a
+        lab-grade table (15″ encoder error) cannot show 5″, however long it settles.
+        """
+        table = self.rig.table or (self.rig.centrifuge.table if self.rig.centrifuge else None)
+        if table is None:
+            return 0.0
+        worst = max(ax.encoder_error_rad + ax.encoder_resolution_rad + ax.position_noise_rad
+                    for ax in table.spec.axes)
+        return 3.0 * worst / units.ARCSEC
+
     def check_steps(self, steps: Sequence[PlanStep]) -> None:
         """Refuse, before anything moves, a step that asks the twin for more than it can do.
 

@@ -97,7 +97,9 @@ class SimulationSummary:
 def scenario_station_and_plan(sc: Scenario) -> tuple[SimStation, Plan]:
     """Return the simulated station of `sc`'s equipment and the plan of its steps.
 
-    The plan's limits are the twin's own (:meth:`SimStation.plan_limits`).
+    The plan's limits are the twin's own (:meth:`SimStation.plan_limits`), and its position
+    tolerance is widened to what the twin's encoders can show
+    (:meth:`SimStation.position_tolerance_arcsec`; 5″ stays for a high-grade table).
 
     Raises
     ------
@@ -112,6 +114,10 @@ def scenario_station_and_plan(sc: Scenario) -> tuple[SimStation, Plan]:
         plan = sc.to_plan(station.plan_limits())
     except ValidationError as exc:
         raise ConfigurationError(format_validation_error(exc, repr(sc.name))) from exc
+    reachable = station.position_tolerance_arcsec()
+    if reachable > plan.guards.position_tolerance_arcsec:
+        guards = plan.guards.model_copy(update={"position_tolerance_arcsec": reachable})
+        plan = plan.model_copy(update={"guards": guards})
     return station, plan
 
 
