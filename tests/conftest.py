@@ -39,6 +39,35 @@ def run_twin(plan: Plan, path: Path) -> Path:
     return path
 
 
+def write_planless_recording(path: Path) -> Path:
+    """Write a Recording of the twin's IMU at rest that holds no plan (two seconds, one step).
+
+    ``imucalib simulate`` runs its scenario as a plan, so its recordings hold one; this is what
+    a recording made without a plan (an import, another tool) looks like to the analysis.
+    """
+    from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+    from imucalib.io.recording import RecordingWriter
+    from imucalib.io.streams import DEVICE_IMU, imu_stream_spec
+    from imucalib.sim.scenario import load_scenario
+
+    station = SimStation(load_scenario("dual-axis-p1").equipment)
+    station.clock.sleep(2.0)
+    src = station.imus[0]
+    block = src.read()
+    cols = {"time_s": block.time_s, "device_time_s": block.device_time_s,
+            "counter": block.counter, "temperature_degc": block.temperature_degc,
+            "saturated": block.saturated}
+    for j, c in enumerate(GYRO_COLUMNS):
+        cols[c] = block.gyro_rps[:, j]
+    for j, c in enumerate(ACCEL_COLUMNS):
+        cols[c] = block.accel_mps2[:, j]
+    with RecordingWriter(path, streams=[imu_stream_spec(src.name)]) as writer:
+        writer.append(DEVICE_IMU, src.name, cols)
+        row = writer.begin_step("static", "at rest", 0.0)
+        writer.update_step(row, t_end_s=2.0, status="done", valid_start_s=0.0, valid_end_s=2.0)
+    return path
+
+
 @pytest.fixture(scope="session")
 def tactical_run(tmp_path_factory) -> Path:
     return run_twin(p1_plan("tactical", 3, repetitions=2), tmp_path_factory.mktemp("p1") / "t.h5")
@@ -52,4 +81,5 @@ def consumer_run(tmp_path_factory) -> Path:
 @pytest.fixture(scope="session")
 def p1_tools() -> SimpleNamespace:
     """The helpers above, for test modules (which cannot import conftest by name)."""
-    return SimpleNamespace(p1_plan=p1_plan, run_twin=run_twin)
+    return SimpleNamespace(p1_plan=p1_plan, run_twin=run_twin,
+                           write_planless_recording=write_planless_recording)

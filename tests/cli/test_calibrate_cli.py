@@ -68,11 +68,8 @@ def test_per_axis_model_fails_its_residual_rule_with_exit_1(consumer_run, tmp_pa
     assert "FAIL" in result.output and "accelerometer residuals" in result.output
 
 
-def test_calibrate_refuses_a_recording_without_a_plan(tmp_path):
-    from imucalib.sim import load_scenario, simulate_scenario
-
-    sc = load_scenario("dual-axis-p1")
-    simulate_scenario(sc.model_copy(update={"steps": sc.steps[:1]}), tmp_path / "s.h5")
+def test_calibrate_refuses_a_recording_without_a_plan(tmp_path, p1_tools):
+    p1_tools.write_planless_recording(tmp_path / "s.h5")
     result = runner.invoke(app, ["calibrate", str(tmp_path / "s.h5")])
     assert result.exit_code == 2 and "holds no plan" in result.output
 

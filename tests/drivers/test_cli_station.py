@@ -10,7 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 from imucalib.cli import _app, app
-from imucalib.drivers.simulators import AclSimServer, F4TSimServer, SimulatedStation
+from imucalib.drivers.simulators import AclSimServer, F4TSimServer, LoopbackStation
 
 from ._rigs import SPEED, make_rig
 
@@ -26,12 +26,12 @@ def wide_console(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 @pytest.fixture
-def sim() -> Iterator[SimulatedStation]:
-    with SimulatedStation(make_rig(chamber=True), speed=SPEED) as station:
+def sim() -> Iterator[LoopbackStation]:
+    with LoopbackStation(make_rig(chamber=True), speed=SPEED) as station:
         yield station
 
 
-def test_check_identifies_everything_and_moves_nothing(sim: SimulatedStation,
+def test_check_identifies_everything_and_moves_nothing(sim: LoopbackStation,
                                                        tmp_path: Path) -> None:
     path = sim.write_station_file(tmp_path / "station.toml")
     result = runner.invoke(app, ["station", "check", str(path), "--listen-s", "0.2"], env=WIDE)
@@ -49,7 +49,7 @@ def test_check_identifies_everything_and_moves_nothing(sim: SimulatedStation,
 
 
 def test_check_serial_dialects(tmp_path: Path) -> None:
-    with SimulatedStation(make_rig(chamber=True), speed=SPEED, table="aerosmith",
+    with LoopbackStation(make_rig(chamber=True), speed=SPEED, table="aerosmith",
                           table_transport="serial", chamber="espec-p300", imu="csv") as sim:
         path = sim.write_station_file(tmp_path / "station.toml")
         result = runner.invoke(app, ["station", "check", str(path), "--listen-s", "0.2"],
@@ -58,7 +58,7 @@ def test_check_serial_dialects(tmp_path: Path) -> None:
     assert "AERO4000-SIM" in result.output and "Espec T,P300" in result.output
 
 
-def test_check_fails_on_an_alarm(sim: SimulatedStation, tmp_path: Path) -> None:
+def test_check_fails_on_an_alarm(sim: LoopbackStation, tmp_path: Path) -> None:
     chamber = sim.servers["chamber"]
     assert isinstance(chamber, F4TSimServer)
     chamber.raise_alarm(0, 37)
@@ -69,7 +69,7 @@ def test_check_fails_on_an_alarm(sim: SimulatedStation, tmp_path: Path) -> None:
     assert "chamber main: running; ALARM alarm 1: high" in result.output
 
 
-def test_check_fails_on_an_unreachable_device(sim: SimulatedStation, tmp_path: Path) -> None:
+def test_check_fails_on_an_unreachable_device(sim: LoopbackStation, tmp_path: Path) -> None:
     path = sim.write_station_file(tmp_path / "station.toml")
     port = sim.servers["imu[IMU-T1]"].port
     sim.servers["imu[IMU-T1]"].close()

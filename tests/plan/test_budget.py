@@ -21,15 +21,16 @@ from imucalib.plan.budget import (
     estimate_plan_recording,
     estimate_recording,
     estimate_recording_bytes,
-    estimate_scenario_recording,
     format_bytes,
     plan_run_duration_s,
 )
+from imucalib.plan.equipment import ImuConfig, TableConfig
+from imucalib.plan.schema import StaticStep
 from imucalib.procedures import generate_p1_plan
-from imucalib.sim.runner import simulate_scenario
-from imucalib.sim.scenario import ImuConfig, Scenario, StaticStep, TableConfig
+from imucalib.sim.scenario import Scenario
 from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
+from imucalib.station.simulate import estimate_scenario_recording, simulate_scenario
 
 CHUNK = 65536
 STEPS_TABLE = 64 * (8 + 64 + 256 + 8192 + 4 * 8 + 32 + 2048 + 512 + 4096 + 2048)  # one chunk

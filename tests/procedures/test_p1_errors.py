@@ -75,12 +75,8 @@ def test_a_table_that_never_settled_leaves_no_valid_window(p1_tools, tmp_path):
         analyze_p1(tmp_path / "s.h5", options=FAST)
 
 
-def test_a_recording_without_a_plan(tmp_path):
-    from imucalib.sim import load_scenario, simulate_scenario
-
-    sc = load_scenario("dual-axis-p1")
-    sc = sc.model_copy(update={"steps": sc.steps[:1]})
-    simulate_scenario(sc, tmp_path / "np.h5")
+def test_a_recording_without_a_plan(tmp_path, p1_tools):
+    p1_tools.write_planless_recording(tmp_path / "np.h5")
     with pytest.raises(RecordingError, match="holds no plan"):
         analyze_p1(tmp_path / "np.h5", options=FAST)
 

@@ -18,8 +18,8 @@ INWARD = Rotation.from_euler("z", 180, degrees=True)  # x_b along −x_p: toward
 
 
 def _centrifuge(load_kg, **extra):
-    spec = CentrifugeSpec(static_radius_m=R_T, unbalance_c0_m_s2=C0,
-                          unbalance_c_per_kg_m_s2_per_kg=C_PER_KG, **extra)
+    spec = CentrifugeSpec(static_radius_m=R_T, unbalance_c0_m_per_rps_sq=C0,
+                          unbalance_c_m_per_rps_sq_per_kg=C_PER_KG, **extra)
     return SimCentrifuge(spec, load_kg=load_kg)
 
 
@@ -38,7 +38,7 @@ def test_input_follows_dynamic_radius(load_kg, rate_dps):
     cf = _centrifuge(load_kg)
     w = rate_dps * DEG
     c = C0 + C_PER_KG * load_kg
-    assert cf.unbalance_m_s2 == pytest.approx(c)
+    assert cf.unbalance_m_per_rps_sq == pytest.approx(c)
     _, kin = _spin_and_average(cf, w, R_T, site)
     omega_u = EARTH_RATE_RPS * np.sin(np.radians(45.0))
     expected = (R_T + c * w * w) * (w * w + 2 * w * omega_u)  # (r_t + cω²)·(ω + Ω_U)² to O(Ω)
@@ -78,7 +78,7 @@ def test_arm_geometry_during_a_ramp():
                                      - cf.mount_kinematics_p(t - h, static)[1]) / (2 * h),
                                atol=1e-8)
     w = cf.motion(t).rate_rps[:, 0]
-    c = cf.unbalance_m_s2
+    c = cf.unbalance_m_per_rps_sq
     np.testing.assert_allclose(pos[:, 0], R_T + (c + 1e-6 * R_T) * w**2, rtol=1e-14)
     np.testing.assert_allclose(pos[:, 1], 0.02 * (1 + 1e-6 * w**2), rtol=1e-14)
     np.testing.assert_allclose(pos[:, 2], 0.0)

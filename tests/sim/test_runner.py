@@ -14,17 +14,10 @@ from imucalib.io import open_recording
 from imucalib.io.streams import axis_columns
 from imucalib.models.imu import ImuModel
 from imucalib.models.triad import apply_triad
-from imucalib.sim.runner import simulate_scenario
-from imucalib.sim.scenario import (
-    BUILTIN_SCENARIOS,
-    ImuConfig,
-    PositionStep,
-    RateStep,
-    Scenario,
-    StaticStep,
-    TableConfig,
-    load_scenario,
-)
+from imucalib.plan.equipment import ImuConfig, TableConfig
+from imucalib.plan.schema import PositionStep, RateStep, StaticStep
+from imucalib.sim.scenario import BUILTIN_SCENARIOS, Scenario, load_scenario
+from imucalib.station.simulate import simulate_scenario
 
 ARCSEC = units.ARCSEC
 
@@ -61,8 +54,12 @@ def test_every_step_is_recorded_done_with_its_window(p1_file):
         assert all(s.status == "done" for s in steps)
         for s in steps:
             assert s.t_start_s <= s.valid_start_s < s.valid_end_s <= s.t_end_s + 1e-12
-        assert steps[-1].t_end_s == pytest.approx(summary.virtual_duration_s)
-        assert [e.source for e in rec.log] == ["twin", "twin"]
+        # the station runner acquires one more tick (2 s on the twin) after the last step
+        assert summary.virtual_duration_s == pytest.approx(steps[-1].t_end_s + 2.0)
+        assert {e.source for e in rec.log} == {"runner"}
+        assert all(e.level == "info" for e in rec.log)
+        assert "'small-p1' started" in rec.log[0].message
+        assert rec.log[-1].message == "plan 'small-p1' completed"
 
 
 def test_valid_position_windows_lie_in_settled_data(p1_file):
@@ -235,4 +232,10 @@ def test_toml_scenario_round_trip(tmp_path):
                                           sample_rate_hz=100.0),),
                           steps=(StaticStep(kind="static", duration_s=5.0),))
     summary = simulate_scenario(sc, tmp_path / "mine.h5")
-    assert summary.samples == {"imu/IMU-9": 500}
+    assert summary.samples == {"imu/IMU-9": 700}  # 5 s, then the run's last tick of 2 s
+
+
+def test_the_builtin_centrifuge_runs_to_the_end_within_its_gyro_range(tmp_path):
+    summary = simulate_scenario(load_scenario("centrifuge"), tmp_path / "c.h5")
+    assert summary.status == "done", summary.reason
+    assert [s.status for s in summary.steps] == ["done"] * 9

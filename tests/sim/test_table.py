@@ -251,3 +251,16 @@ def test_bad_inputs():
         table.motion(np.zeros((2, 2)))
     with pytest.raises(InvalidInputError, match="`time_s` must be finite"):
         table.motion([0.0, float("nan")])
+
+
+def test_the_twin_tables_turn_about_the_axes_the_analysis_assumes():
+    """One geometry: the twin's presets take their axis directions from the conventions."""
+    from imucalib.conventions import TABLE_AXIS_VECTORS
+    from imucalib.sim.centrifuge import CentrifugeSpec
+
+    specs = [RateTableSpec.dual_axis_pitch_roll(grade) for grade in ("ideal", "lab", "high")]
+    specs += [RateTableSpec.single_axis(grade) for grade in ("ideal", "lab", "high")]
+    specs.append(RateTableSpec(axes=(CentrifugeSpec().axis_spec(),)))
+    for spec in specs:
+        for ax in spec.axes:
+            np.testing.assert_array_equal(ax.axis_vector, TABLE_AXIS_VECTORS[ax.name])

@@ -16,7 +16,7 @@ import pytest
 
 from imucalib import units
 from imucalib.drivers import load_driver_station
-from imucalib.drivers.simulators import SimulatedStation
+from imucalib.drivers.simulators import LoopbackStation
 from imucalib.io import open_recording
 from imucalib.io.streams import axis_columns
 from imucalib.procedures import generate_p1_plan
@@ -53,7 +53,7 @@ def test_drivers_over_loopback_give_an_equivalent_recording(tmp_path):
     assert plan.twin is not None
     run_plan(plan, SimStation(plan.twin), tmp_path / "twin.h5")
     rig = build_rig(plan.twin).rig
-    with SimulatedStation(rig, speed=SPEED, table="acutrol", imu="packet") as served:
+    with LoopbackStation(rig, speed=SPEED, table="acutrol", imu="packet") as served:
         station_file = served.write_station_file(tmp_path / "station.toml")
         station = load_driver_station(station_file, clock=served.time_base)
         summary = run_plan(plan, station, tmp_path / "drivers.h5",
@@ -91,7 +91,7 @@ def test_a_dropped_table_connection_trips_stops_and_retries_over_tcp(tmp_path):
     plan = scaled_plan()
     assert plan.twin is not None
     rig = build_rig(plan.twin).rig
-    with SimulatedStation(rig, speed=SPEED) as served:
+    with LoopbackStation(rig, speed=SPEED) as served:
         station = load_driver_station(served.write_station_file(tmp_path / "s.toml"),
                                       clock=served.time_base)
         dropped: list[float] = []

@@ -17,7 +17,7 @@ import pytest
 from imucalib import units
 from imucalib.io import open_recording
 from imucalib.plan import Plan, parse_plan, plan_to_toml
-from imucalib.station.runner import run_plan
+from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
 
 from .conftest import small_p1
@@ -181,3 +181,21 @@ def test_a_table_pushed_off_while_settling_is_corrected_automatically(reference,
     assert len(fixes) == 1 and "from its target" in fixes[0].message
     corrected = next(s for s in steps if s[0] == target[0])
     assert corrected[2] > target[2]  # the window starts once the correction has settled
+
+
+def test_long_idle_ticks_still_guard_every_row(tmp_path):
+    """With `idle_tick_s` a static record advances 10 s per tick; a 2-s drift inside still trips."""
+    plan = small_p1()
+    options = RunOptions(tick_s=0.5, idle_tick_s=10.0)
+    ref = run_plan(plan, SimStation(plan.twin), tmp_path / "ref.h5", options=options)
+    assert ref.status == "done" and ref.steps_invalid == 0
+    with open_recording(tmp_path / "ref.h5") as rec:
+        static = next(s for s in rec.steps if s.kind == "static")
+    assert static.valid_end_s - static.valid_start_s == pytest.approx(20.0)
+    station = SimStation(plan.twin)
+    t_fault = static.valid_start_s + 3.0  # inside the first 10-s tick of the record
+    station.at(t_fault, lambda: station.table.add_position_drift(0, 10 * units.ARCSEC, 2.0))
+    summary = run_plan(plan, station, tmp_path / "f.h5", options=RunOptions(tick_s=0.5,
+                                                                            idle_tick_s=10.0))
+    assert summary.status == "done", summary.reason
+    assert summary.steps_invalid == 1 and "from its target" in summary.trips[0]

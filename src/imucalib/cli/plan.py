@@ -12,14 +12,14 @@ from rich.table import Table
 
 from imucalib.cli._app import app, console, fail
 from imucalib.errors import CalibrationError, ConfigurationError
-from imucalib.plan.budget import format_bytes
-from imucalib.plan.schema import Plan
-from imucalib.sim.scenario import (
+from imucalib.plan.bounds import (
     MAX_RECORD_S,
     MAX_SAMPLE_RATE_HZ,
     MIN_SAMPLE_RATE_HZ,
     format_validation_error,
 )
+from imucalib.plan.budget import format_bytes
+from imucalib.plan.schema import Plan
 
 __all__ = ["plan_app"]
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -35,18 +36,27 @@ def simulate(
 ) -> None:
     """Run a scenario on the digital twin and write its Recording.
 
-    The recording's size is estimated first; a scenario whose file would not fit in the free
+    The scenario's steps run as a plan through the station runner on the simulated station
+    (the same settling, valid windows and guards as `imucalib run --station sim`). A scenario
+    file in the former format is read with a note per renamed field. The recording's size is
+    estimated first; a scenario whose file would not fit in the free
     space of the output's filesystem is refused before anything is written.
     """
     from pydantic import ValidationError
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from imucalib.plan.budget import check_free_space, estimate_scenario_recording
-    from imucalib.sim.runner import simulate_scenario
-    from imucalib.sim.scenario import Scenario, format_validation_error, load_scenario
+    from imucalib.plan.bounds import format_validation_error
+    from imucalib.plan.budget import check_free_space
+    from imucalib.sim.scenario import Scenario, ScenarioFormatWarning, load_scenario
+    from imucalib.station.simulate import estimate_scenario_recording, simulate_scenario
 
     try:
-        sc = load_scenario(scenario)
+        with warnings.catch_warnings(record=True) as notes:
+            warnings.simplefilter("always", ScenarioFormatWarning)
+            sc = load_scenario(scenario)
+        for note in notes:
+            console.print(f"note: {note.message}", style="yellow", highlight=False,
+                          soft_wrap=True)
         if seed is not None:
             sc = Scenario.model_validate({**sc.model_dump(), "seed": seed})
         estimate = estimate_scenario_recording(sc)

@@ -9,7 +9,7 @@ Contents
 :func:`estimate_recording_bytes`
     A plan and station facts → bytes (an ``int``), for a station run to compare with its free
     disk space.
-:func:`estimate_plan_recording`, :func:`estimate_scenario_recording`, :func:`estimate_recording`
+:func:`estimate_plan_recording`, :func:`estimate_recording`
     The same, itemised per stream (:class:`RecordingEstimate`, :class:`StreamEstimate`).
 :func:`check_free_space`
     Refuse (:class:`~imucalib.errors.LimitExceededError`) an estimate larger than the free space
@@ -35,10 +35,9 @@ warm-ups, soaks, settles and operator checks, so the size follows the run's dura
   ``stable_for_s`` W; never beyond ``timeout_s``;
 - operator checks: nothing.
 
-A scenario (``imucalib simulate``) runs by its own steps' durations
-(:func:`~imucalib.sim.scenario.step_min_duration_s`: settle after the move, soaks of a fixed
-``duration_s``) plus :data:`MOVE_ALLOWANCE_S` per motion step. A guard trip's retry of a step is
-not foreseen.
+A scenario (``imucalib simulate``) is a plan run on the twin station and is estimated as one
+(:func:`imucalib.station.simulate.estimate_scenario_recording`). A guard trip's retry of a step
+is not foreseen.
 
 Each stream holds ``⌊rate · duration⌋ + 1`` rows of the canonical layout
 (:mod:`imucalib.io.streams`: an IMU row is 81 bytes, a two-axis table row 40, a chamber row 24);
@@ -90,7 +89,7 @@ from imucalib.plan.schema import (
 )
 
 if TYPE_CHECKING:
-    from imucalib.sim.scenario import Scenario, TwinEquipment
+    from imucalib.plan.equipment import TwinEquipment
 
 __all__ = [
     "METADATA_BYTES",
@@ -103,7 +102,6 @@ __all__ = [
     "estimate_plan_recording",
     "estimate_recording",
     "estimate_recording_bytes",
-    "estimate_scenario_recording",
     "format_bytes",
     "plan_run_duration_s",
 ]
@@ -403,19 +401,6 @@ def estimate_recording_bytes(plan: Plan, *, imu_sample_rate_hz: float | Sequence
                          centrifuge=centrifuge, feedback_rate_hz=feedback_rate_hz,
                          chamber=chamber, chamber_rate_hz=chamber_rate_hz)
     return estimate_plan_recording(plan, facts).total_bytes
-
-
-def estimate_scenario_recording(scenario: Scenario) -> RecordingEstimate:
-    """Return the estimated recording ``imucalib simulate`` writes for `scenario`."""
-    from imucalib.sim.scenario import CentrifugeStep as Spin
-    from imucalib.sim.scenario import PositionStep as Position
-    from imucalib.sim.scenario import RateStep as Rate
-    from imucalib.sim.scenario import step_min_duration_s
-
-    moves = sum(isinstance(s, Position | Rate | Spin) for s in scenario.steps)
-    duration = (sum(step_min_duration_s(s) for s in scenario.steps)
-                + MOVE_ALLOWANCE_S * moves)
-    return estimate_recording(duration, len(scenario.steps), StationFacts.of_twin(scenario))
 
 
 def check_free_space(estimate_bytes: int, path: str | os.PathLike[str], *,

@@ -27,6 +27,7 @@ import tomli_w
 from pydantic import ValidationError
 
 from imucalib.errors import ConfigurationError
+from imucalib.plan.bounds import format_validation_error
 from imucalib.plan.schema import (
     CentrifugeStep,
     OperatorCheckStep,
@@ -39,7 +40,6 @@ from imucalib.plan.schema import (
     WarmUpStep,
     step_min_duration_s,
 )
-from imucalib.sim.scenario import format_validation_error
 
 __all__ = [
     "PlanRow",

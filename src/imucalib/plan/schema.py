@@ -36,7 +36,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from imucalib.sim.scenario import (
+from imucalib.plan.bounds import (
     MAX_ANGLE_DEG,
     MAX_CENTRIFUGE_RATE_DPS,
     MAX_RAMP_DEGC_PER_MIN,
@@ -53,9 +53,9 @@ from imucalib.sim.scenario import (
     MIN_RAMP_DEGC_PER_MIN,
     MIN_SAMPLE_RATE_HZ,
     MIN_TEMPERATURE_DEGC,
-    TwinEquipment,
     check_record_length,
 )
+from imucalib.plan.equipment import TwinEquipment
 
 __all__ = [
     "CentrifugeStep",

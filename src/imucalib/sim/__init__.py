@@ -8,8 +8,9 @@ dynamic unbalance), :mod:`~imucalib.sim.fixture` (IMU mounts), :mod:`~imucalib.s
 
 The station together: :mod:`~imucalib.sim.synth` (an IMU at its own clock),
 :mod:`~imucalib.sim.rig` (:class:`TwinRig`, every stream of the station in virtual time),
-:mod:`~imucalib.sim.scenario` (what to simulate), :mod:`~imucalib.sim.build` (scenario → rig and
-truth), :mod:`~imucalib.sim.runner` (scenario → Recording).
+:mod:`~imucalib.sim.scenario` (what to simulate: twin equipment plus a plan's steps),
+:mod:`~imucalib.sim.build` (equipment → rig and truth). A scenario is run into a Recording by the
+station runner on the simulated station (:mod:`imucalib.station.simulate`).
 """
 
 from __future__ import annotations
@@ -42,7 +43,6 @@ from imucalib.sim.kinematics import (
     stationary_platform_motion,
 )
 from imucalib.sim.rig import RigChunk, TwinRig
-from imucalib.sim.runner import SimulationSummary, simulate_scenario
 from imucalib.sim.scenario import BUILTIN_SCENARIOS, Scenario, load_scenario
 from imucalib.sim.synth import ClockSpec, ImuSamples, ImuSynthesizer, SimImu
 from imucalib.sim.table import (
@@ -76,7 +76,6 @@ __all__ = [
     "SimChamber",
     "SimImu",
     "SimRateTable",
-    "SimulationSummary",
     "Site",
     "TableFeedback",
     "TableGrade",
@@ -96,7 +95,6 @@ __all__ = [
     "normal_gravity_gradient_ps2",
     "normal_gravity_mps2",
     "rot_nt",
-    "simulate_scenario",
     "single_imu_fixture",
     "stationary_platform_motion",
 ]

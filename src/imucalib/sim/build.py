@@ -32,12 +32,12 @@ from scipy.spatial.transform import Rotation
 
 from imucalib import units
 from imucalib.models.imu import ImuModel, sample_imu_model
+from imucalib.plan.equipment import TwinEquipment
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber
 from imucalib.sim.earth import Site
 from imucalib.sim.fixture import Fixture, array_fixture, hexahedral_fixture, single_imu_fixture
 from imucalib.sim.rig import TwinRig
-from imucalib.sim.scenario import TwinEquipment
 from imucalib.sim.synth import ClockSpec, SimImu
 from imucalib.sim.table import RateTableSpec, SimRateTable
 
@@ -111,8 +111,8 @@ def _centrifuge(sc: TwinEquipment) -> SimCentrifuge | None:
     if not cfg.enabled:
         return None
     spec = CentrifugeSpec(static_radius_m=cfg.static_radius_m,
-                          unbalance_c0_m_s2=cfg.unbalance_c0_m_s2,
-                          unbalance_c_per_kg_m_s2_per_kg=cfg.unbalance_c_per_kg_m_s2_per_kg,
+                          unbalance_c0_m_per_rps_sq=cfg.unbalance_c0_m_per_rps_sq,
+                          unbalance_c_m_per_rps_sq_per_kg=cfg.unbalance_c_m_per_rps_sq_per_kg,
                           max_rate_rps=cfg.max_rate_dps * units.DEG)
     return SimCentrifuge(spec, cfg.load_kg,
                          rng=np.random.default_rng(scenario_seed(sc.seed, "centrifuge")))
@@ -182,5 +182,5 @@ def build_rig(sc: TwinEquipment) -> BuiltRig:
                  "earth_rate_t_rps": site.earth_rate_t_rps.tolist()},
     }
     if centrifuge is not None:
-        truth["centrifuge_unbalance_m_s2"] = centrifuge.unbalance_m_s2
+        truth["centrifuge_unbalance_m_per_rps_sq"] = centrifuge.unbalance_m_per_rps_sq
     return BuiltRig(rig=rig, imu_models=models, truth=truth)

@@ -27,7 +27,7 @@ Geometry and signs
   (towards the test side for c > 0), so every point on the arm moves by c·ω²·x̂_p relative to the
   spin axis: the test position's radius becomes r_t + c·ω², a reference at +r_t/3 on the same side
   gets r_t/3 + c·ω² and one at −r_t/3 on the far side gets r_t/3 − c·ω² (it shares the sign of
-  c only on the test side). c = c0 + c_per_kg·load [m·s²].
+  c only on the test side). c = c0 + c_per_kg·load [m/(rad/s)²].
 - **Arm stretch** (IEEE 836 §3.1.1): an optional elastic radial elongation κ·ω²·(p_s,x, p_s,y, 0),
   proportional to the radius (``arm_stretch_s2`` κ [s²]); zero by default.
 - Specific force at a point at distance r from the axis: −ω²·r towards the axis (plus gravity,
@@ -47,6 +47,7 @@ from scipy.spatial.transform import Rotation
 
 from imucalib import units
 from imucalib._checks import as_array, check_finite_scalar, check_nonnegative, check_positive
+from imucalib.conventions import TABLE_AXIS_VECTORS
 from imucalib.errors import ConfigurationError, InvalidInputError
 from imucalib.sim.earth import Site
 from imucalib.sim.fixture import MountedImu, as_rotation
@@ -59,7 +60,7 @@ _F64 = NDArray[np.float64]
 _ARM = np.array([1.0, 0.0, 0.0])  # arm direction x_p
 
 
-def dynamic_radius_m(rate_rps: ArrayLike, static_radius_m: float, unbalance_m_s2: float,
+def dynamic_radius_m(rate_rps: ArrayLike, static_radius_m: float, unbalance_m_per_rps_sq: float,
                      arm_stretch_s2: float = 0.0) -> _F64:
     """Signed radius along the arm while spinning: r_s + c·ω² + κ·r_s·ω² [m].
 
@@ -69,14 +70,14 @@ def dynamic_radius_m(rate_rps: ArrayLike, static_radius_m: float, unbalance_m_s2
         Spin rate ω (its sign does not matter). [rad/s]
     static_radius_m : float
         Signed static position along the arm (+x_p: test side). [m]
-    unbalance_m_s2 : float
-        Dynamic-unbalance coefficient c. [m·s²]
+    unbalance_m_per_rps_sq : float
+        Dynamic-unbalance coefficient c. [m/(rad/s)²]
     arm_stretch_s2 : float
         Relative elastic stretch κ per ω². [s²]
     """
     w2 = np.square(np.asarray(rate_rps, dtype=np.float64))
     r_s = check_finite_scalar(static_radius_m, "static_radius_m")
-    return np.asarray(r_s + (check_finite_scalar(unbalance_m_s2, "unbalance_m_s2")
+    return np.asarray(r_s + (check_finite_scalar(unbalance_m_per_rps_sq, "unbalance_m_per_rps_sq")
                              + check_finite_scalar(arm_stretch_s2, "arm_stretch_s2") * r_s) * w2,
                       dtype=np.float64)
 
@@ -89,10 +90,10 @@ class CentrifugeSpec:
     ----------
     static_radius_m : float
         Static radius r_t of the test position, on +x_p. [m]
-    unbalance_c0_m_s2 : float
-        Dynamic-unbalance coefficient without load. [m·s²]
-    unbalance_c_per_kg_m_s2_per_kg : float
-        Its change per kilogram of test load. [m·s²/kg]
+    unbalance_c0_m_per_rps_sq : float
+        Dynamic-unbalance coefficient without load. [m/(rad/s)²]
+    unbalance_c_m_per_rps_sq_per_kg : float
+        Its change per kilogram of test load. [m/(rad/s)² per kg]
     max_rate_rps, max_accel_rps2 : float
         Spin limits. [rad/s], [rad/s²]
     arm_stretch_s2 : float
@@ -105,8 +106,8 @@ class CentrifugeSpec:
     """
 
     static_radius_m: float = 1.0
-    unbalance_c0_m_s2: float = 0.0
-    unbalance_c_per_kg_m_s2_per_kg: float = 0.0
+    unbalance_c0_m_per_rps_sq: float = 0.0
+    unbalance_c_m_per_rps_sq_per_kg: float = 0.0
     max_rate_rps: float = 720.0 * units.DEG
     max_accel_rps2: float = 90.0 * units.DEG
     arm_stretch_s2: float = 0.0
@@ -122,20 +123,21 @@ class CentrifugeSpec:
 
     def __post_init__(self) -> None:
         check_positive(self.static_radius_m, "static_radius_m")
-        check_finite_scalar(self.unbalance_c0_m_s2, "unbalance_c0_m_s2")
-        check_finite_scalar(self.unbalance_c_per_kg_m_s2_per_kg, "unbalance_c_per_kg_m_s2_per_kg")
+        check_finite_scalar(self.unbalance_c0_m_per_rps_sq, "unbalance_c0_m_per_rps_sq")
+        check_finite_scalar(self.unbalance_c_m_per_rps_sq_per_kg, "unbalance_c_m_per_rps_sq_per_kg")
         check_finite_scalar(self.arm_stretch_s2, "arm_stretch_s2")
         self.axis_spec()  # validates the remaining fields
 
-    def unbalance_m_s2(self, load_kg: float) -> float:
-        """Unbalance coefficient c = c0 + c_per_kg·load for a test load [m·s²]."""
+    def unbalance_m_per_rps_sq(self, load_kg: float) -> float:
+        """Unbalance coefficient c = c0 + c_per_kg·load for a test load [m/(rad/s)²]."""
         load = check_nonnegative(load_kg, "load_kg")
-        return float(self.unbalance_c0_m_s2) + float(self.unbalance_c_per_kg_m_s2_per_kg) * load
+        return (float(self.unbalance_c0_m_per_rps_sq)
+                + float(self.unbalance_c_m_per_rps_sq_per_kg) * load)
 
     def axis_spec(self) -> AxisSpec:
         """Return the spin axis as a table axis (z_t up, tilt as non-orthogonality)."""
         return AxisSpec(
-            "spin", np.array([0.0, 0.0, 1.0]), max_rate_rps=self.max_rate_rps,
+            "spin", np.array(TABLE_AXIS_VECTORS["spin"]), max_rate_rps=self.max_rate_rps,
             max_accel_rps2=self.max_accel_rps2, settling_frequency_hz=self.settling_frequency_hz,
             settling_damping=self.settling_damping, encoder_error_rad=self.encoder_error_rad,
             encoder_resolution_rad=self.encoder_resolution_rad,
@@ -176,9 +178,9 @@ class SimCentrifuge:
         self.table = SimRateTable(RateTableSpec(axes=(spec.axis_spec(),)), rng=rng)
 
     @property
-    def unbalance_m_s2(self) -> float:
-        """The unbalance coefficient c with the current load [m·s²]."""
-        return self.spec.unbalance_m_s2(self.load_kg)
+    def unbalance_m_per_rps_sq(self) -> float:
+        """The unbalance coefficient c with the current load [m/(rad/s)²]."""
+        return self.spec.unbalance_m_per_rps_sq(self.load_kg)
 
     # --- commands -----------------------------------------------------------------------------
     def command_rate(self, rate_rps: float, at_time_s: float) -> float:
@@ -204,7 +206,7 @@ class SimCentrifuge:
     # --- evaluation ---------------------------------------------------------------------------
     def radius_m(self, rate_rps: ArrayLike, static_radius_m: float) -> _F64:
         """Signed dynamic radius r_s + c·ω² + κ·r_s·ω² for this load [m]."""
-        return dynamic_radius_m(rate_rps, static_radius_m, self.unbalance_m_s2,
+        return dynamic_radius_m(rate_rps, static_radius_m, self.unbalance_m_per_rps_sq,
                                 self.spec.arm_stretch_s2)
 
     def motion(self, time_s: ArrayLike) -> PlatformMotion:
@@ -224,7 +226,7 @@ class SimCentrifuge:
         """
         p_s = as_array(static_position_p_m, "static_position_p_m", shape=(3,))
         _, w, wd, wdd = self.table.axis_motion(0, time_s)
-        shift = self.unbalance_m_s2 * _ARM + float(self.spec.arm_stretch_s2) * np.array(
+        shift = self.unbalance_m_per_rps_sq * _ARM + float(self.spec.arm_stretch_s2) * np.array(
             [p_s[0], p_s[1], 0.0])
         w2 = w * w
         w2_d = 2.0 * w * wd

@@ -143,6 +143,25 @@ class SimChamber:
             )
         return temp
 
+    def check_setpoint(self, temp_degc: float, ramp_degc_ps: float | None = None
+                       ) -> tuple[float, float]:
+        """Return (setpoint, ramp) of a command, checked against the chamber's limits.
+
+        Raises
+        ------
+        LimitExceededError
+            If the setpoint is outside the chamber's range or the ramp exceeds its limit.
+        """
+        target = self._check_range(temp_degc, "temp_degc")
+        limit = self.spec.max_ramp_degc_ps
+        ramp = limit if ramp_degc_ps is None else check_positive(ramp_degc_ps, "ramp_degc_ps")
+        if ramp > limit:
+            raise LimitExceededError(
+                f"chamber: ramp {ramp:.6g} °C/s ({ramp * 60:.4g} °C/min) exceeds the limit "
+                f"{limit:.6g} °C/s ({limit * 60:.4g} °C/min)"
+            )
+        return target, ramp
+
     def command_setpoint(self, temp_degc: float, at_time_s: float,
                          ramp_degc_ps: float | None = None) -> float:
         """Ramp the setpoint from its current value to `temp_degc`, then hold it.
@@ -168,14 +187,7 @@ class SimChamber:
         InvalidInputError
             For a non-finite value or a command earlier than the previous one.
         """
-        target = self._check_range(temp_degc, "temp_degc")
-        limit = self.spec.max_ramp_degc_ps
-        ramp = limit if ramp_degc_ps is None else check_positive(ramp_degc_ps, "ramp_degc_ps")
-        if ramp > limit:
-            raise LimitExceededError(
-                f"chamber: ramp {ramp:.6g} °C/s ({ramp * 60:.4g} °C/min) exceeds the limit "
-                f"{limit:.6g} °C/s ({limit * 60:.4g} °C/min)"
-            )
+        target, ramp = self.check_setpoint(temp_degc, ramp_degc_ps)
         t = check_finite_scalar(at_time_s, "at_time_s")
         if t < self._last_command_s:
             raise InvalidInputError(

@@ -86,6 +86,7 @@ from scipy.spatial.transform import Rotation
 
 from imucalib import units
 from imucalib._checks import as_array, check_finite_scalar, check_nonnegative, check_positive
+from imucalib.conventions import TABLE_AXIS_VECTORS
 from imucalib.errors import ConfigurationError, InvalidInputError, LimitExceededError
 from imucalib.sim import _servo
 from imucalib.sim._rotation import evaluate_chain
@@ -340,19 +341,22 @@ class RateTableSpec:
     def single_axis(cls, grade: TableGrade = "high", *, name: str = "azimuth",
                     **overrides: Any) -> RateTableSpec:
         """Build a single-axis table turning about z_t (up); `overrides` replace AxisSpec fields."""
-        return cls(axes=(_preset(grade, name, (0.0, 0.0, 1.0), overrides),))
+        return cls(axes=(_preset(grade, name, TABLE_AXIS_VECTORS["azimuth"], overrides),))
 
     @classmethod
     def dual_axis_pitch_roll(cls, grade: TableGrade = "high", **overrides: Any) -> RateTableSpec:
         """Build the dual-axis table of SPEC.md P1: outer pitch about −y_t, inner roll about x.
 
+        The axis directions are :data:`imucalib.conventions.TABLE_AXIS_VECTORS`, the ones the
+        analysis uses.
+
         At (pitch θ, roll φ) an IMU with b = p (at home b = t) reads the specific force
         g·[sin θ, sin φ cos θ, cos θ cos φ]: with rot_tp = R_{−y}(θ)·R_x(φ),
         f_p = R_x(−φ)·R_y(θ)·[0, 0, g]. (90°, 0°) puts x_b up, (0°, 90°) puts y_b up.
         """
-        pitch = _preset(grade, "pitch", (0.0, -1.0, 0.0),
-                        {"tilt_axis": np.array([1.0, 0.0, 0.0]), **overrides})
-        return cls(axes=(pitch, _preset(grade, "roll", (1.0, 0.0, 0.0), overrides)))
+        pitch = _preset(grade, "pitch", TABLE_AXIS_VECTORS["pitch"],
+                        {"tilt_axis": np.array(TABLE_AXIS_VECTORS["roll"]), **overrides})
+        return cls(axes=(pitch, _preset(grade, "roll", TABLE_AXIS_VECTORS["roll"], overrides)))
 
 
 def _preset(grade: str, name: str, vec: tuple[float, float, float],
@@ -639,6 +643,17 @@ class SimRateTable:
             )
         self._last_command_s = t
         return t
+
+    def check_rate(self, axis: int, rate_rps: float) -> None:
+        """Refuse a rate command beyond an axis's limit (nothing is commanded).
+
+        Raises
+        ------
+        LimitExceededError
+            If ``|rate_rps|`` exceeds the axis's ``max_rate_rps``.
+        """
+        _, ax = self._axis(axis)
+        self._rate_limit(ax, rate_rps, allow_zero=True)
 
     @staticmethod
     def _rate_limit(ax: AxisSpec, rate_rps: float, *, allow_zero: bool = False) -> float:

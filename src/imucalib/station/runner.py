@@ -51,6 +51,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any, Protocol
 
 from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
@@ -61,6 +62,7 @@ from imucalib.io.recording import RecordingWriter
 from imucalib.io.recover import recover_recording
 from imucalib.io.streams import (
     DEVICE_CENTRIFUGE,
+    DEVICE_IMU,
     DEVICE_TABLE,
     chamber_stream_spec,
     imu_stream_spec,
@@ -82,6 +84,7 @@ __all__ = [
     "RunOptions",
     "RunStatus",
     "RunSummary",
+    "TruthSource",
     "check_plan_against_station",
     "check_room_for_run",
     "find_resume_point",
@@ -212,14 +215,33 @@ def _connect(station: Station, plan: Plan) -> list[ImuIdentity]:
     return _identities(station)
 
 
-def _drive(run: RunSession, first: int) -> RunSummary:
+class TruthSource(Protocol):
+    """What a simulated station offers besides its streams: the truth behind them."""
+
+    def truth_stream_specs(self) -> list[StreamSpec]:
+        """Return the layouts of the truth streams."""
+        ...
+
+    def drain_truth(self) -> dict[str, dict[str, Any]]:
+        """Return, per IMU, the truth columns generated since the previous call."""
+        ...
+
+
+def _write_truth(run: RunSession, truth: TruthSource | None) -> None:
+    if truth is not None:
+        for name, cols in truth.drain_truth().items():
+            run.writer.append_truth(DEVICE_IMU, name, cols)
+
+
+def _drive(run: RunSession, first: int, truth: TruthSource | None = None) -> RunSummary:
     """Run the steps from `first`, with the safety net; return the outcome."""
     start = run.now()
     status, reason = "done", ""
     tick = run.tick
 
-    def tick_and_notify(until_s: float | None = None) -> None:
-        tick(until_s)
+    def tick_and_notify(until_s: float | None = None, span_s: float | None = None) -> None:
+        tick(until_s, span_s)
+        _write_truth(run, truth)
         run._notify()
 
     run.tick = tick_and_notify  # type: ignore[method-assign]
@@ -253,8 +275,15 @@ def _drive(run: RunSession, first: int) -> RunSummary:
 
 
 def run_plan(plan: Plan, station: Station, path: str | Path, *,
-             options: RunOptions | None = None, overwrite: bool = False) -> RunSummary:
+             options: RunOptions | None = None, overwrite: bool = False,
+             truth_source: TruthSource | None = None,
+             extra_metadata: Mapping[str, str | int | float | bool] | None = None
+             ) -> RunSummary:
     """Execute `plan` on `station`, writing a new Recording at `path`.
+
+    `truth_source` (a simulated station) adds its truth streams under ``/truth``, written as
+    the streams are acquired; ``options.truth`` is the truth metadata. `extra_metadata` is
+    stored with the run's own (a scenario's description, for one).
 
     Raises
     ------
@@ -268,6 +297,8 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
     opt = options or RunOptions()
     if not opt.tick_s > 0:
         raise InvalidInputError(f"`tick_s` must be > 0; got {opt.tick_s!r}")
+    if opt.idle_tick_s is not None and not opt.idle_tick_s > 0:
+        raise InvalidInputError(f"`idle_tick_s` must be > 0; got {opt.idle_tick_s!r}")
     check_plan_against_station(plan, station)
     if Path(path).exists() and not overwrite:
         raise RecordingError(f"{path} exists; pass overwrite=True to replace it")
@@ -289,15 +320,18 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
         "latitude_deg": station.latitude_deg, "heading_deg": station.heading_deg,
         "run_started_utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "source": "station-run",
+        **(extra_metadata or {}),
     }
     writer = RecordingWriter(path, streams=_stream_specs(station, identities), metadata=meta,
                              truth=opt.truth, overwrite=overwrite,
+                             truth_streams=(truth_source.truth_stream_specs()
+                                            if truth_source is not None else ()),
                              flush_interval_s=opt.flush_interval_s)
     with writer:
         writer.log_event(station.clock.now_s(), "info", "runner",
                          f"plan {plan.name!r} started on {station.describe().get('kind', '?')}")
         run = RunSession(plan, station, writer, opt, identities)
-        summary = _drive(run, 0)
+        summary = _drive(run, 0, truth_source)
     _disconnect(station)
     return summary
 

@@ -104,6 +104,11 @@ class RunOptions:
         Room (free disk space, or what the file-size limit leaves) below which the run stops
         safely and closes its Recording, checked every tick; also added to the estimated file
         size in the check before a run starts. [bytes]
+    idle_tick_s : float, optional
+        Longer ticks while no decision waits on the data: the dwell (``settle_s``) before the
+        settling criteria are checked, and a record of a fixed length (whose rows the guards
+        still check, every one); by default `tick_s`. The simulated station generates its
+        streams per tick, so fewer, longer ticks make it faster. [s]
     """
 
     tick_s: float = 0.5
@@ -113,6 +118,7 @@ class RunOptions:
     truth: dict[str, Any] | None = None
     station_toml: str = ""
     min_free_bytes: int = 128 << 20
+    idle_tick_s: float | None = None
 
 
 class StepTrip(Exception):  # noqa: N818 - a signal between the session and the runner
@@ -146,15 +152,18 @@ class RunSession:
         self.recording = False  # inside a valid window: data-quality guards apply
         self.held_targets: list[float] | None = None  # the table's last position targets
         self.block_reason: str | None = None
+        self.tick_from_s = station.clock.now_s()  # station time the last tick started at
 
     # --- acquisition ------------------------------------------------------------------------
     def now(self) -> float:
         """Return the station time. [s]"""
         return self.station.clock.now_s()
 
-    def tick(self, until_s: float | None = None) -> None:
-        """Let time pass (at most one tick, not beyond `until_s`), acquire, check device guards."""
-        dt = self.opt.tick_s if until_s is None else min(self.opt.tick_s, until_s - self.now())
+    def tick(self, until_s: float | None = None, span_s: float | None = None) -> None:
+        """Let time pass (one tick, or `span_s`, not beyond `until_s`), acquire, check guards."""
+        step = self.opt.tick_s if span_s is None else span_s
+        dt = step if until_s is None else min(step, until_s - self.now())
+        self.tick_from_s = self.now()
         if dt > 0:
             self.station.clock.sleep(dt)
         self.acquire()
@@ -235,7 +244,7 @@ class RunSession:
                                              block.accel_mps2.mean(axis=0)][None, :])
             self.last_sample_s[name] = float(block.time_s[-1])
             self.status.imu_temperature_degc[name] = float(block.temperature_degc[-1])
-            self.status.imu_rate_hz[name] = len(block) / max(self.opt.tick_s, 1e-9)
+            self.status.imu_rate_hz[name] = len(block) / max(now - self.tick_from_s, 1e-9)
         elif now - self.last_sample_s[name] > self.g.device_timeout_s:
             raise StepTrip(f"IMU {name}: no data for {now - self.last_sample_s[name]:.3g} s "
                         f"(time-out {self.g.device_timeout_s:g} s)")
@@ -287,7 +296,7 @@ class RunSession:
     def guard_chamber(self) -> None:
         """Trip when, after a soak, the chamber air leaves its band while recording."""
         if self.recording and self.chamber_setpoint is not None:
-            _, rows = self.chamber_rows.rows(self.now() - self.opt.tick_s)
+            _, rows = self.chamber_rows.rows(self._last_tick_start())
             if rows.size:
                 reason = check_chamber_band(rows[:, 0], self.chamber_setpoint,
                                             self.g.chamber_band_degc)
@@ -336,8 +345,12 @@ class RunSession:
         """
         deadline = t_cmd + self.g.settle_timeout_s + settle_s
         last_fix = -math.inf
+        idle = self.opt.idle_tick_s
         while True:
-            self.tick()
+            if idle is not None and self.now() - t_cmd < settle_s - idle:
+                self.tick(span_s=idle)  # the dwell: nothing is decided yet
+            else:
+                self.tick()
             if self.now() - t_cmd >= settle_s:
                 reason = criterion()
                 if reason is None:
@@ -352,16 +365,27 @@ class RunSession:
                                           f"automatic correction: {reason}; re-commanded")
 
     def record_for(self, duration_s: float, guard: Callable[[], None]) -> tuple[float, float]:
-        """Record a valid window of `duration_s` with `guard` checked every tick."""
+        """Record a valid window of `duration_s` with `guard` checked every tick.
+
+        With ``idle_tick_s`` longer than ``tick_s`` the ticks are longer and the motion
+        feedback kept is widened meanwhile, so that the guard still sees every row.
+        """
         start = self.now()
+        longer = self.opt.idle_tick_s
+        widened = [(w, w.span_s) for w in (self.fb, self.fuge_fb)
+                   if longer is not None and longer > self.opt.tick_s]
+        for w, span in widened:
+            w.span_s = span + (longer or 0.0)
         self.recording = True
         try:
             while self.now() < start + duration_s - 1e-9:
-                self.tick(start + duration_s)
+                self.tick(start + duration_s, longer)
                 guard()
                 self.guard_chamber()
         finally:
             self.recording = False
+            for w, span in widened:
+                w.span_s = span
         return start, start + duration_s
 
     def record_revolutions(self, fuge: bool, axis: int, revolutions: int,
@@ -462,8 +486,12 @@ class RunSession:
     def _latest(self, fuge: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Measured angles and rates of the last tick."""
         t, angle, rate = self.motion_rows(fuge)
-        recent = t > self.now() - self.opt.tick_s - 1e-9
+        recent = t > self._last_tick_start() - 1e-9
         return angle[recent], rate[recent]
+
+    def _last_tick_start(self) -> float:
+        """Station time from which rows belong to the last tick (at least `tick_s` back)."""
+        return min(self.tick_from_s, self.now() - self.opt.tick_s)
 
     def run_static(self, step: StaticStep, attempt: int) -> tuple[float, float]:
         """Execute a static step; return its valid window."""

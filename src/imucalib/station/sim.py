@@ -35,17 +35,26 @@ from __future__ import annotations
 
 import bisect
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from imucalib import units
 from imucalib.errors import DeviceError, InvalidInputError, LimitExceededError
+from imucalib.io._schema import StreamSpec
+from imucalib.io.streams import imu_truth_stream_spec
+from imucalib.plan.bounds import (
+    MAX_CENTRIFUGE_RATE_DPS,
+    MAX_TABLE_ACCEL_DPS2,
+    MAX_TABLE_RATE_DPS,
+)
+from imucalib.plan.equipment import TwinEquipment
+from imucalib.plan.schema import CentrifugeStep, PlanLimits, PlanStep, RateStep, SoakStep
 from imucalib.sim.build import build_rig
 from imucalib.sim.rig import RigChunk
-from imucalib.sim.scenario import TwinEquipment
 from imucalib.sim.synth import ImuSamples
 from imucalib.sim.table import SimRateTable, TableFeedback
 from imucalib.station.devices import (
@@ -448,9 +457,14 @@ class SimStation:
         the IMUs' truths are drawn from its seed, so the same equipment gives the same IMUs.
     start_time_s : float
         Station time of the rig's time 0 (after the last sample of a resumed recording). [s]
+    truth_streams : bool
+        Keep every IMU's true rate, specific force, temperature and sample instant for
+        :meth:`drain_truth` (the runner writes them as ``/truth`` streams when this station is
+        its ``RunOptions.truth_source``).
     """
 
-    def __init__(self, equipment: TwinEquipment, *, start_time_s: float = 0.0) -> None:
+    def __init__(self, equipment: TwinEquipment, *, start_time_s: float = 0.0,
+                 truth_streams: bool = False) -> None:
         built = build_rig(equipment)
         self.equipment = equipment
         self.rig = built.rig
@@ -469,6 +483,92 @@ class SimStation:
         self.chamber = SimChamberDevice(self, "main") if self.rig.chamber is not None else None
         self.imus = [SimImuSource(self, name) for name in self.rig.imu_names]
         self._schedule: list[_Scheduled] = []
+        self.truth_streams = truth_streams
+        self._truth: dict[str, list[ImuSamples]] = {name: [] for name in self.rig.imu_names}
+
+    # --- what the twin can do, before anything moves ------------------------------------------
+    def plan_limits(self) -> PlanLimits:
+        """Return plan limits equal to the twin's own.
+
+        They are its axes' rate and acceleration limits and its chamber's temperature range: a
+        plan within them never asks a device for more.
+        """
+        values: dict[str, float] = {}
+        table, fuge, chamber = self.rig.table, self.rig.centrifuge, self.rig.chamber
+        axes = (table.spec.axes if table is not None
+                else fuge.table.spec.axes if fuge is not None else ())
+        if table is not None:
+            values["max_rate_dps"] = min(min(ax.max_rate_rps for ax in axes) / units.DEG,
+                                         MAX_TABLE_RATE_DPS)
+        if fuge is not None:
+            values["max_centrifuge_rate_dps"] = min(fuge.spec.max_rate_rps / units.DEG,
+                                                    MAX_CENTRIFUGE_RATE_DPS)
+        if axes:
+            values["max_accel_dps2"] = min(min(ax.max_accel_rps2 for ax in axes) / units.DEG,
+                                           MAX_TABLE_ACCEL_DPS2)
+        if chamber is not None:
+            values["min_temperature_degc"] = chamber.spec.min_temp_degc
+            values["max_temperature_degc"] = chamber.spec.max_temp_degc
+        return PlanLimits.model_validate(values)
+
+    def position_tolerance_arcsec(self) -> float:
+        """Return the table deviation this twin's encoders let a held position show. [″]
+
+        It is 3 × (encoder error (an RMS) + resolution + position noise) of the worst axis: a
+        lab-grade table (15″ encoder error) cannot show 5″, however long it settles.
+        """
+        table = self.rig.table or (self.rig.centrifuge.table if self.rig.centrifuge else None)
+        if table is None:
+            return 0.0
+        worst = max(ax.encoder_error_rad + ax.encoder_resolution_rad + ax.position_noise_rad
+                    for ax in table.spec.axes)
+        return 3.0 * worst / units.ARCSEC
+
+    def check_steps(self, steps: Sequence[PlanStep]) -> None:
+        """Refuse, before anything moves, a step that asks the twin for more than it can do.
+
+        Raises
+        ------
+        LimitExceededError
+            A rate beyond a table or centrifuge axis's limit, a soak outside the chamber's
+            range or faster than its ramp limit (the devices' own messages).
+        """
+        for step in steps:
+            if isinstance(step, RateStep) and self.rig.table is not None:
+                self.rig.table.check_rate(step.axis, step.rate_dps * units.DEG)
+            elif isinstance(step, CentrifugeStep) and self.rig.centrifuge is not None:
+                self.rig.centrifuge.table.check_rate(0, step.rate_dps * units.DEG)
+            elif isinstance(step, SoakStep) and self.rig.chamber is not None:
+                ramp = None if step.ramp_degc_per_min is None else step.ramp_degc_per_min / 60.0
+                self.rig.chamber.check_setpoint(step.temperature_degc, ramp)
+
+    # --- truth --------------------------------------------------------------------------------
+    def truth_stream_specs(self) -> list[StreamSpec]:
+        """Return the layouts of the truth streams (one per IMU; none without `truth_streams`)."""
+        if not self.truth_streams:
+            return []
+        return [imu_truth_stream_spec(name) for name in self.rig.imu_names]
+
+    def drain_truth(self) -> dict[str, dict[str, Any]]:
+        """Return, per IMU, the truth columns generated since the previous call."""
+        out: dict[str, dict[str, Any]] = {}
+        for name, blocks in self._truth.items():
+            if not blocks:
+                continue
+            self._truth[name] = []
+            cols: dict[str, Any] = {
+                "time_s": np.concatenate([b.time_s for b in blocks]) + self.start_time_s,
+                "true_time_s": np.concatenate([b.true_time_s for b in blocks])
+                + self.start_time_s,
+                "true_temperature_degc": np.concatenate(
+                    [b.true_temperature_degc for b in blocks])}
+            rate = np.concatenate([b.true_rate_b_rps for b in blocks])
+            force = np.concatenate([b.true_specific_force_b_mps2 for b in blocks])
+            for j, axis in enumerate("xyz"):
+                cols[f"true_rate_{axis}_rps"] = rate[:, j]
+                cols[f"true_force_{axis}_mps2"] = force[:, j]
+            out[name] = cols
+        return out
 
     def describe(self) -> dict[str, Any]:
         """Return a JSON-able description of the station."""
@@ -509,3 +609,5 @@ class SimStation:
             samples = chunk.imu[src.name]
             if len(samples):
                 src._buffer.append(samples)
+                if self.truth_streams:
+                    self._truth[src.name].append(samples)

@@ -17,7 +17,7 @@ Contents
     Chambers with ``raise_alarm`` / ``clear_alarms``.
 :class:`PacketImuServer`, :class:`CsvImuServer`
     IMU streams with ``set_corruption``, ``set_drop_probability``, ``saturate``.
-:class:`SimulatedStation`
+:class:`LoopbackStation`
     Every server of a rig at once, and the station file that reaches them.
 """
 
@@ -29,8 +29,8 @@ from imucalib.drivers.simulators.acl_server import AclSimServer
 from imucalib.drivers.simulators.aerosmith_server import AerosmithSimServer
 from imucalib.drivers.simulators.f4t_server import F4TSimServer
 from imucalib.drivers.simulators.imu_server import CsvImuServer, InjectedImuFaults, PacketImuServer
+from imucalib.drivers.simulators.loopback_station import LoopbackStation
 from imucalib.drivers.simulators.p300_server import P300SimServer
-from imucalib.drivers.simulators.sim_station import SimulatedStation
 
 __all__ = [
     "AclSimServer",
@@ -39,10 +39,10 @@ __all__ = [
     "F4TSimServer",
     "InjectedImuFaults",
     "InjectedMotionFaults",
+    "LoopbackStation",
     "MotionSimServer",
     "P300SimServer",
     "PacketImuServer",
     "SimServer",
     "SimTimeBase",
-    "SimulatedStation",
 ]

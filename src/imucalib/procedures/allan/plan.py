@@ -17,6 +17,7 @@ from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
 from imucalib.io.step_roles import ALLAN_STATIC
+from imucalib.plan.equipment import ChamberConfig, ImuConfig, SiteConfig, TwinEquipment
 from imucalib.plan.schema import (
     ImuSpecConfig,
     OperatorCheckStep,
@@ -27,7 +28,6 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
-from imucalib.sim.scenario import ChamberConfig, ImuConfig, SiteConfig, TwinEquipment
 
 __all__ = ["generate_allan_plan"]
 

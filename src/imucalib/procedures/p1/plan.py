@@ -40,6 +40,7 @@ from imucalib.io.step_roles import (
     P1_HELD_OUT_POSITION,
     P1_HELD_OUT_RATE,
 )
+from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
     GuardConfig,
     ImuSpecConfig,
@@ -52,7 +53,6 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
-from imucalib.sim.scenario import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 
 __all__ = [
     "P1_HELD_OUT_POSITIONS_DEG",

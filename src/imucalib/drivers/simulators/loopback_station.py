@@ -1,15 +1,16 @@
 """Simulator servers for a whole twin rig, and the station file that reaches them.
 
-:class:`SimulatedStation` starts one protocol-faithful server per device of a
+:class:`LoopbackStation` starts one protocol-faithful server per device of a
 :class:`~imucalib.sim.rig.TwinRig` on 127.0.0.1 (OS-assigned ports), all on one
 :class:`~imucalib.drivers.simulators.SimTimeBase`, and writes the station TOML that points the
 real drivers at them, so a station run against it exercises the exact code path used with real
-equipment.
+equipment. (The in-process twin station, without drivers or sockets, is
+:class:`imucalib.station.sim.SimStation`.)
 
 Example
 -------
 >>> from imucalib.drivers import DriverStation, parse_station_config
->>> with SimulatedStation.from_scenario("dual-axis-p1", speed=20.0) as sim:   # doctest: +SKIP
+>>> with LoopbackStation.from_scenario("dual-axis-p1", speed=20.0) as sim:   # doctest: +SKIP
 ...     cfg = parse_station_config(sim.station_toml())
 ...     station = DriverStation.from_config(cfg, clock=sim.time_base)
 """
@@ -31,7 +32,7 @@ from imucalib.sim.rig import TwinRig
 from imucalib.sim.scenario import Scenario, load_scenario
 from imucalib.sim.table import SimRateTable
 
-__all__ = ["SimulatedStation"]
+__all__ = ["LoopbackStation"]
 
 MotionKind = Literal["acutrol", "aerosmith"]
 MotionTransport = Literal["tcp", "visa", "serial"]
@@ -47,7 +48,7 @@ def _url(port: int, transport: str) -> str:
     raise ConfigurationError(f"transport must be tcp, visa or serial; got {transport!r}")
 
 
-class SimulatedStation:
+class LoopbackStation:
     """Start simulator servers for every device of `rig`.
 
     Parameters
@@ -116,14 +117,14 @@ class SimulatedStation:
         self.transports[role] = _url(server.port, transport)
 
     @classmethod
-    def from_scenario(cls, scenario: str | Scenario, **kwargs: Any) -> SimulatedStation:
+    def from_scenario(cls, scenario: str | Scenario, **kwargs: Any) -> LoopbackStation:
         """Build the rig of a scenario (built-in name, TOML file or object) and serve it."""
         from imucalib.sim.build import build_rig
 
         sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
         return cls(build_rig(sc).rig, **kwargs)
 
-    def __enter__(self) -> SimulatedStation:
+    def __enter__(self) -> LoopbackStation:
         return self
 
     def __exit__(self, *exc: Any) -> None:
