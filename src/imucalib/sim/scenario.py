@@ -41,6 +41,7 @@ from typing import Any
 from pydantic import Field, ValidationError, model_validator
 
 from imucalib.errors import ConfigurationError
+from imucalib.io.step_roles import P1_ACCEL_POSITION, P1_GYRO_BIAS, P1_GYRO_RATE
 from imucalib.plan.bounds import MAX_STEPS, MAX_TOTAL_S, format_validation_error
 from imucalib.plan.equipment import (
     LEGACY_CENTRIFUGE_NAMES,
@@ -241,23 +242,32 @@ def _dual_axis_p1() -> Scenario:
     six = [(0, 0), (0, 180), (90, 0), (90, 180), (0, 90), (0, 270)]
     steps: list[Any] = [
         PositionStep(kind="position", angles_deg=a, settle_s=30.0, record_s=10.0,
-                     label=f"position pitch={a[0]} roll={a[1]}")
+                     label=f"position pitch={a[0]} roll={a[1]}", role=P1_ACCEL_POSITION,
+                     tags=("calibration", "six-position"))
         for a in six
     ]
     steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=30.0,
-                              record_s=600.0, label="level static (gyro bias)"))
-    for axis in (0, 1):
+                              record_s=600.0, label="level static (gyro bias)",
+                              role=P1_GYRO_BIAS, tags=("calibration", "gyro-bias")))
+    # rates about pitch (sensor Y), roll (sensor X), and pitch with the roll axis at 90°
+    # (sensor Z): the triad's gyro scale factors and misalignments all need a rate
+    for axis, roll_deg, about in ((0, 0.0, "pitch"), (1, 0.0, "roll"),
+                                  (0, 90.0, "pitch, roll 90")):
+        steps.append(PositionStep(kind="position", angles_deg=(0.0, roll_deg), settle_s=5.0,
+                                  record_s=1.0, label=f"start of {about} rates"))
         for rate in (-100.0, -50.0, 0.0, 50.0, 100.0):
             revs = None if rate == 0 else 3
             steps.append(RateStep(kind="rate", axis=axis, rate_dps=rate, settle_s=20.0,
                                   revolutions=revs, record_s=10.0 if revs is None else None,
-                                  label=f"rate axis {axis} {rate:+g} dps"))
-        steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=5.0,
-                                  record_s=1.0, label="return home"))
+                                  label=f"rate about {about} {rate:+g} dps", role=P1_GYRO_RATE,
+                                  tags=("calibration", "rate")))
+    steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=5.0,
+                              record_s=1.0, label="return home"))
     return Scenario(
         name="dual-axis-p1",
         description="P1 on a dual-axis table: six positions, a level static record, "
-        "±rate points about pitch and roll (SPEC.md P1).",
+        "±rate points about pitch, roll and (roll at 90°) the IMU's Z axis; the steps carry "
+        "P1's roles, so `imucalib calibrate` runs P1 on the file (docs/p1.md).",
         seed=2,
         table=TableConfig(kind="dual-axis", grade="high"),
         imus=(ImuConfig(name="IMU-0001", grade="tactical", drift_ppm=20.0, jitter_s=2e-4),),
