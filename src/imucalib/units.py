@@ -21,7 +21,7 @@ factor.
 
 Notes
 -----
-The angle-random-walk conversions follow `../shared/reference/standards.md` §0:
+The angle-random-walk conversions follow docs/equations.md §1:
 1 °/√h = 1/60 °/√s = 60 (°/h)/√Hz, and 1 °/h^{3/2} = 1/216000 °/s^{3/2}. Densities here are the
 *two-sided* coefficient N of IEEE 952 (σ_Allan(1 s) = N); see :mod:`imucalib.models.noise` for the
 one-sided datasheet convention.
