@@ -365,7 +365,7 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
             cv_limit=opt.repeatability_cv, spread_k=opt.repeatability_k))
     else:
         checks.append(Check("repeatability", None, f"{len(reps)} repetition in the recording: "
-                            "repeatability needs at least 2 (SPEC.md P1 asks for 3)"))
+                            "repeatability needs at least 2 (P1 rule 6 asks for 3, docs/p1.md)"))
     return P1Analysis(result=result, per_repetition=per_rep, checks=tuple(checks),
                       decision=decide(checks), kalman_max_difference_sigma=kalman,
                       crlb_ratio=crlb, observations=obs)
