@@ -74,7 +74,8 @@ URAD = 1e-6
 # Time [s]
 MINUTE = 60.0
 HOUR = 3600.0
-#: True sidereal day, 23 h 56 min 4.0905 s (seed 004 prints 23 h 59 min 57.33 s, which is wrong).
+#: True sidereal day, 23 h 56 min 4.0905 s (docs/conventions.md: one MIMU textbook chapter prints
+#: 23 h 59 min 57.33 s, which is wrong).
 SIDEREAL_DAY_S = 86164.0905
 
 # Rates [rad/s]
