@@ -54,7 +54,7 @@ def naive_grubbs(x: np.ndarray, alpha: float) -> int:
 def main() -> None:
     rng = np.random.default_rng(0)
     fs = 100.0
-    n = 360_000  # one hour at 100 Hz (SPEC.md P1 step 2)
+    n = 360_000  # one hour at 100 Hz (docs/p1.md, step 2)
     x = rng.normal(0.0, 1.0, (n, 3))
     x[rng.integers(0, n, 200)] += 20.0
     rows = []

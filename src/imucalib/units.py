@@ -21,7 +21,7 @@ factor.
 
 Notes
 -----
-The angle-random-walk conversions follow `../shared/reference/standards.md` §0:
+The angle-random-walk conversions follow docs/equations.md §1:
 1 °/√h = 1/60 °/√s = 60 (°/h)/√Hz, and 1 °/h^{3/2} = 1/216000 °/s^{3/2}. Densities here are the
 *two-sided* coefficient N of IEEE 952 (σ_Allan(1 s) = N); see :mod:`imucalib.models.noise` for the
 one-sided datasheet convention.
@@ -74,7 +74,8 @@ URAD = 1e-6
 # Time [s]
 MINUTE = 60.0
 HOUR = 3600.0
-#: True sidereal day, 23 h 56 min 4.0905 s (seed 004 prints 23 h 59 min 57.33 s, which is wrong).
+#: True sidereal day, 23 h 56 min 4.0905 s (docs/conventions.md: one MIMU textbook chapter prints
+#: 23 h 59 min 57.33 s, which is wrong).
 SIDEREAL_DAY_S = 86164.0905
 
 # Rates [rad/s]

@@ -12,7 +12,7 @@ from imucalib.estimation.designs import SIX_POSITION_UP_B
 from imucalib.models.triad import TriadModel, apply_triad
 
 G = units.G0_MPS2
-#: Standard deviation of one position mean: 150 µg/√Hz over 5 s (standards.md §5.2 example).
+#: Standard deviation of one position mean: 150 µg/√Hz over 5 s (docs/equations.md §12 example).
 SIGMA_MPS2 = 67.1 * units.UG
 
 

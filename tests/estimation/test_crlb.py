@@ -1,4 +1,4 @@
-"""Tests of imucalib.estimation.crlb: generic bound vs the closed forms of standards.md §5.2."""
+"""Tests of imucalib.estimation.crlb: generic bound vs the closed forms of docs/equations.md §12."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from imucalib.estimation import (
 )
 
 G = units.G0_MPS2
-SIGMA = 67.1 * units.UG  # 150 µg/√Hz over 5 s (standards.md §5.2 worked example)
+SIGMA = 67.1 * units.UG  # 150 µg/√Hz over 5 s (docs/equations.md §12 worked example)
 
 
 def test_generic_bound_equals_six_position_closed_form() -> None:
@@ -71,7 +71,7 @@ def test_fibonacci_24_is_close_to_sphere_closed_form() -> None:
     d = build_triad_design(G * up)
     bound = compute_crlb(d.H, SIGMA**2, param_names=d.param_names)
     closed = compute_sphere_accel_crlb(SIGMA, k, gravity_mps2=G)
-    # standards.md §5.2: 13.7 µg and 23.7 ppm
+    # docs/equations.md §12: 13.7 µg and 23.7 ppm
     assert closed.bias_std_mps2 / units.UG == pytest.approx(13.7, abs=0.05)
     assert closed.scale_misalignment_std / units.PPM == pytest.approx(23.7, abs=0.05)
     np.testing.assert_allclose(bound.std[:3], closed.bias_std_mps2, rtol=0.02)
@@ -101,7 +101,7 @@ def test_symmetric_rate_design_reduces_to_n_over_root_t() -> None:
     assert closed.scale_std / units.PPM == pytest.approx(11.2, abs=0.05)  # "about 11 ppm"
 
 
-# standards.md §5.2, unknown orientation: σ(bias) µg, σ(scale) ppm, σ(non-orthogonality) µrad
+# docs/equations.md §12, unknown orientation: σ(bias) µg, σ(scale) ppm, σ(non-orthogonality) µrad
 UNKNOWN_ORIENTATION_TABLE = {24: (23.7, 33.5, 53.0), 36: (19.4, 27.3, 43.0),
                              50: (16.4, 23.2, 37.0)}
 

@@ -57,7 +57,7 @@ def test_monte_carlo_spread_matches_covariance_and_crlb(kit: SimpleNamespace, tr
         sol = solve_weighted_lsq(d.H, z, param_names=d.param_names, sigma=kit.SIGMA)
         est[k], chi2[k] = sol.estimate, sol.chi2
         wres.append(sol.normalized_residuals)
-    # the reported covariance is the CRLB closed form (standards.md §5.2)
+    # the reported covariance is the CRLB closed form (docs/equations.md §12)
     bound = compute_six_position_accel_crlb(kit.SIGMA, gravity_mps2=kit.G)
     np.testing.assert_allclose(sol.std[:3], bound.bias_std_mps2, rtol=1e-9)
     np.testing.assert_allclose(sol.std[3:], bound.scale_misalignment_std, rtol=1e-9)

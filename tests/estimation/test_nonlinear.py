@@ -15,7 +15,7 @@ SIGMA = 67.1 * units.UG
 N_MC = 300
 
 
-# -- SPEC.md P1 step 1 model for one axis: a_out = K·(a_ref + b) --------------------------------
+# -- P1 step 1 model for one axis (docs/p1.md): a_out = K·(a_ref + b) ---------------------------
 A_REF = G * np.array([1.0, -1.0, 0.0, 0.0, 0.0, 0.0])  # the axis up, down, and horizontal (4×)
 K_TRUE, B_TRUE = 1.0 + 250e-6, 0.8 * units.MG
 
@@ -63,7 +63,7 @@ def test_p1_axis_model_monte_carlo_matches_reported_covariance() -> None:
     assert np.all((ratio > lo) & (ratio < hi)), ratio
 
 
-# -- gravity-norm (Tedaldi / Shin) accelerometer calibration, standards.md §3.2 -------------------
+# -- gravity-norm (Tedaldi / Shin) accelerometer calibration, docs/equations.md §12 --------------
 def fibonacci_up(k: int) -> np.ndarray:
     i = np.arange(k) + 0.5
     polar = np.arccos(1.0 - 2.0 * i / k)

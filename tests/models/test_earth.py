@@ -25,7 +25,7 @@ from imucalib.units import DEG_PER_H, EARTH_RATE_RPS
 SEED = 20240611
 
 
-# --- reference values (standards.md §0, WGS-84) --------------------------------------------------
+# --- reference values (docs/equations.md §2, WGS-84) ---------------------------------------------
 def test_normal_gravity_reference_values():
     assert normal_gravity_mps2(45.0) == pytest.approx(9.806198, abs=5e-7)
     assert normal_gravity_mps2(0.0) == pytest.approx(9.7803253359, abs=1e-10)  # γ_e
@@ -35,7 +35,7 @@ def test_normal_gravity_reference_values():
 
 def test_free_air_gradient():
     dg = normal_gravity_mps2(45.0, 100.0) - normal_gravity_mps2(45.0, 0.0)
-    assert dg / 100.0 == pytest.approx(-3.086e-6, rel=2e-3)  # standards.md §0
+    assert dg / 100.0 == pytest.approx(-3.086e-6, rel=2e-3)  # docs/equations.md §2
     h = 1.0
     fd = (normal_gravity_mps2(45.0, 500.0 + h) - normal_gravity_mps2(45.0, 500.0 - h)) / (2 * h)
     assert normal_gravity_gradient_ps2(45.0, 500.0) == pytest.approx(fd, rel=1e-6)

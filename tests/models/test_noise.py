@@ -160,7 +160,7 @@ def test_from_dict_rejects_unknown_keys_and_one_sided_convention() -> None:
 
 # -- datasheet conversions ----------------------------------------------------------------------
 def test_one_sided_density_matches_arw_example_of_standards() -> None:
-    """standards.md §0: 0.008 (°/s)/√Hz one-sided is 0.34 °/√h (60·ND/√2), not 60·ND."""
+    """docs/equations.md §1: 0.008 (°/s)/√Hz one-sided is 0.34 °/√h (60·ND/√2), not 60·ND."""
     m = NoiseModel.from_datasheet(noise_density_dps_rthz=0.008)
     assert m.white_density[0] == 0.008 * units.DEG / math.sqrt(2)
     arw_deg_rth = m.white_density / units.DEG_PER_RTH
@@ -221,7 +221,7 @@ def test_datasheet_bad_inputs(kwargs: dict, match: str) -> None:
         NoiseModel.from_datasheet(**kwargs)
 
 
-# -- theoretical Allan deviation (the standards.md §2.4 relations) ------------------------------
+# -- theoretical Allan deviation (the docs/equations.md §8 relations) ---------------------------
 def test_theoretical_adev_reads_the_coefficients_at_their_taus() -> None:
     n, q, k, r, b = 1e-3, 2e-4, 3e-5, 4e-6, 5e-5
     one = np.ones(3)

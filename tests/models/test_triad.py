@@ -210,7 +210,7 @@ def _arr(draw, shape, scale):
     return draw(hnp.arrays(np.float64, shape, elements=unit)) * scale
 
 
-# realistic ranges (standards.md §4.1): scale/misalignment ±2 %, K2 ≤ 1e-3/g,
+# realistic ranges (docs/equations.md §13): scale/misalignment ±2 %, K2 ≤ 1e-3/g,
 # inputs up to 16 g or 2000 °/s
 ACCEL_SCALES = {"bias": 0.5, "scale_misalignment": 0.02, "k2": 1e-3 / G0_MPS2,
                 "k3": 1e-5 / G0_MPS2**2, "koq": 1e-3 / G0_MPS2, "scale_asymmetry": 1e-2,

@@ -1,7 +1,7 @@
 """Monte Carlo on the twin: reported uncertainty against the spread, and against the bound.
 
-Six-position accelerometer design (SPEC.md P1 step 1) on an ideal dual-axis table, IMUs with
-white noise only (so that the closed-form Cramér–Rao bound of standards.md §5.2 applies): each
+Six-position accelerometer design (docs/p1.md, step 1) on an ideal dual-axis table, IMUs with
+white noise only (so that the closed-form Cramér–Rao bound of docs/equations.md §12 applies): each
 run draws a new IMU truth and new noise, records 10 s per position, reduces the windows to
 means and fits the full triad model with the P1 fitting code. Over 300 runs the normalised
 errors must have unit spread (the reported σ within 10 % of the Monte-Carlo spread) and the

@@ -75,7 +75,8 @@ def test_fraction_limits_are_inclusive_and_overridable() -> None:
     ("kwargs", "match"),
     [
         ({"cutoff_fraction": 0.5}, r"`cutoff_fraction` must be within 1/5–1/3 of the IMU "
-                                   r"bandwidth .*; got 0.5 \(pass allow_any_fraction=True"),
+                                   r"bandwidth \(procedure P1, processing rule 2, docs/p1\.md\); "
+                                   r"got 0\.5 \(pass allow_any_fraction=True"),
         ({"cutoff_fraction": 0.1}, r"must be within 1/5–1/3 .*; got 0.1"),
         ({"bandwidth_hz": 1500.0}, r"the cut-off 0.25 × 1500 Hz = 375 Hz must be below the Nyquist "
                                    r"frequency 250 Hz \(sample rate 500 Hz\)"),

@@ -1,4 +1,4 @@
-"""SPEC.md P1 accelerometer chain from samples to parameters: outliers → low-pass → window
+"""P1 accelerometer chain (docs/p1.md) from samples to parameters: outliers → low-pass → window
 statistics → weighted least squares, on one continuous record with white + flicker noise."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from imucalib.processing import (
 )
 
 FS = 100.0
-SETTLE_S, RECORD_S = 30.0, 10.0  # SPEC.md P1 step 1
+SETTLE_S, RECORD_S = 30.0, 10.0  # docs/p1.md, calibration step 1
 PER_S = SETTLE_S + RECORD_S
 G = units.G0_MPS2
 NOISE = NoiseModel(white_density=50.0 * units.UG_PER_RTHZ, bias_instability=20.0 * units.UG)

@@ -32,7 +32,7 @@ def _scenario(grade: str, seed: int):
     spans.append(("rotating", t4, 55.0, -100.0))
     t5 = table.command_stop("roll", 55.0)
     spans.append(("static", t5, 62.0, 0.0))
-    t6 = table.command_rate("roll", 5 * D, 62.0)  # the slowest rate of SPEC.md's plans
+    t6 = table.command_rate("roll", 5 * D, 62.0)  # the slowest rate of imucalib's plans
     spans.append(("rotating", t6, 75.0, 5.0))
     imu = sample_imu_model(grade, seed, sample_rate_hz=FS)
     t = np.arange(0.0, 75.0, 1 / FS)

@@ -18,7 +18,7 @@ quantization (Q²)      δ(t) (white angle, discrete)           3Q²/τ²
 white rate (N²)        −|t|/2                                 N²/τ
 flicker rate (B²)      t²·ln|t|/(2π)                          (2 ln 2/π)·B²
 random-walk rate (K²)  |t|³/12                                K²τ/3
-Markov (σ², T_c)       −(T_c|t| − T_c²(1 − e^(−|t|/T_c)))      standards.md §2.4
+Markov (σ², T_c)       −(T_c|t| − T_c²(1 − e^(−|t|/T_c)))      docs/equations.md §8
 =====================  =====================================  ==================================
 
 g is linear in the coefficients, so the lag sums Σ w·g^p·g^q and Σ w·g^p are computed once

@@ -5,12 +5,12 @@ Contents
 :func:`fit_noise_terms` → :class:`NoiseFit`
     All terms at once over the whole curve, with uncertainties.
 :func:`read_slope_lines`
-    The classical readings of `../shared/reference/standards.md` §2.4 (each on the points where
+    The classical readings of docs/equations.md §8 (each on the points where
     its term dominates), plus the Allan minimum with and without the 0.664 factor.
 :class:`NoiseTerm`, :func:`make_noise_term`, :data:`FIT_TERMS`, :func:`term_avar`
 
-Model (standards.md §2.4, two-sided densities; [1]_ Annex C)
------------------------------------------------------------
+Model (docs/equations.md §8, two-sided densities; [1]_ Annex C)
+--------------------------------------------------------------
 σ²(τ) = 3Q²/τ² + N²/τ + (2 ln 2/π)·B² + K²τ/3 + R²τ²/2 [+ Markov σ_M² term], i.e.
 σ² = Σ c_p·τ^p with p = −2 … 2 and c_p ≥ 0. The flicker term is the plateau
 (2 ln 2/π)·B² = (0.6643·B)², reached for τ ≳ 2/f0; B is reported with the 0.664 factor applied.
@@ -90,7 +90,7 @@ def term_avar(term: str, value_si: float, tau_s: ArrayLike,
 
 
 def _markov_shape(tau: F64, tc: float) -> F64:
-    """Return the AVAR of a unit-variance first-order Gauss–Markov rate (standards.md §2.4).
+    """Return the AVAR of a unit-variance first-order Gauss–Markov rate (docs/equations.md §8).
 
     2(T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))], as :func:`compute_theoretical_adev` of
     :mod:`imucalib.models.noise` gives it.
@@ -414,7 +414,7 @@ _SLOPES = {  # term: (log-log slope of σ, τ where σ reads the coefficient, σ
 
 
 def read_slope_lines(result: DeviationResult, fit: NoiseFit) -> tuple[NoiseTerm, ...]:
-    """Classical slope-line readings (standards.md §2.4) on the measured deviation.
+    """Classical slope-line readings (docs/equations.md §8) on the measured deviation.
 
     For quantization (slope −1, read at τ = √3 s), white noise (−½, τ = 1 s), random walk
     (+½, τ = 3 s) and ramp (+1, τ = √2 s): a line of the fixed slope through the points where the

@@ -5,7 +5,7 @@ Contents
 :class:`UnitValue`, :func:`convert_noise_term`, :data:`SI_UNITS`, :data:`TERM_LABELS`,
 :data:`SENSORS`, :data:`DENSITY_CONVENTION`.
 
-Conventions (`../shared/reference/standards.md` §0): white-noise coefficients N are the
+Conventions (docs/equations.md §1): white-noise coefficients N are the
 **two-sided** densities of IEEE 952 (σ_Allan(1 s) = N; a sample at interval Δt has standard
 deviation N/√Δt); Kalibr's and OpenVINS' continuous-time σ_c is this N. A datasheet noise density
 ND is **one-sided**: ND = √2·N. The rows below are exactly what :func:`convert_noise_term` returns

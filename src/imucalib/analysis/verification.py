@@ -7,15 +7,15 @@ Contents
 :class:`CheckRow`, :class:`Check`, :class:`Decision`
     One compared quantity, one named check (its rows and verdict), the overall decision.
 :func:`check_residuals`
-    SPEC.md P1 rule 5: at every position and rate point the residual mean ≈ 0 and its standard
+    P1 rule 5 (docs/p1.md): at every position and rate point the residual mean ≈ 0 and its standard
     deviation within the limit (0.002 g, 0.1 °/s), and no significant misfit overall (a χ² test of
     the residual means against their standard errors: "a trend or a large residual means the
     model is too simple").
 :func:`check_accuracy`
-    SPEC.md P1 rule 7: after compensation, the error at held-out positions and rates within the
+    P1 rule 7 (docs/p1.md): after compensation, the error at held-out positions and rates within the
     IMU's specification (0.01 g, 0.5 °/s by default).
 :func:`check_repeatability`
-    SPEC.md P1 rule 6: over the repetitions, the coefficient of variation of each scale factor
+    P1 rule 6 (docs/p1.md): over the repetitions, the coefficient of variation of each scale factor
     ≤ 1 %; for parameters near zero (biases, misalignments, g-sensitivities), where a CV means
     nothing, the spread (sample standard deviation) within k times the parameter's typical
     standard uncertainty.
@@ -177,7 +177,7 @@ def check_repeatability(name: str, estimates: Mapping[str, Sequence[float]],
     scale_names : sequence of str
         Parameters judged by their coefficient of variation (scale factors, ≈ 1).
     cv_limit : float
-        Largest CV (SPEC.md P1: 1 %).
+        Largest CV (docs/p1.md, rule 6: 1 %).
     spread_k : float
         Other parameters: the sample standard deviation must stay within `spread_k` × the RMS
         of their reported standard uncertainties.

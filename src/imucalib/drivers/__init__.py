@@ -1,6 +1,6 @@
 """Real equipment: transports, device dialects, device classes, the station file.
 
-Layers (``reference/devices.md``; STYLE.md §8): transports move bytes; pure codecs turn commands
+Layers (docs/drivers.md, "Layers"): transports move bytes; pure codecs turn commands
 into bytes and replies into values; device classes implement the station protocols of
 :mod:`imucalib.station.devices` with the two; simulator servers
 (:mod:`imucalib.drivers.simulators`) speak each dialect on 127.0.0.1 with the twin behind them.

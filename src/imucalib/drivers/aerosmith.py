@@ -1,7 +1,7 @@
 """The Ideal Aerosmith ASCII dialect: pure formatting and parsing.
 
 No public programming manual of the AERO 4000 / 1280-series controllers was found; this dialect
-follows open code for single-axis Ideal Aerosmith tables (``reference/devices.md`` §1.2) and is
+follows open code for single-axis Ideal Aerosmith tables (docs/drivers.md, "Sources") and is
 **[unverified]** on real hardware, including everything marked so below.
 
 Contents
@@ -51,7 +51,8 @@ __all__ = [
 TERMINATOR = b"\r\n"
 #: The prompt line that follows every response (**[unverified]**).
 PROMPT = ">"
-#: Commands the driver and the simulator know (devices.md §1.2 plus ``VER``, [unverified]).
+#: Commands the driver and the simulator know (the open-code dialect of docs/drivers.md,
+#: "Sources", plus ``VER``, [unverified]).
 COMMANDS = ("VER", "SRV", "VEL", "ACL", "MOV", "RMO", "JOG", "STO", "HOM", "PPO", "PVE", "STA",
             "SGO", "ZER")
 _NO_REPLY = frozenset({"JOG", "SGO"})

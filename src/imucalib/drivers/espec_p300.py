@@ -1,7 +1,7 @@
 """The Espec P300 (and SCP-220-compatible) ASCII dialect: pure formatting and parsing.
 
 Sources: ChamberConnectLibrary ``p300.py`` / ``especinteract.py`` **[code]**
-(``reference/devices.md`` §2). Over RS-232/485, optionally prefixed by an address ``n,``; over
+(docs/drivers.md, "Sources"). Over RS-232/485, optionally prefixed by an address ``n,``; over
 TCP through a serial server (port 10001 in that code). Commands and replies end in CR LF.
 
 Commands used

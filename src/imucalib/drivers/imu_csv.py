@@ -1,6 +1,6 @@
 """IMU samples as CSV lines: a header naming columns and units, then one line per sample.
 
-The generic ASCII output of many IMUs and loggers (``reference/devices.md`` §3.1). Pure: no I/O.
+The generic ASCII output of many IMUs and loggers (docs/drivers.md, "Sources"). Pure: no I/O.
 
 Stream format
 -------------

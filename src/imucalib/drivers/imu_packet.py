@@ -1,6 +1,6 @@
 """Our binary IMU frame: encoder, and a streaming decoder that resynchronises and counts faults.
 
-This is the frame an MCU bridge (``reference/devices.md`` §3.1: SPI burst, time stamp,
+This is the frame an MCU bridge (docs/drivers.md, "Sources": SPI burst, time stamp,
 CRC-framed packets over USB-CDC or TCP) sends, and the frame that
 :class:`~imucalib.drivers.simulators.PacketImuServer` streams. Pure: no I/O.
 

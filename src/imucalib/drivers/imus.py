@@ -2,7 +2,7 @@
 
 Both implement :class:`~imucalib.station.devices.ImuSource`. A background thread reads the
 transport in chunks, stamps each chunk with the station clock when it arrives (host receive
-time, ``reference/devices.md`` §3.3), decodes it and buffers the samples;
+time, docs/drivers.md "Time synchronisation practice"), decodes it and buffers the samples;
 :meth:`~PacketImu.read` returns everything received since the previous read.
 
 Time stamps. A chunk's last sample arrives with it, so ``receive time − device time`` of that

@@ -1,7 +1,7 @@
 """A small Modbus facade: 16-bit holding registers and IEEE-754 floats across two of them.
 
 pymodbus changes its API between minor versions (``slave`` became ``device_id``; the datastore
-classes move; see ``reference/devices.md`` §2). Everything that touches it is in this module, so a
+classes move; see docs/drivers.md, "Sources"). Everything that touches it is in this module, so a
 version bump is a one-file change.
 
 Contents

@@ -12,8 +12,8 @@ Contents
 :class:`AerosmithTable`
     The Ideal Aerosmith ASCII dialect over a serial line (or a serial server).
 
-Safety (``reference/devices.md`` §1.4)
---------------------------------------
+Safety (docs/drivers.md, "Sources": motion-layer safety)
+--------------------------------------------------------
 - Software limits (:class:`AxisLimits`) are checked **before** a demand is sent; a demand
   beyond them raises :class:`~imucalib.errors.LimitExceededError` naming the axis and the limit,
   and nothing goes to the controller. The controller's own profiler limits are set on connect.

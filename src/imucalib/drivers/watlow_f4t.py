@@ -4,11 +4,11 @@ Values are IEEE-754 float32 across two registers, low word first (the F4T defaul
 enumerations (Watlow's numeric value codes). Addresses are the 0-based protocol addresses that go
 into the Modbus PDU, as ChamberConnectLibrary uses them.
 
-Sources (``reference/devices.md`` §2): the setpoint (2782) and the actual chamber temperature
+Sources (docs/drivers.md, "Sources"): the setpoint (2782) and the actual chamber temperature
 (27586) are from the F4T manuals **[manual]**; the working setpoint (2810), control mode (2730),
 setpoint range (2774/2776), alarm states (1356 + 100·i), part number (16) and display units
 (6730) are from ChamberConnectLibrary's ``watlowf4t.py`` **[code]**. The ramp registers
-2794/2796/2798 are named in devices.md; their meaning here (ramp action, ramp scale, ramp rate
+2794/2796/2798 are named in the F4T manuals; their meaning here (ramp action, ramp scale, ramp rate
 per scale unit) and the alarm-state codes that mean "active" are **[unverified]**.
 
 Contents

@@ -4,14 +4,14 @@ Contents
 --------
 :class:`CrlbResult`, :func:`compute_crlb`
     Generic bound from a Jacobian and a noise covariance, nuisance parameters eliminated by the
-    Schur complement, with the observability check (`../shared/reference/standards.md` §5.1).
+    Schur complement, with the observability check (docs/equations.md §11).
 :class:`TriadCrlb`, :func:`compute_six_position_accel_crlb`, :func:`compute_sphere_accel_crlb`
-    Closed forms for the known-orientation accelerometer triad (§5.2).
+    Closed forms for the known-orientation accelerometer triad (docs/equations.md §12).
 :class:`RateTableCrlb`, :func:`compute_rate_table_gyro_crlb`
-    Closed form for a gyro's bias and scale factor from rate-table points (§5.2).
+    Closed form for a gyro's bias and scale factor from rate-table points (docs/equations.md §12).
 
-Method (standards.md §5.1)
---------------------------
+Method (docs/equations.md §11)
+------------------------------
 For y = h(θ, φ) + n, n ~ N(0, C), with the Jacobian J = [∂h/∂θ, ∂h/∂φ] at the true (or
 estimated) parameters::
 
@@ -37,7 +37,15 @@ Closed forms (white noise, σ the standard deviation of one position mean)::
 with ω̄ = Σ T_k ω_k / T and T = Σ T_k. Eq. (4) is exact when Σ u_k = 0 and
 Σ u_k u_kᵀ = (K/3)·I (octahedron K = 6, cube vertices K = 8, icosahedron K = 12, …; a
 Fibonacci sphere approximates it). Eq. (5) reduces to σ_b = N/√T, σ_s = N/(ω√T) for a symmetric
-±ω design.
+±ω design. Derivations and worked examples: docs/equations.md §12.
+
+References
+----------
+.. [1] S. M. Kay, *Fundamentals of Statistical Signal Processing: Estimation Theory*,
+   Prentice Hall, 1993, ch. 3 (Cramér–Rao bound, Fisher information of the linear model).
+.. [2] F. Ferraris, U. Grimaldi and M. Parvis, "Procedure for effortless in-field calibration of
+   three-axial rate gyro and accelerometers", Sensors and Materials 7(5):311–330, 1995
+   (six-position design).
 """
 
 from __future__ import annotations
@@ -125,7 +133,7 @@ def compute_crlb(
         [observation units per parameter unit]
     noise_covariance : float or array_like, shape (m,) or (m, m)
         C: a common variance, per-observation variances, or the full covariance (coloured noise
-        correlating the observations, standards.md §5.1 item 4). [observation units²]
+        correlating the observations, docs/equations.md Eq. (11.2)). [observation units²]
     param_names : sequence of str, length p
         Names of all columns.
     nuisance : sequence of str
@@ -207,7 +215,7 @@ class TriadCrlb:
 
 def compute_six_position_accel_crlb(sigma_mps2: float, *,
                                     gravity_mps2: float = units.G0_MPS2) -> TriadCrlb:
-    """Return the six-position bound σ_b = σ/√6, σ_M = σ/(g√2), Eq. (3) (standards.md §5.2).
+    """Return the six-position bound σ_b = σ/√6, σ_M = σ/(g√2), Eq. (3) (docs/equations.md §12).
 
     Parameters
     ----------
@@ -223,7 +231,7 @@ def compute_six_position_accel_crlb(sigma_mps2: float, *,
 
     Examples
     --------
-    >>> b = compute_six_position_accel_crlb(67.1e-6 * 9.80665)   # standards.md §5.2 example
+    >>> b = compute_six_position_accel_crlb(67.1e-6 * 9.80665)   # docs/equations.md §12 example
     >>> round(b.bias_std_mps2 / (1e-6 * 9.80665), 1), round(b.scale_misalignment_std * 1e6, 1)
     (27.4, 47.4)
     """
@@ -312,7 +320,7 @@ def compute_rate_table_gyro_crlb(noise_density_rps_rthz: float, rates_rps: Array
     >>> from imucalib import units
     >>> b = compute_rate_table_gyro_crlb(0.005 * units.DEG, [100 * units.DEG, -100 * units.DEG],
     ...                                  10.0)
-    >>> round(b.scale_std * 1e6, 1)   # standards.md §5.2: about 11 ppm
+    >>> round(b.scale_std * 1e6, 1)   # docs/equations.md §12: about 11 ppm
     11.2
     """
     n_d = check_positive(noise_density_rps_rthz, "noise_density_rps_rthz")

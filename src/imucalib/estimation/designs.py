@@ -1,4 +1,4 @@
-"""Linear designs of the known-orientation triad calibration (standards.md §3.4, §5.2).
+"""Linear designs of the known-orientation triad calibration (docs/equations.md §10, §12).
 
 Contents
 --------
@@ -7,8 +7,8 @@ Contents
 :func:`build_triad_design`
     Rows of y_k − x_k = b + M·x_k for K known inputs x_k (specific force or angular rate).
 :data:`SIX_POSITION_UP_B`
-    The six gravity directions of SPEC.md P1 step 1 in the body frame (Z up, Z down, X up, X down,
-    Y up, Y down).
+    The six gravity directions of procedure P1, calibration step 1 (docs/p1.md), in the body frame
+    (Z up, Z down, X up, X down, Y up, Y down).
 :data:`TRIAD_PARAMETER_NAMES`
     ``bias_x, bias_y, bias_z, M_xx, M_xy, …, M_zz``.
 

@@ -9,7 +9,7 @@ Contents
 :class:`KalmanUpdate`
     What one update returns: posterior, innovation, its covariance, gain, NIS.
 :class:`KalmanRefinement`, :func:`refine_with_kalman`
-    SPEC.md P1 processing step 4: the least-squares observations processed sequentially by a
+    P1 processing rule 4 (docs/p1.md): the least-squares observations processed sequentially by a
     Kalman filter over a static (optionally slowly wandering) parameter vector.
 
 Equations
@@ -308,7 +308,7 @@ def refine_with_kalman(
     process_noise: ArrayLike | None = None,
     cond_limit: float = DEFAULT_COND_LIMIT,
 ) -> KalmanRefinement:
-    """Process observation blocks sequentially with a Kalman filter (SPEC.md P1 step 4).
+    """Process observation blocks sequentially with a Kalman filter (docs/p1.md, rule 4).
 
     The parameters are the state, static between blocks (F = I) unless `process_noise` is given.
     Block i is zᵢ = Hᵢ·x + vᵢ, vᵢ ~ N(0, Rᵢ) — for P1 one block per position or rate point.

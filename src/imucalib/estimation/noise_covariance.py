@@ -1,4 +1,4 @@
-"""Covariance of window means under coloured sensor noise (standards.md §5.1 item 4).
+"""Covariance of window means under coloured sensor noise (docs/equations.md Eq. (11.2)).
 
 Contents
 --------
@@ -41,7 +41,7 @@ References
 .. [1] A. Papoulis and S. U. Pillai, *Probability, Random Variables and Stochastic Processes*,
    4th ed., 2002, §9-4 (integrals of a process, variance of the time average).
 .. [2] M. S. Keshner, "1/f noise", Proc. IEEE 70(3):212–218, 1982;
-   `../shared/reference/standards.md` §2.4 and §5.1.
+   docs/equations.md §8 and §11.
 """
 
 from __future__ import annotations

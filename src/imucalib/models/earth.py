@@ -84,7 +84,7 @@ def normal_gravity_mps2(latitude_deg: float, height_m: float = 0.0) -> float:
     γ(φ, h) = γ(φ) [1 − 2/a (1 + f + m − 2 f sin²φ) h + 3 h²/a²]      (Eq. (4-3) in [1])
 
     The height term is the ellipsoidal free-air correction (≈ −3.086·10⁻⁶ m/s² per m near the
-    surface, standards.md §0), good to about 1 µm/s² for |h| < 10 km.
+    surface, docs/equations.md §2), good to about 1 µm/s² for |h| < 10 km.
 
     Parameters
     ----------

@@ -8,7 +8,7 @@ Contents
     and the output data rate.
 :class:`GradeSpec`, :data:`GRADES`
     One-sigma spreads of the error parameters of consumer-MEMS, tactical and navigation-grade IMUs
-    (`../shared/reference/standards.md` §4.1), used to draw realistic truths for the twin.
+    (docs/equations.md §13), used to draw realistic truths for the twin.
 :func:`sample_imu_model`
     Draw a random IMU of a grade (every random function takes ``rng``).
 """
@@ -122,8 +122,8 @@ def _spec_to_dict(spec: SensorSpec) -> dict[str, Any]:
 class GradeSpec:
     """One-sigma spreads of an IMU grade's errors, in the units of their names.
 
-    Values follow `../shared/reference/standards.md` §4.1 (El-Sheimy & Youssef 2020, Groves 2013,
-    and indicative datasheets such as HG9900, HG1700, MPU-6050/BMI160 class parts).
+    Values follow the grade ranges of docs/equations.md §13 (El-Sheimy & Youssef 2020, Groves
+    2013, and indicative datasheets such as HG9900, HG1700, MPU-6050/BMI160 class parts).
     """
 
     gyro_bias_dph: float

@@ -3,10 +3,10 @@
 Contents: :class:`NoiseModel` (per-axis coefficients of the IEEE 952 Annex C terms plus a
 Gauss–Markov term), :class:`NoiseGenerator` (stateful, continues every process across calls),
 :func:`simulate_noise` (pure wrapper), :func:`compute_theoretical_adev` (the model's Allan
-deviation, `../shared/reference/standards.md` §2.4).
+deviation, docs/equations.md §8).
 
-Densities are the **two-sided** coefficients of IEEE 952 (standards.md §0): white noise N has the
-two-sided PSD N², σ_Allan(1 s) = N, and a sample at interval Δt has the standard deviation
+Densities are the **two-sided** coefficients of IEEE 952 (docs/equations.md §1): white noise N has
+the two-sided PSD N², σ_Allan(1 s) = N, and a sample at interval Δt has the standard deviation
 N/√Δt. Datasheet densities are one-sided, ND = √2·N (:meth:`NoiseModel.from_datasheet`).
 Units read [gyro | accelerometer].
 
@@ -45,7 +45,7 @@ record gives the same values bit for bit.
 
 References
 ----------
-.. [1] IEEE Std 952-1997 (R2008), Annex C; `../shared/reference/standards.md` §0 and §2.4.
+.. [1] IEEE Std 952-1997 (R2008), Annex C; docs/equations.md §1 and §8.
 .. [2] M. S. Keshner, "1/f noise", Proc. IEEE 70(3):212–218, 1982.
 .. [3] N. J. Kasdin, "Discrete simulation of colored noise and stochastic processes and 1/f^α
    power law noise generation", Proc. IEEE 83(5):802–827, 1995.
@@ -73,7 +73,7 @@ from imucalib.errors import ConfigurationError, InvalidInputError
 __all__ = ["FLICKER_ALLAN_FACTOR", "NoiseGenerator", "NoiseModel", "compute_theoretical_adev",
            "simulate_noise"]
 
-#: σ_Allan plateau of flicker noise divided by B: √(2·ln 2/π) (standards.md §2.4).
+#: σ_Allan plateau of flicker noise divided by B: √(2·ln 2/π) (docs/equations.md §8).
 FLICKER_ALLAN_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 
 _ARRAY_FIELDS = ("white_density", "bias_instability", "random_walk", "rate_ramp", "quantization",
@@ -108,7 +108,7 @@ class NoiseModel:
     """Stochastic errors of one triad, per axis, SI, two-sided PSD coefficients.
 
     Each array has shape (3,) (a scalar is broadcast to the three axes) and is stored read-only.
-    The Allan deviation of each term is in `../shared/reference/standards.md` §2.4 and in
+    The Allan deviation of each term is in docs/equations.md §8 and in
     :func:`compute_theoretical_adev`.
 
     Parameters
@@ -209,7 +209,7 @@ class NoiseModel:
         """Build a model from datasheet figures, converting each to SI at the boundary.
 
         Each value is a scalar or a (3,) array. Give at most one value per term, and do not mix
-        gyro and accelerometer units. Conversions (standards.md §0; constants of
+        gyro and accelerometer units. Conversions (docs/equations.md §1; constants of
         :mod:`imucalib.units`):
 
         ===============================  ======================  =================================
@@ -233,7 +233,7 @@ class NoiseModel:
 
         So 0.008 (°/s)/√Hz one-sided is N = 0.3394 °/√h. With
         `bias_instability_is_allan_minimum` the datasheet figure is taken as the Allan minimum
-        σ_min ("in-run bias stability") and B = σ_min/0.6643 (standards.md §2.4).
+        σ_min ("in-run bias stability") and B = σ_min/0.6643 (docs/equations.md §8).
         `bias_instability_corner_hz`, `bias_instability_low_hz` and `markov_time_constant_s`
         [s] pass through.
 
@@ -336,7 +336,7 @@ class NoiseModel:
 def compute_theoretical_adev(model: NoiseModel, tau_s: ArrayLike) -> NDArray[np.float64]:
     """Return the Allan deviation that `model` predicts, per axis.
 
-    The Allan variances of the terms of standards.md §2.4 are summed: 3Q²/τ² + N²/τ + flicker
+    The Allan variances of the terms of docs/equations.md §8 are summed: 3Q²/τ² + N²/τ + flicker
     (IEEE closed form with cut-off f0, no low cut-off: valid for τ ≲ 0.1/f_low) + K²τ/3 +
     R²τ²/2 + Markov (q_c·T_c)²/τ·[1 − (T_c/2τ)(3 − 4e^(−τ/T_c) + e^(−2τ/T_c))], q_c² = 2σ²/T_c.
 

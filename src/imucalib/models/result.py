@@ -21,8 +21,8 @@ Parameter names
 - ``bias_x`` … the bias b of y = b + (I + M)·x [m/s² | rad/s];
 - ``M_xy`` … the scale/misalignment matrix M (row: sensor axis, column: input axis) [–];
 - ``G_xy`` … gyro g-sensitivity, y += G·f [rad/s per m/s²];
-- the per-axis model of SPEC.md P1, y_i = K_i·(x_i + b_i): ``K_x`` [–] and ``b_x`` (a bias in
-  input units) [m/s² | rad/s].
+- the per-axis model of procedure P1 (docs/p1.md, steps 1 and 3), y_i = K_i·(x_i + b_i):
+  ``K_x`` [–] and ``b_x`` (a bias in input units) [m/s² | rad/s].
 
 A result's model (``"triad"`` or ``"per-axis"``) says which set it carries.
 

@@ -19,7 +19,7 @@ For a parameter p with value p0 at the reference temperature T0 [°C]::
     p(T, dT/dt) = p0 + Σ_{k=1..K} c_k·(T − T0)^k + d·dT/dt
 
 This is the static soak polynomial plus the first dynamic term of
-`../shared/reference/standards.md` §3.8 (the E-term D_Ṫ of IEEE 952, standards.md §2.2). Units of
+docs/equations.md §4 (the temperature-rate term D_Ṫ of IEEE 952, docs/equations.md §3). Units of
 c_k are the parameter's unit per °C^k; units of d are the parameter's unit per (°C/s).
 """
 
@@ -82,7 +82,7 @@ def _frozen_arrays(value: Any, name: str, *, polynomial: bool) -> _ReadOnlyMappi
 
 @dataclass(frozen=True, eq=False)
 class TemperatureDependence:
-    """Temperature dependence of named parameters (`../shared/reference/standards.md` §3.8).
+    """Temperature dependence of named parameters (docs/equations.md §4).
 
     ``p(T, dT/dt) = p0 + Σ_{k=1..K} c_k·(T − T0)^k + d·dT/dt``
 
@@ -213,7 +213,7 @@ def evaluate_parameter(
 ) -> NDArray[np.float64]:
     """Evaluate one parameter at given temperatures.
 
-    ``p(T, dT/dt) = p0 + Σ_{k=1..K} c_k·(T − T0)^k + d·dT/dt`` (standards.md §3.8).
+    ``p(T, dT/dt) = p0 + Σ_{k=1..K} c_k·(T − T0)^k + d·dT/dt`` (docs/equations.md §4).
 
     Parameters
     ----------

@@ -26,7 +26,7 @@ For sensor i (row i) of the triad, with A = I + M::
 x_i is the true input seen by sensor i. For a gyro x_i = ω_ib (the same for the three sensors),
 f is the specific force and q(f) = (f_x², f_y², f_z², f_x f_y, f_x f_z, f_y f_z). For an
 accelerometer at position r_i (row i of the lever arms) x_i = f + ω̇ × r_i + ω × (ω × r_i), the
-size effect of `../shared/reference/standards.md` §3.7(c).
+size effect of docs/equations.md §7.
 """
 
 from __future__ import annotations
@@ -112,20 +112,20 @@ class TriadModel:
 
     Notes
     -----
-    Correspondence to the standards (`../shared/reference/standards.md`):
+    Correspondence to the standards (docs/equations.md §3):
 
-    - IEEE 1293 / IEEE 836 accelerometer model (§1.2): K0 = `bias`; scale factor
+    - IEEE 1293 / IEEE 836 accelerometer model equation: K0 = `bias`; scale factor
       K1 = (1 + M_ii)·K1,nominal; K2 = `k2`·g0 [g/g²], K3 = `k3`·g0² [g/g³], Koq = `koq`·g0
       [g/g²] (g0 = 9.80665 m/s²; ×10⁶ for µg/g² and µg/g³); for sensor i with its pendulous and
       output axes along axes p and o, the misalignments are δo = M_ip and δp = −M_io; the size
-      effect (§3.7(c)) is the lever-arm term. Cross-coupling (Kip, Kio) and cross-axis (Kpp, …)
-      terms are not modelled.
-    - IEEE 952 / IEEE 1431 gyro model (§2.2): the fixed drift D_F = `bias`; the scale-factor
+      effect (docs/equations.md §7) is the lever-arm term. Cross-coupling (Kip, Kio) and
+      cross-axis (Kpp, …) terms are not modelled.
+    - IEEE 952 / IEEE 1431 gyro model: the fixed drift D_F = `bias`; the scale-factor
       error εk [ppm] = 10⁶·M_ii (its nonlinearity and asymmetry are `k2`, `k3`, `koq` and
       `scale_asymmetry`); the misalignment couplings θ are the off-diagonal M_ij; the
       acceleration-sensitive drift D_g(a) = G·f + G2·q(f) (g-sensitivity and g²/anisoelastic
       sensitivity, IEEE 1431); D_T·ΔT and D_Ṫ·dT/dt are the polynomial and rate terms of
-      `temperature` (§3.8).
+      `temperature` (docs/equations.md §4).
 
     Arrays are copied and made read-only. Instances compare with :meth:`isclose`, not ``==``.
     """
@@ -566,8 +566,8 @@ def apply_triad(
     Notes
     -----
     The accelerometer i at lever arm r_i senses x_i = f + ω̇ × r_i + ω × (ω × r_i)
-    (standards.md §3.7(c)). Parameters that depend on temperature are evaluated per sample
-    (:func:`~imucalib.models.temperature.evaluate_parameter`, standards.md §3.8).
+    (docs/equations.md §7). Parameters that depend on temperature are evaluated per sample
+    (:func:`~imucalib.models.temperature.evaluate_parameter`, docs/equations.md §4).
     """
     x, single = _samples(input_b, "input_b")
     n = x.shape[0]

@@ -1,4 +1,4 @@
-"""Signal processing between a Recording and the solvers (SPEC.md P1 processing steps 1–3).
+"""Signal processing between a Recording and the solvers (P1 processing rules 1–3, docs/p1.md).
 
 Pure functions on arrays (no Recording access) returning frozen dataclasses. Algorithms,
 equations and choices: ``docs/processing-estimation.md``.

@@ -1,4 +1,4 @@
-"""Zero-phase Butterworth low-pass filter (SPEC.md P1 processing step 2).
+"""Zero-phase Butterworth low-pass filter (P1 processing rule 2, docs/p1.md).
 
 Contents
 --------
@@ -17,14 +17,14 @@ transform with pre-warping, second-order sections for numerical robustness) has 
     |H(f)|² = 1 / (1 + (tan(πf/f_s) / tan(πf_c/f_s))^{2N})                      (1)
 
 Running it forward then backward (``scipy.signal.sosfiltfilt``, odd extension at both ends)
-cancels the phase exactly — no delay, no phase distortion, as SPEC.md requires — but *squares*
+cancels the phase exactly — no delay, no phase distortion, as P1 requires — but *squares*
 the magnitude: the overall response is |H(f)|², −6 dB (gain ½) at f_c, with roll-off 2N·20 dB
 per decade. Its −3 dB point is lower than f_c::
 
     f_3dB = (f_s/π)·atan( tan(πf_c/f_s) · (√2 − 1)^{1/(2N)} )                   (2)
 
 (0.896·f_c for N = 4 well below Nyquist). The cut-off is set as a fraction of the IMU's
-bandwidth, 1/5–1/3 by SPEC.md (default ¼); other fractions need ``allow_any_fraction=True``.
+bandwidth, 1/5–1/3 by P1's rule 2 (default ¼); other fractions need ``allow_any_fraction=True``.
 The filter has unit gain at DC, so window means are unchanged up to end effects; the first and
 last ~1/f_c seconds carry the start-up transient of the odd extension — filter whole records and
 cut windows afterwards.
@@ -58,7 +58,7 @@ __all__ = [
     "lowpass_zero_phase",
 ]
 
-#: Allowed cut-off / bandwidth fractions of SPEC.md P1 processing step 2.
+#: Allowed cut-off / bandwidth fractions of P1 processing rule 2 (docs/p1.md).
 SPEC_CUTOFF_FRACTION_RANGE: tuple[float, float] = (1.0 / 5.0, 1.0 / 3.0)
 _MAX_ORDER = 10
 
@@ -138,7 +138,7 @@ def lowpass_zero_phase(
         The IMU's bandwidth (its datasheet or :class:`~imucalib.models.sensor.SensorSpec`
         ``bandwidth_hz``). [Hz]
     cutoff_fraction : float
-        f_c / bandwidth, within [1/5, 1/3] (SPEC.md) unless `allow_any_fraction`.
+        f_c / bandwidth, within [1/5, 1/3] (docs/p1.md, rule 2) unless `allow_any_fraction`.
     order : int
         Order N of each pass, 1 … 10.
     allow_any_fraction : bool
@@ -171,8 +171,9 @@ def lowpass_zero_phase(
     lo, hi = SPEC_CUTOFF_FRACTION_RANGE
     if not allow_any_fraction and not (lo - 1e-12 <= frac <= hi + 1e-12):
         raise InvalidInputError(
-            f"`cutoff_fraction` must be within 1/5–1/3 of the IMU bandwidth (SPEC.md P1 processing "
-            f"step 2); got {frac:.6g} (pass allow_any_fraction=True to override)"
+            f"`cutoff_fraction` must be within 1/5–1/3 of the IMU bandwidth (procedure P1, "
+            f"processing rule 2, docs/p1.md); got {frac:.6g} "
+            f"(pass allow_any_fraction=True to override)"
         )
     n_ord = _check_order(order)
     fc = frac * bw

@@ -1,4 +1,4 @@
-"""Outlier rejection by the 3σ rule and by the Grubbs test (SPEC.md P1 processing step 1).
+"""Outlier rejection by the 3σ rule and by the Grubbs test (P1 processing rule 1, docs/p1.md).
 
 Contents
 --------
@@ -23,7 +23,7 @@ new is flagged. With ``robust=True`` (default) c is the median and s = 1.4826·M
 absolute deviation scaled to σ for Gaussian data [1]_): one gross outlier can inflate the
 classical standard deviation so much that it hides itself and others (*masking*), while the
 MAD has a 50 % breakdown point. With ``robust=False`` c is the mean and s the sample standard
-deviation (ddof = 1), the textbook rule of SPEC.md; iteration mitigates but does not remove the
+deviation (ddof = 1), the textbook rule P1 names; iteration mitigates but does not remove the
 masking. If the MAD is zero (heavily quantised data) the standard deviation is used instead. On
 clean Gaussian data about 0.3 % of the samples are flagged at n_σ = 3, as the rule implies.
 

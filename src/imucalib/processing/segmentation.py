@@ -9,9 +9,9 @@ Contents
 
 Method
 ------
-In the spirit of the static detector of Tedaldi, Pretto & Menegatti (ICRA 2014; standards.md
-§3.2) [1]_, extended to constant-rate rotation. With a centred moving window of w samples
-(`window_s`), for each sample:
+In the spirit of the static detector of Tedaldi, Pretto & Menegatti (ICRA 2014) [1]_, extended
+to constant-rate rotation. With a centred moving window of w samples (`window_s`), for each
+sample:
 
 - the windowed mean rate ω̄ (per axis) and the *unsteadiness* ζ_g = Σ_axes var_w(ω), the
   variance of the gyro about its window mean (noise, plus a²w_s²/12 during an acceleration a;
@@ -22,11 +22,11 @@ In the spirit of the static detector of Tedaldi, Pretto & Menegatti (ICRA 2014; 
   static period, but without needing one;
 - a sample is **steady** when √ζ_g ≤ max(k_σ·√ζ_g,0, `rate_stability_rps`): k_σ
   (`threshold_factor`, default 3) times the noise in standard deviation, or the table's rate
-  stability (SPEC.md P1: 0.1 °/s), whichever is larger — so table rate ripple at high rates does
-  not break a constant-rate step of a quiet (navigation-grade) IMU, while a table acceleration a
-  makes √ζ_g ≈ a·w_s/√12 (2.9 °/s for 10 °/s² over 1 s) and is rejected;
+  stability (docs/p1.md, step 3: 0.1 °/s), whichever is larger — so table rate ripple at high
+  rates does not break a constant-rate step of a quiet (navigation-grade) IMU, while a table
+  acceleration a makes √ζ_g ≈ a·w_s/√12 (2.9 °/s for 10 °/s² over 1 s) and is rejected;
 - a steady sample is **static** when ‖ω̄‖ < `static_rate_threshold_rps` (default 2.5 °/s, above
-  the bias of a consumer MEMS gyro and below the slowest rate of SPEC.md's plans, 5 °/s) and,
+  the bias of a consumer MEMS gyro and below the slowest rate of imucalib's plans, 5 °/s) and,
   with an accelerometer, √ζ_a ≤ k_σ·√ζ_a,0 (no handling or vibration); it is **rotating** when
   ‖ω̄‖ ≥ the threshold.
 

@@ -7,7 +7,7 @@ Contents
     samples, per column, with correlated (flicker, random-walk) noise taken into account.
 :class:`RevolutionWindow`, :func:`compute_integer_revolution_window`
     The longest span of a rotating step that covers an integer number of table revolutions, and
-    the mean over it (SPEC.md P2 step 2, standards.md §3.7(a)).
+    the mean over it (docs/equations.md §5; the rotating steps of an array calibration).
 
 Standard error of a window mean
 -------------------------------
@@ -64,12 +64,12 @@ angle, "to within one sample"), ties going to the most central window. The mean 
 sample by Δθᵢ (``weighting="angle"``, exact cancellation of any function of the table angle even
 with rate ripple) or equally (``"time"``); both coincide at constant rate. A sinusoid of
 amplitude A leaves at most A·sin(πΔ)/(π(n + Δ)) for a coverage error of Δ revolutions
-(standards.md §3.7(a)).
+(docs/equations.md §5, Eq. (5.1)).
 
 References
 ----------
 .. [1] IEEE Std 952-1997 (R2008), Annex C (Allan variance of the noise terms);
-   `../shared/reference/standards.md` §2.4.
+   docs/equations.md §8.
 .. [2] N. El-Sheimy, H. Hou and X. Niu, "Analysis and modeling of inertial sensors using Allan
    variance", IEEE Trans. Instrum. Meas. 57(1):140–149, 2008.
 .. [3] W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP 1065, 2008, §5.2.4.

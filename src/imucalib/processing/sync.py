@@ -4,10 +4,12 @@ Contents
 --------
 :class:`SyncResult`, :func:`synchronize`
     Linear interpolation of one stream (the IMU) onto the time stamps of another (the table
-    feedback), with the achieved alignment error and the ≤ 1 ms check of SPEC.md P1.
+    feedback), with the achieved alignment error and the ≤ 1 ms check of procedure P1
+    (docs/p1.md, rule 3).
 :class:`TimeBase`, :func:`reconstruct_time_base`
     Device time on the host clock by linear regression of host receive time on the sample
-    counter (`../shared/reference/devices.md` §3.3), with clock-rate error, jitter and gaps.
+    counter (docs/drivers.md, "Time synchronisation practice"), with clock-rate error, jitter
+    and gaps.
 
 Alignment error
 ---------------
@@ -35,8 +37,9 @@ time error of that attribution, as the sum of three parts (all in seconds)::
   stamp; 3σ covers 99.7 % of samples. Reconstructed device time (:func:`reconstruct_time_base`)
   has σ_jitter ≈ 0; raw host receive stamps carry their transport jitter.
 
-The bound is compared with `max_alignment_error_s` (1 ms, SPEC.md P1 "Software" and processing
-step 3) and :class:`~imucalib.errors.LimitExceededError` is raised when it is exceeded.
+The bound is compared with `max_alignment_error_s` (1 ms, procedure P1's software requirement
+and processing rule 3, docs/p1.md) and :class:`~imucalib.errors.LimitExceededError` is raised
+when it is exceeded.
 
 Clock reconstruction
 --------------------
@@ -55,7 +58,8 @@ References
    §4.2.2 (error of linear interpolation).
 .. [2] S. N. Bernstein, 1912; see A. F. Timan, *Theory of Approximation of Functions of a Real
    Variable*, 1963, §4.8 (Bernstein's inequality for entire functions of exponential type).
-.. [3] `../shared/reference/devices.md` §3.3 (regression of host time on the sample counter).
+.. [3] docs/drivers.md, "Time synchronisation practice" (regression of host time on the sample
+   counter); IEEE Std 1554-2005 (inertial sensor test data acquisition).
 """
 
 from __future__ import annotations
@@ -79,7 +83,8 @@ __all__ = [
     "synchronize",
 ]
 
-#: SPEC.md P1: IMU samples and table feedback share a time base with ≤ 1 ms error.
+#: Procedure P1 (docs/p1.md, rule 3): IMU samples and table feedback share a time base with
+#: ≤ 1 ms error.
 DEFAULT_MAX_ALIGNMENT_ERROR_S = 1e-3
 _GAP_FACTOR = 1.5  # an interval longer than 1.5 × the median spacing is a gap
 _ROBUST_K = 5.0
@@ -189,7 +194,7 @@ def synchronize(
     signal_bandwidth_hz : float, optional
         f_max of Eq. (2); the source Nyquist frequency 1/(2·median spacing) when omitted. [Hz]
     max_alignment_error_s : float or None
-        Limit on the bound (1) (SPEC.md: 1 ms); None disables the check. [s]
+        Limit on the bound (1) (docs/p1.md, rule 3: 1 ms); None disables the check. [s]
     estimate_jitter : bool
         Estimate σ_jitter from the source stamps (:func:`estimate_timestamp_jitter_s`); set False
         for sources sampled non-uniformly on purpose.

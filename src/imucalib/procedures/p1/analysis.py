@@ -4,8 +4,8 @@
 fit of the chosen model (:mod:`.fit`), then the verification of
 :mod:`imucalib.analysis.verification`:
 
-- residuals of the calibration windows against the seed's limits (0.002 g, 0.1 °/s) and a χ²
-  test of their means (rule 5: a too-simple model fails it);
+- residuals of the calibration windows against P1's limits (docs/p1.md, rule 5: 0.002 g,
+  0.1 °/s) and a χ² test of their means (rule 5: a too-simple model fails it);
 - accuracy at the held-out positions and rates after compensation (rule 7: the plan's IMU
   specification, 0.01 g and 0.5 °/s by default);
 - repeatability over the repetitions (rule 6: CV ≤ 1 % for scale factors, spread within 3σ for
@@ -75,7 +75,7 @@ class P1Options:
     Attributes
     ----------
     model : {"triad", "per-axis"}
-        The full triad model or the seed's per-axis model.
+        The full triad model or the procedure's per-axis model (docs/p1.md).
     g_sensitivity : bool
         Triad model: estimate the gyro g-sensitivity.
     processing : P1Processing
@@ -365,7 +365,7 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
             cv_limit=opt.repeatability_cv, spread_k=opt.repeatability_k))
     else:
         checks.append(Check("repeatability", None, f"{len(reps)} repetition in the recording: "
-                            "repeatability needs at least 2 (SPEC.md P1 asks for 3)"))
+                            "repeatability needs at least 2 (P1 rule 6 asks for 3, docs/p1.md)"))
     return P1Analysis(result=result, per_repetition=per_rep, checks=tuple(checks),
                       decision=decide(checks), kalman_max_difference_sigma=kalman,
                       crlb_ratio=crlb, observations=obs)

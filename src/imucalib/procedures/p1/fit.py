@@ -2,7 +2,8 @@
 
 Models (``model`` argument)
 ---------------------------
-``"per-axis"`` — the seed's model (docs/p1.md), cross-coupling neglected, per axis i:
+``"per-axis"`` — the procedure's own model (docs/p1.md, steps 1 and 3), cross-coupling
+neglected, per axis i:
     accelerometer  a_out,i = K_i·(a_ref,i + b_i), from the six positions;
     gyro           ω_out,i = K_i·(ω_ref,i + b_i), from the rate points turning about axis i and the
     static windows (whose reference is the Earth-rate projection, so b_i excludes Earth rate).

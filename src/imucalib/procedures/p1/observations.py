@@ -1,11 +1,11 @@
 """From a P1 Recording to observations: one mean per static window and per rate point.
 
-The processing chain of SPEC.md P1 (data processing steps 1–3), one step's valid window at a
+The processing chain of P1 (docs/p1.md, processing rules 1–3), one step's valid window at a
 time, so memory is bounded by the longest step, not the file:
 
 1. read the IMU samples of the window and the table feedback;
 2. rebuild the IMU time base from its sample counter (regression of receive time on counter,
-   devices.md §3.3), which removes receive-time jitter;
+   docs/drivers.md "Time synchronisation practice"), which removes receive-time jitter;
 3. reject outliers per channel (3σ on a robust scale, or Grubbs), replacing them by
    interpolation (or dropping them), counts kept;
 4. compute per-channel statistics with a standard error that accounts for correlated noise
@@ -110,7 +110,7 @@ _F64 = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class P1Processing:
-    """Settings of the processing chain (SPEC.md P1 data processing, steps 1–3).
+    """Settings of the processing chain (docs/p1.md, processing rules 1–3).
 
     Attributes
     ----------
@@ -123,7 +123,7 @@ class P1Processing:
     cutoff_fraction : float or None
         Low-pass cut-off as a fraction of the IMU bandwidth (1/5–1/3); None: no filter.
     max_alignment_error_s : float
-        Largest synchronisation error allowed (SPEC.md: 1 ms). [s]
+        Largest synchronisation error allowed (docs/p1.md, rule 3: 1 ms). [s]
     gravity_mps2 : float or None
         g for the reference specific force; None: the site's normal gravity (P1's 9.80665 is
         the alternative for a site that does not know its g). [m/s²]

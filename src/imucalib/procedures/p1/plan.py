@@ -1,19 +1,20 @@
 """The default plan of procedure P1 (two-dimensional calibration on a dual-axis table).
 
-:func:`generate_p1_plan` writes SPEC.md P1 as a :class:`~imucalib.plan.schema.Plan`: an operator
-check of the mounting, a warm-up, then ``repetitions`` complete calibrations, each with
+:func:`generate_p1_plan` writes procedure P1 (docs/p1.md) as a
+:class:`~imucalib.plan.schema.Plan`: an operator check of the mounting, a warm-up, then
+``repetitions`` complete calibrations, each with
 
 1. the six static positions (pitch, roll) = (0, 0) Z up, (0, 180) Z down, (90, 0) X up,
    (−90, 0) X down, (0, 90) Y up, (0, 270) Y down; settle ≥30 s, record ≥10 s
-   (tag ``"six-position"``). SPEC.md lists (90°, 180°) for X down, but by its own reference
-   formula a_X = g·sin θ that position reads +g on X (rolling about the vertical X axis does not
-   turn X over): X down needs pitch −90°;
+   (tag ``"six-position"``). The procedure lists (90°, 180°) for X down, but by its own
+   reference formula a_X = g·sin θ that position reads +g on X (rolling about the vertical X
+   axis does not turn X over): X down needs pitch −90°;
 2. the level static record for the gyro bias, 60 min by default (tag ``"gyro-bias"``);
 3. the rate points about pitch and roll, both signs and 0, e.g. −100, −50, 0, +50, +100 °/s;
    settle ≥20 s; whole revolutions (tag ``"rate"``); and, by default, about pitch with roll at
-   90°, which turns the IMU about Z. With SPEC.md P1's own positions ((90°, 0°) puts X up),
-   pitch turns the IMU about its Y axis and roll about X; SPEC.md's text pairs pitch with the X
-   gyro, which contradicts its position table, and we follow the geometry;
+   90°, which turns the IMU about Z. With the procedure's own positions ((90°, 0°) puts X up),
+   pitch turns the IMU about its Y axis and roll about X; its text pairs pitch with the X gyro,
+   which contradicts its position table, and we follow the geometry (docs/p1.md, "The plan");
 4. held-out positions and rates for the accuracy verification (tag ``"verification"``),
 
 every step also tagged ``"rep<k>"``. The steps the fit uses carry ``"calibration"``.
@@ -60,7 +61,7 @@ __all__ = [
     "generate_p1_plan",
 ]
 
-#: The six positions of SPEC.md P1 step 1, (pitch, roll) [°], and which axis points up.
+#: The six positions of P1 step 1 (docs/p1.md), (pitch, roll) [°], and which axis points up.
 P1_SIX_POSITIONS_DEG: tuple[tuple[tuple[float, float], str], ...] = (
     ((0.0, 0.0), "Z up"), ((0.0, 180.0), "Z down"), ((90.0, 0.0), "X up"),
     ((-90.0, 0.0), "X down"), ((0.0, 90.0), "Y up"), ((0.0, 270.0), "Y down"),
@@ -99,24 +100,24 @@ def generate_p1_plan(
         Plan name (the recording's file name starts with it).
     grade : {"consumer", "tactical", "navigation"}
         The IMU's grade: the twin's IMU and the warm-up time (10–20 min consumer, 30–60 min
-        navigation; SPEC.md P1).
+        navigation; docs/p1.md, preparation).
     rates_dps : sequence of float
-        Rate points per axis (SPEC.md P1: 5–7 points, both signs and 0). [°/s]
+        Rate points per axis (docs/p1.md, step 3: 5–7 points, both signs and 0). [°/s]
     held_out_rates_dps : sequence of float
         Rate points per axis kept out of the fit for verification. [°/s]
     revolutions : int
         Whole turns recorded at each non-zero rate.
     static_s : float
-        Level static record for the gyro bias (SPEC.md P1: ≥60 min). [s]
+        Level static record for the gyro bias (docs/p1.md, step 2: ≥60 min). [s]
     settle_s, record_s : float
         Settling and recording time at each position (≥30 s, ≥10 s). [s]
     rate_settle_s : float
         Settling time at each rate (≥20 s). [s]
     repetitions : int
-        Complete calibrations (SPEC.md P1: three, for the repeatability check).
+        Complete calibrations (docs/p1.md, rule 6: three, for the repeatability check).
     z_rates : bool
         Add rate points about the pitch axis with the roll axis at 90°, which turns the IMU
-        about its Z axis. SPEC.md P1 is two-dimensional (rates about pitch and roll only);
+        about its Z axis. Procedure P1 is two-dimensional (rates about pitch and roll only);
         without them the Z gyro's scale factor and its Z-input misalignments are unobservable.
     warm_up_s : float, optional
         Warm-up duration; the grade's default when omitted. [s]
@@ -131,15 +132,15 @@ def generate_p1_plan(
     ------
     ConfigurationError
         For fewer than 3 rate points or no zero rate, fewer than 1 repetition, or a rate plan
-        that the SPEC's minimums reject.
+        that P1's minimums (docs/p1.md) reject.
     """
     if grade not in _WARM_UP_S:
         raise ConfigurationError(f"`grade` must be one of {sorted(_WARM_UP_S)}; got {grade!r}")
     if len(rates_dps) < 3 or 0.0 not in rates_dps or not any(r < 0 for r in rates_dps) \
             or not any(r > 0 for r in rates_dps):
         raise ConfigurationError(
-            f"`rates_dps` needs at least 3 points with both signs and 0 (SPEC.md P1 uses 5–7); "
-            f"got {list(rates_dps)}")
+            f"`rates_dps` needs at least 3 points with both signs and 0 (procedure P1, docs/p1.md "
+            f"step 3, uses 5–7); got {list(rates_dps)}")
     if repetitions < 1:
         raise ConfigurationError(f"`repetitions` must be ≥ 1; got {repetitions}")
     steps: list[PlanStep] = [
@@ -198,7 +199,7 @@ def generate_p1_plan(
     )
     return Plan(
         name=name,
-        description=f"SPEC.md P1 on a dual-axis table: six positions, {static_s / 60:g} min "
+        description=f"P1 (docs/p1.md) on a dual-axis table: six positions, {static_s / 60:g} min "
                     f"static, {len(rates_dps)} rates per axis, held-out checks, "
                     f"{repetitions} repetition(s).",
         procedure="p1",
