@@ -24,8 +24,9 @@ Station: :class:`StationConfig`, :func:`load_station_config`, :func:`parse_stati
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from imucalib._lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from imucalib.drivers.base import DeviceCheck
@@ -109,11 +110,4 @@ _LAZY = {
     "parse_transport_url": "imucalib.drivers.transport",
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Import a public name from its module on first access."""
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _LAZY)

@@ -27,8 +27,7 @@ access (importing the package imports no analysis).
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from imucalib._lazy import lazy_getattr
 
 __all__ = [
     "P1_HELD_OUT_POSITIONS_DEG",
@@ -54,11 +53,4 @@ _LAZY = {
     "analyze_allan_recording": "imucalib.procedures.allan.analysis",
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Import a listed name from its module on first access (PEP 562)."""
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _LAZY)

@@ -21,8 +21,9 @@ Contents
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from imucalib._lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from imucalib.station.devices import ChamberDevice, Clock, ImuSource, MotionDevice, Station
@@ -81,11 +82,4 @@ _LAZY = {
     "run_plan": "imucalib.station.runner",
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Import a public name from its module on first access."""
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _LAZY)
