@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from imucalib.errors import InvalidInputError, LimitExceededError
+from imucalib.models.earth import Site
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge, dynamic_radius_m
-from imucalib.sim.earth import Site
 from imucalib.sim.fixture import MountedImu
 from imucalib.units import ARCSEC, DEG, EARTH_RATE_RPS
 

@@ -8,7 +8,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from imucalib.errors import InvalidInputError
-from imucalib.sim.earth import Site
+from imucalib.models.earth import Site
 from imucalib.sim.fixture import MountedImu, hexahedral_fixture
 from imucalib.sim.kinematics import (
     compute_fixture_kinematics,

@@ -10,11 +10,11 @@ from scipy.spatial.transform import Rotation
 
 from imucalib import units
 from imucalib.errors import ConfigurationError, InvalidInputError
+from imucalib.models.earth import Site
 from imucalib.models.imu import ImuModel, sample_imu_model
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 from imucalib.models.triad import TriadModel
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber, imu_temperature_degc
-from imucalib.sim.earth import Site
 from imucalib.sim.fixture import hexahedral_fixture, single_imu_fixture
 from imucalib.sim.kinematics import compute_imu_kinematics
 from imucalib.sim.rig import TwinRig, feedback_grid_s

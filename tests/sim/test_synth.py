@@ -9,10 +9,10 @@ import pytest
 
 from imucalib import units
 from imucalib.errors import ConfigurationError, InvalidInputError
+from imucalib.models.earth import Site
 from imucalib.models.imu import ImuModel, sample_imu_model
 from imucalib.models.triad import apply_triad
 from imucalib.sim.chamber import ImuThermalSpec
-from imucalib.sim.earth import Site
 from imucalib.sim.fixture import single_imu_fixture
 from imucalib.sim.kinematics import compute_imu_kinematics, stationary_platform_motion
 from imucalib.sim.synth import ClockSpec, ImuSynthesizer, SimImu

@@ -1,6 +1,7 @@
 """The station's digital twin.
 
-Equipment and kinematics: :mod:`~imucalib.sim.earth` (site, Earth rate, normal gravity),
+Equipment and kinematics: :mod:`~imucalib.models.earth` (site, Earth rate, normal gravity;
+re-exported here),
 :mod:`~imucalib.sim.table` (single- and dual-axis rate tables), :mod:`~imucalib.sim.chamber`
 (thermal chamber, IMU thermal lag), :mod:`~imucalib.sim.centrifuge` (precision centrifuge with
 dynamic unbalance), :mod:`~imucalib.sim.fixture` (IMU mounts), :mod:`~imucalib.sim.kinematics`
@@ -15,10 +16,7 @@ station runner on the simulated station (:mod:`imucalib.station.simulate`).
 
 from __future__ import annotations
 
-from imucalib.sim.build import BuiltRig, build_rig
-from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge, dynamic_radius_m
-from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber, imu_temperature_degc
-from imucalib.sim.earth import (
+from imucalib.models.earth import (
     Site,
     earth_rate_n_rps,
     gravity_n_mps2,
@@ -26,6 +24,9 @@ from imucalib.sim.earth import (
     normal_gravity_mps2,
     rot_nt,
 )
+from imucalib.sim.build import BuiltRig, build_rig
+from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge, dynamic_radius_m
+from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber, imu_temperature_degc
 from imucalib.sim.fixture import (
     HEXAHEDRAL_FACES,
     Fixture,

@@ -31,11 +31,11 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from imucalib import units
+from imucalib.models.earth import Site
 from imucalib.models.imu import ImuModel, sample_imu_model
 from imucalib.plan.equipment import TwinEquipment
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber
-from imucalib.sim.earth import Site
 from imucalib.sim.fixture import Fixture, array_fixture, hexahedral_fixture, single_imu_fixture
 from imucalib.sim.rig import TwinRig
 from imucalib.sim.synth import ClockSpec, SimImu

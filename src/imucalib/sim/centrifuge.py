@@ -49,7 +49,7 @@ from imucalib import units
 from imucalib._checks import as_array, check_finite_scalar, check_nonnegative, check_positive
 from imucalib.conventions import TABLE_AXIS_VECTORS
 from imucalib.errors import ConfigurationError, InvalidInputError
-from imucalib.sim.earth import Site
+from imucalib.models.earth import Site
 from imucalib.sim.fixture import MountedImu, as_rotation
 from imucalib.sim.kinematics import ImuKinematics, compute_imu_kinematics
 from imucalib.sim.table import AxisSpec, PlatformMotion, RateTableSpec, SimRateTable, TableFeedback

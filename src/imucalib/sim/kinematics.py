@@ -58,8 +58,8 @@ from scipy.spatial.transform import Rotation
 
 from imucalib._checks import as_array
 from imucalib.errors import InvalidInputError
+from imucalib.models.earth import Site
 from imucalib.sim._rotation import cross, quat_conj, quat_mul, quat_rotate
-from imucalib.sim.earth import Site
 from imucalib.sim.fixture import Fixture, MountedImu, as_rotation
 
 __all__ = [

@@ -39,9 +39,9 @@ from numpy.typing import NDArray
 
 from imucalib._checks import check_finite_scalar, check_positive
 from imucalib.errors import ConfigurationError, InvalidInputError
+from imucalib.models.earth import Site
 from imucalib.sim.centrifuge import SimCentrifuge
 from imucalib.sim.chamber import SimChamber, imu_temperature_degc
-from imucalib.sim.earth import Site
 from imucalib.sim.fixture import Fixture
 from imucalib.sim.kinematics import (
     ImuKinematics,

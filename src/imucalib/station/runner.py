@@ -55,7 +55,7 @@ from typing import Any, Protocol
 
 from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
-from imucalib.io._schema import StreamSpec
+from imucalib.io import StreamSpec
 from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.reader import open_recording
 from imucalib.io.recording import RecordingWriter

@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from imucalib import units
 from imucalib.errors import DeviceError, InvalidInputError, LimitExceededError
-from imucalib.io._schema import StreamSpec
+from imucalib.io import StreamSpec
 from imucalib.io.streams import imu_truth_stream_spec
 from imucalib.plan.bounds import (
     MAX_CENTRIFUGE_RATE_DPS,
