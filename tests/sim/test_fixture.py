@@ -1,4 +1,7 @@
-"""Tests of imucalib.sim.fixture: hexahedral geometry (SPEC.md P2), arrays, validation."""
+"""Tests of imucalib.sim.fixture: hexahedral geometry (P2), arrays, validation.
+
+The cube and its six orientations are those of P2 (docs/procedures.md).
+"""
 
 from __future__ import annotations
 

@@ -24,8 +24,8 @@ def _p1_reference(pitch, roll):
     return G * np.array([np.sin(pitch), np.sin(roll) * np.cos(pitch), np.cos(pitch) * np.cos(roll)])
 
 
-# --- SPEC.md P1 geometry ------------------------------------------------------------------------
-# SPEC.md P1 labels (90°, 180°) "X down", but its own formula a_X = g·sin θ gives X up there: with
+# --- P1 geometry (docs/p1.md, calibration step 1) ------------------------------------------------
+# P1 labels (90°, 180°) "X down", but its own formula a_X = g·sin θ gives X up there: with
 # pitch outer, the roll axis is vertical at θ = 90° and roll only turns the IMU about it. X down
 # is (−90°, 0°) under the formula; both are checked here.
 @pytest.mark.parametrize(("pitch_deg", "roll_deg", "up"), [

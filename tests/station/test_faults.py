@@ -168,7 +168,7 @@ def test_chamber_alarm_puts_the_chamber_in_standby_and_retries(tmp_path):
 
 
 def test_a_table_pushed_off_while_settling_is_corrected_automatically(reference, tmp_path):
-    """SPEC.md P1: settle within 5″ "with automatic correction": the position is re-commanded."""
+    """P1 (docs/p1.md, step 1): settle within 5″ "with automatic correction": re-commanded."""
     plan, _ = reference
     target = window_of(reference, "position", nth=3)
     station = SimStation(plan.twin)

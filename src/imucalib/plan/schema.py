@@ -2,8 +2,8 @@
 
 A plan is what a station run executes: limits, guard thresholds, the IMU's specification, an
 optional description of the twin station to run it on, and the list of steps. Defaults are the
-numbers of SPEC.md P1 (settle ≥30 s within 5″ and 0.001 g; rate within 0.5 °/s; record ≥10 s;
-temperature steady within 0.2 °C).
+numbers of P1 (docs/p1.md, calibration steps 1–3: settle ≥30 s within 5″ and 0.001 g; rate within
+0.5 °/s; record ≥10 s; temperature steady within 0.2 °C).
 
 Contents
 --------
@@ -107,7 +107,7 @@ class PlanLimits(_Model):
 
 
 class GuardConfig(_Model):
-    """Settling criteria and guard thresholds; the defaults are SPEC.md P1's."""
+    """Settling criteria and guard thresholds; the defaults are P1's (docs/p1.md, steps 1–3)."""
 
     position_tolerance_arcsec: float = Field(5.0, gt=0.0, le=3600.0,
                                              description="table deviation [″]")
@@ -168,7 +168,7 @@ class ImuSpecConfig(_Model):
 
 
 class EquipmentConfig(_Model):
-    """What the plan requires of the equipment (SPEC.md P1 preparation).
+    """What the plan requires of the equipment (docs/p1.md, preparation).
 
     The analysis also uses these as Type B uncertainties (uniform, u = a/√3) of the quantities
     they limit: table angle errors tilt the reference gravity (accelerometer misalignments),

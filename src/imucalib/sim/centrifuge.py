@@ -1,4 +1,4 @@
-"""Precision centrifuge with dynamic unbalance (SPEC.md P3, IEEE 836; standards.md §1.4).
+"""Precision centrifuge with dynamic unbalance (docs/procedures.md, P3; IEEE Std 836).
 
 Contents
 --------
@@ -18,16 +18,17 @@ Geometry and signs
   seen from above. A tilt makes gravity leak into the radial input once per revolution
   (amplitude g·sin θ_s), which averages out over whole revolutions. Earth rate enters the gyro
   input and, through the Coriolis term 2Ω × v, the specific force: on average
-  (ω + Ω_U)²·r ≈ ω²r + 2ωΩ_U·r with Ω_U = Ω_e sin L (standards.md §1.4; computed exactly by
+  (ω + Ω_U)²·r ≈ ω²r + 2ωΩ_U·r with Ω_U = Ω_e sin L (docs/equations.md §7; computed exactly by
   :func:`~imucalib.sim.kinematics.compute_imu_kinematics`).
 - The arm points along +x_p; the test position is at +r_t·x_p (``static_radius_m``). A mount is
   given by its static position p_s in p (signed: the side opposite the test position has
   x < 0).
-- **Dynamic unbalance** (SPEC.md P3): under load the rotor's centre shifts by c·ω² along +x_p
-  (towards the test side for c > 0), so every point on the arm moves by c·ω²·x̂_p relative to the
-  spin axis: the test position's radius becomes r_t + c·ω², a reference at +r_t/3 on the same side
-  gets r_t/3 + c·ω² and one at −r_t/3 on the far side gets r_t/3 − c·ω² (it shares the sign of
-  c only on the test side). c = c0 + c_per_kg·load [m/(rad/s)²].
+- **Dynamic unbalance** (docs/procedures.md, P3): under load the rotor's centre shifts by c·ω²
+  along +x_p (towards the test side for c > 0), so every point on the arm moves by c·ω²·x̂_p
+  relative to the spin axis: the test position's radius becomes r_t + c·ω², a reference at
+  +r_t/3 on the same side gets r_t/3 + c·ω² and one at −r_t/3 on the far side gets
+  r_t/3 − c·ω² (it shares the sign of c only on the test side). c = c0 + c_per_kg·load
+  [m/(rad/s)²].
 - **Arm stretch** (IEEE 836 §3.1.1): an optional elastic radial elongation κ·ω²·(p_s,x, p_s,y, 0),
   proportional to the radius (``arm_stretch_s2`` κ [s²]); zero by default.
 - Specific force at a point at distance r from the axis: −ω²·r towards the axis (plus gravity,
@@ -147,7 +148,7 @@ class CentrifugeSpec:
         )
 
     def p3_positions_p_m(self) -> dict[str, _F64]:
-        """Return the static mount positions of SPEC.md P3 in p [m].
+        """Return the static mount positions of P3 (docs/procedures.md) in p [m].
 
         The test position is at +r_t, reference A at +r_t/3 (same side) and reference B at
         −r_t/3 (opposite side), all on the x_p axis.

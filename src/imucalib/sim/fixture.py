@@ -7,7 +7,7 @@ Contents
 :class:`Fixture`
     The IMUs on one fixture and the fixture's own mounting rotation on the platform ``rot_pm``.
 :func:`single_imu_fixture`, :func:`hexahedral_fixture`, :func:`array_fixture`
-    Builders for one IMU, the cube of SPEC.md P2, and N IMUs on a plate.
+    Builders for one IMU, the cube of P2 (docs/procedures.md, P2), and N IMUs on a plate.
 :func:`as_rotation`
     A validated single proper rotation from a Rotation or a 3×3 matrix.
 
@@ -21,7 +21,7 @@ Hexahedral fixture
 ------------------
 A cube of half edge h centred on the rotation centre carries one IMU on each face, the IMU origin
 at the face centre (lever arm h·n̂) and the IMU's z axis along the outward normal n̂. Faces in
-order (the six orientations of SPEC.md P2 when m = t: z up, z down, y up, y down, x up, x down),
+order (the six orientations of P2 when m = t: z up, z down, y up, y down, x up, x down),
 with the columns of ``mat_mb`` (x_b, y_b, z_b expressed in m):
 
 ====  ========  ==============================  ====================
@@ -196,7 +196,7 @@ def single_imu_fixture(lever_arm_m_m: ArrayLike = (0.0, 0.0, 0.0),
 
 def hexahedral_fixture(half_edge_m: float, names: Sequence[str] | None = None,
                        rot_pm: Rotation | ArrayLike | None = None) -> Fixture:
-    """Build the cube of SPEC.md P2: one IMU per face, z_b along the outward normal.
+    """Build the cube of P2 (docs/procedures.md): one IMU per face, z_b along the outward normal.
 
     Parameters
     ----------

@@ -33,16 +33,18 @@ The inertial acceleration of a point moving relative to the rotating Earth is
 a_i = a_e + 2Ω × v_e + Ω × (Ω × R) ([2], ch. 2); the plumb-line gravity g = G − Ω × (Ω × R) =
 [0, 0, −g]_t absorbs the centrifugal part, so f = a_e + 2Ω × v_e − g_t. The centripetal term
 ω × (ω × r) is constant in p at constant ω and does not average out over revolutions; 2Ω × v
-adds the (ω + Ω_U)² ≈ ω² + 2ωΩ_U effect of IEEE 836 (standards.md §1.4 and §3.7(c)). Terms of order
-Ω²·|r| (< 10⁻⁸ m/s² at r = 1 m) are neglected; with ``gravity_gradient=True`` the normal-field
-gradient of g over the lever arm (≈ 3·10⁻⁶ s⁻² · |r|) is added (standards.md §0, free-air
-gradient). ω̇_ib^b is the derivative of the body-frame components of ω_ib (equal to its inertial
-derivative expressed in b), the input of the accelerometer size effect (standards.md §3.7(c)).
+adds the (ω + Ω_U)² ≈ ω² + 2ωΩ_U effect of IEEE 836 ([1], §7, Eqs. (7.1) and (7.3)). Terms of
+order Ω²·|r| (< 10⁻⁸ m/s² at r = 1 m) are neglected; with ``gravity_gradient=True`` the
+normal-field gradient of g over the lever arm (≈ 3·10⁻⁶ s⁻² · |r|) is added ([1], §2, the
+free-air gradient of Eq. (2.3)). ω̇_ib^b is the derivative of the body-frame components of ω_ib
+(equal to its inertial derivative expressed in b), the input of the accelerometer size effect
+([1], §7, Eq. (7.2)).
 
 References
 ----------
-.. [1] ``../shared/reference/standards.md`` §1.4 (centrifuge input, Earth rate) and §3.7
-   (continuous rotation: centripetal, tangential and Earth-rate terms).
+.. [1] docs/equations.md §2 (gravity and its free-air gradient) and §7 (centripetal, tangential
+   and Earth-rate terms of continuous rotation, the size effect, the centrifuge input); IEEE Std
+   836-2009 (precision centrifuge testing).
 .. [2] P. D. Groves, *Principles of GNSS, Inertial, and Multisensor Integrated Navigation
    Systems*, 2nd ed., Artech House, 2013, ch. 2 (kinematics in rotating frames, specific force
    and gravity).

@@ -294,7 +294,7 @@ def _chamber_array() -> Scenario:
     return Scenario(
         name="chamber-array",
         description="Six consumer IMUs on a hexahedral fixture in a thermal chamber on a "
-        "single-axis table (SPEC.md P2): soak, static and ±rate at three temperatures.",
+        "single-axis table (P2, docs/procedures.md): soak, static and ±rate at three temperatures.",
         seed=3,
         table=TableConfig(kind="single-axis", grade="lab"),
         chamber=ChamberConfig(enabled=True, initial_temperature_degc=20.0),
@@ -319,7 +319,7 @@ def _centrifuge() -> Scenario:
     return Scenario(
         name="centrifuge",
         description="A navigation-grade IMU on a precision centrifuge with dynamic unbalance "
-        "(SPEC.md P3): arm positions at rest, then four rates.",
+        "(P3, docs/procedures.md): arm positions at rest, then four rates.",
         seed=4,
         centrifuge=CentrifugeConfig(enabled=True, static_radius_m=0.6,
                                     unbalance_c0_m_per_rps_sq=2e-7,

@@ -218,7 +218,7 @@ class AxisSpec:
 
     @classmethod
     def high_grade(cls, name: str, axis_vector: ArrayLike, **overrides: Any) -> AxisSpec:
-        """Build a navigation-test-grade axis (standards.md §4.3).
+        """Build a navigation-test-grade axis (docs/twin.md, "Table grades").
 
         1″ encoder RMS, 0.05″ resolution, 0.1″ noise, 2″ non-orthogonality, 1″ wobble, 1 ppm
         rate ripple at 1 Hz, 10 Hz / ζ = 0.8 servo, 1000 °/s and 500 °/s² limits.
@@ -232,7 +232,7 @@ class AxisSpec:
 
     @classmethod
     def lab_grade(cls, name: str, axis_vector: ArrayLike, **overrides: Any) -> AxisSpec:
-        """Build a lab/MEMS-grade axis (standards.md §4.3).
+        """Build a lab/MEMS-grade axis (docs/twin.md, "Table grades").
 
         15″ encoder RMS, 1″ resolution, 1″ noise, 20″ non-orthogonality, 10″ wobble, 100 ppm
         rate ripple at 2 Hz, 5 Hz / ζ = 0.7 servo, 500 °/s and 300 °/s² limits.
@@ -345,7 +345,7 @@ class RateTableSpec:
 
     @classmethod
     def dual_axis_pitch_roll(cls, grade: TableGrade = "high", **overrides: Any) -> RateTableSpec:
-        """Build the dual-axis table of SPEC.md P1: outer pitch about −y_t, inner roll about x.
+        """Build the dual-axis table of P1 (docs/p1.md): outer pitch about −y_t, inner roll about x.
 
         The axis directions are :data:`imucalib.conventions.TABLE_AXIS_VECTORS`, the ones the
         analysis uses.

@@ -125,10 +125,10 @@ def check_chamber_band(temperature_degc: _F64, setpoint_degc: float, band_degc: 
 
 
 def accel_fluctuation_g(time_s: _F64, accel_mps2: _F64, average_s: float) -> float:
-    """Return the fluctuation of the accelerometer output (SPEC.md P1's "signal fluctuation"). [g]
+    """Return the fluctuation of the accelerometer output (P1's "signal fluctuation"). [g]
 
     It is the largest per-axis standard deviation of the output's means over consecutive blocks of
-    `average_s`.
+    `average_s`; P1 settles until it is within 0.001 g (docs/p1.md, calibration step 1).
     Block means, rather than samples, are compared so that white noise at a high output rate
     (a consumer part's per-sample noise exceeds 0.001 g) does not mask a table at rest.
     """

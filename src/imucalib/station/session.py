@@ -339,9 +339,9 @@ class RunSession:
                correct: Callable[[str], bool] | None = None) -> None:
         """Tick until `settle_s` has passed and `criterion` holds; trip after the time-out.
 
-        `correct` (SPEC.md P1's "automatic correction") is offered each failing reason once
-        per `settle_check_s` after the dwell; it re-commands the equipment when the reason is
-        one it can correct, and says whether it did.
+        `correct` (the "automatic correction" of docs/p1.md, calibration steps 1 and 3) is offered
+        each failing reason once per `settle_check_s` after the dwell; it re-commands the
+        equipment when the reason is one it can correct, and says whether it did.
         """
         deadline = t_cmd + self.g.settle_timeout_s + settle_s
         last_fix = -math.inf
