@@ -35,24 +35,54 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
                                 f"{exc.strerror or exc}") from exc
 
 
+def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path | None
+                           ) -> Path:
+    """Import a CSV and its step file into ``<out>/<stem>.imported.h5`` (replaced if there)."""
+    from imucalib.io.csv_recording import recording_from_csv
+    from imucalib.io.step_file import load_step_file
+
+    step_file = load_step_file(steps)
+    folder = out if out is not None else data.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot create {folder}: {exc.strerror or exc}") from exc
+    target = folder / f"{data.stem}.imported.h5"
+    return recording_from_csv(data, step_file, target, unit=imu, overwrite=True,
+                              step_file_text=steps.read_text(encoding="utf-8"))
+
+
 @app.command()
 def calibrate(
-    recording: Annotated[Path, typer.Argument(help="Recording of a plan run (.h5).")],
+    recording: Annotated[Path, typer.Argument(
+        help="Recording (.h5) of a plan run or a simulation; or a CSV with --steps.")],
     imu: Annotated[str | None, typer.Option(help="IMU stream (default: the only one).")] = None,
     model: Annotated[str, typer.Option(help="triad (full) or per-axis (P1's simple model).")]
     = "triad",
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for the results.")]
     = None,
+    steps: Annotated[Path | None, typer.Option(
+        "--steps", help="Step file (TOML) saying what each interval of a CSV is; the CSV is "
+                        "first imported into OUT/<name>.imported.h5 (docs/import.md).")] = None,
 ) -> None:
     """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
 
     The recording's procedure decides: a P1 recording gives the calibration, its checks and the
     decision; an Allan recording the noise terms (JSON, Kalibr and OpenVINS YAML, a datasheet
-    table, figures).
+    table, figures). A CSV is calibrated through its step file (``--steps``).
     """
     from imucalib.report.console import render_result
 
     try:
+        if steps is not None:
+            recording = import_for_calibration(recording, steps, imu, out)
+            console.print(f"imported into {recording} (table stream reconstructed from the "
+                          "step file)", highlight=False)
+        elif recording.suffix.lower() in (".csv", ".txt", ".tsv"):
+            raise InvalidInputError(f"{recording}: a CSV or other log needs --steps (a step "
+                                    "file saying what each interval is, docs/import.md); "
+                                    "`imucalib segments DATA --step-file FILE` writes one to "
+                                    "complete")
         result, written = run_calibration(recording, imu, model, out)
     except CalibrationError as exc:
         raise fail(exc) from exc

@@ -49,10 +49,15 @@ def export(
     stream: Annotated[str, typer.Option(help="Stream as DEVICE/UNIT, e.g. imu/IMU-0001.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.csv or .mat).")],
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
+    step_file: Annotated[Path | None, typer.Option(
+        "--step-file", help="Also write the recording's steps as a step file (TOML) here: "
+                            "with the CSV, `imucalib calibrate CSV --steps FILE` calibrates "
+                            "it (docs/import.md).")] = None,
 ) -> None:
     """Export a stream, or one step of it, as CSV or MAT (chosen by the file suffix)."""
     from imucalib.exports.streams import export_csv, export_mat
     from imucalib.io.reader import open_recording
+    from imucalib.io.step_file import step_file_from_recording, step_file_to_toml
 
     device, _, unit = stream.partition("/")
     try:
@@ -68,9 +73,51 @@ def export(
                 export_csv(rec, device, unit, out, step=step)
             else:
                 export_mat(rec, device, unit, out, step=step)
+            if step_file is not None:
+                text = step_file_to_toml(step_file_from_recording(
+                    rec, unit if device == "imu" else None))
+                _write_text(step_file, text, "--step-file")
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(f"wrote {out}", highlight=False)
+    if step_file is not None:
+        console.print(f"wrote {step_file}", highlight=False)
+
+
+def _write_text(path: Path, text: str, option: str) -> None:
+    try:
+        path.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise InvalidInputError(f"cannot write {option} {path}: {exc.strerror or exc}") from exc
+
+
+@app.command("import")
+def import_csv(
+    data: Annotated[Path, typer.Argument(help="IMU samples (CSV with time_s and the six gyro "
+                                              "and accelerometer columns).")],
+    steps: Annotated[Path, typer.Option("--steps", help="Step file (TOML): what each interval "
+                                                        "is (docs/import.md).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Recording to write (.h5).")],
+    unit: Annotated[str | None, typer.Option(help="The IMU's name (default: the step file's "
+                                                  "`unit`, else the CSV's stem).")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing --out.")] = False,
+) -> None:
+    """Make a Recording from a CSV and its step file, to calibrate like a planned run."""
+    from imucalib.io.csv_recording import recording_from_csv
+    from imucalib.io.step_file import load_step_file
+
+    try:
+        step_file = load_step_file(steps)
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InvalidInputError(f"cannot create {out.parent}: {exc.strerror or exc}") from exc
+        recording_from_csv(data, step_file, out, unit=unit, overwrite=overwrite,
+                           step_file_text=steps.read_text(encoding="utf-8"))
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"wrote {out}: {len(step_file.used_steps)} steps from {steps}; the table "
+                  "stream is reconstructed from the commanded states", highlight=False)
 
 
 def _imu_arrays(path: Path, unit: str | None) -> tuple[str, Any, Any, Any]:
@@ -120,6 +167,10 @@ def segments(
         help="Shortest rotating segment kept [s].")] = 2.0,
     json_out: Annotated[Path | None, typer.Option("--json", help="Also write the segments "
                                                                  "as JSON here.")] = None,
+    step_file: Annotated[Path | None, typer.Option(
+        "--step-file", help="Also write a step file skeleton here (TOML, every interval "
+                            "'skip'): label the intervals, then `imucalib calibrate DATA "
+                            "--steps FILE` (docs/import.md).")] = None,
 ) -> None:
     """Find the static and constant-rate intervals of IMU data that has no step records."""
     import json
@@ -171,3 +222,13 @@ def segments(
             raise fail(InvalidInputError(f"cannot write --json {json_out}: "
                                          f"{exc.strerror or exc}")) from exc
         console.print(f"wrote {json_out}", highlight=False)
+    if step_file is not None:
+        from imucalib.io.step_file import step_file_skeleton
+
+        text = step_file_skeleton([(seg.kind, float(seg.start_time_s), float(seg.end_time_s))
+                                   for seg in result.segments], unit=unit)
+        try:
+            _write_text(step_file, text, "--step-file")
+        except CalibrationError as exc:
+            raise fail(exc) from exc
+        console.print(f"wrote {step_file}", highlight=False)

@@ -223,18 +223,19 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
 
 def _equipment(obs: P1Observations, opt: P1Options) -> tuple[float, float, str]:
     """Return the table position accuracy and perpendicularity [″], and where they come from."""
-    eq = obs.plan.equipment if obs.plan is not None else EquipmentConfig()
+    eq = (obs.plan.equipment if obs.plan is not None else obs.equipment or EquipmentConfig())
     pos, perp = opt.table_position_accuracy_arcsec, opt.table_orthogonality_arcsec
     source = ("P1Options" if pos is not None and perp is not None
               else "the plan's [equipment]" if obs.plan is not None
+              else "the recording's equipment_json" if obs.equipment is not None
               else "defaults: the recording holds no plan")
     return (eq.table_position_accuracy_arcsec if pos is None else pos,
             eq.table_orthogonality_arcsec if perp is None else perp, source)
 
 
 def _imu_spec(obs: P1Observations) -> ImuSpecConfig:
-    """Return the IMU specification of the stored plan, or the defaults without one."""
-    return obs.plan.imu if obs.plan is not None else ImuSpecConfig()
+    """Return the IMU specification of the stored plan, the recording's, or the defaults."""
+    return obs.plan.imu if obs.plan is not None else obs.imu_spec or ImuSpecConfig()
 
 
 def _add_type_b(names: tuple[str, ...], cov: np.ndarray, obs: P1Observations,

@@ -59,7 +59,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -79,7 +79,7 @@ from imucalib.io.step_roles import (
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.io import parse_plan
-from imucalib.plan.schema import Plan
+from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig, Plan
 from imucalib.procedures.common.noise import estimate_noise, window_mean_se
 from imucalib.procedures.common.reference import axis_vector as _axis_vector
 from imucalib.procedures.common.reference import site_vectors, spin_axis_b, table_rotation
@@ -217,7 +217,10 @@ class P1Observations:
     """Every usable window of one IMU in a P1 Recording, with the site and processing facts.
 
     ``plan`` is the plan stored in the recording, or None when it holds none (the analysis then
-    takes the IMU specification and equipment accuracies from its options or their defaults).
+    takes the IMU specification and equipment accuracies from its options, from ``equipment``
+    and ``imu_spec``, or their defaults). ``equipment`` and ``imu_spec`` are what a recording
+    without a plan states in its ``equipment_json`` and ``imu_spec_json`` metadata (an import
+    from CSV and a step file, docs/import.md); None when it states nothing.
     """
 
     sensor_id: str
@@ -232,6 +235,8 @@ class P1Observations:
     notes: tuple[str, ...] = ()
     skipped: tuple[str, ...] = field(default_factory=tuple)
     noise: dict[str, NoiseModel] = field(default_factory=dict)
+    equipment: EquipmentConfig | None = None
+    imu_spec: ImuSpecConfig | None = None
 
     def select(self, *, kind: str | None = None, role: str | None = None,
                repetition: int | None = None, tag: str | None = None
@@ -306,6 +311,36 @@ def _commanded_number(step: StepRecord, key: str) -> float | None:
     if isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value):
         return float(value)
     return None
+
+
+_Config = TypeVar("_Config", EquipmentConfig, ImuSpecConfig)
+
+
+def _recorded_config(rec: Recording, key: str, model: type[_Config]) -> _Config | None:
+    """Return the configuration a recording without a plan states in metadata `key`, or None."""
+    if not rec.metadata.get(key):
+        return None
+    try:
+        return model.model_validate(_meta_json(rec, key))
+    except ValueError as exc:
+        raise RecordingError(f"{rec.path}: metadata {key} is not a valid "
+                             f"{model.__name__}: {exc}") from exc
+
+
+def _angle_at(t: _F64, fb_t: _F64, fb_angle: _F64) -> _F64:
+    """Return the table angle at times `t`: interpolated in the feedback span, else extrapolated.
+
+    Outside ``[fb_t[0], fb_t[-1]]`` the angle continues at the mean rate of the feedback span
+    (the table turns at constant rate through a rate window).
+    """
+    out = np.interp(t, fb_t, fb_angle)
+    span = float(fb_t[-1] - fb_t[0])
+    if span > 0:
+        rate = float(fb_angle[-1] - fb_angle[0]) / span
+        before, after = t < fb_t[0], t > fb_t[-1]
+        out[before] = fb_angle[0] + rate * (t[before] - fb_t[0])
+        out[after] = fb_angle[-1] + rate * (t[after] - fb_t[-1])
+    return out
 
 
 def _stored_plan(rec: Recording) -> Plan | None:
@@ -476,9 +511,11 @@ class _Extractor:
             # times it gives every IMU sample its angle, so the whole-revolution mean uses all
             # samples whatever the feedback rate (the IMU-onto-table interpolation above
             # still bounds the alignment error)
-            inner = (t >= fb_t[0]) & (t <= fb_t[-1])
-            imu_angle = np.interp(t[inner], fb_t, np.unwrap(angles[:, axis]))
-            win = compute_integer_revolution_window(t[inner], filt[inner], angle_rad=imu_angle)
+            # IMU samples just outside the feedback span (less than a feedback period at each
+            # end) get the angle extrapolated at the rate of the span: without them the span of
+            # a valid window that holds exactly N revolutions would hold only N − 1 whole ones
+            imu_angle = _angle_at(t, fb_t, np.unwrap(angles[:, axis]))
+            win = compute_integer_revolution_window(t, filt, angle_rad=imu_angle)
             mean = win.mean
             in_win = (fb_t >= win.start_time_s) & (fb_t <= win.end_time_s)
             sel = in_win if np.count_nonzero(in_win) >= 2 else np.ones(fb_t.size, dtype=bool)
@@ -493,7 +530,7 @@ class _Extractor:
             force_b = float(np.array([0.0, 0.0, self.g]) @ a_t) * a_b
             kind, mean_angles = "rate", held
             in_imu = slice(win.start_index, win.stop_index)
-            resid_std = _harmonic_residual_std(filt[inner][in_imu], imu_angle[in_imu])
+            resid_std = _harmonic_residual_std(filt[in_imu], imu_angle[in_imu])
         else:
             mean = sync.values.mean(axis=0)
             mean_angles = angles.mean(axis=0)
@@ -613,7 +650,11 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                           gravity_mps2=ex.g, earth_rate_t_rps=ex.earth_t,
                           latitude_deg=ex.latitude_deg, heading_deg=ex.heading_deg,
                           sample_rate_hz=ex.sample_rate_hz, cutoff_hz=ex.cutoff_hz,
-                          notes=tuple(notes), skipped=tuple(skipped), noise=noise)
+                          notes=tuple(notes), skipped=tuple(skipped), noise=noise,
+                          equipment=(None if plan is not None else
+                                     _recorded_config(rec, "equipment_json", EquipmentConfig)),
+                          imu_spec=(None if plan is not None else
+                                    _recorded_config(rec, "imu_spec_json", ImuSpecConfig)))
 
 
 def _with_model_se(w: WindowObservation, noise: Mapping[str, NoiseModel]) -> WindowObservation:
