@@ -82,7 +82,12 @@ from imucalib.plan.io import parse_plan
 from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig, Plan
 from imucalib.procedures.common.noise import estimate_noise, window_mean_se
 from imucalib.procedures.common.reference import axis_vector as _axis_vector
-from imucalib.procedures.common.reference import site_vectors, spin_axis_b, table_rotation
+from imucalib.procedures.common.reference import (
+    rate_inputs_b,
+    site_vectors,
+    static_inputs_b,
+    table_rotation,
+)
 from imucalib.procedures.common.windows import RunningMoments as _Moments
 from imucalib.procedures.common.windows import harmonic_residual_std as _harmonic_residual_std
 from imucalib.processing import (
@@ -462,7 +467,7 @@ class _Extractor:
         stats = compute_window_statistics(np.concatenate(means), self.sample_rate_hz / decim)
         angles = np.column_stack([fb.columns[axis_columns(a)[0]] for a in self.axis_names])
         mean_angles = angles.mean(axis=0)
-        rot = table_rotation(self.axis_names, mean_angles)
+        rate_b, force_b = static_inputs_b(self.axis_names, mean_angles, self.g, self.earth_t)
         mean = acc.mean
         return WindowObservation(
             step_index=step.index, plan_step=_plan_step(step), kind="static",
@@ -470,8 +475,7 @@ class _Extractor:
             step_role=step_role, gyro_mean_rps=mean[:3], accel_mean_mps2=mean[3:],
             gyro_se_rps=stats.standard_error[:3], accel_se_mps2=stats.standard_error[3:],
             gyro_std_rps=acc.std[:3], accel_std_mps2=acc.std[3:],
-            rate_b_rps=np.asarray(rot.inv().apply(self.earth_t), dtype=np.float64),
-            force_b_mps2=np.asarray(rot.inv().apply([0.0, 0.0, self.g]), dtype=np.float64),
+            rate_b_rps=rate_b, force_b_mps2=force_b,
             angles_rad=np.asarray(mean_angles, dtype=np.float64), table_rate_rps=0.0,
             axis=None, n_samples=acc.n, n_outliers=n_out, n_revolutions=0,
             alignment_error_s=align, duration_s=t_last - t_first, t_start_s=t_first,
@@ -524,19 +528,15 @@ class _Extractor:
             table_rate = float(np.mean(rates[sel, axis]))
             held = angles[sel].mean(axis=0)
             held[axis] = float(np.interp(win.start_time_s, fb_t, angles[:, axis]))
-            a_b = self.spin_axis_b(axis, held)
-            a_t = table_rotation(self.axis_names, held).apply(a_b)
-            rate_b = (table_rate + float(self.earth_t @ a_t)) * a_b
-            force_b = float(np.array([0.0, 0.0, self.g]) @ a_t) * a_b
+            rate_b, force_b = rate_inputs_b(self.axis_names, axis, held, table_rate, self.g,
+                                            self.earth_t)
             kind, mean_angles = "rate", held
             in_imu = slice(win.start_index, win.stop_index)
             resid_std = _harmonic_residual_std(filt[in_imu], imu_angle[in_imu])
         else:
             mean = sync.values.mean(axis=0)
             mean_angles = angles.mean(axis=0)
-            rot = table_rotation(self.axis_names, mean_angles)
-            rate_b = rot.inv().apply(self.earth_t)
-            force_b = rot.inv().apply([0.0, 0.0, self.g])
+            rate_b, force_b = static_inputs_b(self.axis_names, mean_angles, self.g, self.earth_t)
             table_rate, kind = 0.0, "static"
             t0, span = float(fb_t[0]), float(fb_t[-1] - fb_t[0])
             resid_std = filt.std(axis=0, ddof=1)
@@ -578,9 +578,6 @@ class _Extractor:
             measured = float(mean_dps[axis])
             rate_dps = measured if abs(measured) >= _STATIC_RATE_DPS else 0.0
         return axis, rate_dps
-
-    def spin_axis_b(self, axis: int, angles: _F64) -> _F64:
-        return spin_axis_b(self.axis_names, axis, angles)
 
 
 def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
