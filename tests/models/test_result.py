@@ -55,7 +55,8 @@ def test_json_round_trip_is_exact(values):
 def test_newer_format_and_foreign_documents_are_refused():
     data = json.loads(make_result(np.zeros(33)).to_json())
     data["format_version"] = RESULT_FORMAT_VERSION + 1
-    with pytest.raises(InvalidInputError, match="format_version 2 is not supported"):
+    with pytest.raises(InvalidInputError,
+                       match=f"format_version {RESULT_FORMAT_VERSION + 1} is not supported"):
         CalibrationResult.from_dict(data)
     with pytest.raises(InvalidInputError, match="not an imucalib calibration result"):
         CalibrationResult.from_json('{"format": "something-else"}')

@@ -67,6 +67,21 @@ def test_residual_rule_catches_a_model_that_is_too_simple(consumer_run):
     assert tr["accelerometer residuals"].passed and tr["gyro residuals"].passed
     assert not per_axis.decision.passed and "accelerometer residuals" in per_axis.decision.failed
     assert triad.decision.passed
+    # the misfit is said in the result, the decision and the report, with Birge-scaled σ
+    quality = {q.group: q for q in per_axis.result.fit_quality}
+    assert quality["accel"].misfit and quality["accel"].reduced_chi2 > quality[
+        "accel"].expected_high
+    assert any("MODEL MISFIT" in n for n in per_axis.decision.notes)
+    assert "MODEL MISFIT" in per_axis.decision.summary()
+    assert any("MODEL MISFIT" in n for n in per_axis.result.notes)
+    scaled, std = per_axis.result.std(scaled=True), per_axis.result.std()
+    ratio = quality["accel"].birge_ratio
+    assert scaled["accel_K_x"] == pytest.approx(std["accel_K_x"] * ratio)
+    report = per_axis.to_dict()
+    assert [q["group"] for q in report["fit_quality"]] == ["accel", "gyro"]
+    assert report["std_scaled"]["accel_K_x"] == pytest.approx(std["accel_K_x"] * ratio)
+    assert not triad.result.misfit and not triad.decision.notes
+    assert triad.result.std(scaled=True) == triad.result.std()
 
 
 def test_repeatability_over_repetitions_and_the_decision(tactical_run):

@@ -91,15 +91,18 @@ class Decision:
     failed: tuple[str, ...] = ()
     not_assessed: tuple[str, ...] = ()
     checks: tuple[Check, ...] = field(default_factory=tuple)
+    notes: tuple[str, ...] = ()
 
     def summary(self) -> str:
-        """Return the verdict in one line."""
+        """Return the verdict in one line (its notes after it)."""
         verdict = "PASS" if self.passed else "FAIL"
         text = f"{verdict} ({self.rule})"
         if self.failed:
             text += "; failed: " + ", ".join(self.failed)
         if self.not_assessed:
             text += "; not assessed: " + ", ".join(self.not_assessed)
+        for note in self.notes:
+            text += f"; {note}"
         return text
 
 
@@ -206,9 +209,14 @@ def check_repeatability(name: str, estimates: Mapping[str, Sequence[float]],
     return Check(name, not failed, summary, tuple(rows))
 
 
-def decide(checks: Sequence[Check]) -> Decision:
-    """Return the overall decision under :data:`DECISION_RULE`."""
+def decide(checks: Sequence[Check], *, notes: Sequence[str] = ()) -> Decision:
+    """Return the overall decision under :data:`DECISION_RULE`.
+
+    `notes` are what the decision must say besides its checks (a model misfit and the scaled
+    uncertainties that go with it); they are printed with its summary.
+    """
     failed = tuple(c.name for c in checks if c.passed is False)
     not_assessed = tuple(c.name for c in checks if c.passed is None)
     return Decision(passed=not failed and any(c.assessed for c in checks), rule=DECISION_RULE,
-                    failed=failed, not_assessed=not_assessed, checks=tuple(checks))
+                    failed=failed, not_assessed=not_assessed, checks=tuple(checks),
+                    notes=tuple(notes))

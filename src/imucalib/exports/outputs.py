@@ -20,6 +20,8 @@ format             file                           content
 ``openvins-yaml``  ``…[.k].openvins.yaml``        OpenVINS ``kalibr_imu_chain.yaml``, per record
 ``noise-table``    ``…[.k].table.md``             the datasheet-style noise table, per record
 ``figures``        ``….figures/``                 Allan deviation figures (PNG)
+``residuals-png``  ``….residuals.png``            residual mean per window and axis with ±2σ
+                                                  bars, χ²/ν (a calibration)
 =================  =============================  ================================================
 
 The record index ``.k`` appears only when the characterisation holds more than one record.
@@ -131,6 +133,13 @@ def _figures(result: Any, folder: Path, stem: str) -> list[Path]:
     return list(save_allan_figures(_noise(result, "figures"), folder / f"{stem}.figures"))
 
 
+def _residuals_png(result: Any, folder: Path, stem: str) -> list[Path]:
+    from imucalib.report.residual_figure import save_residual_figure
+
+    _calibration(result, "residuals-png")
+    return [save_residual_figure(result, folder / f"{stem}.residuals.png")]
+
+
 #: Output format → writer(result, folder, stem) returning the paths written.
 OUTPUT_FORMATS: dict[str, _Writer] = {
     "result-json": _result_json,
@@ -141,6 +150,7 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "openvins-yaml": _per_record("openvins-yaml", _openvins, ".openvins.yaml"),
     "noise-table": _per_record("noise-table", _table, ".table.md"),
     "figures": _figures,
+    "residuals-png": _residuals_png,
 }
 
 

@@ -70,13 +70,16 @@ __all__ = [
     "RESULT_FORMAT",
     "RESULT_FORMAT_VERSION",
     "CalibrationResult",
+    "FitQuality",
     "Provenance",
     "ResidualStats",
     "triad_parameter_names",
 ]
 
 RESULT_FORMAT: Final = "imucalib-calibration-result"
-RESULT_FORMAT_VERSION: Final = 1
+#: Version 2 adds ``fit_quality`` (χ²/ν, expected range, misfit flag per fitted triad); version 1
+#: files are read with none.
+RESULT_FORMAT_VERSION: Final = 2
 MODELS: Final = ("triad", "per-axis")
 #: Largest result file :meth:`CalibrationResult.load` reads (a P1 result is about 40 kB). [B]
 MAX_RESULT_BYTES: Final = 16 * 2**20
@@ -112,6 +115,64 @@ class ResidualStats:
     std: tuple[float, ...]
     n: int
     unit: str
+
+
+@dataclass(frozen=True)
+class FitQuality:
+    """How well one fitted group (a triad) describes its data (docs/processing-estimation.md).
+
+    Computed by :func:`imucalib.estimation.goodness.assess_fit`.
+
+    Attributes
+    ----------
+    group : str
+        The fitted group: the prefix of its parameter names (``"accel"``, ``"gyro"``).
+    chi2 : float
+        rᵀC⁻¹r of the residuals, C the noise covariance of the observations.
+    dof : int
+        Degrees of freedom ν = n − p (0: nothing to test).
+    expected_low, expected_high : float
+        The range of χ²/ν that 1 % … 99 % of fits of a right model fall in (NaN when ν = 0).
+    misfit : bool
+        χ² above the `quantile` of χ²_ν: the model does not describe the data to their noise.
+    quantile : float
+        The misfit threshold's quantile (0.99).
+    """
+
+    group: str
+    chi2: float
+    dof: int
+    expected_low: float
+    expected_high: float
+    misfit: bool
+    quantile: float = 0.99
+
+    @property
+    def reduced_chi2(self) -> float:
+        """χ²/ν (NaN when ν = 0)."""
+        return self.chi2 / self.dof if self.dof > 0 else math.nan
+
+    @property
+    def birge_ratio(self) -> float:
+        """R_B = √(χ²/ν) (NaN when ν = 0)."""
+        return math.sqrt(self.reduced_chi2) if self.dof > 0 else math.nan
+
+    @property
+    def sigma_scale(self) -> float:
+        """The factor applied to the group's σ: R_B for a misfit, else 1."""
+        return self.birge_ratio if self.misfit else 1.0
+
+    def summary(self) -> str:
+        """One line: χ²/ν, its expected range and the verdict."""
+        if self.dof == 0:
+            return f"{self.group}: χ² not testable (no redundant observations)"
+        text = (f"{self.group}: χ²/ν = {self.reduced_chi2:.3g} (ν = {self.dof}; a right model "
+                f"gives {self.expected_low:.2g}–{self.expected_high:.2g})")
+        if self.misfit:
+            text += (f" — MODEL MISFIT above the {self.quantile:.0%} quantile: σ scaled by the "
+                     f"Birge ratio √(χ²/ν) = {self.birge_ratio:.3g} are reported beside the "
+                     "noise-only σ")
+        return text
 
 
 @dataclass(frozen=True)
@@ -164,6 +225,10 @@ class CalibrationResult:
     provenance : Provenance
     notes : tuple of str
         What the reader must know (e.g. that the Earth-rate projection was subtracted).
+    fit_quality : tuple of FitQuality
+        The goodness of fit of each fitted triad (format version 2). `covariance` is the
+        noise-only covariance; where a triad's fit is a misfit, :meth:`covariance_scaled`
+        scales its block by the Birge ratio (docs/processing-estimation.md).
     format_version : int
     """
 
@@ -179,6 +244,7 @@ class CalibrationResult:
     residuals: Mapping[str, ResidualStats] = field(default_factory=dict)
     provenance: Provenance = field(default_factory=Provenance)
     notes: tuple[str, ...] = ()
+    fit_quality: tuple[FitQuality, ...] = ()
     format_version: int = RESULT_FORMAT_VERSION
 
     def __post_init__(self) -> None:
@@ -203,12 +269,37 @@ class CalibrationResult:
         object.__setattr__(self, "input_units", dict(self.input_units))
         object.__setattr__(self, "residuals", dict(self.residuals))
         object.__setattr__(self, "notes", tuple(self.notes))
+        object.__setattr__(self, "fit_quality", tuple(self.fit_quality))
+        groups = [q.group for q in self.fit_quality]
+        if len(set(groups)) != len(groups):
+            raise InvalidInputError(f"`fit_quality` names a group twice: {groups}")
 
     # --- access -----------------------------------------------------------------------------
-    def std(self) -> dict[str, float]:
-        """Return the standard uncertainty of each parameter (√diag of the covariance), SI."""
-        return {n: float(math.sqrt(v)) for n, v in zip(self.param_names,
-                                                         np.diag(self.covariance), strict=True)}
+    def std(self, *, scaled: bool = False) -> dict[str, float]:
+        """Return the standard uncertainty of each parameter, SI.
+
+        √diag of the noise-only covariance, or with ``scaled=True`` of
+        :meth:`covariance_scaled` (σ × Birge ratio for a triad whose fit is a misfit).
+        """
+        cov = self.covariance_scaled if scaled else self.covariance
+        return {n: float(math.sqrt(v)) for n, v in zip(self.param_names, np.diag(cov),
+                                                         strict=True)}
+
+    def sigma_scale(self, name: str) -> float:
+        """Return the factor on a parameter's σ from its group's misfit (1 when none)."""
+        group = name.split("_")[0]
+        return next((q.sigma_scale for q in self.fit_quality if q.group == group), 1.0)
+
+    @property
+    def covariance_scaled(self) -> NDArray[np.float64]:
+        """The covariance with each misfit group's rows and columns scaled by its Birge ratio."""
+        s = np.array([self.sigma_scale(n) for n in self.param_names])
+        return np.asarray(self.covariance * np.outer(s, s), dtype=np.float64)
+
+    @property
+    def misfit(self) -> bool:
+        """Whether any fitted group's χ² exceeds its misfit threshold."""
+        return any(q.misfit for q in self.fit_quality)
 
     def value(self, name: str) -> float:
         """Return one parameter's value, SI."""
@@ -281,6 +372,8 @@ class CalibrationResult:
                            "created_utc": self.provenance.created_utc,
                            "details": dict(self.provenance.details)},
             "notes": list(self.notes),
+            **({"fit_quality": [_fit_quality_dict(q) for q in self.fit_quality]}
+               if self.format_version >= 2 else {}),
         }
 
     def to_json(self) -> str:
@@ -361,9 +454,25 @@ class CalibrationResult:
                 and np.allclose(self.covariance, other.covariance, rtol=rtol, atol=atol))
 
 
+def _fit_quality_dict(q: FitQuality) -> dict[str, Any]:
+    nan = math.isnan
+    return {"group": q.group, "chi2": q.chi2, "dof": q.dof,
+            "reduced_chi2": None if q.dof == 0 else q.reduced_chi2,
+            "expected_low": None if nan(q.expected_low) else q.expected_low,
+            "expected_high": None if nan(q.expected_high) else q.expected_high,
+            "quantile": q.quantile, "misfit": q.misfit,
+            "birge_ratio": None if q.dof == 0 else q.birge_ratio,
+            "sigma_scale": q.sigma_scale}
+
+
 # --- the reading side: every field of a result document checked, naming the file and field ---
-_FIELDS: Final = ("format", "format_version", "sensor_id", "procedure", "model", "parameters",
-                  "covariance", "input_units", "residuals", "provenance", "notes")
+_FIELDS_V1: Final = ("format", "format_version", "sensor_id", "procedure", "model",
+                     "parameters", "covariance", "input_units", "residuals", "provenance",
+                     "notes")
+_FIELDS: Final = (*_FIELDS_V1, "fit_quality")
+_FIT_QUALITY_FIELDS: Final = ("group", "chi2", "dof", "reduced_chi2", "expected_low",
+                              "expected_high", "quantile", "misfit", "birge_ratio",
+                              "sigma_scale")
 _PARAMETER_FIELDS: Final = ("name", "value", "unit", "std")
 _RESIDUAL_FIELDS: Final = ("mean", "std", "n", "unit")
 _PROVENANCE_FIELDS: Final = ("plan_hash", "recording_sha256", "recording", "software_version",
@@ -526,9 +635,37 @@ class _ResultReader:
                       f"has the eigenvalue {lowest:.3g}")
         return cov
 
+    def fit_quality(self, value: object, where: str) -> FitQuality:
+        q = self.obj(value, where, _FIT_QUALITY_FIELDS)
+        dof = q["dof"]
+        if isinstance(dof, bool) or not isinstance(dof, int) or dof < 0:
+            self.fail(f"{where}.dof", f"expected an integer ≥ 0; got {_kind(dof)}")
+        misfit = q["misfit"]
+        if not isinstance(misfit, bool):
+            self.fail(f"{where}.misfit", f"expected true or false; got {_kind(misfit)}")
+
+        def optional(key: str) -> float:
+            v = q[key]
+            return math.nan if v is None and dof == 0 else self.number(v, f"{where}.{key}")
+
+        out = FitQuality(group=self.text(q["group"], f"{where}.group", nonempty=True),
+                         chi2=self.number(q["chi2"], f"{where}.chi2", nonnegative=True),
+                         dof=dof, expected_low=optional("expected_low"),
+                         expected_high=optional("expected_high"), misfit=misfit,
+                         quantile=self.number(q["quantile"], f"{where}.quantile"))
+        for key, derived in (("reduced_chi2", out.reduced_chi2), ("birge_ratio",
+                                                                   out.birge_ratio),
+                             ("sigma_scale", out.sigma_scale)):
+            given = optional(key)
+            if not (math.isnan(derived) and math.isnan(given)) and not math.isclose(
+                    given, derived, rel_tol=_RTOL):
+                self.fail(f"{where}.{key}", f"{given!r} disagrees with χ² and ν "
+                          f"({derived!r}; a hand-edited file?)")
+        return out
+
     def read(self, cls: type[CalibrationResult], data: object) -> CalibrationResult:
         version = self.header(data)
-        doc = self.obj(data, "(top level)", _FIELDS)
+        doc = self.obj(data, "(top level)", _FIELDS if version >= 2 else _FIELDS_V1)
         sensor_id = self.text(doc["sensor_id"], "sensor_id", nonempty=True)
         procedure = self.text(doc["procedure"], "procedure")
         model = self.text(doc["model"], "model")
@@ -570,11 +707,16 @@ class _ResultReader:
         self.free(details, "provenance.details")
         notes = tuple(self.text(v, f"notes[{i}]")
                       for i, v in enumerate(self.array(doc["notes"], "notes")))
+        fit_quality = tuple(self.fit_quality(q, f"fit_quality[{i}]") for i, q in enumerate(
+            self.array(doc["fit_quality"], "fit_quality"))) if version >= 2 else ()
+        groups = [q.group for q in fit_quality]
+        if len(set(groups)) != len(groups):
+            self.fail("fit_quality", f"a group appears twice: {groups}")
         try:
             return cls(sensor_id=sensor_id, procedure=procedure, model=model,
                        param_names=tuple(names), values=np.array(values, dtype=np.float64),
                        covariance=cov, units=units, input_units=dict(input_units),
                        residuals=residuals, provenance=Provenance(**texts, details=details),
-                       notes=notes, format_version=version)
+                       notes=notes, fit_quality=fit_quality, format_version=version)
         except InvalidInputError as exc:  # pragma: no cover - the checks above come first
             raise InvalidInputError(f"calibration result {self.source}: {exc}") from exc

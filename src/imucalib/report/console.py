@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from imucalib import units
@@ -47,15 +48,26 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
     """Print a P1 analysis: the parameters, the checks, the decision and the files written."""
     result = analysis.result
     repeat = {r.name: r for c in analysis.checks if c.name == "repeatability" for r in c.rows}
-    table = Table("parameter", "value", "std. uncertainty", "unit", "repeatability",
+    misfit = getattr(result, "misfit", False)
+    columns = ["parameter", "value", "std. uncertainty", "unit", "repeatability"]
+    if misfit:  # the Birge-scaled σ beside the noise-only σ (docs/processing-estimation.md)
+        columns.insert(3, "σ × √(χ²/ν)")
+    table = Table(*columns,
                   title=f"{result.sensor_id}: {result.procedure.upper()} {result.model} model")
     std = result.std()
     for name in result.param_names:
         value, sigma, unit = _display(name, result.value(name), std[name])
         row = repeat.get(name)
         rep = "—" if row is None else ("[green]pass[/]" if row.passed else "[red]FAIL[/]")
-        table.add_row(name, value, sigma, unit, rep)
+        cells = [name, value, sigma, unit, rep]
+        if misfit:
+            scale = result.sigma_scale(name)
+            cells.insert(3, _display(name, 0.0, std[name] * scale)[1] if scale != 1.0 else "")
+        table.add_row(*cells)
     console.print(table)
+    for q in getattr(result, "fit_quality", ()):
+        console.print(("[bold red]" if q.misfit else "") + escape(q.summary())
+                      + ("[/]" if q.misfit else ""), highlight=False)
     checks = Table("check", "verdict", "summary", title="verification")
     for c in analysis.checks:
         verdict = ("not assessed" if c.passed is None

@@ -45,8 +45,9 @@ from imucalib.analysis.verification import (
     decide,
 )
 from imucalib.estimation import compute_crlb, refine_with_kalman
+from imucalib.estimation.goodness import assess_fit
 from imucalib.io.reader import open_recording
-from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
+from imucalib.models.result import CalibrationResult, FitQuality, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
 from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.p1.fit import (
@@ -158,10 +159,17 @@ class P1Analysis:
                         "rows": [r.__dict__ for r in c.rows]} for c in self.checks],
             "decision": {"passed": self.decision.passed, "rule": self.decision.rule,
                          "failed": list(self.decision.failed),
+                         "notes": list(self.decision.notes),
                          "not_assessed": list(self.decision.not_assessed),
                          "summary": self.decision.summary()},
             "kalman_max_difference_sigma": self.kalman_max_difference_sigma,
             "crlb_ratio": self.crlb_ratio,
+            "fit_quality": [{"group": q.group, "chi2": q.chi2, "dof": q.dof,
+                             "reduced_chi2": q.reduced_chi2, "expected_low": q.expected_low,
+                             "expected_high": q.expected_high, "misfit": q.misfit,
+                             "birge_ratio": q.birge_ratio, "summary": q.summary()}
+                            for q in self.result.fit_quality],
+            "std_scaled": self.result.std(scaled=True),
         }
 
 
@@ -199,7 +207,8 @@ def _chi2(groups: list[tuple[str, np.ndarray, np.ndarray]], se: list[np.ndarray]
 
 
 def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provenance,
-            residuals: dict[str, ResidualStats], extra_notes: list[str]) -> CalibrationResult:
+            residuals: dict[str, ResidualStats], extra_notes: list[str],
+            fit_quality: tuple[FitQuality, ...] = ()) -> CalibrationResult:
     notes = [
         f"gyro bias excludes Earth rate: its projection at latitude {obs.latitude_deg:g}° and "
         f"table heading {obs.heading_deg:g}° (15.041 °/h) was subtracted",
@@ -218,7 +227,7 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
         sensor_id=obs.sensor_id, procedure="p1", model=fit.model,
         param_names=fit.param_names, values=fit.estimate, covariance=cov,
         units={n: _units(n) for n in fit.param_names}, residuals=residuals,
-        provenance=provenance, notes=tuple(notes))
+        provenance=provenance, notes=tuple(notes), fit_quality=fit_quality)
 
 
 def _equipment(obs: P1Observations, opt: P1Options) -> tuple[float, float, str]:
@@ -336,7 +345,9 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
             if fit.model == "triad" else {})
     prov = provenance or Provenance(software_version=__version__,
                                     created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
-    result = _result(fit, obs, opt, prov, residuals, [])
+    quality = (assess_fit("accel", chi2_a, dof_a), assess_fit("gyro", chi2_g, dof_g))
+    result = _result(fit, obs, opt, prov, residuals,
+                     [q.summary() for q in quality if q.misfit], quality)
     spec = _imu_spec(obs)
     accel_err, gyro_err = _held_out(result, obs)
     checks.append(check_accuracy("held-out accelerometer accuracy", accel_err,
@@ -368,7 +379,9 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
         checks.append(Check("repeatability", None, f"{len(reps)} repetition in the recording: "
                             "repeatability needs at least 2 (P1 rule 6 asks for 3, docs/p1.md)"))
     return P1Analysis(result=result, per_repetition=per_rep, checks=tuple(checks),
-                      decision=decide(checks), kalman_max_difference_sigma=kalman,
+                      decision=decide(checks, notes=[q.summary() for q in quality
+                                                     if q.misfit]),
+                      kalman_max_difference_sigma=kalman,
                       crlb_ratio=crlb, observations=obs)
 
 

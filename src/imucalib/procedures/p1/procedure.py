@@ -34,7 +34,7 @@ class P1Procedure:
                    "record, rate points, held-out checks, repetitions")
     plan_options = frozenset({"grade", "repetitions", "static_s", "sample_rate_hz", "seed"})
     analysis_options = frozenset({"model"})
-    outputs = ("result-json", "report-json")
+    outputs = ("result-json", "report-json", "residuals-png")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.p1.plan.generate_p1_plan` (its keywords)."""
