@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.console import Console
-from rich.table import Table
+from rich.table import Column, Table
 
 from imucalib import units
 from imucalib.report.numbers import round_pair
@@ -55,7 +55,8 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
     """Print a P1 analysis: the parameters, the checks, the decision and the files written."""
     result = analysis.result
     repeat = {r.name: r for c in analysis.checks if c.name == "repeatability" for r in c.rows}
-    table = Table("parameter", "value", "std. uncertainty", "unit", "repeatability",
+    table = Table("parameter", Column("value", justify="right"),
+                  Column("std. uncertainty", justify="right"), "unit", "repeatability",
                   title=f"{result.sensor_id}: {result.procedure.upper()} {result.model} model")
     std = result.std()
     for name in result.param_names:
