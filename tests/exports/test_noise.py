@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 
 import numpy as np
 import pytest
@@ -163,6 +164,16 @@ def test_export_bad_inputs() -> None:
         format_noise_table({})
 
 
+def _pm(cell: str) -> tuple[float, float]:
+    """(value, half a unit of its last digit) of a ``"v ± u"`` or ``"(v ± u)eN"`` cell."""
+    m = re.fullmatch(r"\(?([+-]?\d+(?:\.(\d+))?) ± (\d+(?:\.(\d+))?)\)?(?:e(-?\d+))?", cell)
+    assert m, cell
+    assert len(m.group(3).replace(".", "").lstrip("0")) == 2, cell  # u: two significant digits
+    assert len(m.group(2) or "") == len(m.group(4) or ""), cell  # the value at the same place
+    exp = int(m.group(5) or 0)
+    return float(m.group(1)) * 10.0 ** exp, 0.5 * 10.0 ** (exp - len(m.group(2) or ""))
+
+
 def test_datasheet_table_from_a_real_fit() -> None:
     truth_n, truth_b = 2e-3, 4e-4
     model = NoiseModel(white_density=truth_n, bias_instability=truth_b,
@@ -174,14 +185,14 @@ def test_datasheet_table_from_a_real_fit() -> None:
     rows = list(csv.reader(io.StringIO(table)))
     assert rows[0] == ["parameter", "unit", "gyro_x", "gyro_y", "gyro_z"]
     by_name = {r[0]: r for r in rows}
-    arw = float(by_name["Angle random walk"][2].split(" ± ")[0])
+    arw, half = _pm(by_name["Angle random walk"][2])
     assert arw == pytest.approx(fits["gyro_x"].term("white").value_si / units.DEG_PER_RTH,
-                                rel=1e-3)
-    nd = float(by_name["Noise density (one-sided)"][2].split(" ± ")[0])
+                                abs=half * 1.000001)  # rounded as GUM 7.2.6 asks
+    nd, _ = _pm(by_name["Noise density (one-sided)"][2])
     assert nd == pytest.approx(RT2 * truth_n / units.DEG, rel=0.02)
-    amin = float(by_name["Allan minimum (no factor)"][2].split(" ± ")[0])
+    amin, half = _pm(by_name["Allan minimum (no factor)"][2])
     assert amin == pytest.approx(fits["gyro_x"].reading("bias_instability_allan_minimum")
-                                 .value_si / units.DEG_PER_H, rel=1e-3)
+                                 .value_si / units.DEG_PER_H, abs=half * 1.000001)
     assert "n.d." in by_name["Rate ramp"][3]
     md = format_noise_table(fits, fmt="markdown")
     assert md.startswith("| parameter | unit | gyro_x | gyro_y | gyro_z |\n|---|---|---|---|---|")

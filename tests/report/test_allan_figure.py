@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -41,6 +42,11 @@ def test_triad_figure_has_band_fit_and_term_lines(tmp_path: Path) -> None:
         assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
         labels = [t.get_text() for t in ax.get_legend().get_texts()]
         assert any(lbl.startswith("N = ") and lbl.endswith("°/√h") for lbl in labels)
+        n_label = next(lbl for lbl in labels if lbl.startswith("N = "))
+        # value ± u, u to two significant digits and the value to the same place (GUM 7.2.6)
+        m = re.fullmatch(r"N = \(?\d+\.?(\d*) ± (\d+\.?(\d*))\)?(e-?\d+)? °/√h", n_label)
+        assert m and len(m.group(1)) == len(m.group(3)), n_label
+        assert len(m.group(2).replace(".", "").lstrip("0")) == 2, n_label
         shown = {lbl.split(" = ")[0] for lbl in labels if " = " in lbl}
         detected = {t.name for t in ch.fit.terms if t.detected}
         assert ("K" in shown) == ("random_walk" in detected)

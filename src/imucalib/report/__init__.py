@@ -10,6 +10,8 @@ Contents
     :func:`~imucalib.report.noise_table.format_noise_table` (the datasheet-style noise table).
 :mod:`imucalib.report.console`
     The terminal rendering of procedure results.
+:mod:`imucalib.report.numbers`
+    A value with its uncertainty as text, GUM 7.2.6 rounding (docs/reporting.md).
 """
 
 from __future__ import annotations

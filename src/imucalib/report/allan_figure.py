@@ -28,6 +28,7 @@ from imucalib import units
 from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
 from imucalib.errors import InvalidInputError
 from imucalib.report.noise_table import TABLE_ROWS
+from imucalib.report.numbers import format_pm
 
 if TYPE_CHECKING:
     from imucalib.procedures.allan.analysis import NoiseCharacterization, SegmentNoise
@@ -50,7 +51,7 @@ def _term_text(fit: NoiseFit, term: NoiseTerm) -> str:
                      shown)
     value = f"{shown.value:.3g}"
     if math.isfinite(shown.std) and term.detected:
-        value += f" ± {shown.std:.1g}"
+        value = format_pm(shown.value, shown.std)  # GUM 7.2.6, docs/reporting.md
     return f"{_SYMBOL.get(term.name, term.name)} = {value} {shown.unit}"
 
 

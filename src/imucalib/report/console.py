@@ -17,27 +17,35 @@ from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
+from rich.table import Column, Table
 
 from imucalib import units
+from imucalib.report.numbers import round_pair
 
 __all__ = ["render_calibration", "render_noise_characterization", "render_result"]
 
-# display unit of each parameter symbol: (unit text, SI value of one display unit)
+# display unit of each parameter symbol: (unit text, SI value of one display unit); M's
+# off-diagonal (misalignment) elements are in _OFF_DIAGONAL instead (docs/reporting.md)
 _DISPLAY = {
     ("accel", "bias"): ("µg", units.UG), ("accel", "b"): ("µg", units.UG),
     ("gyro", "bias"): ("°/h", units.DEG_PER_H), ("gyro", "b"): ("°/h", units.DEG_PER_H),
-    ("accel", "K"): ("ppm of 1", units.PPM), ("gyro", "K"): ("ppm of 1", units.PPM),
-    ("accel", "M"): ("ppm | µrad", units.PPM), ("gyro", "M"): ("ppm | µrad", units.PPM),
+    ("accel", "K"): ("ppm", units.PPM), ("gyro", "K"): ("ppm", units.PPM),
+    ("accel", "M"): ("ppm", units.PPM), ("gyro", "M"): ("ppm", units.PPM),
     ("gyro", "G"): ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2),
 }
+_OFF_DIAGONAL = ("µrad", units.URAD)
 
 
-def _display(name: str, value: float, sigma: float) -> tuple[str, str, str]:
-    triad, symbol = name.split("_")[0], name.split("_")[1]
-    unit, scale = _DISPLAY.get((triad, symbol), ("SI", 1.0))
+def _display(name: str, value: float, sigma: float, si_unit: str) -> tuple[str, str, str]:
+    """(value, standard uncertainty, unit) cells of one parameter, GUM 7.2.6 rounding."""
+    parts = name.split("_")
+    triad, symbol = parts[0], parts[1]
+    unit, scale = _DISPLAY.get((triad, symbol), (si_unit, 1.0))
+    if symbol == "M" and len(parts) == 3 and len(parts[2]) == 2 and parts[2][0] != parts[2][1]:
+        unit, scale = _OFF_DIAGONAL  # a misalignment, a small angle
     shown = value - 1.0 if symbol == "K" else value  # a scale factor as its deviation from 1
-    return f"{shown / scale:+.4f}", f"{sigma / scale:.4f}", unit
+    cells = round_pair(shown / scale, sigma / scale, sign=True)
+    return cells.value_text, cells.uncertainty_text, unit
 
 
 def _wrote(console: Console, written: Sequence[Path]) -> None:
@@ -49,20 +57,24 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
     result = analysis.result
     repeat = {r.name: r for c in analysis.checks if c.name == "repeatability" for r in c.rows}
     misfit = getattr(result, "misfit", False)
-    columns = ["parameter", "value", "std. uncertainty", "unit", "repeatability"]
+    columns: list[str | Column] = ["parameter", Column("value", justify="right"),
+                                   Column("std. uncertainty", justify="right"), "unit",
+                                   "repeatability"]
     if misfit:  # the Birge-scaled σ beside the noise-only σ (docs/processing-estimation.md)
-        columns.insert(3, "σ × √(χ²/ν)")
+        columns.insert(3, Column("σ × √(χ²/ν)", justify="right"))
     table = Table(*columns,
                   title=f"{result.sensor_id}: {result.procedure.upper()} {result.model} model")
     std = result.std()
     for name in result.param_names:
-        value, sigma, unit = _display(name, result.value(name), std[name])
+        value, sigma, unit = _display(name, result.value(name), std[name],
+                                      result.units[name])
         row = repeat.get(name)
         rep = "—" if row is None else ("[green]pass[/]" if row.passed else "[red]FAIL[/]")
         cells = [name, value, sigma, unit, rep]
         if misfit:
             scale = result.sigma_scale(name)
-            cells.insert(3, _display(name, 0.0, std[name] * scale)[1] if scale != 1.0 else "")
+            cells.insert(3, _display(name, result.value(name), std[name] * scale,
+                                     result.units[name])[1] if scale != 1.0 else "")
         table.add_row(*cells)
     console.print(table)
     for q in getattr(result, "fit_quality", ()):

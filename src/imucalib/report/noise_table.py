@@ -14,6 +14,7 @@ from collections.abc import Mapping
 
 from imucalib.analysis.noise_fit import NoiseFit, NoiseTerm
 from imucalib.errors import InvalidInputError
+from imucalib.report.numbers import format_pm
 
 __all__ = ["TABLE_ROWS", "format_noise_table"]
 
@@ -49,7 +50,7 @@ def _cell(term: NoiseTerm | None, unit: str, note: str) -> str:
             if not term.detected:
                 return f"< {2 * u.std:.3g} (n.d.)" if math.isfinite(u.std) else "n.d."
             if math.isfinite(u.std):
-                return f"{u.value:.4g} ± {u.std:.2g}"
+                return format_pm(u.value, u.std)
             return f"{u.value:.4g}"
     raise InvalidInputError(f"no unit {unit!r} ({note}) for term {term.name!r}")
 
@@ -60,7 +61,8 @@ def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> st
     One row per parameter of :data:`TABLE_ROWS` (the units users see on datasheets: ARW in
     °/√h, one-sided density in (°/s)/√Hz or µg/√Hz, bias instability in °/h or µg with the
     0.664 factor, the raw Allan minimum beside it, …), one column per channel with value ± standard
-    uncertainty; ``< 2u (n.d.)`` marks a term the fit did not detect, ``—`` one not fitted.
+    uncertainty, rounded by GUM 7.2.6 (:func:`~imucalib.report.numbers.format_pm`,
+    docs/reporting.md); ``< 2u (n.d.)`` marks a term the fit did not detect, ``—`` one not fitted.
     Sensors are grouped; the last line states the convention.
 
     Raises
