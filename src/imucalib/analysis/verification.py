@@ -27,7 +27,9 @@ Decision rule
 *Simple acceptance* (ISO/IEC Guide 98-4 §8.2, ILAC-G8 "simple acceptance"): a check passes when
 every measured value lies within its limit, with no guard band; the calibration passes when every
 assessed check passes. Checks that could not be assessed (e.g. repeatability with one
-repetition) are listed and do not count.
+repetition) are listed and do not count. A plan may choose *guarded acceptance* instead
+(:func:`decision_rule_text`, :func:`check_specification`): a specified parameter passes only when
+|value| + k·u is within its limit.
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
+from imucalib.errors import InvalidInputError
+
 __all__ = [
     "DECISION_RULE",
     "Check",
@@ -48,11 +52,69 @@ __all__ = [
     "check_accuracy",
     "check_repeatability",
     "check_residuals",
+    "check_specification",
     "decide",
+    "decision_rule_text",
 ]
 
 DECISION_RULE = ("simple acceptance (ISO/IEC Guide 98-4 §8.2; ILAC-G8): each value within its "
                  "limit, no guard band; pass when every assessed check passes")
+
+
+def decision_rule_text(rule: str = "simple", guard_band_k: float = 2.0) -> str:
+    """Return the statement of a decision rule (``"simple"`` or ``"guarded"`` acceptance).
+
+    Guarded acceptance (ISO/IEC Guide 98-4:2012 §8.3.2; ILAC-G8:09/2019 §4.2.2): a value passes
+    when |value| + w ≤ limit, with the guard band w = k·u.
+    """
+    if rule == "simple":
+        return DECISION_RULE
+    if rule == "guarded":
+        return (f"guarded acceptance (ISO/IEC Guide 98-4 §8.3.2; ILAC-G8 §4.2.2): a specified "
+                f"parameter passes when |value| + {guard_band_k:g}·u is within its limit "
+                f"(guard band w = {guard_band_k:g}u); pass when every assessed check passes")
+    raise InvalidInputError(f"decision rule must be 'simple' or 'guarded'; got {rule!r}")
+
+
+def check_specification(name: str, rows: Sequence[tuple[str, float, float, float | None, str]],
+                        *, rule: str = "simple", guard_band_k: float = 2.0) -> Check:
+    """Check calibrated parameters against the unit's specification.
+
+    Parameters
+    ----------
+    name : str
+        The check's name (``"specification"``).
+    rows : sequence of (label, value, u, limit, unit)
+        Each specified quantity in its display unit: the value (its magnitude is compared),
+        its standard uncertainty u, its limit (None: not specified, skipped).
+    rule : {"simple", "guarded"}
+        Simple acceptance: |value| ≤ limit; guarded: |value| + k·u ≤ limit
+        (:func:`decision_rule_text`).
+    guard_band_k : float
+        k of the guard band.
+
+    Returns
+    -------
+    Check
+        Not assessed (None) when no row has a limit.
+    """
+    decision_rule_text(rule, guard_band_k)  # validates the rule
+    out: list[CheckRow] = []
+    for label, value, u, limit, unit in rows:
+        if limit is None:
+            continue
+        band = guard_band_k * u if rule == "guarded" else 0.0
+        magnitude = abs(value) + band
+        detail = (f"|value| {abs(value):.3g} + {guard_band_k:g}u {band:.3g}" if band else "")
+        out.append(CheckRow(label, magnitude, float(limit), unit, magnitude <= limit, detail))
+    if not out:
+        return Check(name, None, "no specification limits given: not assessed")
+    failed = [r for r in out if not r.passed]
+    what = "within" if rule == "simple" else "within, with the guard band,"
+    summary = (f"{len(out)} specified quantities {what} their limits" if not failed
+               else f"{len(failed)} of {len(out)} specified quantities beyond their limits: "
+                    + ", ".join(r.name for r in failed[:6]) + ("…" if len(failed) > 6 else ""))
+    return Check(name, not failed, summary, tuple(out))
 
 
 @dataclass(frozen=True)
@@ -209,14 +271,15 @@ def check_repeatability(name: str, estimates: Mapping[str, Sequence[float]],
     return Check(name, not failed, summary, tuple(rows))
 
 
-def decide(checks: Sequence[Check], *, notes: Sequence[str] = ()) -> Decision:
-    """Return the overall decision under :data:`DECISION_RULE`.
+def decide(checks: Sequence[Check], *, notes: Sequence[str] = (),
+           rule: str = DECISION_RULE) -> Decision:
+    """Return the overall decision under `rule` (its statement; :func:`decision_rule_text`).
 
     `notes` are what the decision must say besides its checks (a model misfit and the scaled
     uncertainties that go with it); they are printed with its summary.
     """
     failed = tuple(c.name for c in checks if c.passed is False)
     not_assessed = tuple(c.name for c in checks if c.passed is None)
-    return Decision(passed=not failed and any(c.assessed for c in checks), rule=DECISION_RULE,
+    return Decision(passed=not failed and any(c.assessed for c in checks), rule=rule,
                     failed=failed, not_assessed=not_assessed, checks=tuple(checks),
                     notes=tuple(notes))

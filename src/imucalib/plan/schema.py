@@ -58,6 +58,7 @@ from imucalib.plan.bounds import (
 from imucalib.plan.equipment import TwinEquipment
 
 __all__ = [
+    "AcceptanceConfig",
     "CentrifugeStep",
     "EquipmentConfig",
     "GuardConfig",
@@ -69,6 +70,7 @@ __all__ = [
     "PositionStep",
     "RateStep",
     "SoakStep",
+    "SpecLimits",
     "StaticStep",
     "WarmUpStep",
     "plan_min_duration_s",
@@ -153,11 +155,32 @@ class GuardConfig(_Model):
         return self
 
 
-class ImuSpecConfig(_Model):
-    """What the IMU under test claims: identity and the accuracy verification checks against."""
+class SpecLimits(_Model):
+    """The unit's specification: the largest error each parameter may have (docs/p1.md).
 
-    model: str = ""
-    maker: str = ""
+    Each limit bounds |value| of the calibrated parameter (a scale factor: its deviation from
+    1); None: not specified, not checked. The noise limits bound the white-noise coefficients
+    of the noise model fitted to the static record.
+    """
+
+    accel_bias_ug: float | None = Field(None, ge=0.0, le=1e7, description="[µg]")
+    accel_scale_ppm: float | None = Field(None, ge=0.0, le=1e6, description="[ppm]")
+    accel_misalignment_urad: float | None = Field(None, ge=0.0, le=1e6, description="[µrad]")
+    gyro_bias_dph: float | None = Field(None, ge=0.0, le=1e7, description="[°/h]")
+    gyro_scale_ppm: float | None = Field(None, ge=0.0, le=1e6, description="[ppm]")
+    gyro_misalignment_urad: float | None = Field(None, ge=0.0, le=1e6, description="[µrad]")
+    gyro_g_sensitivity_dph_per_g: float | None = Field(None, ge=0.0, le=1e7,
+                                                       description="[(°/h)/g]")
+    gyro_arw_deg_rth: float | None = Field(None, ge=0.0, le=1e4, description="[°/√h]")
+    accel_vrw_ug_rthz: float | None = Field(None, ge=0.0, le=1e7, description="[µg/√Hz]")
+
+
+class ImuSpecConfig(_Model):
+    """The IMU under test: identity, specification, held-out limits (docs/p1.md, "Acceptance")."""
+
+    serial: str = Field("", max_length=100, description="serial number")
+    model: str = Field("", max_length=200)
+    maker: str = Field("", max_length=200)
     grade: Literal["consumer", "tactical", "navigation", ""] = ""
     accel_accuracy_g: float = Field(0.01, gt=0.0, le=100.0,
                                     description="held-out accuracy spec [g]")
@@ -165,6 +188,23 @@ class ImuSpecConfig(_Model):
                                      description="held-out accuracy spec [°/s]")
     gyro_noise_dps: float | None = Field(None, gt=0.0, le=1000.0,
                                          description="gyro noise spec [°/s]")
+    limits: SpecLimits = Field(default_factory=SpecLimits,
+                               description="per-parameter limits (none: not checked)")
+
+
+class AcceptanceConfig(_Model):
+    """The decision rule (ISO/IEC Guide 98-4 §8; ILAC-G8:09/2019, docs/p1.md "Acceptance").
+
+    ``simple``: a value passes when it is within its limit (the probability of a false accept
+    can reach 50 % at the limit). ``guarded``: it passes only when |value| + k·u is within the
+    limit (guard band w = k·u, u the standard uncertainty, misfit-scaled when the fit is a
+    misfit), so a pass is a pass at about 97.7 % (k = 2) confidence; a value whose band
+    straddles the limit fails.
+    """
+
+    rule: Literal["simple", "guarded"] = "simple"
+    guard_band_k: float = Field(2.0, gt=0.0, le=10.0,
+                                description="guard band in standard uncertainties")
 
 
 class EquipmentConfig(_Model):
@@ -316,6 +356,7 @@ class Plan(_Model):
     description: str = Field("", max_length=2000)
     procedure: str = Field("", max_length=64, description="analysis that applies: p1, allan, …")
     imu: ImuSpecConfig = Field(default_factory=ImuSpecConfig)
+    acceptance: AcceptanceConfig = Field(default_factory=AcceptanceConfig)
     limits: PlanLimits = Field(default_factory=PlanLimits)
     guards: GuardConfig = Field(default_factory=GuardConfig)
     equipment: EquipmentConfig = Field(default_factory=EquipmentConfig)

@@ -42,14 +42,16 @@ from imucalib.analysis.verification import (
     check_accuracy,
     check_repeatability,
     check_residuals,
+    check_specification,
     decide,
+    decision_rule_text,
 )
 from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.estimation.goodness import assess_fit
 from imucalib.io.reader import open_recording
 from imucalib.models.result import CalibrationResult, FitQuality, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
-from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig
+from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.p1.fit import (
     P1Fit,
     TriadFit,
@@ -104,6 +106,10 @@ class P1Options:
         The equipment accuracy for `type_b`; None: the ``[equipment]`` values of the plan stored
         in the recording, or without one the defaults of
         :class:`~imucalib.plan.schema.EquipmentConfig` (10″, 5″). [″]
+    acceptance : {"simple", "guarded"} or None
+        The decision rule; None: the plan's ``[acceptance]`` (simple without a plan).
+    guard_band_k : float or None
+        k of a guarded rule; None: the plan's (2).
     """
 
     model: Literal["triad", "per-axis"] = "triad"
@@ -121,6 +127,8 @@ class P1Options:
     type_b: bool = True
     table_position_accuracy_arcsec: float | None = None
     table_orthogonality_arcsec: float | None = None
+    acceptance: Literal["simple", "guarded"] | None = None
+    guard_band_k: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -247,6 +255,58 @@ def _imu_spec(obs: P1Observations) -> ImuSpecConfig:
     return obs.plan.imu if obs.plan is not None else obs.imu_spec or ImuSpecConfig()
 
 
+def _acceptance(obs: P1Observations, opt: P1Options) -> tuple[str, float]:
+    """Return the decision rule and guard-band k: the options', else the plan's."""
+    plan = obs.plan.acceptance if obs.plan is not None else AcceptanceConfig()
+    return (opt.acceptance or plan.rule,
+            opt.guard_band_k if opt.guard_band_k is not None else plan.guard_band_k)
+
+
+#: Display unit and SI value of one unit, and the SpecLimits field, per parameter kind.
+_SPEC_KINDS: dict[tuple[str, str], tuple[str, float, str]] = {
+    ("accel", "bias"): ("µg", units.UG, "accel_bias_ug"),
+    ("accel", "scale"): ("ppm", units.PPM, "accel_scale_ppm"),
+    ("accel", "misalignment"): ("µrad", units.URAD, "accel_misalignment_urad"),
+    ("gyro", "bias"): ("°/h", units.DEG_PER_H, "gyro_bias_dph"),
+    ("gyro", "scale"): ("ppm", units.PPM, "gyro_scale_ppm"),
+    ("gyro", "misalignment"): ("µrad", units.URAD, "gyro_misalignment_urad"),
+    ("gyro", "g-sensitivity"): ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2,
+                                "gyro_g_sensitivity_dph_per_g"),
+}
+
+
+def _spec_kind(name: str) -> str:
+    triad_symbol = name.split("_")
+    symbol, axes = triad_symbol[1], triad_symbol[2]
+    if symbol in ("bias", "b"):
+        return "bias"
+    if symbol == "K" or (symbol == "M" and axes[0] == axes[1]):
+        return "scale"
+    return "misalignment" if symbol == "M" else "g-sensitivity"
+
+
+def _specification_rows(result: CalibrationResult, obs: P1Observations, spec: ImuSpecConfig
+                        ) -> list[tuple[str, float, float, float | None, str]]:
+    """Each specified quantity in its display unit: (label, value, u, limit, unit)."""
+    lim = spec.limits
+    std = result.std(scaled=True)  # honest under misfit (docs/processing-estimation.md)
+    rows: list[tuple[str, float, float, float | None, str]] = []
+    for name in result.param_names:
+        kind = _spec_kind(name)
+        unit, scale, field_name = _SPEC_KINDS[(name.split("_")[0], kind)]
+        value = result.value(name) - (1.0 if name.split("_")[1] == "K" else 0.0)
+        rows.append((name, value / scale, std[name] / scale, getattr(lim, field_name), unit))
+    for triad, field_name, scale, unit in (
+            ("gyro", "gyro_arw_deg_rth", units.DEG_PER_RTH, "°/√h"),
+            ("accel", "accel_vrw_ug_rthz", units.UG_PER_RTHZ, "µg/√Hz")):
+        model = obs.noise.get(triad)
+        if model is not None:
+            for axis, n in zip("xyz", np.asarray(model.white_density), strict=True):
+                rows.append((f"{triad}_white_noise_{axis}", float(n) / scale, 0.0,
+                             getattr(lim, field_name), unit))
+    return rows
+
+
 def _add_type_b(names: tuple[str, ...], cov: np.ndarray, obs: P1Observations,
                 opt: P1Options) -> tuple[np.ndarray, str]:
     """Add the equipment's Type B variances to the misalignments (uniform, u = a/√3)."""
@@ -356,6 +416,9 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
     checks.append(check_accuracy("held-out gyro accuracy", gyro_err,
                                  limit=opt.gyro_accuracy_dps or spec.gyro_accuracy_dps,
                                  unit="°/s", scale=units.DEG))
+    rule, guard_k = _acceptance(obs, opt)
+    checks.append(check_specification("specification", _specification_rows(result, obs, spec),
+                                      rule=rule, guard_band_k=guard_k))
     per_rep: dict[int, CalibrationResult] = {}
     reps = obs.repetitions
     if len(reps) > 1:
@@ -380,7 +443,8 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                             "repeatability needs at least 2 (P1 rule 6 asks for 3, docs/p1.md)"))
     return P1Analysis(result=result, per_repetition=per_rep, checks=tuple(checks),
                       decision=decide(checks, notes=[q.summary() for q in quality
-                                                     if q.misfit]),
+                                                     if q.misfit],
+                                      rule=decision_rule_text(rule, guard_k)),
                       kalman_max_difference_sigma=kalman,
                       crlb_ratio=crlb, observations=obs)
 
@@ -419,6 +483,8 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
         obs = extract_p1_observations(rec, sensor_id, processing=opt.processing)
         meta = rec.metadata
     gyro_w = gyro_windows(obs, "calibration", None)
+    spec = _imu_spec(obs)
+    rule, guard_k = _acceptance(obs, opt)
     prov = Provenance(
         plan_hash=str(meta.get("plan_hash", "")),
         recording_sha256=_sha256(p) if opt.hash_recording else "",
@@ -429,5 +495,11 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
                  "max_alignment_error_s": max(w.alignment_error_s for w in obs.windows),
                  "outliers_removed": int(sum(w.n_outliers for w in obs.windows)),
                  "processing": json.loads(json.dumps(opt.processing.__dict__)),
-                 "skipped_steps": list(obs.skipped)})
+                 "skipped_steps": list(obs.skipped),
+                 "unit": {"serial": spec.serial or obs.sensor_id, "model": spec.model,
+                          "maker": spec.maker, "grade": spec.grade},
+                 "specification": {**spec.limits.model_dump(exclude_none=True),
+                                   "accel_accuracy_g": spec.accel_accuracy_g,
+                                   "gyro_accuracy_dps": spec.gyro_accuracy_dps},
+                 "acceptance": {"rule": rule, "guard_band_k": guard_k}})
     return analyze_p1_observations(obs, opt, provenance=prov)

@@ -43,6 +43,7 @@ from imucalib.io.step_roles import (
 )
 from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
+    AcceptanceConfig,
     GuardConfig,
     ImuSpecConfig,
     OperatorCheckStep,
@@ -51,6 +52,7 @@ from imucalib.plan.schema import (
     PlanStep,
     PositionStep,
     RateStep,
+    SpecLimits,
     StaticStep,
     WarmUpStep,
 )
@@ -58,6 +60,7 @@ from imucalib.plan.schema import (
 __all__ = [
     "P1_HELD_OUT_POSITIONS_DEG",
     "P1_SIX_POSITIONS_DEG",
+    "default_specification",
     "generate_p1_plan",
 ]
 
@@ -71,6 +74,52 @@ P1_HELD_OUT_POSITIONS_DEG: tuple[tuple[float, float], ...] = (
     (45.0, 0.0), (0.0, 45.0), (30.0, 120.0), (60.0, 225.0),
 )
 _WARM_UP_S = {"consumer": 900.0, "tactical": 1800.0, "navigation": 3600.0}
+#: Held-out accuracy limits per grade (accelerometer [g], gyro [°/s]), docs/p1.md "Acceptance".
+GRADE_ACCURACY: dict[str, tuple[float, float]] = {
+    "consumer": (0.01, 0.5), "tactical": (1e-3, 0.05), "navigation": (1e-4, 0.005)}
+#: A grade's parameter limits are this many one-sigma spreads of the grade (datasheet maxima).
+SPEC_SPREADS = 4.0
+#: Its noise limits are this many times the grade's typical white noise.
+SPEC_NOISE_FACTOR = 2.0
+
+
+def default_specification(grade: str, *, serial: str = "", model: str = "",
+                          maker: str = "") -> ImuSpecConfig:
+    """Return the specification P1 checks a unit of `grade` against when none is given.
+
+    Parameter limits are :data:`SPEC_SPREADS` times the grade's one-sigma spreads
+    (:data:`imucalib.models.imu.GRADES`, docs/equations.md §13): the maxima a datasheet of that
+    grade states; noise limits :data:`SPEC_NOISE_FACTOR` times its typical white noise;
+    held-out accuracy limits :data:`GRADE_ACCURACY`. A term the grade does not have (the
+    g-sensitivity of optical gyros) is not checked. A real unit's own datasheet belongs in the
+    plan's ``[imu.limits]`` instead (docs/p1.md, "Acceptance").
+
+    Raises
+    ------
+    ConfigurationError
+        For an unknown grade.
+    """
+    from imucalib.models.imu import GRADES
+
+    if grade not in GRADES:
+        raise ConfigurationError(f"`grade` must be one of {sorted(GRADES)}; got {grade!r}")
+    g = GRADES[grade]
+    k, n = SPEC_SPREADS, SPEC_NOISE_FACTOR
+
+    def limit(spread: float, factor: float = 1.0) -> float | None:
+        return k * spread * factor if spread > 0 else None
+
+    limits = SpecLimits(
+        accel_bias_ug=limit(g.accel_bias_ug), accel_scale_ppm=limit(g.accel_scale_ppm),
+        accel_misalignment_urad=limit(g.accel_misalignment_mrad, 1000.0),
+        gyro_bias_dph=limit(g.gyro_bias_dph), gyro_scale_ppm=limit(g.gyro_scale_ppm),
+        gyro_misalignment_urad=limit(g.gyro_misalignment_mrad, 1000.0),
+        gyro_g_sensitivity_dph_per_g=limit(g.gyro_g_sensitivity_dph_per_g),
+        gyro_arw_deg_rth=n * g.gyro_arw_deg_rth, accel_vrw_ug_rthz=n * g.accel_vrw_ug_rthz)
+    accel_g, gyro_dps = GRADE_ACCURACY[grade]
+    return ImuSpecConfig(serial=serial, model=model, maker=maker,
+                         grade=grade,
+                         accel_accuracy_g=accel_g, gyro_accuracy_dps=gyro_dps, limits=limits)
 
 
 def generate_p1_plan(
@@ -91,6 +140,10 @@ def generate_p1_plan(
     latitude_deg: float = 45.0,
     heading_deg: float = 0.0,
     seed: int = 1,
+    serial: str = "",
+    model: str = "",
+    maker: str = "",
+    acceptance: str = "simple",
 ) -> Plan:
     """Return the default P1 plan.
 
@@ -127,6 +180,13 @@ def generate_p1_plan(
         Site of the twin station. [°]
     seed : int
         Seed of the twin (the IMU's truth and noise).
+    serial, model, maker : str
+        The unit's identity, carried into the result.
+    acceptance : {"simple", "guarded"}
+        The decision rule (:class:`~imucalib.plan.schema.AcceptanceConfig`, guard band 2u).
+
+    The unit's specification is the grade's (:func:`default_specification`); edit the plan's
+    ``[imu]`` and ``[imu.limits]`` for a unit's own datasheet.
 
     Raises
     ------
@@ -136,6 +196,9 @@ def generate_p1_plan(
     """
     if grade not in _WARM_UP_S:
         raise ConfigurationError(f"`grade` must be one of {sorted(_WARM_UP_S)}; got {grade!r}")
+    if acceptance not in ("simple", "guarded"):
+        raise ConfigurationError(f"`acceptance` must be 'simple' or 'guarded'; got "
+                                 f"{acceptance!r}")
     if len(rates_dps) < 3 or 0.0 not in rates_dps or not any(r < 0 for r in rates_dps) \
             or not any(r > 0 for r in rates_dps):
         raise ConfigurationError(
@@ -195,7 +258,7 @@ def generate_p1_plan(
         seed=seed,
         site=SiteConfig(latitude_deg=latitude_deg, heading_deg=heading_deg),
         table=TableConfig(kind="dual-axis", grade="high"),
-        imus=(ImuConfig(name="IMU-0001", grade=grade, sample_rate_hz=sample_rate_hz),),
+        imus=(ImuConfig(name=serial or "IMU-0001", grade=grade, sample_rate_hz=sample_rate_hz),),
     )
     return Plan(
         name=name,
@@ -203,7 +266,8 @@ def generate_p1_plan(
                     f"static, {len(rates_dps)} rates per axis, held-out checks, "
                     f"{repetitions} repetition(s).",
         procedure="p1",
-        imu=ImuSpecConfig(grade=grade),
+        imu=default_specification(grade, serial=serial, model=model, maker=maker),
+        acceptance=AcceptanceConfig(rule=acceptance),
         limits=PlanLimits(max_rate_dps=max(300.0, 1.2 * max_rate)),
         guards=GuardConfig(),
         twin=twin,
