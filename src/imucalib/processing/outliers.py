@@ -31,7 +31,7 @@ the end: ĉ_{n−1−h} and ĉ_{n−1−2h}), so that a slope does not bias the 
 number per column, s = 1.4826·MAD of the deviations rᵢ = xᵢ − ĉᵢ [1]_ (their standard
 deviation if the MAD is 0). One pass flags [6]_::
 
-    |rᵢ| > k(n)·s,   k(n) = max(k_min, Φ⁻¹(1 − α_n/2)),   α_n = 1 − (1 − α)^{1/n}          (2)
+    |rᵢ| > k(n)·s + mᵢ,   k(n) = max(k_min, Φ⁻¹(1 − α_n/2)),   α_n = 1 − (1 − α)^{1/n}          (2)
 
 so that a window of n Gaussian samples loses any sample at all with probability α (≈ α/(2n)
 per tail and sample: the Šidák/Bonferroni form of Chauvenet's criterion). With α = 0.01:
@@ -39,8 +39,11 @@ k = 4.42 for n = 10³, 4.89 for 10⁴, 5.33 for 10⁵ and 5.73 for 10⁶ (k_min 
 A single pass suffices: the median and the MAD are not inflated by the outliers they seek, and
 iterating would only erode the Gaussian tails. The running median follows a smooth signal
 exactly where it is monotone over 2h + 1 samples; at an extremum of a sinusoid of amplitude A and
-period P samples it cuts the peak by about A·(πh/P)²/2, which stays far below k·s unless the
-sinusoid is both large and fast (A = 100 σ at P = 200 samples, h = 4: 0.2 σ).
+period P samples it cuts the peak by about A·(πh/P)²/2 (A = 100 σ at P = 200 samples, h = 4:
+0.2 σ), and the straight edge extrapolation misses the curvature by up to 16·A·(πh/P)² (6 σ).
+The margin mᵢ covers both: |Δ²ᵢ|/4 inside, with Δ²ᵢ = ĉ_{i−h} − 2ĉᵢ + ĉ_{i+h} (≈ 2× the cut),
+and on the i-th edge sample |Δ²|·(h − i)(2h − i)/(2h²), the quadratic term the line leaves out;
+on noise alone it is a fraction of s.
 
 3σ rule
 -------
@@ -400,30 +403,35 @@ def reject_outliers_robust(
     scale = np.empty(k)
     for j in range(k):
         x = cols[:, j]
-        r = x - _running_median(x, h)
+        c, margin = _running_median(x, h)
+        r = x - c
         med_r = float(np.median(r))
         s = MAD_TO_SIGMA * float(np.median(np.abs(r - med_r)))
         if s <= 0.0:
             s = float(np.std(r, ddof=1))
-        mask[:, j] = np.abs(r - med_r) > k_n * s  # Eq. (2)
+        mask[:, j] = np.abs(r - med_r) > k_n * s + margin  # Eq. (2)
         center[j] = float(np.median(x[~mask[:, j]]))
         scale[j] = s
     iters = np.ones(k, dtype=np.int64)
     return _finish(cols, one_d, mask, center, scale, iters, "robust", method, t, k_n)
 
 
-def _running_median(x: NDArray[np.float64], h: int) -> NDArray[np.float64]:
-    """Median of the 2h neighbours of each sample (itself left out); edges extrapolated.
+def _running_median(x: NDArray[np.float64], h: int
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Median of the 2h neighbours of each sample (itself left out), and its curvature margin.
 
     Leaving xᵢ out keeps xᵢ − ĉᵢ Gaussian for Gaussian data (with xᵢ in, ĉᵢ = xᵢ whenever xᵢ
     is the window's median, which piles deviations up at 0 and makes the MAD underestimate
     their tails). The first h samples get the line through ĉ_h and ĉ_{2h}, the last h the same
-    at the other end, so that a slope does not bias the edges. A column shorter than
-    2(2h + 1) gets its median throughout.
+    at the other end, so that a slope does not bias the edges. The margin bounds what
+    curvature does to ĉ, from the second difference Δ²ᵢ = ĉ_{i−h} − 2ĉᵢ + ĉ_{i+h}: |Δ²|/4
+    inside (a running median cuts an extremum by ≈ f''·h²/8 = Δ²/8), |Δ²|·(h − i)(2h − i)/(2h²)
+    on the extrapolated edges (the quadratic term the line leaves out). A column shorter than
+    2(2h + 1) gets its median throughout and no margin.
     """
     n, w = x.size, 2 * h + 1
     if n < 2 * w:
-        return np.full(n, float(np.median(x)))
+        return np.full(n, float(np.median(x))), np.zeros(n)
     c = np.empty(n)
     step = 1 << 16  # rows per block: bounded memory
     for a in range(0, n - 2 * h, step):
@@ -432,12 +440,19 @@ def _running_median(x: NDArray[np.float64], h: int) -> NDArray[np.float64]:
         nb = np.delete(win, h, axis=1)  # the 2h neighbours, the sample itself left out
         nb.partition((h - 1, h), axis=1)
         c[a + h:b + h] = 0.5 * (nb[:, h - 1] + nb[:, h])
+    d2 = np.zeros(n)
+    d2[2 * h:n - 2 * h] = c[h:n - 3 * h] - 2.0 * c[2 * h:n - 2 * h] + c[3 * h:n - h]
+    d2[:2 * h], d2[n - 2 * h:] = d2[2 * h], d2[n - 2 * h - 1]
+    margin = np.abs(d2) / 4.0
     i = np.arange(h, dtype=np.float64)
     slope = (c[2 * h] - c[h]) / h
     c[:h] = c[h] + slope * (i - h)
     slope = (c[n - 1 - h] - c[n - 1 - 2 * h]) / h
     c[n - h:] = c[n - 1 - h] + slope * (i + 1)
-    return c
+    edge = (h - i) * (2 * h - i) / (2.0 * h * h)  # at distance h − i before ĉ_h
+    margin[:h] = np.maximum(margin[:h], np.abs(d2[:h]) * edge)
+    margin[n - h:] = np.maximum(margin[n - h:], np.abs(d2[n - h:]) * edge[::-1])
+    return c, margin
 
 
 def grubbs_critical_value(n_samples: int | NDArray[np.int64], alpha: float

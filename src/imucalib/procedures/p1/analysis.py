@@ -415,6 +415,10 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
                  "n_gyro_windows": len(gyro_w), "cutoff_hz": obs.cutoff_hz,
                  "max_alignment_error_s": max(w.alignment_error_s for w in obs.windows),
                  "outliers_removed": int(sum(w.n_outliers for w in obs.windows)),
+                 "outliers": [{"step_index": w.step_index,
+                               "per_channel": list(w.outliers_per_channel),
+                               "first_times_s": list(w.outlier_times_s)}
+                              for w in obs.windows if w.n_outliers],
                  "processing": json.loads(json.dumps(opt.processing.__dict__)),
                  "skipped_steps": list(obs.skipped)})
     return analyze_p1_observations(obs, opt, provenance=prov)
