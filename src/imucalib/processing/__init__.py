@@ -6,7 +6,8 @@ equations and choices: ``docs/processing-estimation.md``.
 Contents
 --------
 :mod:`imucalib.processing.outliers`
-    :func:`reject_outliers_3sigma`, :func:`reject_outliers_grubbs` (→ :class:`OutlierResult`),
+    :func:`reject_outliers_robust` (P1's default), :func:`reject_outliers_3sigma`,
+    :func:`reject_outliers_grubbs` (→ :class:`OutlierResult`), :func:`robust_threshold`,
     :func:`grubbs_critical_value`.
 :mod:`imucalib.processing.filtering`
     :func:`lowpass_zero_phase` (→ :class:`LowpassResult`), :func:`compute_effective_cutoff_hz`,
@@ -35,6 +36,8 @@ from imucalib.processing.outliers import (
     grubbs_critical_value,
     reject_outliers_3sigma,
     reject_outliers_grubbs,
+    reject_outliers_robust,
+    robust_threshold,
 )
 from imucalib.processing.segmentation import (
     SEGMENT_LABELS,
@@ -79,5 +82,7 @@ __all__ = [
     "reconstruct_time_base",
     "reject_outliers_3sigma",
     "reject_outliers_grubbs",
+    "reject_outliers_robust",
+    "robust_threshold",
     "synchronize",
 ]

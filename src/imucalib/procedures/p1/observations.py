@@ -6,8 +6,10 @@ time, so memory is bounded by the longest step, not the file:
 1. read the IMU samples of the window and the table feedback;
 2. rebuild the IMU time base from its sample counter (regression of receive time on counter,
    docs/drivers.md "Time synchronisation practice"), which removes receive-time jitter;
-3. reject outliers per channel (3σ on a robust scale, or Grubbs), replacing them by
-   interpolation (or dropping them), counts kept;
+3. reject outliers per channel (by default one pass against a running median with a threshold
+   that grows with the window length, :func:`~imucalib.processing.reject_outliers_robust`; P1's
+   3σ rule or Grubbs test as options), replacing them by interpolation (or dropping them),
+   counts per channel and the times of the first few kept;
 4. compute per-channel statistics with a standard error that accounts for correlated noise
    (:func:`~imucalib.processing.statistics.compute_window_statistics`);
 5. low-pass the window with a zero-phase Butterworth at 1/4 (1/5–1/3) of the IMU bandwidth;
@@ -97,6 +99,7 @@ from imucalib.processing import (
     reconstruct_time_base,
     reject_outliers_3sigma,
     reject_outliers_grubbs,
+    reject_outliers_robust,
     synchronize,
 )
 
@@ -119,11 +122,20 @@ class P1Processing:
 
     Attributes
     ----------
-    outlier_test : {"3sigma", "grubbs", "none"}
+    outlier_test : {"robust", "3sigma", "grubbs", "none"}
+        ``"robust"`` (default): one pass against the running median of each sample's
+        neighbours, threshold k(n) = Φ⁻¹(1 − α_n/2), α_n = 1 − (1 − α)^{1/n}
+        (:func:`~imucalib.processing.reject_outliers_robust`), so that a Gaussian window loses
+        any sample with probability `outlier_alpha`. ``"3sigma"`` and ``"grubbs"`` are the
+        rules P1 names (docs/p1.md, rule 1): the 3σ rule flags 0.27 % of good Gaussian samples
+        per window whatever its length, truncating the distribution and biasing the noise
+        figures computed after it; the Grubbs test (α = 0.05) flags a good sample in 5 % of the
+        windows.
     outlier_passes : int
-        Passes of the 3σ rule (robust centre and scale). Its robust scale barely moves once the
-        gross outliers are out, so further passes only erode the Gaussian tails (each pass
-        flags 0.27 % of good samples); three passes catch clusters that mask each other.
+        Passes of the 3σ rule (robust centre and scale); three catch clusters that mask each
+        other, further passes only erode the Gaussian tails.
+    outlier_alpha : float
+        α of the robust rule: the probability that a Gaussian window loses any sample.
     outlier_method : {"interpolate", "drop"}
     cutoff_fraction : float or None
         Low-pass cut-off as a fraction of the IMU bandwidth (1/5–1/3); None: no filter.
@@ -134,8 +146,9 @@ class P1Processing:
         the alternative for a site that does not know its g). [m/s²]
     """
 
-    outlier_test: Literal["3sigma", "grubbs", "none"] = "3sigma"
+    outlier_test: Literal["robust", "3sigma", "grubbs", "none"] = "robust"
     outlier_passes: int = 3
+    outlier_alpha: float = 0.01
     outlier_method: Literal["interpolate", "drop"] = "interpolate"
     cutoff_fraction: float | None = 0.25
     max_alignment_error_s: float = 1e-3
@@ -177,6 +190,12 @@ class WindowObservation:
     axis : int or None
         The spinning table axis of a rate point.
     n_samples, n_outliers : int
+        Samples in the window, and samples flagged as outliers (all channels together).
+    outliers_per_channel : tuple of int
+        Flagged samples per channel (gyro x, y, z, accel x, y, z); empty when not tested.
+    outlier_times_s : tuple of float
+        Times of the first :data:`OUTLIER_TIMES_KEPT` rows with a flagged sample, to say where.
+        [s]
     n_revolutions : int
     alignment_error_s : float
         Bound on the IMU-to-table synchronisation error. [s]
@@ -215,6 +234,8 @@ class WindowObservation:
     t_start_s: float = 0.0
     allan_fit: _F64 | None = None
     step_role: str = ""
+    outliers_per_channel: tuple[int, ...] = ()
+    outlier_times_s: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -260,6 +281,33 @@ class P1Observations:
 
 #: Rows per block of a long static window (bounded memory).
 CHUNK_ROWS = 1 << 18
+#: Times of flagged rows a WindowObservation keeps (the first ones).
+OUTLIER_TIMES_KEPT = 10
+
+
+@dataclass
+class _Flagged:
+    """Outliers of a window, accumulated over its blocks: counts per channel, first times."""
+
+    per_channel: NDArray[np.int64] = field(default_factory=lambda: np.zeros(6, dtype=np.int64))
+    times_s: list[float] = field(default_factory=list)
+    tested: bool = False
+
+    @property
+    def total(self) -> int:
+        return int(self.per_channel.sum())
+
+    def add(self, other: _Flagged) -> None:
+        self.per_channel = self.per_channel + other.per_channel
+        self.times_s = (self.times_s + other.times_s)[:OUTLIER_TIMES_KEPT]
+        self.tested = self.tested or other.tested
+
+    def fields(self) -> dict[str, Any]:
+        """Return the WindowObservation fields."""
+        return {"n_outliers": self.total,
+                "outliers_per_channel": (tuple(int(c) for c in self.per_channel)
+                                         if self.tested else ()),
+                "outlier_times_s": tuple(self.times_s)}
 _ALLAN_POINTS = 1 << 19
 
 
@@ -383,7 +431,7 @@ class _Extractor:
         self.cutoff_hz: float | None = None
         self.notes: list[str] = []
 
-    def imu_window(self, step_index: int) -> tuple[_F64, _F64, int]:
+    def imu_window(self, step_index: int) -> tuple[_F64, _F64, _Flagged]:
         """Return (time, values (n, 6): gyro then accel, outliers removed) of a step."""
         data = self.rec.read_step(step_index, DEVICE_IMU, self.sensor,
                                   [*GYRO_COLUMNS, *ACCEL_COLUMNS, "counter"])
@@ -392,7 +440,7 @@ class _Extractor:
                                  "window")
         return self.clean(step_index, data)
 
-    def clean(self, step_index: int, data: Any) -> tuple[_F64, _F64, int]:
+    def clean(self, step_index: int, data: Any) -> tuple[_F64, _F64, _Flagged]:
         """Time base from the counter and outlier rejection of one block of IMU rows."""
         values = np.column_stack([data.columns[c] for c in (*GYRO_COLUMNS, *ACCEL_COLUMNS)])
         if not np.all(np.isfinite(values)):
@@ -403,18 +451,24 @@ class _Extractor:
         t = base.time_s
         if self.sample_rate_hz <= 0:
             self.sample_rate_hz = base.sample_rate_hz
-        n_out = 0
-        if self.opt.outlier_test != "none":
-            if self.opt.outlier_test == "3sigma":
-                res = reject_outliers_3sigma(values, method=self.opt.outlier_method, time_s=t,
+        flagged = _Flagged()
+        test, method = self.opt.outlier_test, self.opt.outlier_method
+        if test != "none":
+            if test == "robust":
+                res = reject_outliers_robust(values, alpha=self.opt.outlier_alpha, method=method,
+                                             time_s=t)
+            elif test == "3sigma":
+                res = reject_outliers_3sigma(values, method=method, time_s=t,
                                              max_iterations=self.opt.outlier_passes)
             else:
-                res = reject_outliers_grubbs(values, method=self.opt.outlier_method, time_s=t)
+                res = reject_outliers_grubbs(values, method=method, time_s=t)
+            rows = np.flatnonzero(res.outlier_mask.any(axis=1))[:OUTLIER_TIMES_KEPT]
+            flagged = _Flagged(per_channel=np.asarray(res.n_outliers, dtype=np.int64),
+                               times_s=[float(x) for x in t[rows]], tested=True)
             values = res.values
-            n_out = int(np.sum(res.n_outliers))
-            if self.opt.outlier_method == "drop":
+            if method == "drop":
                 t = t[res.kept]
-        return t, values, n_out
+        return t, values, flagged
 
     def filtered(self, values: _F64) -> _F64:
         frac = self.opt.cutoff_fraction
@@ -441,7 +495,7 @@ class _Extractor:
         decim = 1 << max(0, math.ceil(math.log2(max(n_total, 1) / _ALLAN_POINTS)))
         acc = _Moments()
         means: list[_F64] = []
-        n_out = 0
+        flagged = _Flagged()
         align = math.nan
         t_first = t_last = math.nan
         fb = self.rec.read_step(step.index, DEVICE_TABLE, self.table.unit)
@@ -451,7 +505,7 @@ class _Extractor:
             if len(block) < 10:
                 continue
             t, raw, out = self.clean(step.index, block)
-            n_out += out
+            flagged.add(out)
             filt = self.filtered(raw)
             acc.add(raw, filt)
             usable = (raw.shape[0] // decim) * decim
@@ -477,7 +531,7 @@ class _Extractor:
             gyro_std_rps=acc.std[:3], accel_std_mps2=acc.std[3:],
             rate_b_rps=rate_b, force_b_mps2=force_b,
             angles_rad=np.asarray(mean_angles, dtype=np.float64), table_rate_rps=0.0,
-            axis=None, n_samples=acc.n, n_outliers=n_out, n_revolutions=0,
+            axis=None, n_samples=acc.n, **flagged.fields(), n_revolutions=0,
             alignment_error_s=align, duration_s=t_last - t_first, t_start_s=t_first,
             allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
                                  stats.random_walk]))
@@ -492,7 +546,7 @@ class _Extractor:
                                         step.valid_end_s)
             if i1 - i0 > CHUNK_ROWS:
                 return self.observe_long_static(step, role, tags, step_role)
-        t, raw, n_out = self.imu_window(step.index)
+        t, raw, flagged = self.imu_window(step.index)
         stats = compute_window_statistics(raw, self.sample_rate_hz)
         filt = self.filtered(raw)
         fb = self.rec.read_step(step.index, DEVICE_TABLE, self.table.unit)
@@ -550,7 +604,7 @@ class _Extractor:
             rate_b_rps=np.asarray(rate_b, dtype=np.float64),
             force_b_mps2=np.asarray(force_b, dtype=np.float64),
             angles_rad=np.asarray(mean_angles, dtype=np.float64), table_rate_rps=table_rate,
-            axis=axis, n_samples=int(t.size), n_outliers=n_out, n_revolutions=n_rev,
+            axis=axis, n_samples=int(t.size), **flagged.fields(), n_revolutions=n_rev,
             alignment_error_s=float(sync.alignment_error_s), duration_s=span, t_start_s=t0,
             allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
                                  stats.random_walk]))
