@@ -127,6 +127,7 @@ _UNIT_FACTORS: dict[str, float] = {
     "s": 1.0,
     "ms": 1e-3,
     "us": 1e-6,
+    "ns": 1e-9,
     "min": MINUTE,
     "h": HOUR,
     # angle

@@ -44,7 +44,7 @@ def write(tmp_path: Path, content: str | bytes, name: str = "data.csv") -> Path:
      "text in another encoding: save it as UTF-8)"),
     ("time_s,time_s [furlong],gyro_x_rps\n0,0,1\n", UnitError,
      "{p}: column 'time_s [furlong]' has an unknown unit 'furlong'; time_s is a time, expected "
-     "one of s, ms, us, min, h"),
+     "one of s, ms, us, ns, min, h"),
     ("time_s,gyro_x_rps,gyro_x_rps [deg/h]\n0,1,1\n", InvalidInputError,
      "{p}: columns 'gyro_x_rps' and 'gyro_x_rps [deg/h]' (header fields 2 and 3) both hold "
      "gyro_x_rps; expected one column per quantity"),

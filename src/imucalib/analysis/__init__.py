@@ -17,6 +17,9 @@ Contents
 :mod:`imucalib.analysis.noise_fit`
     :func:`fit_noise_terms`, :class:`NoiseFit`, :class:`NoiseTerm`, :func:`read_slope_lines`,
     :func:`term_avar`, :func:`make_noise_term`, :data:`FIT_TERMS`, :data:`FLICKER_FACTOR`.
+:mod:`imucalib.analysis.bias_instability`
+    :func:`read_allan_minimum`, :class:`AllanMinimum` (the Allan minimum over the usable τ, its
+    detection test and upper bound; imported from its module).
 :mod:`imucalib.analysis.noise_parameters`
     :class:`ImuNoiseParameters`, :func:`noise_parameters_from_fits` (the densities a VIO filter
     takes; imported from its module).

@@ -24,7 +24,9 @@ it reproduces Greenhall's EDF on the diagonal and the correlation ≈ 0.5 betwee
 octaves, which a diagonal weighting would ignore and so understate every uncertainty). The
 coefficient covariance is (Xᵀ Σ⁻¹ X)⁻¹ over the terms found (> 0); each term's uncertainty
 follows by the delta method (P = √(c/k) → u(P) = u(c)/(2kP)). A term is ``detected`` when
-c > 2·u(c). χ² = rᵀΣ⁻¹r is reported (about dof when the model fits). A term's τ range is the
+c > 2·u(c); otherwise its ``upper_bound_si`` is the coefficient of
+c_max = max(c, 0) + 2·u(c) (P < √(c_max/k), the one-sided 97.7 % limit).
+χ² = rᵀΣ⁻¹r is reported (about dof when the model fits). A term's τ range is the
 span of points where it contributes ≥ 25 % of the fitted variance.
 
 The ramp enters as a deterministic drift (σ_Allan(τ) = |R|τ/√2); quantization as white angle
@@ -48,6 +50,7 @@ from scipy import linalg, optimize
 
 from imucalib.analysis._avar_covariance import covariance_basis
 from imucalib.analysis.allan import DeviationResult
+from imucalib.analysis.bias_instability import read_allan_minimum
 from imucalib.analysis.noise_units import (
     DENSITY_CONVENTION,
     SI_UNITS,
@@ -114,6 +117,7 @@ class NoiseTerm:
     detected: bool
     display: tuple[UnitValue, ...] = field(default=())
     convention: str = DENSITY_CONVENTION
+    upper_bound_si: float | None = None  # when not detected: the value is below this (SI)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
@@ -130,19 +134,25 @@ class NoiseTerm:
 
         kw = dict(data)
         kw["value_si"], kw["std_si"] = num(kw["value_si"]), num(kw["std_si"])
+        bound = kw.get("upper_bound_si")
+        kw["upper_bound_si"] = None if bound is None else float(bound)
         kw["tau_range_s"] = tuple(num(v) for v in kw["tau_range_s"])
         kw["display"] = tuple(UnitValue(u["unit"], num(u["value"]), num(u["std"]),
-                                        u.get("note", "")) for u in kw.get("display", ()))
+                                        u.get("note", ""),
+                                        None if u.get("upper") is None else float(u["upper"]))
+                              for u in kw.get("display", ()))
         return cls(**kw)
 
 
 def make_noise_term(sensor: str, name: str, value_si: float, std_si: float = math.nan,
                     tau_range_s: tuple[float, float] = (math.nan, math.nan),
-                    method: str = "given", detected: bool = True) -> NoiseTerm:
+                    method: str = "given", detected: bool = True,
+                    upper_bound_si: float | None = None) -> NoiseTerm:
     """Build a :class:`NoiseTerm` (label, SI unit and conversions filled in).
 
     For values from elsewhere (a datasheet, another tool) that should be exported or tabulated
-    like fitted ones. `value_si` is the two-sided SI coefficient (:mod:`.noise_units`).
+    like fitted ones. `value_si` is the two-sided SI coefficient (:mod:`.noise_units`);
+    `upper_bound_si` the bound a term that was not detected lies below (docs/noise.md).
 
     Raises
     ------
@@ -154,7 +164,9 @@ def make_noise_term(sensor: str, name: str, value_si: float, std_si: float = mat
                                 f"{sorted(SI_UNITS['gyro'])}")
     return NoiseTerm(name, TERM_LABELS[sensor][name], float(value_si), float(std_si),
                      SI_UNITS[sensor][name], (float(tau_range_s[0]), float(tau_range_s[1])),
-                     method, bool(detected), convert_noise_term(sensor, name, value_si, std_si))
+                     method, bool(detected),
+                     convert_noise_term(sensor, name, value_si, std_si, upper_bound_si),
+                     upper_bound_si=None if upper_bound_si is None else float(upper_bound_si))
 
 
 _make_term = make_noise_term
@@ -371,8 +383,11 @@ def fit_noise_terms(result: DeviationResult, *, sensor: str = "gyro",
         else:
             val = math.sqrt(max(ck, 0.0) / _K[name])
             std = uc / (2 * _K[name] * val) if val > 0 else math.sqrt(uc / _K[name])
-        out_terms.append(_make_term(sensor, name, val, std, rng, "gls-fit",
-                                    active[k] and ck > 2 * uc))
+        detected = bool(active[k] and ck > 2 * uc)
+        c_max = max(ck, 0.0) + 2 * uc
+        upper = None if detected else (
+            math.sqrt(c_max) if name == "markov_sigma" else math.sqrt(c_max / _K[name]))
+        out_terms.append(_make_term(sensor, name, val, std, rng, "gls-fit", detected, upper))
     if "markov_sigma" in names and tc is not None:
         out_terms.append(_make_term(sensor, "markov_time_constant", tc, math.nan,
                                     out_terms[names.index("markov_sigma")].tau_range_s,
@@ -421,9 +436,11 @@ def read_slope_lines(result: DeviationResult, fit: NoiseFit) -> tuple[NoiseTerm,
     term supplies ≥ 50 % of the fitted variance (log-space mean weighted by EDF), read at its
     τ. Its uncertainty treats the points as fully correlated (conservative): the EDF-weighted
     mean of their relative standard errors 1/√(2·edf). Bias instability: the minimum σ_min of
-    the measured curve (``bias_instability_allan_minimum``, no factor, what many datasheets
-    quote) and σ_min/0.6643 (``bias_instability``). A term without a dominant point has no
-    reading.
+    the measured curve over the τ with enough EDF (``bias_instability_allan_minimum``, no
+    factor, what many datasheets quote) and σ_min/0.6643 (``bias_instability``), detected only
+    when the curve has flattened there, otherwise reported with the upper bound the curve gives
+    (:func:`~imucalib.analysis.bias_instability.read_allan_minimum`, docs/noise.md). A term
+    without a dominant point has no reading.
     """
     tau = result.taus_s
     dev = result.deviation
@@ -443,11 +460,14 @@ def read_slope_lines(result: DeviationResult, fit: NoiseFit) -> tuple[NoiseTerm,
         std = value * float(np.sum(w * rel[sel]) / np.sum(w))
         out.append(_make_term(fit.sensor, name, value, std, (tau[sel].min(), tau[sel].max()),
                               "slope-line", True))
-    k = int(np.argmin(dev))
-    smin, u = float(dev[k]), float(dev[k] * rel[k])
-    span = (float(tau[k]), float(tau[k]))
-    out.append(_make_term(fit.sensor, "bias_instability_allan_minimum", smin, u, span,
-                          "allan-minimum", True))
-    out.append(_make_term(fit.sensor, "bias_instability", smin / FLICKER_FACTOR,
-                          u / FLICKER_FACTOR, span, "allan-minimum", True))
+    amin = read_allan_minimum(result)
+    if not math.isfinite(amin.value):
+        return tuple(out)
+    span = (amin.tau_s, amin.tau_s)
+    upper = None if amin.detected else amin.upper_bound
+    out.append(_make_term(fit.sensor, "bias_instability_allan_minimum", amin.value, amin.std,
+                          span, "allan-minimum", amin.detected, upper))
+    out.append(_make_term(fit.sensor, "bias_instability", amin.value / FLICKER_FACTOR,
+                          amin.std / FLICKER_FACTOR, span, "allan-minimum", amin.detected,
+                          None if upper is None else upper / FLICKER_FACTOR))
     return tuple(out)

@@ -122,11 +122,13 @@ class UnitValue:
     value: float
     std: float
     note: str = ""
+    upper: float | None = None  # upper bound of a term not detected (docs/noise.md)
 
 
 def convert_noise_term(sensor: str, term: str, value_si: float,
-                       std_si: float = math.nan) -> tuple[UnitValue, ...]:
-    """Express a term in every unit of the module table (SI first where it is listed).
+                       std_si: float = math.nan,
+                       upper_si: float | None = None) -> tuple[UnitValue, ...]:
+    """Express a term (and its upper bound, if any) in every unit of the module table.
 
     ``bias_instability_allan_minimum`` converts like ``bias_instability``.
 
@@ -142,4 +144,6 @@ def convert_noise_term(sensor: str, term: str, value_si: float,
     if rows is None:
         raise InvalidInputError(f"unknown noise term {term!r}; expected one of "
                                 f"{sorted(SI_UNITS[sensor])}")
-    return tuple(UnitValue(u, value_si / f, std_si / f, note) for u, f, note in rows)
+    return tuple(UnitValue(u, value_si / f, std_si / f, note,
+                           None if upper_si is None else upper_si / f)
+                 for u, f, note in rows)

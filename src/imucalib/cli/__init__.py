@@ -12,6 +12,7 @@ Commands
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 ``calibrate RECORDING``            estimate, verify and decide; write the result JSON
+``allan DATA``                     noise terms of a bare static log (CSV, ROS CSV or .h5)
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 """
@@ -22,7 +23,15 @@ import logging
 import os
 import sys
 
-from imucalib.cli import calibrate, plan, recording, run, station, twin  # noqa: F401 (register)
+from imucalib.cli import (  # noqa: F401 (register)
+    allan,
+    calibrate,
+    plan,
+    recording,
+    run,
+    station,
+    twin,
+)
 from imucalib.cli._app import app, err_console, fail
 from imucalib.errors import CalibrationError
 

@@ -49,7 +49,7 @@ from __future__ import annotations
 import csv
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
@@ -71,11 +71,11 @@ MAX_ABS_TIME_S: Final = 1e10
 #: Largest accepted last − first time of one file: 366 days. [s]
 MAX_TIME_SPAN_S: Final = 366 * 86400.0
 
-_HEADER = re.compile(r"^\s*([A-Za-z][A-Za-z0-9_]*)\s*(?:\[(.+)\])?\s*$")
+_HEADER = re.compile(r"^\s*([A-Za-z][A-Za-z0-9_.]*)\s*(?:\[(.+)\])?\s*$")
 _SI_SUFFIXES = {"_rps": "rad/s", "_mps2": "m/s^2", "_s": "s"}
 _SUFFIX_UNITS = {"_rps": "rad/s", "_mps2": "m/s^2", "_s": "s", "_degc": "degC", "_dps": "deg/s",
                  "_g": "g"}
-_TIME_UNITS = ("s", "ms", "us", "min", "h")
+_TIME_UNITS = ("s", "ms", "us", "ns", "min", "h")
 _RATE_UNITS = ("rad/s", "deg/s", "°/s", "dps", "deg/h", "°/h", "dph", "rpm")
 _ACCEL_UNITS = ("m/s^2", "m/s²", "mps2", "g", "mg", "ug", "µg")
 #: The dimension a name suffix fixes: (what it is, the units of that dimension).
@@ -141,13 +141,18 @@ def _read_header(p: Path) -> list[str]:
 
 
 def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
-             units: Mapping[str, str] | None) -> tuple[list[str], dict[str, str]]:
-    """Return the canonical name of each header field and the unit of each name."""
-    names: list[str] = []
+             units: Mapping[str, str] | None, only: Collection[str] | None = None
+             ) -> tuple[list[str | None], dict[str, str]]:
+    """Return the canonical name of each header field (None: skipped) and each name's unit."""
+    names: list[str | None] = []
     col_units: dict[str, str] = {}
     seen: dict[str, int] = {}
     given_names: list[str] = []
     for i, header in enumerate(headers):
+        if only is not None and header.strip() not in only:
+            names.append(None)
+            given_names.append("")
+            continue
         m = _HEADER.match(header)
         if not header.strip():
             raise InvalidInputError(f"{p}: header field {i + 1} is empty; expected `name` or "
@@ -304,7 +309,8 @@ def _check_time(p: Path, t: np.ndarray[Any, Any]) -> None:
 
 
 def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] | None = None,
-                 units: Mapping[str, str] | None = None, to_si: bool = True) -> pd.DataFrame:
+                 units: Mapping[str, str] | None = None, to_si: bool = True,
+                 only: Collection[str] | None = None) -> pd.DataFrame:
     """Read a CSV file of IMU samples.
 
     Parameters
@@ -318,6 +324,9 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
     to_si : bool
         Convert every column with a known SI factor to SI (``deg/s`` → rad/s, ``g`` → m/s²);
         the canonical name must then carry the SI suffix.
+    only : collection of str, optional
+        Header fields (as written in the file) to read; the others are skipped unchecked (the
+        text and bookkeeping fields of a ``rostopic echo -p`` export, :mod:`.csv_layouts`).
 
     Returns
     -------
@@ -334,7 +343,7 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
     """
     p = Path(path)
     headers = _read_header(p)
-    names, col_units = _columns(p, headers, column_map, units)
+    names, col_units = _columns(p, headers, column_map, units, only)
     if TIME_COLUMN not in names:
         raise InvalidInputError(f"{p}: no {TIME_COLUMN!r} column; columns are {names}"
                                 " (use `column_map` to name the time column)")
@@ -344,6 +353,8 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
                                 "of numbers")
     data: dict[str, Any] = {}
     for pos, col in enumerate(names):
+        if col is None:
+            continue
         values = _numeric(p, raw, pos, col, len(names)).to_numpy()
         unit = col_units[col]
         factor = 1.0 if _key(unit) in _NO_FACTOR else parse_unit(unit)

@@ -48,7 +48,8 @@ def _cell(term: NoiseTerm | None, unit: str, note: str) -> str:
     for u in term.display:
         if u.unit == unit and u.note.startswith(note):
             if not term.detected:
-                return f"< {2 * u.std:.3g} (n.d.)" if math.isfinite(u.std) else "n.d."
+                bound = u.upper if u.upper is not None else 2 * u.std
+                return f"< {bound:.3g} (n.d.)" if math.isfinite(bound) else "n.d."
             if math.isfinite(u.std):
                 return format_pm(u.value, u.std)
             return f"{u.value:.4g}"
@@ -62,7 +63,9 @@ def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> st
     °/√h, one-sided density in (°/s)/√Hz or µg/√Hz, bias instability in °/h or µg with the
     0.664 factor, the raw Allan minimum beside it, …), one column per channel with value ± standard
     uncertainty, rounded by GUM 7.2.6 (:func:`~imucalib.report.numbers.format_pm`,
-    docs/reporting.md); ``< 2u (n.d.)`` marks a term the fit did not detect, ``—`` one not fitted.
+    docs/reporting.md); ``< X (n.d.)`` marks a term that was not detected, X its upper bound
+    (the fit's 2σ limit; for the Allan minimum the lowest usable 97.7 % confidence limit,
+    docs/noise.md; 2u for a term without one), ``—`` one not fitted or without a usable point.
     Sensors are grouped; the last line states the convention.
 
     Raises
@@ -91,7 +94,8 @@ def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> st
                 cells.append(_cell(term, unit, note))
             rows.append([label, unit, *cells])
     foot = ("Densities: N two-sided (IEEE 952; = Kalibr sigma_c); the noise-density row is the "
-            "one-sided datasheet value sqrt(2)*N. Uncertainties are 1-sigma.")
+            "one-sided datasheet value sqrt(2)*N. Uncertainties are 1-sigma; '< X (n.d.)': not "
+            "detected, below the upper bound X (docs/noise.md).")
     if fmt == "csv":
         buf = _io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")

@@ -5,6 +5,8 @@ Contents
 :func:`analyze_allan_recording` → :class:`NoiseCharacterization`
     For each static record: OADEV with confidence intervals and the noise-term fit of every gyro
     and accelerometer axis, streamed in bounded memory.
+:func:`analyze_allan_arrays`
+    The same for one record given as arrays (``imucalib allan DATA`` on a CSV).
 :class:`SegmentNoise`, :class:`ChannelNoise`
     One record (step) and one channel of it.
 :data:`FORMAT_VERSION`, :data:`STATIC_STEP_KINDS`
@@ -39,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from imucalib import __version__
 from imucalib.analysis import (
@@ -58,7 +61,7 @@ from imucalib.io.reader import Recording, open_recording
 from imucalib.units import parse_unit
 
 __all__ = ["FORMAT_VERSION", "STATIC_STEP_KINDS", "ChannelNoise", "NoiseCharacterization",
-           "SegmentNoise", "analyze_allan_recording"]
+           "SegmentNoise", "analyze_allan_arrays", "analyze_allan_recording"]
 
 #: Version of the JSON form of :class:`NoiseCharacterization`.
 FORMAT_VERSION = 1
@@ -388,54 +391,140 @@ def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int]
     all_kinds = tuple(dict.fromkeys(("oadev", *kinds)))
     has_temp = TEMPERATURE_COLUMN in rec.stream_info(device, unit).columns
     columns = [c for c, _, _ in chans] + ([TEMPERATURE_COLUMN] if has_temp else [])
+    fit_options = _FitOptions(taus, all_kinds, confidence, tuple(terms), tau_range,
+                              memory_limit_samples, scratch_dir, sampling_rtol)
     segments = []
     for label, index, t0, t1 in _windows(rec, steps):
-        check = SamplingCheck(rtol=sampling_rtol)
-        streams: dict[str, AllanStream] = {}
-        sums = dict.fromkeys(columns, 0.0)
-        try:
-            for chunk in rec.iter_stream(device, unit, chunk_samples, columns, t0, t1):
-                check.update(chunk.time_s)
-                if not streams:
-                    first = check.n_samples
-                    rate0 = 1.0 / float(np.median(np.diff(chunk.time_s))) if first > 1 else 1.0
-                    streams = {c: AllanStream(rate0, unit=_SI_UNIT[s], scratch_dir=scratch_dir,
-                                              memory_limit_samples=memory_limit_samples)
-                               for c, s, _ in chans}
-                for c, _, factor in chans:
-                    values = np.asarray(chunk.columns[c], dtype=np.float64) * factor
-                    try:
-                        streams[c].append(values)
-                    except InvalidInputError as exc:
-                        raise InvalidInputError(f"{label}, column {c}: {exc}") from exc
-                    sums[c] += float(np.sum(values))
-                if has_temp:
-                    sums[TEMPERATURE_COLUMN] += float(np.sum(chunk.columns[TEMPERATURE_COLUMN],
-                                                             dtype=np.float64))
-            n = check.n_samples
-            if n < 3:
-                raise InvalidInputError(f"{label}: {n} sample(s) in the window "
-                                        f"[{t0}, {t1}) s of {device}/{unit}; need at least 3")
-            rate = check.sample_rate_hz()
-            results = []
-            for c, sensor, _ in chans:
-                streams[c].sample_rate_hz = rate
-                devs = streams[c].compute(all_kinds, taus=taus, confidence=confidence)
-                fit = fit_noise_terms(devs["oadev"], sensor=sensor, terms=terms,
-                                      tau_range_s=tau_range)
-                results.append(ChannelNoise(c, sensor, devs, fit, sums[c] / n))
-        finally:
-            for s in streams.values():
-                s.close()
-        segments.append(SegmentNoise(
-            label=label, step_index=index, t_start_s=check.t_first_s,
-            t_end_s=check.t_last_s, n_samples=n, sample_rate_hz=rate,
-            temperature_degc=sums[TEMPERATURE_COLUMN] / n if has_temp else None,
-            channels=tuple(results)))
+        chunks = rec.iter_stream(device, unit, chunk_samples, columns, t0, t1)
+        where = f"the window [{t0}, {t1}) s of {device}/{unit}"
+        segments.append(_segment(label, index, chunks, chans, has_temp, where, fit_options))
+    return _characterization(str(rec.path), device, unit, segments, fit_options, tau_min_s)
+
+
+def _characterization(source: str, device: str, unit: str, segments: Sequence[SegmentNoise],
+                      opts: _FitOptions, tau_min_s: float | None) -> NoiseCharacterization:
+    taus = opts.taus
     spec = taus if isinstance(taus, str | int) else [float(v) for v in np.ravel(taus)]
     settings = {"taus": spec,
-                "kinds": list(all_kinds), "confidence": confidence, "terms": list(terms),
-                "sampling_rtol": sampling_rtol, "tau_min_s": tau_min_s}
+                "kinds": list(opts.kinds), "confidence": opts.confidence,
+                "terms": list(opts.terms), "sampling_rtol": opts.sampling_rtol,
+                "tau_min_s": tau_min_s}
     return NoiseCharacterization(
-        recording=str(rec.path), device=device, unit=unit, segments=tuple(segments),
+        recording=source, device=device, unit=unit, segments=tuple(segments),
         settings=settings, created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
+
+
+@dataclass(frozen=True)
+class _FitOptions:
+    """Settings shared by every record of one analysis."""
+
+    taus: TauSpec
+    kinds: tuple[str, ...]
+    confidence: float
+    terms: tuple[str, ...]
+    tau_range: tuple[float, float] | None
+    memory_limit_samples: int
+    scratch_dir: str | os.PathLike[str] | None
+    sampling_rtol: float
+
+
+@dataclass(frozen=True)
+class _Chunk:
+    """A block of samples: what :meth:`Recording.iter_stream` yields, or a slice of arrays."""
+
+    time_s: Any
+    columns: Mapping[str, Any]
+
+
+def _segment(label: str, index: int | None, chunks: Iterable[Any],
+             chans: Sequence[tuple[str, str, float]], has_temp: bool, where: str,
+             opts: _FitOptions) -> SegmentNoise:
+    """Stream `chunks` (``time_s``, ``columns``) through the deviations and fit each channel."""
+    check = SamplingCheck(rtol=opts.sampling_rtol)
+    streams: dict[str, AllanStream] = {}
+    names = [c for c, _, _ in chans] + ([TEMPERATURE_COLUMN] if has_temp else [])
+    sums = dict.fromkeys(names, 0.0)
+    try:
+        for chunk in chunks:
+            check.update(chunk.time_s)
+            if not streams:
+                first = check.n_samples
+                rate0 = 1.0 / float(np.median(np.diff(chunk.time_s))) if first > 1 else 1.0
+                streams = {c: AllanStream(rate0, unit=_SI_UNIT[s], scratch_dir=opts.scratch_dir,
+                                          memory_limit_samples=opts.memory_limit_samples)
+                           for c, s, _ in chans}
+            for c, _, factor in chans:
+                values = np.asarray(chunk.columns[c], dtype=np.float64) * factor
+                try:
+                    streams[c].append(values)
+                except InvalidInputError as exc:
+                    raise InvalidInputError(f"{label}, column {c}: {exc}") from exc
+                sums[c] += float(np.sum(values))
+            if has_temp:
+                sums[TEMPERATURE_COLUMN] += float(np.sum(chunk.columns[TEMPERATURE_COLUMN],
+                                                         dtype=np.float64))
+        n = check.n_samples
+        if n < 3:
+            raise InvalidInputError(f"{label}: {n} sample(s) in {where}; need at least 3")
+        rate = check.sample_rate_hz()
+        results = []
+        for c, sensor, _ in chans:
+            streams[c].sample_rate_hz = rate
+            devs = streams[c].compute(opts.kinds, taus=opts.taus, confidence=opts.confidence)
+            fit = fit_noise_terms(devs["oadev"], sensor=sensor, terms=opts.terms,
+                                  tau_range_s=opts.tau_range)
+            results.append(ChannelNoise(c, sensor, devs, fit, sums[c] / n))
+    finally:
+        for s in streams.values():
+            s.close()
+    return SegmentNoise(
+        label=label, step_index=index, t_start_s=check.t_first_s,
+        t_end_s=check.t_last_s, n_samples=n, sample_rate_hz=rate,
+        temperature_degc=sums[TEMPERATURE_COLUMN] / n if has_temp else None,
+        channels=tuple(results))
+
+
+def analyze_allan_arrays(time_s: ArrayLike, columns: Mapping[str, ArrayLike], *,
+                         source: str, device: str = "imu", unit: str = "imu",
+                         label: str = "whole record", taus: TauSpec = "octave",
+                         kinds: Sequence[str] = ("oadev",), confidence: float = ONE_SIGMA,
+                         terms: Sequence[str] = FIT_TERMS, chunk_samples: int = 1 << 18,
+                         memory_limit_samples: int = 1 << 22,
+                         scratch_dir: str | os.PathLike[str] | None = None,
+                         sampling_rtol: float = 0.01,
+                         tau_min_s: float | None = None) -> NoiseCharacterization:
+    """Characterise the noise of one static record given as arrays (a CSV, no Recording).
+
+    The same analysis as :func:`analyze_allan_recording` (one record, ``"whole record"``):
+    `columns` maps canonical names (``gyro_x_rps`` …, ``accel_z_mps2``, optionally
+    ``temperature_degc``) to SI samples at the times `time_s` [s]; gyro and accelerometer
+    columns are analysed. `source` names the data in the result (its path).
+
+    Raises
+    ------
+    InvalidInputError
+        No gyro or accelerometer column, arrays of unequal length, non-uniform time stamps,
+        or a record too short for any τ.
+    """
+    t = np.asarray(time_s, dtype=np.float64)
+    chans = [(c, "gyro" if c in GYRO_COLUMNS else "accel", 1.0)
+             for c in (*GYRO_COLUMNS, *ACCEL_COLUMNS) if c in columns]
+    if not chans:
+        raise InvalidInputError(f"{source}: none of the columns "
+                                f"{list(GYRO_COLUMNS + ACCEL_COLUMNS)}; found {sorted(columns)}")
+    data = {c: np.asarray(columns[c], dtype=np.float64) for c, _, _ in chans}
+    has_temp = TEMPERATURE_COLUMN in columns
+    if has_temp:
+        data[TEMPERATURE_COLUMN] = np.asarray(columns[TEMPERATURE_COLUMN], dtype=np.float64)
+    for c, v in data.items():
+        if v.shape != t.shape:
+            raise InvalidInputError(f"{source}: column {c} has {v.size} samples; time_s has "
+                                    f"{t.size}")
+    tau_range = None if tau_min_s is None else (float(tau_min_s), math.inf)
+    opts = _FitOptions(taus, tuple(dict.fromkeys(("oadev", *kinds))), confidence, tuple(terms),
+                       tau_range, memory_limit_samples, scratch_dir, sampling_rtol)
+    step = max(int(chunk_samples), 1)
+    chunks = (_Chunk(t[i:i + step], {c: v[i:i + step] for c, v in data.items()})
+              for i in range(0, t.size, step))
+    seg = _segment(label, None, chunks, chans, has_temp, source, opts)
+    return _characterization(source, device, unit, [seg], opts, tau_min_s)
