@@ -97,8 +97,9 @@ def run(
         metavar="PLAN", help="Plan file (.toml); not needed with --resume.")] = None,
     station: Annotated[str, typer.Option(
         help="'sim' (the plan's [twin]) or a station file STATION.toml.")] = "sim",
-    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for the recording.")] = Path(
-        "out"),
+    out: Annotated[Path, typer.Option("--out", "-o", help=(
+        "Folder for the recording (named PLAN-TIME.h5), or the recording itself (.h5)."))]
+    = Path("out"),
     resume: Annotated[Path | None, typer.Option(
         help="Continue this interrupted run's recording.")] = None,
     operator: Annotated[str | None, typer.Option(help="Operator's name (recorded).")] = None,
@@ -167,9 +168,16 @@ def run(
             st, station_toml = make_station(station, plan)
             options.station_toml = station_toml
             options.truth = getattr(st, "truth", None)
-            out.mkdir(parents=True, exist_ok=True)
-            stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
-            path = out / f"{plan.name}-{stamp}.h5"
+            if out.suffix.lower() in (".h5", ".hdf5"):
+                path = out
+            else:
+                stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
+                path = out / f"{plan.name}-{stamp}.h5"
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise ConfigurationError(f"cannot create {path.parent}: "
+                                         f"{exc.strerror or exc}") from exc
             with live_view or _nothing():
                 summary = run_plan(plan, st, path, options=options)
     except CalibrationError as exc:
