@@ -1,14 +1,27 @@
-"""The Typer application and the console helpers shared by every command module."""
+"""The Typer application and the console helpers shared by every command module.
+
+Help texts are plain text, not rich markup: units in brackets (``Moving-window length [s].``)
+and table names (``the plan's [twin]``) must show as written, so every Typer app of the command
+line is made by :func:`typer_app`, which turns rich markup off.
+"""
 
 from __future__ import annotations
+
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
 from rich.markup import escape
 
-__all__ = ["app", "console", "err_console", "fail"]
+__all__ = ["app", "console", "err_console", "fail", "typer_app"]
 
-app = typer.Typer(
+
+def typer_app(**options: Any) -> typer.Typer:
+    """Return a Typer app (the root or a command group) whose help texts are not markup."""
+    return typer.Typer(rich_markup_mode=None, **options)
+
+
+app = typer_app(
     name="imucalib",
     help="Inertial-sensor calibration station: twin, recordings, analysis.",
     no_args_is_help=True,
@@ -17,6 +30,23 @@ app = typer.Typer(
 )
 console = Console()
 err_console = Console(stderr=True)
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from imucalib import __version__
+
+        typer.echo(f"imucalib {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[bool, typer.Option(
+        "--version", callback=_print_version, is_eager=True,
+        help="Print the version and exit.")] = False,
+) -> None:
+    """Inertial-sensor calibration station: twin, recordings, analysis."""
 
 
 def fail(exc: Exception) -> typer.Exit:

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from imucalib.cli._app import app, console, fail
+from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 
 if TYPE_CHECKING:
@@ -16,9 +18,13 @@ if TYPE_CHECKING:
 __all__ = ["apply", "calibrate", "run_calibration"]
 
 
-def run_calibration(recording: Path, imu: str | None, model: str, out: Path | None
+def run_calibration(recording: Path, imu: str | None, model: str, out: Path | None, *,
+                    progress: Callable[[float], None] | None = None
                     ) -> tuple[ProcedureResult, list[Path]]:
-    """Analyse a recording with its procedure (the registry's choice); write its outputs."""
+    """Analyse a recording with its procedure (the registry's choice); write its outputs.
+
+    `progress` is given the fraction of the analysis done (the procedure's own measure).
+    """
     from imucalib.exports.outputs import write_outputs
     from imucalib.io.reader import open_recording
     from imucalib.procedures import registry
@@ -26,7 +32,7 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
     with open_recording(recording) as rec:
         procedure = registry.get(registry.identify(rec))
     options = {"model": model} if "model" in procedure.analysis_options else {}
-    result = procedure.analyze(recording, unit=imu, options=options)
+    result = procedure.analyze(recording, unit=imu, options=options, progress=progress)
     folder = out if out is not None else recording.parent
     try:
         return result, write_outputs(result, folder, name=recording.stem)
@@ -64,6 +70,7 @@ def calibrate(
     steps: Annotated[Path | None, typer.Option(
         "--steps", help="Step file (TOML) saying what each interval of a CSV is; the CSV is "
                         "first imported into OUT/<name>.imported.h5 (docs/import.md).")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)] = False,
 ) -> None:
     """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
 
@@ -83,7 +90,8 @@ def calibrate(
                                     "file saying what each interval is, docs/import.md); "
                                     "`imucalib segments DATA --step-file FILE` writes one to "
                                     "complete")
-        result, written = run_calibration(recording, imu, model, out)
+        with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
+            result, written = run_calibration(recording, imu, model, out, progress=update)
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_result(console, result, written)

@@ -10,7 +10,7 @@ import typer
 from pydantic import ValidationError
 from rich.table import Table
 
-from imucalib.cli._app import app, console, fail
+from imucalib.cli._app import app, console, fail, typer_app
 from imucalib.errors import CalibrationError, ConfigurationError
 from imucalib.plan.bounds import (
     MAX_RECORD_S,
@@ -26,7 +26,7 @@ __all__ = ["plan_app"]
 #: Most repetitions `plan new p1` writes (each adds 36 steps and the static record).
 MAX_REPETITIONS = 50
 
-plan_app = typer.Typer(help="Validate, show and describe test plans.", no_args_is_help=True)
+plan_app = typer_app(help="Validate, show and describe test plans.", no_args_is_help=True)
 app.add_typer(plan_app, name="plan")
 
 
@@ -83,8 +83,36 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
     console.print(_estimate_line(plan), highlight=False, soft_wrap=True)
 
 
+#: The options of `plan new` and the generator keyword each sets.
+_PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "static_s",
+                 "sample_rate_hz": "sample_rate_hz", "seed": "seed", "record_s": "record_s",
+                 "temperatures": "temperatures_degc"}
+
+
+def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
+                            ) -> None:
+    """Refuse an option given on the command line that `procedure`'s plan generator does not take.
+
+    An option the generator does not take would otherwise be dropped without a word (P1
+    calibrates at one temperature: ``plan new p1 --temperatures=…`` would write the same plan).
+    The message names the procedures whose plans do take it.
+    """
+    from imucalib.procedures import registry
+
+    for param, keyword in _PLAN_OPTIONS.items():
+        source = ctx.get_parameter_source(param)  # click's ParameterSource (typer vendors it)
+        if keyword in plan_options or source is None or source.name == "DEFAULT":
+            continue
+        flag = "--" + param.replace("_", "-")
+        takers = [n for n in registry.names() if keyword in registry.get(n).plan_options]
+        where = (f"; the plan of {', '.join(f'`plan new {n} {flag}`' for n in takers)} takes it"
+                 if takers else "")
+        raise ConfigurationError(f"the {procedure} plan takes no {flag}{where}")
+
+
 @plan_app.command("new")
 def new(
+    ctx: typer.Context,
     procedure: Annotated[str, typer.Argument(help="Procedure: p1 or allan (the registry's).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
@@ -109,6 +137,7 @@ def new(
 
     try:
         proc = registry.get(procedure)
+        _refuse_foreign_options(ctx, procedure, proc.plan_options)
         temps = None
         if temperatures is not None and "temperatures_degc" in proc.plan_options:
             try:

@@ -8,6 +8,7 @@ from typing import Annotated, Any
 import typer
 
 from imucalib.cli._app import app, console, fail
+from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 
 __all__ = ["export", "inspect", "recover", "segments"]
@@ -53,6 +54,7 @@ def export(
         "--step-file", help="Also write the recording's steps as a step file (TOML) here: "
                             "with the CSV, `imucalib calibrate CSV --steps FILE` calibrates "
                             "it (docs/import.md).")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)] = False,
 ) -> None:
     """Export a stream, or one step of it, as CSV or MAT (chosen by the file suffix)."""
     from imucalib.exports.streams import export_csv, export_mat
@@ -70,7 +72,8 @@ def export(
             raise InvalidInputError(f"--out must end in .csv or .mat; got {out.name!r}")
         with open_recording(path) as rec:
             if suffix == ".csv":
-                export_csv(rec, device, unit, out, step=step)
+                with progress_bar(f"export {stream}", quiet=quiet) as update:
+                    export_csv(rec, device, unit, out, step=step, progress=update)
             else:
                 export_mat(rec, device, unit, out, step=step)
             if step_file is not None:

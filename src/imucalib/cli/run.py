@@ -10,10 +10,12 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.console import Group
 from rich.live import Live
 from rich.table import Table
 
-from imucalib.cli._app import app, console, fail
+from imucalib.cli._app import app, console, err_console, fail
+from imucalib.cli._progress import make_progress, shows_progress
 from imucalib.errors import CalibrationError, ConfigurationError
 from imucalib.plan.schema import Plan
 from imucalib.station.devices import Station
@@ -95,8 +97,9 @@ def run(
         metavar="PLAN", help="Plan file (.toml); not needed with --resume.")] = None,
     station: Annotated[str, typer.Option(
         help="'sim' (the plan's [twin]) or a station file STATION.toml.")] = "sim",
-    out: Annotated[Path, typer.Option("--out", "-o", help="Folder for the recording.")] = Path(
-        "out"),
+    out: Annotated[Path, typer.Option("--out", "-o", help=(
+        "Folder for the recording (named PLAN-TIME.h5), or the recording itself (.h5)."))]
+    = Path("out"),
     resume: Annotated[Path | None, typer.Option(
         help="Continue this interrupted run's recording.")] = None,
     operator: Annotated[str | None, typer.Option(help="Operator's name (recorded).")] = None,
@@ -105,9 +108,17 @@ def run(
     tick_s: Annotated[float | None, typer.Option(
         help="Acquisition interval [s]; default 2 on the twin (virtual), 0.5 on equipment.")]
     = None,
-    live: Annotated[bool, typer.Option(help="Show the live view.")] = True,
+    live: Annotated[bool, typer.Option(
+        help="Show the live view (on a terminal's stderr only).")] = True,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live view nor progress bar "
+                                        "(none is drawn anyway when stderr is not a terminal).")]
+    = False,
 ) -> None:
-    """Run a plan on the twin or on real equipment, writing a crash-safe recording."""
+    """Run a plan on the twin or on real equipment, writing a crash-safe recording.
+
+    On a terminal, stderr shows a live view of the station and a progress bar: station time
+    done of the plan's least station time, with an ETA.
+    """
     from imucalib.plan import load_plan
     from imucalib.station.runner import resume_run, run_plan
 
@@ -120,13 +131,20 @@ def run(
     else:
         op = AutoOperator(who)  # checked below: only when the plan has no operator checks
     last_draw = [0.0]
-    live_view = Live(console=console, auto_refresh=False, transient=True) if live else None
+    shown = live and shows_progress(quiet)
+    live_view = (Live(console=err_console, auto_refresh=False, transient=True) if shown
+                 else None)
+    bar = make_progress()
+    task = bar.add_task("run", total=1.0, detail="")
 
     def on_status(status: RunStatus) -> None:
         now = time.monotonic()
         if live_view is not None and now - last_draw[0] > 0.1:
             last_draw[0] = now
-            live_view.update(_view(status), refresh=True)
+            planned = status.time_s + status.remaining_min_s
+            bar.update(task, completed=status.time_s / planned if planned > 0 else 0.0,
+                       detail=f"{status.steps_done}/{status.n_steps} steps")
+            live_view.update(Group(_view(status), bar), refresh=True)
 
     tick = tick_s if tick_s is not None else (2.0 if station == "sim" else 0.5)
     options = RunOptions(tick_s=tick, operator=op, on_status=on_status)
@@ -150,9 +168,16 @@ def run(
             st, station_toml = make_station(station, plan)
             options.station_toml = station_toml
             options.truth = getattr(st, "truth", None)
-            out.mkdir(parents=True, exist_ok=True)
-            stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
-            path = out / f"{plan.name}-{stamp}.h5"
+            if out.suffix.lower() in (".h5", ".hdf5"):
+                path = out
+            else:
+                stamp = datetime.now(UTC).strftime("%Y%m%dT%H%M%SZ")
+                path = out / f"{plan.name}-{stamp}.h5"
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise ConfigurationError(f"cannot create {path.parent}: "
+                                         f"{exc.strerror or exc}") from exc
             with live_view or _nothing():
                 summary = run_plan(plan, st, path, options=options)
     except CalibrationError as exc:

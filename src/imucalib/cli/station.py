@@ -8,12 +8,12 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from imucalib.cli._app import app, console, err_console, fail
+from imucalib.cli._app import app, console, err_console, fail, typer_app
 from imucalib.errors import CalibrationError
 
 __all__ = ["check", "station_app"]
 
-station_app = typer.Typer(
+station_app = typer_app(
     name="station",
     help="Real station equipment: check the station file and every device.",
     no_args_is_help=True,

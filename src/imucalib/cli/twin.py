@@ -10,6 +10,7 @@ import typer
 from rich.table import Table
 
 from imucalib.cli._app import app, console, fail
+from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, ConfigurationError
 
 __all__ = ["scenarios", "simulate"]
@@ -33,6 +34,7 @@ def simulate(
     out: Annotated[Path, typer.Option("--out", "-o", help="Recording to write (.h5).")],
     seed: Annotated[int | None, typer.Option(help="Override the scenario's seed.")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing file.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)] = False,
 ) -> None:
     """Run a scenario on the digital twin and write its Recording.
 
@@ -43,7 +45,6 @@ def simulate(
     space of the output's filesystem is refused before anything is written.
     """
     from pydantic import ValidationError
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     from imucalib.plan.bounds import format_validation_error
     from imucalib.plan.budget import check_free_space
@@ -63,22 +64,11 @@ def simulate(
         replaced = out.stat().st_size if overwrite and out.is_file() else 0
         check_free_space(estimate.total_bytes, out, replaced_bytes=replaced,
                          what=f"the recording of scenario {sc.name!r}")
-        with Progress(
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            TextColumn("{task.fields[virtual]}"),
-            TimeRemainingColumn(),
-            console=console,
-            transient=False,
-        ) as progress:
-            task = progress.add_task(sc.name, total=1.0, virtual="")
+        with progress_bar(sc.name, quiet=quiet) as update:
 
             def on_progress(done_s: float, total_s: float) -> None:
-                progress.update(
-                    task,
-                    completed=done_s / total_s if total_s > 0 else 1.0,
-                    virtual=f"{done_s:,.0f} / {total_s:,.0f} s virtual",
-                )
+                update(done_s / total_s if total_s > 0 else 1.0,
+                       f"{done_s:,.0f} / {total_s:,.0f} s virtual")
 
             summary = simulate_scenario(sc, out, progress=on_progress, overwrite=overwrite)
     except ValidationError as exc:  # --seed outside the scenario's bounds

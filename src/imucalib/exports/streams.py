@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +54,8 @@ def export_csv(recording: Recording | str | os.PathLike[str], device: str, unit:
                path: str | os.PathLike[str], *, step: int | None = None,
                columns: Sequence[str] | None = None, t_start_s: float | None = None,
                t_end_s: float | None = None, valid_only: bool = True,
-               chunk_samples: int = 1 << 18) -> int:
+               chunk_samples: int = 1 << 18,
+               progress: Callable[[float], None] | None = None) -> int:
     """Write a stream (or a window, or a step's valid window) to CSV, one chunk at a time.
 
     The first column is ``time_s [s]``; each header names the column and its unit in
@@ -79,6 +80,9 @@ def export_csv(recording: Recording | str | os.PathLike[str], device: str, unit:
         With `step`: the valid window (default) or the whole step.
     chunk_samples : int
         Rows held in memory at once.
+    progress : callable, optional
+        Called after each chunk with the fraction of the rows written (increasing; the last
+        call is 1.0, also for an empty window).
 
     Returns
     -------
@@ -103,6 +107,8 @@ def export_csv(recording: Recording | str | os.PathLike[str], device: str, unit:
         names = [c for c in (columns if columns is not None else info.columns)
                  if c != TIME_COLUMN]
         header = [f"{c} [{info.columns[c].unit}]" for c in (TIME_COLUMN, *names)]
+        i0, i1 = rec.row_range(device, unit, t0, t1)
+        total = max(i1 - i0, 0)
         try:
             with open(out, "w", newline="", encoding="utf-8") as fh:
                 fh.write(",".join(header) + "\n")
@@ -112,8 +118,12 @@ def export_csv(recording: Recording | str | os.PathLike[str], device: str, unit:
                     frame.to_csv(fh, header=False, index=False, na_rep="NaN",
                                  lineterminator="\n")
                     n_rows += len(chunk)
+                    if progress is not None and 0 < n_rows < total:
+                        progress(n_rows / total)
         except OSError as exc:
             raise RecordingError(f"cannot write {out}: {exc}") from exc
+    if progress is not None:
+        progress(1.0)
     return n_rows
 
 

@@ -91,16 +91,25 @@ class RecordingSummary:
         for key in ("created_utc", "software_version", "scenario_name"):
             if key in self.metadata:
                 console.print(f"  {key}: {self.metadata[key]}")
-        table = Table("stream", "samples", "duration [s]", "rate [Hz]", "time gaps",
-                      "counter gaps (missing)", "columns [unit]", title="Streams")
+        # Units in brackets are text, not markup. On a terminal the tables fit its width (the
+        # stream names are never cut); without one (a pipe, a file) they are printed at their
+        # natural width, so nothing is cut or folded at 80 columns.
+        table = Table(title="Streams")
+        longest = max((len(s.device) + 1 + len(s.unit) for s in self.streams), default=6)
+        table.add_column("stream", no_wrap=True, min_width=longest)
+        for header in ("samples", "duration [s]", "rate [Hz]", "time gaps",
+                       "counter gaps (missing)", "columns [unit]"):
+            table.add_column(escape(header))
         for s in self.streams:
             cols = ", ".join(f"{k} [{u}]" for k, u in s.columns.items() if k != TIME_COLUMN)
             cg = "—" if s.counter_gaps is None else f"{s.counter_gaps} ({s.missing_samples})"
-            table.add_row(f"{s.device}/{s.unit}", f"{s.n_samples:,}", f"{s.duration_s:,.3f}",
-                          f"{s.sample_rate_hz:,.3f}", str(s.time_gaps), cg, cols)
-        console.print(table)
-        steps = Table("#", "kind", "label", "role", "tags", "valid window [s]", "status",
-                      title="Steps")
+            table.add_row(escape(f"{s.device}/{s.unit}"), f"{s.n_samples:,}",
+                          f"{s.duration_s:,.3f}", f"{s.sample_rate_hz:,.3f}", str(s.time_gaps),
+                          cg, escape(cols))
+        _print_whole(console, table)
+        steps = Table(title="Steps")
+        for header in ("#", "kind", "label", "role", "tags", "valid window [s]", "status"):
+            steps.add_column(escape(header))
         for st in self.steps:
             tags = ", ".join(st.tags)
             if st.units:
@@ -108,8 +117,22 @@ class RecordingSummary:
             steps.add_row(str(st.index), st.kind, escape(st.label), escape(st.role or "—"),
                           escape(tags or "—"),
                           f"{st.valid_start_s:,.3f} – {st.valid_end_s:,.3f}", st.status)
-        console.print(steps)
+        _print_whole(console, steps)
         console.print(f"{self.n_events} logged event(s)")
+
+
+def _print_whole(console: Console, table: Any) -> None:
+    """Print `table` to fit a terminal, or at its natural width when `console` is not one."""
+    from rich.measure import Measurement
+    from rich.segment import Segments
+
+    if console.is_terminal:
+        console.print(table)
+        return
+    natural = Measurement.get(console, console.options.update_width(10_000), table).maximum
+    width = max(console.width, natural)
+    console.print(Segments(console.render(table, console.options.update(width=width))),
+                  crop=False)
 
 
 def _counter_steps(c: np.ndarray) -> np.ndarray:

@@ -34,7 +34,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -308,7 +308,9 @@ def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
                             memory_limit_samples: int = 1 << 22,
                             scratch_dir: str | os.PathLike[str] | None = None,
                             sampling_rtol: float = 0.01,
-                            tau_min_s: float | None = None) -> NoiseCharacterization:
+                            tau_min_s: float | None = None,
+                            progress: Callable[[float], None] | None = None
+                            ) -> NoiseCharacterization:
     """Characterise the noise of an IMU from the static records of a Recording.
 
     Parameters
@@ -345,6 +347,9 @@ def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
         deviation at τ below a few filter time constants, which a white-noise term would
         otherwise be bent to follow (the twin's 90 Hz filter at 200 Hz made a fit from the
         first octave read the bias instability 3× too high). Without a bandwidth, every τ. [s]
+    progress : callable, optional
+        Called after each record with the fraction of the records analysed (increasing; the
+        last call is 1.0).
 
     Returns
     -------
@@ -361,11 +366,11 @@ def analyze_allan_recording(recording: Recording | str | os.PathLike[str], *,
     if isinstance(recording, Recording):
         return _analyze(recording, device, unit, steps, channels, taus, kinds, confidence,
                         terms, chunk_samples, memory_limit_samples, scratch_dir, sampling_rtol,
-                        tau_min_s)
+                        tau_min_s, progress)
     with open_recording(recording) as rec:
         return _analyze(rec, device, unit, steps, channels, taus, kinds, confidence, terms,
                         chunk_samples, memory_limit_samples, scratch_dir, sampling_rtol,
-                        tau_min_s)
+                        tau_min_s, progress)
 
 
 def _bandwidth_tau_min_s(rec: Recording, unit: str) -> float | None:
@@ -382,7 +387,8 @@ def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int]
              channels: Sequence[str] | None, taus: TauSpec, kinds: Sequence[str],
              confidence: float, terms: Sequence[str], chunk_samples: int,
              memory_limit_samples: int, scratch_dir: str | os.PathLike[str] | None,
-             sampling_rtol: float, tau_min_s: float | None) -> NoiseCharacterization:
+             sampling_rtol: float, tau_min_s: float | None,
+             progress: Callable[[float], None] | None = None) -> NoiseCharacterization:
     unit = _select_unit(rec, device, unit)
     if tau_min_s is None:
         tau_min_s = _bandwidth_tau_min_s(rec, unit)
@@ -394,10 +400,13 @@ def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int]
     fit_options = _FitOptions(taus, all_kinds, confidence, tuple(terms), tau_range,
                               memory_limit_samples, scratch_dir, sampling_rtol)
     segments = []
-    for label, index, t0, t1 in _windows(rec, steps):
+    records = list(_windows(rec, steps))
+    for done, (label, index, t0, t1) in enumerate(records, start=1):
         chunks = rec.iter_stream(device, unit, chunk_samples, columns, t0, t1)
         where = f"the window [{t0}, {t1}) s of {device}/{unit}"
         segments.append(_segment(label, index, chunks, chans, has_temp, where, fit_options))
+        if progress is not None:
+            progress(done / len(records))
     return _characterization(str(rec.path), device, unit, segments, fit_options, tau_min_s)
 
 

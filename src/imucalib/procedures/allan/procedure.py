@@ -9,7 +9,7 @@ versioned noise JSON, Kalibr and OpenVINS YAML, a datasheet table per record, an
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
@@ -40,9 +40,11 @@ class AllanProcedure:
         return generate_allan_plan(**options)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
-                unit: str | None = None, options: Mapping[str, Any] | None = None
-                ) -> NoiseCharacterization:
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> NoiseCharacterization:
         """Run :func:`~imucalib.procedures.allan.analysis.analyze_allan_recording`.
+
+        `progress`, when given, is called with the fraction of the records analysed.
 
         Raises
         ------
@@ -53,7 +55,7 @@ class AllanProcedure:
 
         if options:
             raise InvalidInputError(f"procedure allan takes no options; got {sorted(options)}")
-        return analyze_allan_recording(recording, unit=unit)
+        return analyze_allan_recording(recording, unit=unit, progress=progress)
 
 
 #: The registered Allan procedure.

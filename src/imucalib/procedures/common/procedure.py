@@ -15,7 +15,7 @@ Contents
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
@@ -110,11 +110,12 @@ class Procedure(Protocol):
         ...
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
-                unit: str | None = None, options: Mapping[str, Any] | None = None
-                ) -> ProcedureResult:
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> ProcedureResult:
         """Analyse a recording of this procedure's plan.
 
         For one IMU (`unit`; the only one when omitted), with the procedure's `options` (keys in
-        :attr:`analysis_options`).
+        :attr:`analysis_options`). `progress`, when given, is called with the fraction of the
+        work done (increasing, ending at 1.0), for a progress bar; it must not raise.
         """
         ...

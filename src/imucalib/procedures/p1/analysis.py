@@ -28,6 +28,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -458,7 +459,8 @@ def _sha256(path: Path) -> str:
 
 
 def analyze_p1(path: str | Path, sensor_id: str | None = None,
-               options: P1Options | None = None) -> P1Analysis:
+               options: P1Options | None = None, *,
+               progress: Callable[[float], None] | None = None) -> P1Analysis:
     """Analyse a P1 Recording: observations, fit, verification and decision.
 
     Parameters
@@ -468,6 +470,9 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
     sensor_id : str, optional
         The IMU (the only one when omitted).
     options : P1Options, optional
+    progress : callable, optional
+        Called with the fraction of the steps reduced to observations (the long part; see
+        :func:`~imucalib.procedures.p1.observations.extract_p1_observations`).
 
     Raises
     ------
@@ -480,7 +485,8 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
     opt = options or P1Options()
     p = Path(path)
     with open_recording(p) as rec:
-        obs = extract_p1_observations(rec, sensor_id, processing=opt.processing)
+        obs = extract_p1_observations(rec, sensor_id, processing=opt.processing,
+                                      progress=progress)
         meta = rec.metadata
     gyro_w = gyro_windows(obs, "calibration", None)
     spec = _imu_spec(obs)

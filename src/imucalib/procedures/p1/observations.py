@@ -59,7 +59,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
@@ -635,7 +635,8 @@ class _Extractor:
 
 
 def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
-                            processing: P1Processing | None = None) -> P1Observations:
+                            processing: P1Processing | None = None,
+                            progress: Callable[[float], None] | None = None) -> P1Observations:
     """Reduce a P1 Recording to window observations of one IMU (module docstring).
 
     Parameters
@@ -646,6 +647,9 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     sensor_id : str, optional
         The IMU; the only one when omitted.
     processing : P1Processing, optional
+    progress : callable, optional
+        Called after each of the IMU's steps with the fraction of them reduced (increasing;
+        the last call is 1.0).
 
     Returns
     -------
@@ -676,14 +680,15 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     ex = _Extractor(rec, sensor_id, opt, plan)
     windows: list[WindowObservation] = []
     skipped: list[str] = []
-    for step, role in steps:
+    for i, (step, role) in enumerate(steps, start=1):
         if step.status != "done" or not step.has_valid_window:
             if step.status in ("invalid", "aborted"):
                 skipped.append(f"step {step.index} ({step.label}): {step.status}"
                                + (f" — {step.note}" if step.note else ""))
-            continue
-        if role:
+        elif role:
             windows.append(ex.observe(step, role))
+        if progress is not None:
+            progress(i / len(steps))
     if not windows:
         why = "; ".join(skipped) if skipped else "no step has a P1 measurement role"
         raise RecordingError(f"{rec.path}: no completed calibration or verification window for "

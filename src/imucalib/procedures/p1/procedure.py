@@ -9,7 +9,7 @@ writes the calibration result JSON and the full report JSON.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -43,12 +43,13 @@ class P1Procedure:
         return generate_p1_plan(**options)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
-                unit: str | None = None, options: Mapping[str, Any] | None = None
-                ) -> P1Analysis:
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> P1Analysis:
         """Run :func:`~imucalib.procedures.p1.analysis.analyze_p1` on a recording.
 
         `options` may set ``model`` (``"triad"``, the default, or ``"per-axis"``). An open
-        Recording is analysed through its path (the provenance hashes the file).
+        Recording is analysed through its path (the provenance hashes the file). `progress`,
+        when given, is called with the fraction of the steps reduced to observations.
 
         Raises
         ------
@@ -66,7 +67,7 @@ class P1Procedure:
         if model not in MODELS:
             raise InvalidInputError(f"--model must be 'triad' or 'per-axis'; got {model!r}")
         path = Path(recording.path if hasattr(recording, "path") else recording)
-        return analyze_p1(path, unit, P1Options(model=model))
+        return analyze_p1(path, unit, P1Options(model=model), progress=progress)
 
 
 #: The registered P1 procedure.
