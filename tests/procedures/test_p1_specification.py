@@ -93,3 +93,21 @@ def test_guarded_acceptance_refuses_a_value_whose_band_straddles_the_limit(tacti
     spec = {c.name: c for c in guarded.checks}["specification"]
     assert worst in [r.name for r in spec.rows if not r.passed]
     assert "guarded acceptance" in guarded.decision.rule
+
+
+def test_plan_new_writes_the_identity_and_the_rule(tmp_path):
+    from typer.testing import CliRunner
+
+    from imucalib.cli import app
+    from imucalib.plan import load_plan
+
+    out = tmp_path / "p1.toml"
+    done = CliRunner().invoke(app, ["plan", "new", "p1", "--out", str(out), "--serial", "SN-7",
+                                    "--model", "T1", "--maker", "ACME", "--acceptance",
+                                    "guarded"])
+    assert done.exit_code == 0, done.output
+    plan = load_plan(out)
+    assert plan.imu.serial == "SN-7" and plan.acceptance.rule == "guarded"
+    assert plan.imu.limits.gyro_bias_dph == 20.0
+    done = CliRunner().invoke(app, ["plan", "new", "allan", "--out", str(out), "--serial", "X"])
+    assert done.exit_code == 2 and "takes no --serial" in done.output

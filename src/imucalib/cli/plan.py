@@ -86,7 +86,8 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
 #: The options of `plan new` and the generator keyword each sets.
 _PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "static_s",
                  "sample_rate_hz": "sample_rate_hz", "seed": "seed", "record_s": "record_s",
-                 "temperatures": "temperatures_degc"}
+                 "temperatures": "temperatures_degc", "serial": "serial", "model": "model",
+                 "maker": "maker", "acceptance": "acceptance"}
 
 
 def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
@@ -130,6 +131,11 @@ def new(
                                             max=MAX_RECORD_S)] = 7200.0,
     temperatures: Annotated[str | None, typer.Option(
         help="Allan: record at these chamber temperatures, e.g. '-10,20,60' [°C].")] = None,
+    serial: Annotated[str, typer.Option(help="P1: the unit's serial number.")] = "",
+    model: Annotated[str, typer.Option(help="P1: the unit's model.")] = "",
+    maker: Annotated[str, typer.Option(help="P1: the unit's maker.")] = "",
+    acceptance: Annotated[str, typer.Option(
+        help="P1: decision rule, simple or guarded (|value| + 2u within the limit).")] = "simple",
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
@@ -148,7 +154,8 @@ def new(
                     f"{temperatures!r}") from exc
         given = {"grade": grade, "repetitions": repetitions, "static_s": static_s,
                  "sample_rate_hz": sample_rate_hz, "seed": seed, "record_s": record_s,
-                 "temperatures_degc": temps}
+                 "temperatures_degc": temps, "serial": serial, "model": model, "maker": maker,
+                 "acceptance": acceptance}
         plan = proc.generate_plan(**{k: v for k, v in given.items() if k in proc.plan_options})
         write_plan(plan, out)
     except ValidationError as exc:  # options the plan's bounds refuse (NaN passes a range)

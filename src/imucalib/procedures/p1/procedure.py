@@ -32,7 +32,8 @@ class P1Procedure:
     name = "p1"
     description = ("two-dimensional calibration on a dual-axis table: six positions, a static "
                    "record, rate points, held-out checks, repetitions")
-    plan_options = frozenset({"grade", "repetitions", "static_s", "sample_rate_hz", "seed"})
+    plan_options = frozenset({"grade", "repetitions", "static_s", "sample_rate_hz", "seed",
+                              "serial", "model", "maker", "acceptance"})
     analysis_options = frozenset({"model"})
     outputs = ("result-json", "report-json", "residuals-png")
 
