@@ -65,7 +65,8 @@ def test_a_header_only_csv(tmp_path):
 def test_duplicated_and_unknown_units_in_the_header(tmp_path):
     data = csv_file(tmp_path, f"time_s,time_s [furlong],{GYRO}\n0,0,0,0,0\n")
     refused(["segments", data], f"{data}: column 'time_s [furlong]' has an unknown unit "
-                                "'furlong'; time_s is a time, expected one of s, ms, us, min, h")
+                                "'furlong'; time_s is a time, expected one of s, ms, us, ns, "
+                                "min, h")
     data = csv_file(tmp_path, f"time_s,{GYRO},gyro_x_rps [deg/h]\n0,0,0,0,0\n")
     refused(["apply", result_file(tmp_path), data, "--out", tmp_path / "o.csv"],
             f"{data}: columns 'gyro_x_rps' and 'gyro_x_rps [deg/h]' (header fields 2 and 5) "
