@@ -10,14 +10,15 @@ Contents
 :data:`LOG_FIELDS`, :data:`STEP_STATUSES`, :data:`LOG_LEVELS`, :data:`EXTRA_UNITS`
     Format constants.
 
-File format, version 2
+File format, version 3
 ----------------------
 An HDF5 file (``libver="latest"``, superblock v3) written in SWMR mode. Everything is created
 before SWMR starts; afterwards the writer only appends to and overwrites datasets, so everything
 known at creation is stored then.
 
 Root attributes
-    ``format`` = ``"imucalib-recording"``; ``format_version`` = 2 (int); ``created_utc``
+    ``format`` = ``"imucalib-recording"``; ``format_version`` = 3 (int; 2 for a file without
+    scaled columns or Blosc-compressed columns, which readers of version 2 read); ``created_utc``
     (ISO 8601, ``Z``); ``software_version`` (``imucalib.__version__``); and the caller's metadata,
     one attribute per key (str, int, float or bool). Keys ending in ``_json`` hold JSON text;
     the conventional keys are ``plan_toml``, ``station_json``, ``environment_json``,
@@ -26,14 +27,18 @@ Root attributes
 ``/streams/<device>/<unit>/<column>``
     One group per stream (``device``: kind such as ``imu``, ``table``, ``chamber``,
     ``centrifuge``; ``unit``: the physical unit's name, e.g. ``IMU-0001`` or ``main``). Each column
-    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk, no compression by
-    default), attributes ``unit`` (a unit string, checked against
+    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk, Blosc LZ4 with
+    bit-shuffle by default: :mod:`imucalib.io.compression`), attributes ``unit`` (a unit
+    string, checked against
     :func:`imucalib.units.parse_unit` or :data:`EXTRA_UNITS`), ``quantity`` (``"si"`` or ``"raw"``)
     and ``description``. ``time_s`` (float64, ``"s"``, non-decreasing, finite) is mandatory and is
-    the stream's time base. Float columns have fill value NaN. The group has attributes
+    the stream's time base. Float columns have fill value NaN. An integer column with a
+    ``scale`` attribute (version 3) holds counts of that LSB: readers return ``counts × scale``
+    as float64, exactly the values the writer was given. The group has attributes
     ``device``, ``unit`` and ``columns_json``: the column specifications in declared order, a
-    JSON list of ``{"name", "unit", "dtype", "quantity", "description"}`` (the same facts as the
-    datasets' attributes, in one attribute so that a reader opens a stream quickly).
+    JSON list of ``{"name", "unit", "dtype", "quantity", "description"}`` plus ``"scale"`` for a
+    scaled column (the same facts as the datasets' attributes, in one attribute so that a reader
+    opens a stream quickly).
 ``/steps/<field>``
     The executed plan steps as one 1-D dataset per field (row ``i`` is step ``index == i``):
     ``index`` (int64), ``kind``, ``label``, ``commanded`` (JSON text), ``t_start_s``, ``t_end_s``,
@@ -95,6 +100,7 @@ from imucalib.io._schema import (
     EXTRA_UNITS,
     FORMAT_NAME,
     FORMAT_VERSION,
+    FORMAT_VERSION_PLAIN,
     LOG_CHUNK_ROWS,
     LOG_FIELDS,
     LOG_GROUP,
@@ -111,11 +117,19 @@ from imucalib.io._schema import (
     as_column,
     check_key,
     check_metadata,
+    column_json,
     decode_attr,
+    encode_counts,
     json_dumps,
     step_fields,
 )
 from imucalib.io._tables import StepLogTables, create_table
+from imucalib.io.compression import (
+    COMPRESSIONS,
+    DEFAULT_COMPRESSION,
+    column_filter_kwargs,
+    needs_plugin,
+)
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
 
 __all__ = [
@@ -165,7 +179,6 @@ def abandoned_files() -> tuple[Path, ...]:
     """
     return tuple(_ABANDONED)
 
-_COMPRESSIONS = (None, "gzip", "lzf")
 _METADATA_SLACK_BYTES = 64 << 10  # B-tree and heap growth that may come with a block write
 
 
@@ -173,13 +186,14 @@ class _StreamState:
     """Buffers and bookkeeping of one stream while writing."""
 
     __slots__ = ("buffers", "datasets", "dtypes", "entry", "last_time_s", "n_buffered",
-                 "n_written", "spec")
+                 "n_written", "scaled", "spec")
 
     def __init__(self, spec: StreamSpec, entry: str, datasets: dict[str, h5py.Dataset]) -> None:
         self.spec = spec
         self.entry = entry
         self.datasets = datasets
         self.dtypes = {name: np.dtype(c.dtype) for name, c in spec.columns.items()}
+        self.scaled = {name: c for name, c in spec.columns.items() if c.scale is not None}
         self.buffers: dict[str, list[NDArray[Any]]] = {name: [] for name in spec.columns}
         self.n_buffered = 0
         self.n_written = 0
@@ -209,8 +223,11 @@ class RecordingWriter:
         Replace an existing file; otherwise an existing `path` is an error.
     chunk_rows : int
         Rows per HDF5 chunk of a stream column.
-    compression : {None, "lzf", "gzip"}
-        Column compression; off by default (see ``bench/bench_recording.py``).
+    compression : {"blosc-lz4", None, "lzf", "gzip", "blosc-zstd"}
+        Column compression (:mod:`imucalib.io.compression`): Blosc LZ4 after a bit-shuffle by
+        default, ``"gzip"`` (shuffle + deflate) for files that HDF5 tools without the Blosc
+        plugin must read, ``None`` for none (``docs/recording-format.md``, *Size and
+        compression*, has the measurements).
     buffer_limit_bytes : int
         Buffered bytes (all streams) above which the writer flushes.
     reserve_bytes : int
@@ -251,7 +268,7 @@ class RecordingWriter:
         flush_interval_s: float = 1.0,
         overwrite: bool = False,
         chunk_rows: int = DEFAULT_CHUNK_ROWS,
-        compression: str | None = None,
+        compression: str | None = DEFAULT_COMPRESSION,
         buffer_limit_bytes: int = 64 << 20,
         reserve_bytes: int = DEFAULT_RESERVE_BYTES,
     ) -> None:
@@ -264,8 +281,8 @@ class RecordingWriter:
             raise InvalidInputError(f"`flush_interval_s` must be ≥ 0 [s]; got {flush_interval_s!r}")
         if not isinstance(chunk_rows, int) or chunk_rows < 1:
             raise InvalidInputError(f"`chunk_rows` must be a positive int; got {chunk_rows!r}")
-        if compression not in _COMPRESSIONS:
-            raise InvalidInputError(f"`compression` must be one of {_COMPRESSIONS}; "
+        if compression not in COMPRESSIONS:
+            raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
                                     f"got {compression!r}")
         if not isinstance(buffer_limit_bytes, int) or buffer_limit_bytes < 1:
             raise InvalidInputError(f"`buffer_limit_bytes` must be a positive int; "
@@ -365,7 +382,7 @@ class RecordingWriter:
         cols = json.loads(decode_attr(group.attrs["columns_json"]))
         spec = StreamSpec(decode_attr(group.attrs["device"]), decode_attr(group.attrs["unit"]),
                           {c["name"]: ColumnSpec(c["unit"], c["dtype"], c["quantity"],
-                                                 c["description"])
+                                                 c["description"], c.get("scale"))
                            for c in cols if c["name"] != TIME_COLUMN})
         datasets = {name: group[name] for name in spec.columns}
         st = _StreamState(spec, entry, datasets)
@@ -411,7 +428,10 @@ class RecordingWriter:
                 chunk_rows: int, compression: str | None) -> None:
         f = self._file
         f.attrs["format"] = FORMAT_NAME
-        f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        scaled = any(c.scale is not None for spec in (*stream_specs, *truth_specs)
+                     for c in spec.columns.values())
+        version = FORMAT_VERSION if scaled or needs_plugin(compression) else FORMAT_VERSION_PLAIN
+        f.attrs["format_version"] = np.int64(version)
         f.attrs["created_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
         f.attrs["software_version"] = __version__
         for key, value in meta.items():
@@ -451,17 +471,19 @@ class RecordingWriter:
         group.attrs["device"] = spec.device
         group.attrs["unit"] = spec.unit
         group.attrs["columns_json"] = json_dumps(
-            [{"name": name, "unit": c.unit, "dtype": c.dtype, "quantity": c.quantity,
-              "description": c.description} for name, c in spec.columns.items()], "columns")
+            [column_json(name, c) for name, c in spec.columns.items()], "columns")
         datasets: dict[str, h5py.Dataset] = {}
+        filters = column_filter_kwargs(compression)
         for name, col in spec.columns.items():
             dt = np.dtype(col.dtype)
             ds = group.create_dataset(
                 name, shape=(0,), maxshape=(None,), chunks=(chunk_rows,), dtype=dt,
-                compression=compression, fillvalue=np.nan if dt.kind == "f" else None)
+                fillvalue=np.nan if dt.kind == "f" else None, **filters)
             ds.attrs["unit"] = col.unit
             ds.attrs["quantity"] = col.quantity
             ds.attrs["description"] = col.description
+            if col.scale is not None:
+                ds.attrs["scale"] = np.float64(col.scale)
             datasets[name] = ds
         return _StreamState(spec, f"{base}/{spec.device}/{spec.unit}", datasets)
 
@@ -557,7 +579,10 @@ class RecordingWriter:
         for col, dt in st.dtypes.items():
             if col == TIME_COLUMN:
                 continue
-            arr = as_column(columns[col], dt, f"{what} {name}, column {col!r}")
+            where = f"{what} {name}, column {col!r}"
+            scaled = st.scaled.get(col)
+            arr = (as_column(columns[col], dt, where) if scaled is None
+                   else encode_counts(columns[col], scaled, where))
             if arr.shape[0] != n:
                 raise InvalidInputError(f"{what} {name}, column {col!r}: length {arr.shape[0]} "
                                         f"differs from time_s length {n}")

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -60,6 +61,7 @@ from imucalib.io._schema import (
     TRUTH_STREAMS_GROUP,
     ColumnSpec,
     FieldSpec,
+    column_json,
     decode_attr,
     decode_text,
     dtype_code,
@@ -69,6 +71,7 @@ from imucalib.io._schema import (
 )
 from imucalib.io._tables import create_table
 from imucalib.io._validate import H5PY_ERRORS, first_bad_time, from_h5py, parse_columns
+from imucalib.io.compression import copy_filter_kwargs
 from imucalib.io.reader import Recording, open_damaged, open_recording
 
 __all__ = ["RecoveredStream", "RecoveryReport", "recover_recording"]
@@ -169,8 +172,7 @@ def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int, attrs: Mapping[
           ) -> h5py.Dataset:
     out = dst.create_dataset(
         name, shape=(n,), maxshape=(None,), chunks=src.chunks, dtype=src.dtype,
-        compression=src.compression, compression_opts=src.compression_opts,
-        fillvalue=src.fillvalue)
+        fillvalue=src.fillvalue, **copy_filter_kwargs(src))
     _set_attrs(out, attrs)
     return out
 
@@ -296,9 +298,13 @@ class _Copier:
             a, _ = _try(_raw_attrs, ds)
             if a is None or not isinstance(decode_attr(a.get("unit")), str):
                 return None, "its columns_json is damaged and its columns carry no units"
+            scale = decode_attr(a.get("scale"))
+            if scale is not None and not (isinstance(scale, float) and math.isfinite(scale)
+                                          and scale > 0 and ds.dtype.kind in "iu"):
+                return None, f"its columns_json is damaged and {name} has a bad scale"
             cols[name] = ColumnSpec(decode_attr(a["unit"]), dtype_code(ds.dtype),
                                     str(decode_attr(a.get("quantity", "si"))),
-                                    str(decode_attr(a.get("description", ""))))
+                                    str(decode_attr(a.get("description", ""))), scale)
         if TIME_COLUMN not in cols:
             return None, "its columns_json is damaged and it has no time_s"
         return cols, "columns_json rebuilt from the datasets"
@@ -344,8 +350,7 @@ class _Copier:
         kept = {c: s for c, s in cols.items() if c in dsets}
         device, unit = path.rsplit("/", 2)[-2:]
         attrs.update(device=device, unit=unit, columns_json=json_dumps(
-            [{"name": c, "unit": s.unit, "dtype": s.dtype, "quantity": s.quantity,
-              "description": s.description} for c, s in kept.items()], "columns"))
+            [column_json(c, s) for c, s in kept.items()], "columns"))
         return self._copy_columns(path, attrs, dsets, kept, n, found, notes)
 
     def _copy_columns(self, path: str, attrs: dict[str, Any], dsets: dict[str, h5py.Dataset],
