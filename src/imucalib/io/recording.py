@@ -27,8 +27,9 @@ Root attributes
 ``/streams/<device>/<unit>/<column>``
     One group per stream (``device``: kind such as ``imu``, ``table``, ``chamber``,
     ``centrifuge``; ``unit``: the physical unit's name, e.g. ``IMU-0001`` or ``main``). Each column
-    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk, Blosc LZ4 with
-    bit-shuffle by default: :mod:`imucalib.io.compression`), attributes ``unit`` (a unit
+    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk; uncompressed while
+    written, Blosc LZ4 with bit-shuffle by default once closed: :mod:`imucalib.io.compression`),
+    attributes ``unit`` (a unit
     string, checked against
     :func:`imucalib.units.parse_unit` or :data:`EXTRA_UNITS`), ``quantity`` (``"si"`` or ``"raw"``)
     and ``description``. ``time_s`` (float64, ``"s"``, non-decreasing, finite) is mandatory and is
@@ -81,6 +82,7 @@ import math
 import os
 import sys
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -127,7 +129,6 @@ from imucalib.io._tables import StepLogTables, create_table
 from imucalib.io.compression import (
     COMPRESSIONS,
     DEFAULT_COMPRESSION,
-    column_filter_kwargs,
     needs_plugin,
 )
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
@@ -166,6 +167,22 @@ def _mute_hdf5_teardown(path: Path) -> None:
         previous(unraisable)
 
     sys.unraisablehook = hook
+
+
+def _has_filtered_columns(f: h5py.File) -> bool:
+    """Whether any stream column of an open Recording is stored through an HDF5 filter."""
+    found = False
+
+    def visit(_: str, obj: Any) -> None:
+        nonlocal found
+        if isinstance(obj, h5py.Dataset) and obj._filters:
+            found = True
+
+    for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
+        group = f.get(base)
+        if isinstance(group, h5py.Group):
+            group.visititems(visit)
+    return found
 
 
 def abandoned_files() -> tuple[Path, ...]:
@@ -224,10 +241,13 @@ class RecordingWriter:
     chunk_rows : int
         Rows per HDF5 chunk of a stream column.
     compression : {"blosc-lz4", None, "lzf", "gzip", "blosc-zstd"}
-        Column compression (:mod:`imucalib.io.compression`): Blosc LZ4 after a bit-shuffle by
-        default, ``"gzip"`` (shuffle + deflate) for files that HDF5 tools without the Blosc
-        plugin must read, ``None`` for none (``docs/recording-format.md``, *Size and
-        compression*, has the measurements).
+        Column compression of the closed file (:mod:`imucalib.io.compression`): Blosc LZ4
+        after a bit-shuffle by default, ``"gzip"`` (shuffle + deflate) for files that HDF5 tools
+        without the Blosc plugin must read, ``None`` for none. While the file is written its
+        columns are uncompressed (under SWMR every flush would rewrite a compressed chunk in a
+        new place and HDF5 never reuses the old one); :meth:`close` then rewrites it compressed
+        (:func:`~imucalib.io.recover.compact_recording`: copied, verified, atomically renamed).
+        ``docs/recording-format.md``, *Size and compression*, has the measurements.
     buffer_limit_bytes : int
         Buffered bytes (all streams) above which the writer flushes.
     reserve_bytes : int
@@ -295,6 +315,7 @@ class RecordingWriter:
         self._flush_interval_s = float(flush_interval_s)
         self._buffer_limit_bytes = buffer_limit_bytes
         self._reserve_bytes = reserve_bytes
+        self._compression = compression
         self._full: StorageFullError | None = None
         self._buffered_bytes = 0
         self._streams: dict[tuple[str, str], _StreamState] = {}
@@ -318,13 +339,16 @@ class RecordingWriter:
     @classmethod
     def reopen(cls, path: str | os.PathLike[str], *, flush_interval_s: float = 1.0,
                buffer_limit_bytes: int = 64 << 20,
-               reserve_bytes: int = DEFAULT_RESERVE_BYTES) -> RecordingWriter:
+               reserve_bytes: int = DEFAULT_RESERVE_BYTES,
+               compression: str | None = DEFAULT_COMPRESSION) -> RecordingWriter:
         """Reopen a cleanly closed Recording to append to its streams, steps and log.
 
         The streams and truth streams are those declared when the file was created; rows
         already written, steps (which :meth:`update_step` may still change) and events are kept.
         A file a crashed writer left open must first be recovered
-        (:func:`imucalib.io.recover.recover_recording`).
+        (:func:`imucalib.io.recover.recover_recording`). A file with compressed columns is
+        first rewritten uncompressed (:func:`~imucalib.io.recover.compact_recording`), and
+        :meth:`close` compresses it again with `compression`.
 
         Raises
         ------
@@ -334,12 +358,19 @@ class RecordingWriter:
             If it is not a readable Recording of this format.
         """
         from imucalib.io.reader import open_recording
+        from imucalib.io.recover import compact_recording
 
+        if compression not in COMPRESSIONS:
+            raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
+                                    f"got {compression!r}")
         p = Path(path)
-        with open_recording(p, strict=True):
-            pass  # diagnoses foreign, newer, damaged and still-open files with clear messages
+        with open_recording(p, strict=True) as rec:  # diagnoses foreign, newer, damaged and
+            filtered = _has_filtered_columns(rec._file)  # still-open files with clear messages
+        if filtered:
+            compact_recording(p, None)
         self = cls.__new__(cls)
         self._path = p
+        self._compression = compression
         self._flush_interval_s = float(flush_interval_s)
         self._buffer_limit_bytes = int(buffer_limit_bytes)
         self._reserve_bytes = int(reserve_bytes)
@@ -473,12 +504,11 @@ class RecordingWriter:
         group.attrs["columns_json"] = json_dumps(
             [column_json(name, c) for name, c in spec.columns.items()], "columns")
         datasets: dict[str, h5py.Dataset] = {}
-        filters = column_filter_kwargs(compression)
         for name, col in spec.columns.items():
             dt = np.dtype(col.dtype)
             ds = group.create_dataset(
                 name, shape=(0,), maxshape=(None,), chunks=(chunk_rows,), dtype=dt,
-                fillvalue=np.nan if dt.kind == "f" else None, **filters)
+                fillvalue=np.nan if dt.kind == "f" else None)
             ds.attrs["unit"] = col.unit
             ds.attrs["quantity"] = col.quantity
             ds.attrs["description"] = col.description
@@ -807,10 +837,18 @@ class RecordingWriter:
             self._committed = counts
 
     def close(self) -> None:
-        """Flush and close; the file then opens normally. Calling it again does nothing."""
+        """Flush and close, then compress; the file then opens normally. Again: does nothing.
+
+        The compression (``compression`` of the constructor or :meth:`reopen`) rewrites the
+        closed file (:func:`~imucalib.io.recover.compact_recording`). It is skipped, with a
+        :class:`RuntimeWarning`, when the room left is less than the file's size plus
+        `reserve_bytes`, after the storage filled up, or when the rewrite fails; the file is
+        then left complete and uncompressed.
+        """
         if self._closed:
             return
         already_full = self._full is not None
+        closed_cleanly = False
         try:
             self.flush()
         except StorageFullError:
@@ -820,6 +858,32 @@ class RecordingWriter:
             if not self._closed:  # not abandoned by a failed write
                 self._closed = True
                 self._file.close()
+                closed_cleanly = True
+        if closed_cleanly:
+            self._compress()
+
+    def _compress(self) -> None:
+        """Rewrite the closed file with its compression, or warn and leave it as it is."""
+        from imucalib.io.recover import compact_recording
+
+        if self._compression is None:
+            return
+        size = self._path.stat().st_size
+        room = room_bytes(self._path)
+        why = ""
+        if self._full is not None:
+            why = "the storage filled up during the run"
+        elif room - size < self._reserve_bytes:
+            why = (f"the copy needs up to {format_bytes(size)} and {format_bytes(room)} is left "
+                   f"(reserve {format_bytes(self._reserve_bytes)})")
+        else:
+            try:
+                compact_recording(self._path, self._compression)
+                return
+            except (RecordingError, OSError) as exc:
+                why = str(exc)
+        warnings.warn(f"{self._path} is complete but was left uncompressed ({why}); compress "
+                      "it later with imucalib.io.compact_recording", RuntimeWarning, stacklevel=3)
 
     def __enter__(self) -> RecordingWriter:
         return self
