@@ -172,7 +172,11 @@ def test_recovery_and_resume_keep_scales_and_filters(tmp_path):
     with pytest.raises(InvalidInputError, match="stores integer counts"):
         w.append("imu", "U", {"time_s": [9.0], "gyro_x_rps": [0.3 * LSB],
                               "accel_x_mps2": [0.0]})
+    with h5py.File(path, "r") as f:  # reopened: written uncompressed until closed
+        assert not f["streams/imu/U/gyro_x_rps"]._filters
     w.close()
+    with h5py.File(path, "r") as f:
+        assert "32001" in f["streams/imu/U/gyro_x_rps"]._filters
     report = recover_recording(path)
     with h5py.File(report.output, "r") as f:
         ds = f["streams/imu/U/gyro_x_rps"]
@@ -213,6 +217,8 @@ def test_live_reader_reads_a_compressed_scaled_stream(tmp_path):
         for _ in range(2):
             with open_recording(path) as rec:  # the writer is alive and appending
                 assert rec.was_open_for_write
+                # written uncompressed (compressed when closed): no chunk is rewritten elsewhere
+                assert not rec._file["streams/imu/U/gyro_x_rps"]._filters
                 got = rec.read_stream("imu", "U")
             n = len(got)
             assert n >= 1200 and n % 300 == 0
@@ -263,7 +269,10 @@ def _twin_imu_columns(n: int) -> tuple[dict[str, np.ndarray], float, float, floa
     return cols, g, a, imu.temperature_resolution_degc
 
 
-def test_twin_imu_stream_is_three_times_smaller_and_exact(tmp_path):
+@pytest.mark.parametrize("flush_each_append", [False, True])
+def test_twin_imu_stream_is_three_times_smaller_and_exact(tmp_path, flush_each_append):
+    """≥3× smaller, also when every second of data is flushed, as a real-time station does
+    (compressed chunks rewritten at each flush under SWMR would leave their old copies behind)."""
     n = 1 << 17  # 131 072 samples: two whole chunks, so the float64 file wastes no chunk space
     cols, g_lsb, a_lsb, t_lsb = _twin_imu_columns(n)
     before, after = tmp_path / "f64.h5", tmp_path / "compact.h5"
@@ -274,6 +283,8 @@ def test_twin_imu_stream_is_three_times_smaller_and_exact(tmp_path):
     with RecordingWriter(after, streams=[compact]) as w:
         for a in range(0, len(cols["time_s"]), 1000):
             w.append("imu", "U", {k: v[a:a + 1000] for k, v in cols.items()})
+            if flush_each_append:
+                w.flush()
     ratio = before.stat().st_size / after.stat().st_size
     assert ratio >= 3.0, f"only {ratio:.2f}× smaller"
     with open_recording(after) as rec:
@@ -309,3 +320,56 @@ def test_default_filters():
     assert column_filter_kwargs(None) == {}
     assert column_filter_kwargs("gzip") == {"compression": "gzip", "compression_opts": 1,
                                             "shuffle": True}
+
+
+def test_close_leaves_the_file_uncompressed_when_room_is_short(tmp_path, monkeypatch):
+    from imucalib.io import recording as recording_module
+
+    data = _values()
+    path = tmp_path / "r.h5"
+    w = RecordingWriter(path, streams=[_spec()])
+    w.append("imu", "U", data)
+    w.flush()
+    monkeypatch.setattr(recording_module, "room_bytes",
+                        lambda p, file_size_bytes=None: Path(p).stat().st_size + 1024)
+    with pytest.warns(RuntimeWarning, match=r"complete but was left uncompressed \(the copy "
+                                            r"needs up to .* is left"):
+        w.close()
+    with h5py.File(path, "r") as f:
+        assert not f["streams/imu/U/gyro_x_rps"]._filters
+    with open_recording(path) as rec:
+        got = rec.read_stream("imu", "U")
+    assert np.array_equal(got.columns["gyro_x_rps"], data["gyro_x_rps"])
+    assert not list(tmp_path.glob(".*partial"))
+
+
+def test_compact_recording_round_trip_and_refusals(tmp_path):
+    from imucalib.errors import RecordingOpenForWriteError
+    from imucalib.io import compact_recording
+
+    data = _values()
+    path = tmp_path / "r.h5"
+    with RecordingWriter(path, streams=[_spec()], compression="gzip") as w:
+        w.append("imu", "U", data)
+        i = w.begin_step("static", "s", 0.0, tags=("a",))
+        w.update_step(i, t_end_s=1.0, status="done")
+    with h5py.File(path, "r") as f:
+        assert f["streams/imu/U/gyro_x_rps"].compression == "gzip"
+    for compression in (None, "blosc-zstd", "lzf"):
+        compact_recording(path, compression)
+        with open_recording(path) as rec:
+            got = rec.read_stream("imu", "U")
+            assert rec.steps[0].tags == ("a",) and "recovered_from" not in rec.metadata
+        assert np.array_equal(got.columns["gyro_x_rps"], data["gyro_x_rps"])
+        assert np.array_equal(got.columns["accel_x_mps2"], data["accel_x_mps2"], equal_nan=True)
+    with pytest.raises(InvalidInputError, match="`compression` must be one of"):
+        compact_recording(path, "zip")
+    live = tmp_path / "open.h5"
+    w = RecordingWriter(live, streams=[_spec()])
+    w.append("imu", "U", data)
+    w.flush()
+    try:
+        with pytest.raises(RecordingOpenForWriteError):
+            compact_recording(live, None)
+    finally:
+        w.close()

@@ -44,7 +44,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.conventions import TIME_COLUMN
-from imucalib.errors import InvalidInputError, RecordingCorruptError, RecordingError
+from imucalib.errors import (
+    InvalidInputError,
+    RecordingCorruptError,
+    RecordingError,
+    RecordingOpenForWriteError,
+)
+from imucalib.io._open import marked_open_for_write
 from imucalib.io._schema import (
     COMMIT_GROUP,
     FORMAT_NAME,
@@ -654,6 +660,10 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
         raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
                                 f"got {compression!r}")
     src = Path(path)
+    if src.is_file() and marked_open_for_write(src):
+        raise RecordingOpenForWriteError(
+            f"{src} is open for write (a writer holds it, or one was stopped): it can be "
+            "compacted once closed; `imucalib recover FILE` copies out a stopped writer's file")
     tmp = src.with_name(f".{src.name}.compact.partial")
     try:
         with open_recording(src, strict=True) as rec:
