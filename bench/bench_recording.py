@@ -37,6 +37,7 @@ Run:  .venv/bin/python bench/bench_recording.py [--streams 8] [--rows 400000] [-
       [--repeat 3] [--compression]     (the station-size case: --rows 3600000)
       .venv/bin/python bench/bench_recording.py --sizes [--p1-repetitions 3]
       [--p1-static-s 3600] [--allan-hours 8]     (compact recordings, before/after)
+      .venv/bin/python bench/bench_recording.py --filters   (each filter, per column)
 """
 
 from __future__ import annotations
@@ -171,7 +172,14 @@ def main() -> None:
     parser.add_argument("--p1-repetitions", type=int, default=3)
     parser.add_argument("--p1-static-s", type=float, default=3600.0)
     parser.add_argument("--allan-hours", type=float, default=8.0)
+    parser.add_argument("--filters", action="store_true",
+                        help="each filter's ratio and speed per column of twin IMU data")
     args = parser.parse_args()
+    if args.filters:
+        from compact_cases import column_filters  # bench/compact_cases.py
+
+        column_filters()
+        return
     if args.sizes:
         from compact_cases import run_sizes  # bench/compact_cases.py
 

@@ -320,9 +320,8 @@ def decode_counts(counts: NDArray[Any], scale: float | None) -> NDArray[Any]:
     """Return a column's values as read: ``counts × scale`` in float64, or `counts` unscaled."""
     if scale is None:
         return counts
-    out = counts.astype(np.float64)
-    out *= scale
-    return out
+    # one pass: each count converted to float64 (exact below 2^53), then the rounded product
+    return np.multiply(counts, scale, dtype=np.float64)
 
 
 @dataclass(frozen=True)

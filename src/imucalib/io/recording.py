@@ -82,7 +82,6 @@ import math
 import os
 import sys
 import time
-import warnings
 from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -840,10 +839,11 @@ class RecordingWriter:
         """Flush and close, then compress; the file then opens normally. Again: does nothing.
 
         The compression (``compression`` of the constructor or :meth:`reopen`) rewrites the
-        closed file (:func:`~imucalib.io.recover.compact_recording`). It is skipped, with a
-        :class:`RuntimeWarning`, when the room left is less than the file's size plus
-        `reserve_bytes`, after the storage filled up, or when the rewrite fails; the file is
-        then left complete and uncompressed.
+        closed file (:func:`~imucalib.io.recover.compact_recording`). It is skipped when the
+        room left is less than the file's size plus `reserve_bytes`, after the storage filled
+        up (the caller has had the :class:`~imucalib.errors.StorageFullError`), or when the
+        rewrite fails; the file is then left complete and uncompressed, and
+        :attr:`compression_skipped` says why.
         """
         if self._closed:
             return
@@ -882,8 +882,14 @@ class RecordingWriter:
                 return
             except (RecordingError, OSError) as exc:
                 why = str(exc)
-        warnings.warn(f"{self._path} is complete but was left uncompressed ({why}); compress "
-                      "it later with imucalib.io.compact_recording", RuntimeWarning, stacklevel=3)
+        self._compression_skipped = (f"{self._path} is complete but was left uncompressed "
+                                     f"({why}); compress it later with "
+                                     "imucalib.io.compact_recording")
+
+    @property
+    def compression_skipped(self) -> str:
+        """Why :meth:`close` left the file uncompressed (``""``: it did not, or none was asked)."""
+        return getattr(self, "_compression_skipped", "")
 
     def __enter__(self) -> RecordingWriter:
         return self

@@ -630,6 +630,10 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
 def compact_recording(path: str | os.PathLike[str], compression: str | None) -> None:
     """Rewrite a cleanly closed Recording in place with another compression of its columns.
 
+    The copy holds what every reader of the file sees: each stream's committed rows (rows a
+    column holds past its commit count, which no reader shows, are not copied), the steps, the
+    log, the attributes and the truth.
+
     The copy is written beside the original (``.<name>.compact.partial``), checked as
     :func:`recover_recording` checks its copies (every check of
     :func:`~imucalib.io.reader.open_recording`, every column's SHA-256), and only then
@@ -667,14 +671,16 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
     tmp = src.with_name(f".{src.name}.compact.partial")
     try:
         with open_recording(src, strict=True) as rec:
+            visible = rec.committed_rows()  # rows past a commit count are shown to no reader
             with h5py.File(tmp, "w", libver="latest") as dst:
                 copier = _copy(rec, dst, filters=column_filter_kwargs(compression),
                                recovered=False)
-        changed = [t for t in copier.tables if t.rows_copied != t.rows_found or t.note]
+        changed = [f"{t.name}: {t.rows_copied} of {visible.get(t.name)} rows ({t.note})"
+                   for t in copier.tables if t.rows_copied != visible.get(t.name)]
         if copier.notes or changed:
             raise RecordingError(
                 f"compacting {src} stopped, the file is unchanged: the copy would differ "
-                f"({'; '.join(copier.notes + [f'{t.name}: {t.note}' for t in changed])})")
+                f"({'; '.join(copier.notes + changed)})")
         _verify(tmp, copier.tables, copier.hashes)
         os.replace(tmp, src)
     except OSError as exc:
