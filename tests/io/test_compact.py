@@ -375,3 +375,31 @@ def test_compact_recording_round_trip_and_refusals(tmp_path):
             compact_recording(live, None)
     finally:
         w.close()
+
+
+def test_older_files_never_gain_blosc(tmp_path):
+    """A version 1 or 2 file stays readable by its readers: resumed or recovered, no Blosc."""
+    import shutil
+
+    from imucalib.io.recording import KEEP
+
+    plain = tmp_path / "plain.h5"
+    spec = StreamSpec("imu", "U", {"gyro_x_rps": ColumnSpec("rad/s")})
+    with RecordingWriter(plain, streams=[spec], compression=None) as w:
+        w.append("imu", "U", {"time_s": [0.0, 1.0], "gyro_x_rps": [1.0, 2.0]})
+    with pytest.raises(InvalidInputError, match=r"format version 2, whose readers lack the Blosc"):
+        RecordingWriter.reopen(plain, compression="blosc-lz4")
+    with RecordingWriter.reopen(plain, compression=KEEP) as w:
+        w.append("imu", "U", {"time_s": [2.0], "gyro_x_rps": [3.0]})
+    with h5py.File(plain, "r") as f:
+        assert f.attrs["format_version"] == 2 and not f["streams/imu/U/gyro_x_rps"]._filters
+    v1 = tmp_path / "v1.h5"
+    shutil.copyfile(Path(__file__).parents[1] / "data" / "p1_v1.h5", v1)
+    for source in (plain, v1):
+        report = recover_recording(source)  # the default compression is Blosc
+        with h5py.File(report.output, "r") as f:
+            assert f.attrs["format_version"] < 3
+            assert all("32001" not in f[f"streams/imu/{u}/time_s"]._filters
+                       for u in f["streams/imu"])
+        with open_recording(report.output) as rec:
+            assert len(rec.read_stream("imu", rec.streams[0].unit, t_end_s=1.0)) > 0

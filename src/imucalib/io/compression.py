@@ -10,6 +10,8 @@ Contents
     The ``h5py`` ``create_dataset`` keywords of a compression name.
 :func:`copy_filter_kwargs`
     The keywords that give a new dataset the filters of an existing one (recovery's copies).
+:func:`compression_of`
+    The compression name of an existing dataset.
 :func:`needs_plugin`
     Whether a compression name needs the ``hdf5plugin`` filters to be read.
 
@@ -36,6 +38,7 @@ __all__ = [
     "COMPRESSIONS",
     "DEFAULT_COMPRESSION",
     "column_filter_kwargs",
+    "compression_of",
     "copy_filter_kwargs",
     "needs_plugin",
 ]
@@ -72,6 +75,20 @@ def column_filter_kwargs(compression: str | None) -> dict[str, Any]:
     if compression == "blosc-lz4":
         return dict(hdf5plugin.Blosc(cname="lz4", clevel=5, shuffle=bits))
     return dict(hdf5plugin.Blosc(cname="zstd", clevel=1, shuffle=bits))
+
+
+def compression_of(ds: h5py.Dataset) -> str | None:
+    """Return the name in :data:`COMPRESSIONS` of a dataset's compression (None: none known).
+
+    Blosc with another compressor than LZ4 counts as ``"blosc-zstd"``.
+    """
+    filters = ds._filters
+    if "32001" in filters or 32001 in filters:
+        opts = filters.get("32001", filters.get(32001, ()))
+        return "blosc-lz4" if len(opts) > 6 and opts[6] == 1 else "blosc-zstd"
+    if ds.compression in ("gzip", "lzf"):
+        return str(ds.compression)
+    return None
 
 
 def copy_filter_kwargs(src: h5py.Dataset) -> dict[str, Any]:

@@ -128,6 +128,7 @@ from imucalib.io._tables import StepLogTables, create_table
 from imucalib.io.compression import (
     COMPRESSIONS,
     DEFAULT_COMPRESSION,
+    compression_of,
     needs_plugin,
 )
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
@@ -137,6 +138,7 @@ __all__ = [
     "EXTRA_UNITS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
+    "KEEP",
     "LOG_FIELDS",
     "LOG_LEVELS",
     "STEP_FIELDS",
@@ -168,20 +170,19 @@ def _mute_hdf5_teardown(path: Path) -> None:
     sys.unraisablehook = hook
 
 
-def _has_filtered_columns(f: h5py.File) -> bool:
-    """Whether any stream column of an open Recording is stored through an HDF5 filter."""
-    found = False
+def _column_compression(f: h5py.File) -> tuple[bool, str | None]:
+    """Whether any stream column of an open Recording is filtered, and its compression name."""
+    found: list[h5py.Dataset] = []
 
     def visit(_: str, obj: Any) -> None:
-        nonlocal found
         if isinstance(obj, h5py.Dataset) and obj._filters:
-            found = True
+            found.append(obj)
 
     for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
         group = f.get(base)
         if isinstance(group, h5py.Group):
             group.visititems(visit)
-    return found
+    return bool(found), (compression_of(found[0]) if found else None)
 
 
 def abandoned_files() -> tuple[Path, ...]:
@@ -196,6 +197,17 @@ def abandoned_files() -> tuple[Path, ...]:
     return tuple(_ABANDONED)
 
 _METADATA_SLACK_BYTES = 64 << 10  # B-tree and heap growth that may come with a block write
+
+
+class _Keep:
+    """The type of :data:`KEEP`."""
+
+    def __repr__(self) -> str:
+        return "KEEP"
+
+
+#: ``RecordingWriter.reopen(..., compression=KEEP)``: close the file with the compression it had.
+KEEP = _Keep()
 
 
 class _StreamState:
@@ -339,7 +351,7 @@ class RecordingWriter:
     def reopen(cls, path: str | os.PathLike[str], *, flush_interval_s: float = 1.0,
                buffer_limit_bytes: int = 64 << 20,
                reserve_bytes: int = DEFAULT_RESERVE_BYTES,
-               compression: str | None = DEFAULT_COMPRESSION) -> RecordingWriter:
+               compression: str | _Keep | None = KEEP) -> RecordingWriter:
         """Reopen a cleanly closed Recording to append to its streams, steps and log.
 
         The streams and truth streams are those declared when the file was created; rows
@@ -347,7 +359,9 @@ class RecordingWriter:
         A file a crashed writer left open must first be recovered
         (:func:`imucalib.io.recover.recover_recording`). A file with compressed columns is
         first rewritten uncompressed (:func:`~imucalib.io.recover.compact_recording`), and
-        :meth:`close` compresses it again with `compression`.
+        :meth:`close` compresses it with `compression`: by default (:data:`KEEP`) the one it
+        had, so that a file of format version 1 or 2 stays readable by the readers of its
+        version; a Blosc compression (version 3 only) is refused for an older file.
 
         Raises
         ------
@@ -359,12 +373,19 @@ class RecordingWriter:
         from imucalib.io.reader import open_recording
         from imucalib.io.recover import compact_recording
 
-        if compression not in COMPRESSIONS:
-            raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
+        if not isinstance(compression, _Keep) and compression not in COMPRESSIONS:
+            raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS} or KEEP; "
                                     f"got {compression!r}")
         p = Path(path)
         with open_recording(p, strict=True) as rec:  # diagnoses foreign, newer, damaged and
-            filtered = _has_filtered_columns(rec._file)  # still-open files with clear messages
+            filtered, had = _column_compression(rec._file)  # still-open files clearly
+            version = rec.format_version
+        if isinstance(compression, _Keep):
+            compression = had
+        elif needs_plugin(compression) and version < FORMAT_VERSION:
+            raise InvalidInputError(f"{p} is of format version {version}, whose readers lack the "
+                                    f"Blosc filter: `compression` {compression!r} needs version "
+                                    f"{FORMAT_VERSION}; use KEEP, None, 'gzip' or 'lzf'")
         if filtered:
             compact_recording(p, None)
         self = cls.__new__(cls)

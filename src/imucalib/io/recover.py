@@ -82,6 +82,7 @@ from imucalib.io.compression import (
     DEFAULT_COMPRESSION,
     column_filter_kwargs,
     copy_filter_kwargs,
+    needs_plugin,
 )
 from imucalib.io.reader import Recording, open_damaged, open_recording
 
@@ -579,6 +580,8 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
     compression : str or None
         Compression of the copy's stream columns (:data:`~imucalib.io.compression.COMPRESSIONS`;
         the copy is written once, so it can be compressed without the cost SWMR appends have).
+        A file of format version 1 or 2 keeps its own filters instead of a Blosc compression,
+        which the readers of its version lack.
 
     Returns
     -------
@@ -611,8 +614,12 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
         was_open = rec.was_open_for_write
         _check_recognizable(rec)
         try:
+            # a file of version 1 or 2 keeps its own filters rather than gain Blosc, which its
+            # readers lack (Blosc came with version 3)
+            keep = needs_plugin(compression) and rec.format_version < FORMAT_VERSION
             with h5py.File(tmp, "w", libver="latest") as dst:
-                copier = _copy(rec, dst, filters=column_filter_kwargs(compression))
+                copier = _copy(rec, dst,
+                               filters=None if keep else column_filter_kwargs(compression))
             _verify(tmp, copier.tables, copier.hashes)
             os.replace(tmp, out)
         except OSError as exc:
