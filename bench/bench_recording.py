@@ -11,8 +11,23 @@ station would:
 
 then reads each stream whole (``read_stream`` vs ``ds[:]`` per column) and in pieces of 2^18 rows
 (``iter_stream`` vs slicing). Prints MB/s (payload bytes, 10^6 B/s) and the ratio
-imucalib / h5py (target for writing: within 1.5×, i.e. ratio ≥ 0.67). Optionally compares the
-writer's compression settings (file size and speed).
+imucalib / h5py (target for writing: within 1.5×, i.e. ratio ≥ 0.67). Both sides write
+uncompressed float64 here (``compression=None``): this part measures the library's overhead.
+Optionally compares the writer's compression settings on these random floats (``--compression``).
+
+``--sizes`` measures instead compact recordings against the former layout (float64 columns, no
+compression), in the same process, on twin data (:mod:`bench.compact_cases`, shown below):
+
+- **P1 at 1 kHz**: :func:`~imucalib.procedures.p1.plan.generate_p1_plan` (tactical,
+  ``sample_rate_hz=1000``) run on the twin through the station runner, which writes the new
+  defaults; its streams, steps and metadata are then written again through
+  :class:`~imucalib.io.recording.RecordingWriter` in both layouts (same data, same process),
+  read back, and calibrated (:func:`~imucalib.procedures.p1.analysis.analyze_p1`);
+- **Allan, 8 h at 1 kHz**: a static tactical twin IMU generated block by block and appended to
+  both writers (only the append and close calls are timed), then read back in 2^18-row pieces.
+
+Printed per case: file size before/after and their ratio, write and read speed (MB/s of
+float64 payload, 10^6 B/s: the same bytes for both), and for P1 the analysis time.
 
 Reads come from the page cache right after writing (both sides alike): they measure the library
 overhead, not the disk, and they are noisy (memory allocation and page faults of the returned
@@ -20,6 +35,9 @@ arrays dominate), so they are repeated 2 × repeat + 1 times, interleaved, and t
 
 Run:  .venv/bin/python bench/bench_recording.py [--streams 8] [--rows 400000] [--block 1000]
       [--repeat 3] [--compression]     (the station-size case: --rows 3600000)
+      .venv/bin/python bench/bench_recording.py --sizes [--p1-repetitions 3]
+      [--p1-static-s 3600] [--allan-hours 8]     (compact recordings, before/after)
+      .venv/bin/python bench/bench_recording.py --filters   (each filter, per column)
 """
 
 from __future__ import annotations
@@ -35,6 +53,7 @@ import h5py
 import numpy as np
 
 from imucalib.io import ColumnSpec, RecordingWriter, StreamSpec, open_recording
+from imucalib.io.compression import COMPRESSIONS
 from imucalib.io.recording import DEFAULT_CHUNK_ROWS
 
 COLUMNS = ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps", "accel_x_mps2", "accel_y_mps2",
@@ -60,6 +79,7 @@ def specs(n_streams: int) -> list[StreamSpec]:
 
 def write_imucalib(path: Path, data: list[dict[str, np.ndarray]], block: int,
                    compression: str | None = None) -> None:
+    """Write through RecordingWriter (uncompressed unless asked: the library's overhead)."""
     n = len(data[0]["time_s"])
     with RecordingWriter(path, streams=specs(len(data)), overwrite=True,
                          compression=compression) as w:
@@ -146,8 +166,25 @@ def main() -> None:
     parser.add_argument("--block", type=int, default=1000, help="rows per append")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--compression", action="store_true",
-                        help="also time the writer with lzf and gzip and report file sizes")
+                        help="also time the writer's compressions and report file sizes")
+    parser.add_argument("--sizes", action="store_true",
+                        help="compact recordings vs float64 uncompressed on twin data (P1, Allan)")
+    parser.add_argument("--p1-repetitions", type=int, default=3)
+    parser.add_argument("--p1-static-s", type=float, default=3600.0)
+    parser.add_argument("--allan-hours", type=float, default=8.0)
+    parser.add_argument("--filters", action="store_true",
+                        help="each filter's ratio and speed per column of twin IMU data")
     args = parser.parse_args()
+    if args.filters:
+        from compact_cases import column_filters  # bench/compact_cases.py
+
+        column_filters()
+        return
+    if args.sizes:
+        from compact_cases import run_sizes  # bench/compact_cases.py
+
+        run_sizes(args.p1_repetitions, args.p1_static_s, args.allan_hours, args.repeat)
+        return
 
     data = make_data(args.streams, args.rows)
     payload = sum(v.nbytes for d in data for v in d.values())
@@ -181,7 +218,7 @@ def main() -> None:
         if args.compression:
             print("\nwriter compression (same data; random normal floats compress poorly, real "
                   "IMU data with quantised low bits compresses better):")
-            for comp in (None, "lzf", "gzip"):
+            for comp in COMPRESSIONS:
                 path = Path(tmp) / f"c_{comp}.h5"
                 (t,) = best_times([lambda c=comp, p=path: write_imucalib(p, data, args.block, c)],
                                   args.repeat)

@@ -34,12 +34,13 @@ CHUNK_ROWS = 1024  # small, so that blocks reach the file between flushes too
 METADATA = {"plan_toml": 'name = "crash"\n', "station_json": '{"site": "lab 1"}',
             "operator": "test", "latitude_deg": 48.1}
 TRUTH = {"gyro_bias_rps": np.array([1e-5, -2e-5, 3e-5]), "scenario": {"seed": 7}}
+ACCEL_LSB_MPS2 = 30 * 9.80665 / 2**23  # accel_z_mps2 is stored as int32 counts of it
 
 
 def specs() -> list[StreamSpec]:
     imu_cols = {
         "gyro_x_rps": ColumnSpec("rad/s"),
-        "accel_z_mps2": ColumnSpec("m/s^2"),
+        "accel_z_mps2": ColumnSpec("m/s^2", dtype="i4", scale=ACCEL_LSB_MPS2),
         "counter": ColumnSpec("counts", dtype="u4", quantity="raw"),
     }
     table_cols = {"angle_rad": ColumnSpec("rad"), "rate_rps": ColumnSpec("rad/s", dtype="f4")}
@@ -57,7 +58,8 @@ def block(seed: int, stream: int, b: int) -> dict[str, np.ndarray]:
         gyro = rng.standard_normal(size)
         gyro[rng.integers(0, size)] = np.nan  # NaN is data
         return {"time_s": time_s, "gyro_x_rps": gyro,
-                "accel_z_mps2": 9.8 + rng.standard_normal(size),
+                "accel_z_mps2": np.rint((9.8 + rng.standard_normal(size)) / ACCEL_LSB_MPS2)
+                * ACCEL_LSB_MPS2,
                 "counter": (rows % 2**32).astype(np.uint32)}
     return {"time_s": time_s, "angle_rad": rng.uniform(-np.pi, np.pi, size),
             "rate_rps": rng.standard_normal(size).astype(np.float32)}

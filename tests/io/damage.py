@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 
 from imucalib.errors import RecordingCorruptError, RecordingError
-from imucalib.io import ColumnSpec, RecordingWriter, StreamSpec
+from imucalib.io import FORMAT_VERSION, ColumnSpec, RecordingWriter, StreamSpec
 
 IMU = StreamSpec("imu", "IMU-0001", {"gyro_x_rps": ColumnSpec("rad/s"),
                                      "accel_z_mps2": ColumnSpec("m/s^2"),
@@ -216,7 +216,8 @@ DAMAGES: dict[str, Damage] = {
     # 8. layout
     "format-version-missing": (
         _edit(lambda f: f.attrs.__delitem__("format_version")), RecordingCorruptError,
-        r"^{path} is damaged: its root has no `format_version` attribute; expected the int 2"),
+        r"^{path} is damaged: its root has no `format_version` attribute; expected the int "
+        + str(FORMAT_VERSION)),
     "format-version-str": (_set_attr("/", "format_version", "1"), RecordingCorruptError,
                            r"its `format_version` attribute is str '1'; expected a positive int"),
     "columns-json-not-json": (_set_attr("streams/table/main", "columns_json", "[{"),

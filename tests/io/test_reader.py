@@ -17,7 +17,7 @@ from imucalib.errors import (
     RecordingError,
     RecordingFormatError,
 )
-from imucalib.io import ColumnSpec, RecordingWriter, StreamSpec, open_recording
+from imucalib.io import FORMAT_VERSION, ColumnSpec, RecordingWriter, StreamSpec, open_recording
 from imucalib.io import reader as reader_module
 
 
@@ -204,9 +204,10 @@ def test_other_format_name(tmp_path):
 def test_newer_format_version(recording):
     path, _ = recording
     with h5py.File(path, "r+") as f:
-        f.attrs["format_version"] = 3
-    with pytest.raises(RecordingFormatError, match=r"format_version 3, newer than imucalib .* "
-                                                   r"reads \(up to 2\); upgrade imucalib"):
+        f.attrs["format_version"] = FORMAT_VERSION + 1
+    with pytest.raises(RecordingFormatError,
+                       match=rf"format_version {FORMAT_VERSION + 1}, newer than imucalib .* "
+                             rf"reads \(up to {FORMAT_VERSION}\); upgrade imucalib"):
         open_recording(path)
 
 

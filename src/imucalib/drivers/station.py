@@ -117,21 +117,21 @@ def make_chamber_driver(section: ChamberSection, clock: Clock
 
 def make_imu_source(section: ImuSection, clock: Clock) -> PacketImu | CsvLineImu:
     """Return the (unconnected) IMU source an ``[[imu]]`` section describes."""
+    gyro_lsb_rps = None if section.gyro_lsb_dps is None else section.gyro_lsb_dps * units.DEG
+    accel_lsb_mps2 = None if section.accel_lsb_g is None else section.accel_lsb_g * units.G0_MPS2
+    # int32-count frames decode to counts × LSB exactly: the Recording stores the counts
     identity = ImuIdentity(
         name=section.name, model=section.model, maker=section.maker,
         sample_rate_hz=section.sample_rate_hz,
         gyro_range_rps=None if section.gyro_range_dps is None
         else section.gyro_range_dps * units.DEG,
         accel_range_mps2=None if section.accel_range_g is None
-        else section.accel_range_g * units.G0_MPS2)
+        else section.accel_range_g * units.G0_MPS2,
+        gyro_lsb_rps=gyro_lsb_rps, accel_lsb_mps2=accel_lsb_mps2)
     opener = _opener(parse_transport_url(section.transport), 3.0)
     if section.kind == "packet":
-        return PacketImu(identity, opener, clock=clock,
-                         gyro_scale_rps=(None if section.gyro_lsb_dps is None
-                                         else section.gyro_lsb_dps * units.DEG),
-                         accel_scale_mps2=(None if section.accel_lsb_g is None
-                                           else section.accel_lsb_g * units.G0_MPS2),
-                         address=section.transport)
+        return PacketImu(identity, opener, clock=clock, gyro_scale_rps=gyro_lsb_rps,
+                         accel_scale_mps2=accel_lsb_mps2, address=section.transport)
     return CsvLineImu(identity, opener, clock=clock, address=section.transport)
 
 

@@ -7,8 +7,9 @@ Contents
 :func:`open_recording`, :class:`Recording`, :class:`StreamInfo`, :class:`StreamData`,
 :class:`StepRecord`, :class:`LogEvent`
     Read one (:mod:`imucalib.io.reader`).
-:func:`recover_recording`, :class:`RecoveryReport`
-    Copy what a crashed writer flushed into a cleanly closed file (:mod:`imucalib.io.recover`).
+:func:`recover_recording`, :class:`RecoveryReport`, :func:`compact_recording`
+    Copy what a crashed writer flushed into a cleanly closed file; rewrite a closed one with
+    another compression (:mod:`imucalib.io.recover`).
 
 A stream or a step of it is exported to CSV or MAT by :mod:`imucalib.exports.streams`.
 """
@@ -30,7 +31,12 @@ from imucalib.io.recording import (
     RecordingWriter,
     StreamSpec,
 )
-from imucalib.io.recover import RecoveredStream, RecoveryReport, recover_recording
+from imucalib.io.recover import (
+    RecoveredStream,
+    RecoveryReport,
+    compact_recording,
+    recover_recording,
+)
 
 __all__ = [
     "FORMAT_NAME",
@@ -45,6 +51,7 @@ __all__ = [
     "StreamData",
     "StreamInfo",
     "StreamSpec",
+    "compact_recording",
     "open_recording",
     "recover_recording",
 ]

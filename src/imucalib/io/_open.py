@@ -17,9 +17,10 @@ import h5py
 
 from imucalib import __version__
 from imucalib.errors import RecordingCorruptError, RecordingError, RecordingFormatError
+from imucalib.io import compression as _compression  # noqa: F401  (registers the Blosc filter)
 from imucalib.io._schema import FORMAT_NAME, FORMAT_VERSION, decode_attr
 
-__all__ = ["check_format", "open_h5"]
+__all__ = ["check_format", "marked_open_for_write", "open_h5"]
 
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -46,6 +47,16 @@ def _read_superblock(path: Path) -> _Superblock | None:
                 return _Superblock(version, bool(flags & 0x05), offset + eof)
             return _Superblock(version, False, None)
     return None
+
+
+def marked_open_for_write(path: str | os.PathLike[str]) -> bool:
+    """Whether the file's superblock says a writer holds it (read from the bytes on disk).
+
+    Unlike an HDF5 open, this also sees a writer in the same process (HDF5 shares an open file
+    between handles of one process, so a second open there succeeds).
+    """
+    sb = _read_superblock(Path(path))
+    return sb is not None and sb.open_for_write
 
 
 def open_h5(path: str | os.PathLike[str]) -> tuple[h5py.File, bool]:

@@ -27,6 +27,7 @@ __all__ = [
     "EXTRA_UNITS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
+    "FORMAT_VERSION_PLAIN",
     "LOG_CHUNK_ROWS",
     "LOG_FIELDS",
     "LOG_GROUP",
@@ -45,8 +46,11 @@ __all__ = [
     "FieldSpec",
     "StreamSpec",
     "check_unit",
+    "column_json",
     "decode_attr",
+    "decode_counts",
     "dtype_code",
+    "encode_counts",
     "encode_text",
     "json_dumps",
     "parse_string_list",
@@ -55,8 +59,12 @@ __all__ = [
 ]
 
 FORMAT_NAME: Final = "imucalib-recording"
-#: Version 2 added the step fields ``role``, ``tags`` and ``units``; version 1 files still read.
-FORMAT_VERSION: Final = 2
+#: Version 2 added the step fields ``role``, ``tags`` and ``units``; version 3 added integer
+#: columns with a ``scale`` (counts read as ``counts × scale`` in float64) and Blosc-compressed
+#: columns. Files of versions 1 and 2 still read; a writer stamps 2 when it uses neither.
+FORMAT_VERSION: Final = 3
+#: The version of a file without scaled columns or plugin filters.
+FORMAT_VERSION_PLAIN: Final = 2
 
 #: Rows per chunk of a stream column: 64 Ki rows = 512 KiB of float64.
 DEFAULT_CHUNK_ROWS: Final = 1 << 16
@@ -196,12 +204,23 @@ class ColumnSpec:
         Whether the values are in SI (calibrated physical units) or raw device output.
     description : str
         Free text stored with the column.
+    scale : float, optional
+        For an integer `dtype` only: the column stores integer counts of `scale` (the LSB, in
+        `unit`), and readers return ``counts × scale`` as float64. The writer is given the
+        float64 values and refuses any that is not exactly ``k × scale`` for an integer ``k``
+        of `dtype` (:func:`encode_counts`), so the round trip returns the very values written.
     """
 
     unit: str
     dtype: str = "f8"
     quantity: str = "si"
     description: str = ""
+    scale: float | None = None
+
+    @property
+    def value_dtype(self) -> np.dtype[Any]:
+        """The dtype of the values written and read: float64 for a scaled column."""
+        return np.dtype("f8") if self.scale is not None else np.dtype(self.dtype)
 
 
 def dtype_code(dt: np.dtype[Any]) -> str:
@@ -223,8 +242,86 @@ def _check_column(spec: object, where: str) -> ColumnSpec:
         raise InvalidInputError(f"{where}: quantity must be one of {QUANTITIES}; "
                                 f"got {spec.quantity!r}")
     encode_text(spec.description, f"{where} description")
+    scale = check_scale(spec.scale, dt, where)
     return ColumnSpec(unit=spec.unit, dtype=dtype_code(dt), quantity=spec.quantity,
-                      description=spec.description)
+                      description=spec.description, scale=scale)
+
+
+def check_scale(scale: object, dt: np.dtype[Any], where: str) -> float | None:
+    """Return a column's scale as a float (None stays None), or raise InvalidInputError.
+
+    A scale must be a positive, finite number and needs an integer dtype (``i`` or ``u``).
+    """
+    if scale is None:
+        return None
+    if isinstance(scale, bool) or not isinstance(scale, int | float | np.floating | np.integer):
+        raise InvalidInputError(f"{where}: scale must be a number (the LSB) or None; "
+                                f"got {scale!r}")
+    value = float(scale)
+    if not (math.isfinite(value) and value > 0):
+        raise InvalidInputError(f"{where}: scale must be positive and finite; got {value!r}")
+    if dt.kind not in "iu":
+        raise InvalidInputError(f"{where}: a scale needs an integer dtype (counts); got "
+                                f"{dtype_code(dt)}")
+    return value
+
+
+def column_json(name: str, spec: ColumnSpec) -> dict[str, Any]:
+    """Return the ``columns_json`` item of a column (``scale`` only when it has one)."""
+    item: dict[str, Any] = {"name": name, "unit": spec.unit, "dtype": spec.dtype,
+                            "quantity": spec.quantity, "description": spec.description}
+    if spec.scale is not None:
+        item["scale"] = spec.scale
+    return item
+
+
+def encode_counts(values: Any, spec: ColumnSpec, where: str) -> NDArray[Any]:
+    """Return the integer counts of a scaled column's float values, refusing any off the grid.
+
+    Parameters
+    ----------
+    values : array_like
+        The values in the column's unit (float64 after conversion).
+    spec : ColumnSpec
+        The column, with ``scale`` set and an integer dtype.
+    where : str
+        What is written, for messages.
+
+    Returns
+    -------
+    ndarray
+        ``rint(values / scale)`` in the column's dtype; ``counts × scale`` (in float64)
+        reproduces every value (``-0.0`` reads back as ``0.0``, which compares equal).
+
+    Raises
+    ------
+    InvalidInputError
+        If a value is NaN or infinite, is not exactly an integer multiple of the scale, or its
+        count does not fit the dtype; the message names the first such row.
+    """
+    assert spec.scale is not None
+    v = as_column(values, np.dtype("f8"), where)
+    dt = np.dtype(spec.dtype)
+    with np.errstate(invalid="ignore", over="ignore"):
+        k = np.rint(v / spec.scale)
+        info = np.iinfo(dt)
+        ok = (k * spec.scale == v) & (k >= info.min) & (k <= info.max)
+    if not ok.all():
+        i = int(np.argmin(ok))
+        raise InvalidInputError(
+            f"{where} stores integer counts of {spec.scale!r} {spec.unit} in {spec.dtype}; row "
+            f"{i} of this append is {float(v[i])!r}, not such a multiple (or not finite, or out of "
+            f"the {spec.dtype} range {info.min}…{info.max}); declare the column without a scale "
+            "(float64) for values that are not the device's counts")
+    return k.astype(dt)
+
+
+def decode_counts(counts: NDArray[Any], scale: float | None) -> NDArray[Any]:
+    """Return a column's values as read: ``counts × scale`` in float64, or `counts` unscaled."""
+    if scale is None:
+        return counts
+    # one pass: each count converted to float64 (exact below 2^53), then the rounded product
+    return np.multiply(counts, scale, dtype=np.float64)
 
 
 @dataclass(frozen=True)

@@ -339,8 +339,15 @@ def parse_columns(p: Path, path: str, text: Any) -> dict[str, ColumnSpec]:
             raise damaged(p, f"{where} column {name!r} has dtype {c['dtype']!r}, quantity "
                              f"{c['quantity']!r}, unit {c['unit']!r}; expected a numeric dtype, "
                              f"one of {list(QUANTITIES)} and a unit")
+        scale = c.get("scale")
+        if scale is not None and (isinstance(scale, bool) or not isinstance(scale, int | float)
+                                  or not math.isfinite(scale) or scale <= 0 or dt.kind not in "iu"):
+            raise damaged(p, f"{where} column {name!r} has scale {scale!r} with dtype "
+                             f"{c['dtype']!r}; expected a positive finite number on an integer "
+                             "column")
         cols[name] = ColumnSpec(unit=c["unit"], dtype=dtype_code(dt), quantity=c["quantity"],
-                                description=c["description"])
+                                description=c["description"],
+                                scale=None if scale is None else float(scale))
     first = next(iter(cols))
     if first != TIME_COLUMN or cols[first].dtype != "f8":
         raise damaged(p, f"{where} starts with {first!r} ({cols[first].dtype}); expected "

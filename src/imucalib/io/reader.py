@@ -58,6 +58,7 @@ from imucalib.io._schema import (
     TRUTH_STREAMS_GROUP,
     ColumnSpec,
     decode_attr,
+    decode_counts,
     decode_text,
     parse_string_list,
     step_fields,
@@ -565,7 +566,7 @@ class Recording:
         def read() -> StreamData:
             ds = dsets if dsets is not None else self._open_columns(path, names)
             t = ds[TIME_COLUMN][i0:i1]
-            cols = {c: ds[c][i0:i1] for c in names}
+            cols = {c: decode_counts(ds[c][i0:i1], info.columns[c].scale) for c in names}
             units = {TIME_COLUMN: info.columns[TIME_COLUMN].unit}
             units.update({c: info.columns[c].unit for c in names})
             return StreamData(t, cols, units)

@@ -10,14 +10,15 @@ Contents
 :data:`LOG_FIELDS`, :data:`STEP_STATUSES`, :data:`LOG_LEVELS`, :data:`EXTRA_UNITS`
     Format constants.
 
-File format, version 2
+File format, version 3
 ----------------------
 An HDF5 file (``libver="latest"``, superblock v3) written in SWMR mode. Everything is created
 before SWMR starts; afterwards the writer only appends to and overwrites datasets, so everything
 known at creation is stored then.
 
 Root attributes
-    ``format`` = ``"imucalib-recording"``; ``format_version`` = 2 (int); ``created_utc``
+    ``format`` = ``"imucalib-recording"``; ``format_version`` = 3 (int; 2 for a file without
+    scaled columns or Blosc-compressed columns, which readers of version 2 read); ``created_utc``
     (ISO 8601, ``Z``); ``software_version`` (``imucalib.__version__``); and the caller's metadata,
     one attribute per key (str, int, float or bool). Keys ending in ``_json`` hold JSON text;
     the conventional keys are ``plan_toml``, ``station_json``, ``environment_json``,
@@ -26,14 +27,19 @@ Root attributes
 ``/streams/<device>/<unit>/<column>``
     One group per stream (``device``: kind such as ``imu``, ``table``, ``chamber``,
     ``centrifuge``; ``unit``: the physical unit's name, e.g. ``IMU-0001`` or ``main``). Each column
-    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk, no compression by
-    default), attributes ``unit`` (a unit string, checked against
+    is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk; uncompressed while
+    written, Blosc LZ4 with bit-shuffle by default once closed: :mod:`imucalib.io.compression`),
+    attributes ``unit`` (a unit
+    string, checked against
     :func:`imucalib.units.parse_unit` or :data:`EXTRA_UNITS`), ``quantity`` (``"si"`` or ``"raw"``)
     and ``description``. ``time_s`` (float64, ``"s"``, non-decreasing, finite) is mandatory and is
-    the stream's time base. Float columns have fill value NaN. The group has attributes
+    the stream's time base. Float columns have fill value NaN. An integer column with a
+    ``scale`` attribute (version 3) holds counts of that LSB: readers return ``counts × scale``
+    as float64, exactly the values the writer was given. The group has attributes
     ``device``, ``unit`` and ``columns_json``: the column specifications in declared order, a
-    JSON list of ``{"name", "unit", "dtype", "quantity", "description"}`` (the same facts as the
-    datasets' attributes, in one attribute so that a reader opens a stream quickly).
+    JSON list of ``{"name", "unit", "dtype", "quantity", "description"}`` plus ``"scale"`` for a
+    scaled column (the same facts as the datasets' attributes, in one attribute so that a reader
+    opens a stream quickly).
 ``/steps/<field>``
     The executed plan steps as one 1-D dataset per field (row ``i`` is step ``index == i``):
     ``index`` (int64), ``kind``, ``label``, ``commanded`` (JSON text), ``t_start_s``, ``t_end_s``,
@@ -95,6 +101,7 @@ from imucalib.io._schema import (
     EXTRA_UNITS,
     FORMAT_NAME,
     FORMAT_VERSION,
+    FORMAT_VERSION_PLAIN,
     LOG_CHUNK_ROWS,
     LOG_FIELDS,
     LOG_GROUP,
@@ -111,11 +118,19 @@ from imucalib.io._schema import (
     as_column,
     check_key,
     check_metadata,
+    column_json,
     decode_attr,
+    encode_counts,
     json_dumps,
     step_fields,
 )
 from imucalib.io._tables import StepLogTables, create_table
+from imucalib.io.compression import (
+    COMPRESSIONS,
+    DEFAULT_COMPRESSION,
+    compression_of,
+    needs_plugin,
+)
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
 
 __all__ = [
@@ -123,6 +138,7 @@ __all__ = [
     "EXTRA_UNITS",
     "FORMAT_NAME",
     "FORMAT_VERSION",
+    "KEEP",
     "LOG_FIELDS",
     "LOG_LEVELS",
     "STEP_FIELDS",
@@ -154,6 +170,21 @@ def _mute_hdf5_teardown(path: Path) -> None:
     sys.unraisablehook = hook
 
 
+def _column_compression(f: h5py.File) -> tuple[bool, str | None]:
+    """Whether any stream column of an open Recording is filtered, and its compression name."""
+    found: list[h5py.Dataset] = []
+
+    def visit(_: str, obj: Any) -> None:
+        if isinstance(obj, h5py.Dataset) and obj._filters:
+            found.append(obj)
+
+    for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
+        group = f.get(base)
+        if isinstance(group, h5py.Group):
+            group.visititems(visit)
+    return bool(found), (compression_of(found[0]) if found else None)
+
+
 def abandoned_files() -> tuple[Path, ...]:
     """Files whose writer gave up after HDF5 failed to write (this process).
 
@@ -165,21 +196,32 @@ def abandoned_files() -> tuple[Path, ...]:
     """
     return tuple(_ABANDONED)
 
-_COMPRESSIONS = (None, "gzip", "lzf")
 _METADATA_SLACK_BYTES = 64 << 10  # B-tree and heap growth that may come with a block write
+
+
+class _Keep:
+    """The type of :data:`KEEP`."""
+
+    def __repr__(self) -> str:
+        return "KEEP"
+
+
+#: ``RecordingWriter.reopen(..., compression=KEEP)``: close the file with the compression it had.
+KEEP = _Keep()
 
 
 class _StreamState:
     """Buffers and bookkeeping of one stream while writing."""
 
     __slots__ = ("buffers", "datasets", "dtypes", "entry", "last_time_s", "n_buffered",
-                 "n_written", "spec")
+                 "n_written", "scaled", "spec")
 
     def __init__(self, spec: StreamSpec, entry: str, datasets: dict[str, h5py.Dataset]) -> None:
         self.spec = spec
         self.entry = entry
         self.datasets = datasets
         self.dtypes = {name: np.dtype(c.dtype) for name, c in spec.columns.items()}
+        self.scaled = {name: c for name, c in spec.columns.items() if c.scale is not None}
         self.buffers: dict[str, list[NDArray[Any]]] = {name: [] for name in spec.columns}
         self.n_buffered = 0
         self.n_written = 0
@@ -209,8 +251,14 @@ class RecordingWriter:
         Replace an existing file; otherwise an existing `path` is an error.
     chunk_rows : int
         Rows per HDF5 chunk of a stream column.
-    compression : {None, "lzf", "gzip"}
-        Column compression; off by default (see ``bench/bench_recording.py``).
+    compression : {"blosc-lz4", None, "lzf", "gzip", "blosc-zstd"}
+        Column compression of the closed file (:mod:`imucalib.io.compression`): Blosc LZ4
+        after a bit-shuffle by default, ``"gzip"`` (shuffle + deflate) for files that HDF5 tools
+        without the Blosc plugin must read, ``None`` for none. While the file is written its
+        columns are uncompressed (under SWMR every flush would rewrite a compressed chunk in a
+        new place and HDF5 never reuses the old one); :meth:`close` then rewrites it compressed
+        (:func:`~imucalib.io.recover.compact_recording`: copied, verified, atomically renamed).
+        ``docs/recording-format.md``, *Size and compression*, has the measurements.
     buffer_limit_bytes : int
         Buffered bytes (all streams) above which the writer flushes.
     reserve_bytes : int
@@ -251,7 +299,7 @@ class RecordingWriter:
         flush_interval_s: float = 1.0,
         overwrite: bool = False,
         chunk_rows: int = DEFAULT_CHUNK_ROWS,
-        compression: str | None = None,
+        compression: str | None = DEFAULT_COMPRESSION,
         buffer_limit_bytes: int = 64 << 20,
         reserve_bytes: int = DEFAULT_RESERVE_BYTES,
     ) -> None:
@@ -264,8 +312,8 @@ class RecordingWriter:
             raise InvalidInputError(f"`flush_interval_s` must be ≥ 0 [s]; got {flush_interval_s!r}")
         if not isinstance(chunk_rows, int) or chunk_rows < 1:
             raise InvalidInputError(f"`chunk_rows` must be a positive int; got {chunk_rows!r}")
-        if compression not in _COMPRESSIONS:
-            raise InvalidInputError(f"`compression` must be one of {_COMPRESSIONS}; "
+        if compression not in COMPRESSIONS:
+            raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
                                     f"got {compression!r}")
         if not isinstance(buffer_limit_bytes, int) or buffer_limit_bytes < 1:
             raise InvalidInputError(f"`buffer_limit_bytes` must be a positive int; "
@@ -278,6 +326,7 @@ class RecordingWriter:
         self._flush_interval_s = float(flush_interval_s)
         self._buffer_limit_bytes = buffer_limit_bytes
         self._reserve_bytes = reserve_bytes
+        self._compression = compression
         self._full: StorageFullError | None = None
         self._buffered_bytes = 0
         self._streams: dict[tuple[str, str], _StreamState] = {}
@@ -301,13 +350,18 @@ class RecordingWriter:
     @classmethod
     def reopen(cls, path: str | os.PathLike[str], *, flush_interval_s: float = 1.0,
                buffer_limit_bytes: int = 64 << 20,
-               reserve_bytes: int = DEFAULT_RESERVE_BYTES) -> RecordingWriter:
+               reserve_bytes: int = DEFAULT_RESERVE_BYTES,
+               compression: str | _Keep | None = KEEP) -> RecordingWriter:
         """Reopen a cleanly closed Recording to append to its streams, steps and log.
 
         The streams and truth streams are those declared when the file was created; rows
         already written, steps (which :meth:`update_step` may still change) and events are kept.
         A file a crashed writer left open must first be recovered
-        (:func:`imucalib.io.recover.recover_recording`).
+        (:func:`imucalib.io.recover.recover_recording`). A file with compressed columns is
+        first rewritten uncompressed (:func:`~imucalib.io.recover.compact_recording`), and
+        :meth:`close` compresses it with `compression`: by default (:data:`KEEP`) the one it
+        had, so that a file of format version 1 or 2 stays readable by the readers of its
+        version; a Blosc compression (version 3 only) is refused for an older file.
 
         Raises
         ------
@@ -317,12 +371,26 @@ class RecordingWriter:
             If it is not a readable Recording of this format.
         """
         from imucalib.io.reader import open_recording
+        from imucalib.io.recover import compact_recording
 
+        if not isinstance(compression, _Keep) and compression not in COMPRESSIONS:
+            raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS} or KEEP; "
+                                    f"got {compression!r}")
         p = Path(path)
-        with open_recording(p, strict=True):
-            pass  # diagnoses foreign, newer, damaged and still-open files with clear messages
+        with open_recording(p, strict=True) as rec:  # diagnoses foreign, newer, damaged and
+            filtered, had = _column_compression(rec._file)  # still-open files clearly
+            version = rec.format_version
+        if isinstance(compression, _Keep):
+            compression = had
+        elif needs_plugin(compression) and version < FORMAT_VERSION:
+            raise InvalidInputError(f"{p} is of format version {version}, whose readers lack the "
+                                    f"Blosc filter: `compression` {compression!r} needs version "
+                                    f"{FORMAT_VERSION}; use KEEP, None, 'gzip' or 'lzf'")
+        if filtered:
+            compact_recording(p, None)
         self = cls.__new__(cls)
         self._path = p
+        self._compression = compression
         self._flush_interval_s = float(flush_interval_s)
         self._buffer_limit_bytes = int(buffer_limit_bytes)
         self._reserve_bytes = int(reserve_bytes)
@@ -365,7 +433,7 @@ class RecordingWriter:
         cols = json.loads(decode_attr(group.attrs["columns_json"]))
         spec = StreamSpec(decode_attr(group.attrs["device"]), decode_attr(group.attrs["unit"]),
                           {c["name"]: ColumnSpec(c["unit"], c["dtype"], c["quantity"],
-                                                 c["description"])
+                                                 c["description"], c.get("scale"))
                            for c in cols if c["name"] != TIME_COLUMN})
         datasets = {name: group[name] for name in spec.columns}
         st = _StreamState(spec, entry, datasets)
@@ -411,7 +479,10 @@ class RecordingWriter:
                 chunk_rows: int, compression: str | None) -> None:
         f = self._file
         f.attrs["format"] = FORMAT_NAME
-        f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        scaled = any(c.scale is not None for spec in (*stream_specs, *truth_specs)
+                     for c in spec.columns.values())
+        version = FORMAT_VERSION if scaled or needs_plugin(compression) else FORMAT_VERSION_PLAIN
+        f.attrs["format_version"] = np.int64(version)
         f.attrs["created_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
         f.attrs["software_version"] = __version__
         for key, value in meta.items():
@@ -451,17 +522,18 @@ class RecordingWriter:
         group.attrs["device"] = spec.device
         group.attrs["unit"] = spec.unit
         group.attrs["columns_json"] = json_dumps(
-            [{"name": name, "unit": c.unit, "dtype": c.dtype, "quantity": c.quantity,
-              "description": c.description} for name, c in spec.columns.items()], "columns")
+            [column_json(name, c) for name, c in spec.columns.items()], "columns")
         datasets: dict[str, h5py.Dataset] = {}
         for name, col in spec.columns.items():
             dt = np.dtype(col.dtype)
             ds = group.create_dataset(
                 name, shape=(0,), maxshape=(None,), chunks=(chunk_rows,), dtype=dt,
-                compression=compression, fillvalue=np.nan if dt.kind == "f" else None)
+                fillvalue=np.nan if dt.kind == "f" else None)
             ds.attrs["unit"] = col.unit
             ds.attrs["quantity"] = col.quantity
             ds.attrs["description"] = col.description
+            if col.scale is not None:
+                ds.attrs["scale"] = np.float64(col.scale)
             datasets[name] = ds
         return _StreamState(spec, f"{base}/{spec.device}/{spec.unit}", datasets)
 
@@ -557,7 +629,10 @@ class RecordingWriter:
         for col, dt in st.dtypes.items():
             if col == TIME_COLUMN:
                 continue
-            arr = as_column(columns[col], dt, f"{what} {name}, column {col!r}")
+            where = f"{what} {name}, column {col!r}"
+            scaled = st.scaled.get(col)
+            arr = (as_column(columns[col], dt, where) if scaled is None
+                   else encode_counts(columns[col], scaled, where))
             if arr.shape[0] != n:
                 raise InvalidInputError(f"{what} {name}, column {col!r}: length {arr.shape[0]} "
                                         f"differs from time_s length {n}")
@@ -782,10 +857,19 @@ class RecordingWriter:
             self._committed = counts
 
     def close(self) -> None:
-        """Flush and close; the file then opens normally. Calling it again does nothing."""
+        """Flush and close, then compress; the file then opens normally. Again: does nothing.
+
+        The compression (``compression`` of the constructor or :meth:`reopen`) rewrites the
+        closed file (:func:`~imucalib.io.recover.compact_recording`). It is skipped when the
+        room left is less than the file's size plus `reserve_bytes`, after the storage filled
+        up (the caller has had the :class:`~imucalib.errors.StorageFullError`), or when the
+        rewrite fails; the file is then left complete and uncompressed, and
+        :attr:`compression_skipped` says why.
+        """
         if self._closed:
             return
         already_full = self._full is not None
+        closed_cleanly = False
         try:
             self.flush()
         except StorageFullError:
@@ -795,6 +879,38 @@ class RecordingWriter:
             if not self._closed:  # not abandoned by a failed write
                 self._closed = True
                 self._file.close()
+                closed_cleanly = True
+        if closed_cleanly:
+            self._compress()
+
+    def _compress(self) -> None:
+        """Rewrite the closed file with its compression, or warn and leave it as it is."""
+        from imucalib.io.recover import compact_recording
+
+        if self._compression is None:
+            return
+        size = self._path.stat().st_size
+        room = room_bytes(self._path)
+        why = ""
+        if self._full is not None:
+            why = "the storage filled up during the run"
+        elif room - size < self._reserve_bytes:
+            why = (f"the copy needs up to {format_bytes(size)} and {format_bytes(room)} is left "
+                   f"(reserve {format_bytes(self._reserve_bytes)})")
+        else:
+            try:
+                compact_recording(self._path, self._compression)
+                return
+            except (RecordingError, OSError) as exc:
+                why = str(exc)
+        self._compression_skipped = (f"{self._path} is complete but was left uncompressed "
+                                     f"({why}); compress it later with "
+                                     "imucalib.io.compact_recording")
+
+    @property
+    def compression_skipped(self) -> str:
+        """Why :meth:`close` left the file uncompressed (``""``: it did not, or none was asked)."""
+        return getattr(self, "_compression_skipped", "")
 
     def __enter__(self) -> RecordingWriter:
         return self

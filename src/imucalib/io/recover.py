@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -43,7 +44,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.conventions import TIME_COLUMN
-from imucalib.errors import InvalidInputError, RecordingCorruptError, RecordingError
+from imucalib.errors import (
+    InvalidInputError,
+    RecordingCorruptError,
+    RecordingError,
+    RecordingOpenForWriteError,
+)
+from imucalib.io._open import marked_open_for_write
 from imucalib.io._schema import (
     COMMIT_GROUP,
     FORMAT_NAME,
@@ -60,6 +67,7 @@ from imucalib.io._schema import (
     TRUTH_STREAMS_GROUP,
     ColumnSpec,
     FieldSpec,
+    column_json,
     decode_attr,
     decode_text,
     dtype_code,
@@ -69,9 +77,16 @@ from imucalib.io._schema import (
 )
 from imucalib.io._tables import create_table
 from imucalib.io._validate import H5PY_ERRORS, first_bad_time, from_h5py, parse_columns
+from imucalib.io.compression import (
+    COMPRESSIONS,
+    DEFAULT_COMPRESSION,
+    column_filter_kwargs,
+    copy_filter_kwargs,
+    needs_plugin,
+)
 from imucalib.io.reader import Recording, open_damaged, open_recording
 
-__all__ = ["RecoveredStream", "RecoveryReport", "recover_recording"]
+__all__ = ["RecoveredStream", "RecoveryReport", "compact_recording", "recover_recording"]
 
 _BLOCK_ROWS = 1 << 20
 _T = TypeVar("_T")
@@ -165,12 +180,12 @@ def _set_attrs(obj: h5py.HLObject, attrs: Mapping[str, Any]) -> None:
         obj.attrs[key] = value
 
 
-def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int, attrs: Mapping[str, Any]
-          ) -> h5py.Dataset:
+def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int, attrs: Mapping[str, Any],
+          filters: dict[str, Any] | None) -> h5py.Dataset:
+    """Create a dataset like `src` (chunks, dtype, fill) with `filters` (None: those of `src`)."""
     out = dst.create_dataset(
         name, shape=(n,), maxshape=(None,), chunks=src.chunks, dtype=src.dtype,
-        compression=src.compression, compression_opts=src.compression_opts,
-        fillvalue=src.fillvalue)
+        fillvalue=src.fillvalue, **(copy_filter_kwargs(src) if filters is None else filters))
     _set_attrs(out, attrs)
     return out
 
@@ -178,9 +193,12 @@ def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int, attrs: Mapping[
 class _Copier:
     """Copies what is valid of an opened (possibly damaged) Recording into a new file."""
 
-    def __init__(self, rec: Recording, dst: h5py.File) -> None:
+    def __init__(self, rec: Recording, dst: h5py.File, *, filters: dict[str, Any] | None = None,
+                 recovered: bool = True) -> None:
         self.src: h5py.File = rec._file
         self.dst = dst
+        self.filters = filters  # of the stream columns; None: as in the original
+        self.recovered = recovered  # stamp recovered_from / recovered_utc
         self.path = rec.path
         self.version = int(rec.format_version)
         self.hashes: dict[str, str] = {}
@@ -227,8 +245,9 @@ class _Copier:
         _set_attrs(self.dst, attrs)
         self.dst.attrs["format"] = FORMAT_NAME
         self.dst.attrs["format_version"] = np.int64(min(self.version, FORMAT_VERSION))
-        self.dst.attrs["recovered_from"] = str(self.path.name)
-        self.dst.attrs["recovered_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        if self.recovered:
+            self.dst.attrs["recovered_from"] = str(self.path.name)
+            self.dst.attrs["recovered_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
     def truth(self) -> None:
         group, err = _try(self.src.get, TRUTH_GROUP)
@@ -296,9 +315,13 @@ class _Copier:
             a, _ = _try(_raw_attrs, ds)
             if a is None or not isinstance(decode_attr(a.get("unit")), str):
                 return None, "its columns_json is damaged and its columns carry no units"
+            scale = decode_attr(a.get("scale"))
+            if scale is not None and not (isinstance(scale, float) and math.isfinite(scale)
+                                          and scale > 0 and ds.dtype.kind in "iu"):
+                return None, f"its columns_json is damaged and {name} has a bad scale"
             cols[name] = ColumnSpec(decode_attr(a["unit"]), dtype_code(ds.dtype),
                                     str(decode_attr(a.get("quantity", "si"))),
-                                    str(decode_attr(a.get("description", ""))))
+                                    str(decode_attr(a.get("description", ""))), scale)
         if TIME_COLUMN not in cols:
             return None, "its columns_json is damaged and it has no time_s"
         return cols, "columns_json rebuilt from the datasets"
@@ -344,8 +367,7 @@ class _Copier:
         kept = {c: s for c, s in cols.items() if c in dsets}
         device, unit = path.rsplit("/", 2)[-2:]
         attrs.update(device=device, unit=unit, columns_json=json_dumps(
-            [{"name": c, "unit": s.unit, "dtype": s.dtype, "quantity": s.quantity,
-              "description": s.description} for c, s in kept.items()], "columns"))
+            [column_json(c, s) for c, s in kept.items()], "columns"))
         return self._copy_columns(path, attrs, dsets, kept, n, found, notes)
 
     def _copy_columns(self, path: str, attrs: dict[str, Any], dsets: dict[str, h5py.Dataset],
@@ -359,7 +381,8 @@ class _Copier:
             col_attrs, _ = _try(_raw_attrs, d)
             spec = cols[c]
             outs[c] = _like(dst, c, d, n, col_attrs if col_attrs is not None else {
-                "unit": spec.unit, "quantity": spec.quantity, "description": spec.description})
+                "unit": spec.unit, "quantity": spec.quantity, "description": spec.description},
+                self.filters)
         digests = {c: hashlib.sha256() for c in dsets}
         copied = n
         for a in range(0, n, _BLOCK_ROWS):
@@ -508,8 +531,9 @@ def _check_recognizable(rec: Recording) -> None:
             f"/log, /commit) are not readable either (found {groups}); restore it from a copy")
 
 
-def _copy(rec: Recording, dst: h5py.File) -> _Copier:
-    copier = _Copier(rec, dst)
+def _copy(rec: Recording, dst: h5py.File, *, filters: dict[str, Any] | None = None,
+          recovered: bool = True) -> _Copier:
+    copier = _Copier(rec, dst, filters=filters, recovered=recovered)
     copier.root()
     copier.truth()
     copier.streams()
@@ -541,7 +565,8 @@ def _verify(path: Path, tables: list[RecoveredStream], hashes: dict[str, str]) -
 
 
 def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
-                      *, overwrite: bool = False) -> RecoveryReport:
+                      *, overwrite: bool = False,
+                      compression: str | None = DEFAULT_COMPRESSION) -> RecoveryReport:
     """Copy everything readable of a Recording into a new, cleanly closed file.
 
     Parameters
@@ -552,6 +577,11 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
         Where to write the copy; default ``<stem>.recovered.h5`` beside `path`.
     overwrite : bool
         Replace an existing `out_path`.
+    compression : str or None
+        Compression of the copy's stream columns (:data:`~imucalib.io.compression.COMPRESSIONS`;
+        the copy is written once, so it can be compressed without the cost SWMR appends have).
+        A file of format version 1 or 2 keeps its own filters instead of a Blosc compression,
+        which the readers of its version lack.
 
     Returns
     -------
@@ -575,14 +605,21 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
                                 "is never modified")
     if out.exists() and not overwrite:
         raise RecordingError(f"{out} exists; choose another output path or remove it first")
+    if compression not in COMPRESSIONS:
+        raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
+                                f"got {compression!r}")
     tmp = out.with_name(f".{out.name}.partial")
     rec, damage = open_damaged(src)
     with rec:
         was_open = rec.was_open_for_write
         _check_recognizable(rec)
         try:
+            # a file of version 1 or 2 keeps its own filters rather than gain Blosc, which its
+            # readers lack (Blosc came with version 3)
+            keep = needs_plugin(compression) and rec.format_version < FORMAT_VERSION
             with h5py.File(tmp, "w", libver="latest") as dst:
-                copier = _copy(rec, dst)
+                copier = _copy(rec, dst,
+                               filters=None if keep else column_filter_kwargs(compression))
             _verify(tmp, copier.tables, copier.hashes)
             os.replace(tmp, out)
         except OSError as exc:
@@ -595,3 +632,67 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
                           tables=tuple(copier.tables), unfinished_steps=copier.unfinished,
                           verified=True, damage=str(damage) if damage is not None else "",
                           notes=tuple(copier.notes))
+
+
+def compact_recording(path: str | os.PathLike[str], compression: str | None) -> None:
+    """Rewrite a cleanly closed Recording in place with another compression of its columns.
+
+    The copy holds what every reader of the file sees: each stream's committed rows (rows a
+    column holds past its commit count, which no reader shows, are not copied), the steps, the
+    log, the attributes and the truth.
+
+    The copy is written beside the original (``.<name>.compact.partial``), checked as
+    :func:`recover_recording` checks its copies (every check of
+    :func:`~imucalib.io.reader.open_recording`, every column's SHA-256), and only then
+    replaces the original (:func:`os.replace`, atomic on POSIX filesystems). A process killed
+    before that leaves the original untouched (and the partial file behind). This is how a
+    :class:`~imucalib.io.recording.RecordingWriter` compresses a file when it closes it, and
+    uncompresses one it reopens: under SWMR HDF5 never reuses the space of a rewritten chunk,
+    and a compressed chunk is rewritten (in a new place) at every flush until it is full
+    (``docs/recording-format.md``, *Size and compression*).
+
+    Parameters
+    ----------
+    path : str or Path
+        A cleanly closed Recording.
+    compression : str or None
+        One of :data:`~imucalib.io.compression.COMPRESSIONS`.
+
+    Raises
+    ------
+    InvalidInputError
+        For an unknown compression.
+    RecordingOpenForWriteError, RecordingFormatError, RecordingCorruptError
+        If the file is not a cleanly closed, valid Recording (it is then not touched).
+    RecordingError
+        If the copy would differ from the original in anything (it is then not touched).
+    """
+    if compression not in COMPRESSIONS:
+        raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
+                                f"got {compression!r}")
+    src = Path(path)
+    if src.is_file() and marked_open_for_write(src):
+        raise RecordingOpenForWriteError(
+            f"{src} is open for write (a writer holds it, or one was stopped): it can be "
+            "compacted once closed; `imucalib recover FILE` copies out a stopped writer's file")
+    tmp = src.with_name(f".{src.name}.compact.partial")
+    try:
+        with open_recording(src, strict=True) as rec:
+            visible = rec.committed_rows()  # rows past a commit count are shown to no reader
+            with h5py.File(tmp, "w", libver="latest") as dst:
+                copier = _copy(rec, dst, filters=column_filter_kwargs(compression),
+                               recovered=False)
+        changed = [f"{t.name}: {t.rows_copied} of {visible.get(t.name)} rows ({t.note})"
+                   for t in copier.tables if t.rows_copied != visible.get(t.name)]
+        if copier.notes or changed:
+            raise RecordingError(
+                f"compacting {src} stopped, the file is unchanged: the copy would differ "
+                f"({'; '.join(copier.notes + changed)})")
+        _verify(tmp, copier.tables, copier.hashes)
+        os.replace(tmp, src)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise RecordingError(f"compacting {src} failed, the file is unchanged: {exc}") from exc
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise

@@ -25,6 +25,7 @@ Column names follow :mod:`imucalib.conventions`: ``gyro_x_rps`` … ``accel_z_mp
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from imucalib.conventions import (
     ACCEL_COLUMNS,
@@ -61,7 +62,9 @@ IMU_TRUTH_COLUMNS: tuple[str, ...] = (
 )
 
 
-def imu_stream_spec(name: str, *, quantity: str = "si") -> StreamSpec:
+def imu_stream_spec(name: str, *, quantity: str = "si", gyro_lsb_rps: float | None = None,
+                    accel_lsb_mps2: float | None = None,
+                    temperature_lsb_degc: float | None = None) -> StreamSpec:
     """Return the layout of an IMU stream.
 
     Parameters
@@ -70,8 +73,17 @@ def imu_stream_spec(name: str, *, quantity: str = "si") -> StreamSpec:
         The unit's name (serial number); the stream is ``/streams/imu/<name>``.
     quantity : {"si", "raw"}
         Whether gyro and accelerometer columns hold SI values (rad/s, m/s²) or raw output.
+    gyro_lsb_rps, accel_lsb_mps2, temperature_lsb_degc : float, optional
+        The output's LSB, when the device delivers integer counts of it: the column is then
+        stored as int32 counts with that ``scale`` and read back as the same float64 values
+        (``docs/recording-format.md``, *Size and compression*); values off that grid are
+        refused when appended. Omitted: float64. [rad/s], [m/s²], [°C]
     """
     gyro_unit, accel_unit = ("rad/s", "m/s^2") if quantity == "si" else ("counts", "counts")
+
+    def counts(lsb: float | None) -> dict[str, Any]:
+        return {} if lsb is None else {"dtype": "i4", "scale": lsb}
+
     cols: dict[str, ColumnSpec] = {
         "device_time_s": ColumnSpec("s", description="the IMU's own timestamp"),
         COUNTER_COLUMN: ColumnSpec("counts", dtype="i8", quantity="raw",
@@ -79,11 +91,13 @@ def imu_stream_spec(name: str, *, quantity: str = "si") -> StreamSpec:
     }
     for col, axis in zip(GYRO_COLUMNS, "xyz", strict=True):
         cols[col] = ColumnSpec(gyro_unit, quantity=quantity,
-                               description=f"gyro {axis}, sensor frame")
+                               description=f"gyro {axis}, sensor frame", **counts(gyro_lsb_rps))
     for col, axis in zip(ACCEL_COLUMNS, "xyz", strict=True):
         cols[col] = ColumnSpec(accel_unit, quantity=quantity,
-                               description=f"accelerometer {axis}, sensor frame")
-    cols[TEMPERATURE_COLUMN] = ColumnSpec("degC", description="internal temperature sensor")
+                               description=f"accelerometer {axis}, sensor frame",
+                               **counts(accel_lsb_mps2))
+    cols[TEMPERATURE_COLUMN] = ColumnSpec("degC", description="internal temperature sensor",
+                                          **counts(temperature_lsb_degc))
     cols["saturated"] = ColumnSpec("bool", dtype="b1", quantity="raw",
                                    description="any channel at its range")
     return StreamSpec(DEVICE_IMU, name, cols)

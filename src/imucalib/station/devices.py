@@ -214,6 +214,11 @@ class ImuIdentity:
         Full-scale ranges (for the saturation guard), when known. [rad/s], [m/s²]
     extra : mapping
         Anything else the device reports (firmware, calibration ID …).
+    gyro_lsb_rps, accel_lsb_mps2, temperature_lsb_degc : float or None
+        The value of one output count, when every sample the source delivers is an exact integer
+        multiple of it (a converter's codes times its LSB); the Recording then stores the counts
+        as int32 (:func:`imucalib.io.streams.imu_stream_spec`). None: stored as float64.
+        [rad/s], [m/s²], [°C]
     """
 
     name: str
@@ -223,6 +228,9 @@ class ImuIdentity:
     gyro_range_rps: float | None = None
     accel_range_mps2: float | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
+    gyro_lsb_rps: float | None = None
+    accel_lsb_mps2: float | None = None
+    temperature_lsb_degc: float | None = None
 
 
 # --- protocols ----------------------------------------------------------------------------------

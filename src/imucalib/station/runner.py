@@ -116,7 +116,8 @@ class RunSummary:
 
 
 def _stream_specs(station: Station, identities: list[ImuIdentity]) -> list[StreamSpec]:
-    specs = [imu_stream_spec(i.name) for i in identities]
+    specs = [imu_stream_spec(i.name, gyro_lsb_rps=i.gyro_lsb_rps, accel_lsb_mps2=i.accel_lsb_mps2,
+                             temperature_lsb_degc=i.temperature_lsb_degc) for i in identities]
     if station.table is not None:
         specs.append(motion_stream_spec(DEVICE_TABLE, station.table.name,
                                         station.table.axis_names))

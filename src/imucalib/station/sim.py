@@ -46,6 +46,7 @@ from imucalib import units
 from imucalib.errors import DeviceError, InvalidInputError, LimitExceededError
 from imucalib.io import StreamSpec
 from imucalib.io.streams import imu_truth_stream_spec
+from imucalib.models.sensor import SensorSpec
 from imucalib.plan.bounds import (
     MAX_CENTRIFUGE_RATE_DPS,
     MAX_TABLE_ACCEL_DPS2,
@@ -358,11 +359,15 @@ class SimImuSource:
         """Return the unit's identity and ranges."""
         imu = self._station.rig.imus[self.name]
         grade = self._station.grades.get(self.name, "")
+        temp_lsb = imu.temperature_resolution_degc
         return ImuIdentity(name=self.name, model=f"twin-{grade}", maker="imucalib digital twin",
                            sample_rate_hz=imu.model.sample_rate_hz,
                            gyro_range_rps=imu.model.gyro_output.range,
                            accel_range_mps2=imu.model.accel_output.range,
-                           extra={"bandwidth_hz": imu.model.gyro_output.bandwidth_hz})
+                           extra={"bandwidth_hz": imu.model.gyro_output.bandwidth_hz},
+                           gyro_lsb_rps=_count_lsb(imu.model.gyro_output),
+                           accel_lsb_mps2=_count_lsb(imu.model.accel_output),
+                           temperature_lsb_degc=temp_lsb if temp_lsb > 0 else None)
 
     def read(self) -> ImuBlock:
         """Return the samples delivered since the previous read."""
@@ -396,8 +401,8 @@ class SimImuSource:
         gyro, accel, flags = block.gyro_rps, block.accel_mps2, block.saturated
         if sat.any():
             gyro, accel, flags = gyro.copy(), accel.copy(), flags | sat
-            gyro[sat] = imu.gyro_output.range or 0.0
-            accel[sat] = imu.accel_output.range or 0.0
+            gyro[sat] = _full_scale(imu.gyro_output)
+            accel[sat] = _full_scale(imu.accel_output)
         out = ImuBlock(block.time_s[keep], block.device_time_s[keep], block.counter[keep],
                        gyro[keep], accel[keep], block.temperature_degc[keep], flags[keep])
         self._count(out.counter, n_crc)
@@ -438,6 +443,34 @@ class SimImuSource:
                                  crc_errors=h.crc_errors + n_crc, resyncs=h.resyncs,
                                  counter_gaps=h.counter_gaps + gaps,
                                  missing_samples=h.missing_samples + missing)
+
+
+def _count_lsb(spec: SensorSpec) -> float | None:
+    """Return the LSB of an output whose every value is an int32 count of it, else None.
+
+    The output stage (:mod:`imucalib.models.sensor`) delivers ``k·LSB`` with ``k`` between its
+    code limits; without limits (no range), or with codes beyond int32, the counts are not
+    bounded by int32 and the output is stored as float64.
+    """
+    lsb = spec.effective_lsb
+    limits = spec.code_limits()
+    if lsb is None or limits is None:
+        return None
+    lo, hi = limits
+    info = np.iinfo(np.int32)
+    top = max(hi, _full_scale(spec) / lsb)  # an injected saturation's code included
+    return lsb if info.min <= lo and top <= info.max else None
+
+
+def _full_scale(spec: SensorSpec) -> float:
+    """Return the value an injected saturation drives a channel to: the range, on the grid.
+
+    With a word length the range is a code (``2^(b−1)·LSB``) itself; with a LSB alone the
+    nearest multiple of it, so that the value stays one the output stage can deliver.
+    """
+    top = spec.range or 0.0
+    lsb = spec.effective_lsb
+    return float(np.rint(top / lsb) * lsb) if lsb is not None else top
 
 
 @dataclass(order=True)
