@@ -29,7 +29,6 @@ that does not is refused with its step named, before anything is written.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
@@ -50,6 +49,7 @@ from imucalib.conventions import (
 from imucalib.errors import InvalidInputError
 from imucalib.io._schema import ColumnSpec, StreamSpec
 from imucalib.io.csv_import import read_imu_csv
+from imucalib.io.hashing import file_sha256
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.step_file import StepEntry, StepFile, step_file_to_toml
 from imucalib.io.streams import DEVICE_TABLE, axis_columns, imu_stream_spec
@@ -69,14 +69,6 @@ TABLE_FEEDBACK_RECONSTRUCTED = "reconstructed from the step file"
 MIN_STEP_SAMPLES = 10
 
 _F64 = NDArray[np.float64]
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _counter(t: _F64, df: pd.DataFrame, rate_hz: float) -> NDArray[np.int64]:
@@ -201,7 +193,7 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
     if steps.bandwidth_hz is not None:
         ident["bandwidth_hz"] = steps.bandwidth_hz
     meta: dict[str, str | int | float | bool] = {
-        "source": "csv-import", "source_file": src.name, "source_sha256": _sha256(src),
+        "source": "csv-import", "source_file": src.name, "source_sha256": file_sha256(src),
         "step_file_toml": step_file_text or step_file_to_toml(steps),
         "table_feedback": TABLE_FEEDBACK_RECONSTRUCTED,
         "heading_deg": steps.heading_deg, "imu_identity_json": json.dumps({name: ident}),

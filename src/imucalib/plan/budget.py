@@ -40,12 +40,20 @@ A scenario (``imucalib simulate``) is a plan run on the twin station and is esti
 is not foreseen.
 
 Each stream holds ``⌊rate · duration⌋ + 1`` rows of the canonical layout
-(:mod:`imucalib.io.streams`: an IMU row is 81 bytes, a two-axis table row 40, a chamber row 24);
-every column is stored in chunks of 65 536 rows, allocated whole, so the last chunk counts in
-full. The steps table and the event log are chunked tables too (one row per step, about three
-events per step), and :data:`METADATA_BYTES` covers the HDF5 metadata, the plan and the truth.
-Against recordings the twin wrote (``docs/station.md``, ``docs/twin.md``) the estimate is 0.98–1.0
-of the file size.
+(:mod:`imucalib.io.streams`: an IMU row is 81 bytes with float64 samples, a two-axis table row 40,
+a chamber row 24); every column is stored in chunks of 65 536 rows, allocated whole, so the last
+chunk counts in full. The steps table and the event log are chunked tables too (one row per
+step, about three events per step), and :data:`METADATA_BYTES` covers the HDF5 metadata, the plan
+and the truth.
+
+What it bounds: the room a run needs. A Recording is written uncompressed and compressed when
+it is closed (docs/recording-format.md, "Size and compression"), so the disk holds at the most
+the file as written plus its compressed copy. An IMU that gives counts is written as int32 counts
+(61 bytes a row instead of 81), which the estimate does not assume: against the twin's files the
+estimate is 1.4–1.7 times the file as written and 5–10 times the closed, compressed file, and
+covers the peak (written file plus compressed copy, 0.7–0.9 of the estimate). With float64
+samples (an IMU without counts) the estimate is 0.98–1.0 of the file as written; a close that
+then finds too little room for the copy leaves the file uncompressed and complete.
 """
 
 from __future__ import annotations
@@ -61,7 +69,7 @@ from typing import TYPE_CHECKING, Final
 import numpy as np
 
 from imucalib.errors import ConfigurationError, LimitExceededError
-from imucalib.io._schema import (
+from imucalib.io.recording import (
     DEFAULT_CHUNK_ROWS,
     LOG_CHUNK_ROWS,
     LOG_FIELDS,

@@ -25,7 +25,6 @@ table heading, so the gyro bias excludes it (stated in the result's notes).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from collections.abc import Callable
@@ -49,6 +48,7 @@ from imucalib.analysis.verification import (
 )
 from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.estimation.goodness import assess_fit
+from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import open_recording
 from imucalib.models.result import CalibrationResult, FitQuality, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
@@ -450,14 +450,6 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                       crlb_ratio=crlb, observations=obs)
 
 
-def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 22), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def analyze_p1(path: str | Path, sensor_id: str | None = None,
                options: P1Options | None = None, *,
                progress: Callable[[float], None] | None = None) -> P1Analysis:
@@ -493,7 +485,7 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
     rule, guard_k = _acceptance(obs, opt)
     prov = Provenance(
         plan_hash=str(meta.get("plan_hash", "")),
-        recording_sha256=_sha256(p) if opt.hash_recording else "",
+        recording_sha256=file_sha256(p) if opt.hash_recording else "",
         recording=str(p.name), software_version=__version__,
         created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         details={"repetitions": list(obs.repetitions), "n_windows": len(obs.windows),
