@@ -59,6 +59,7 @@ from imucalib.analysis.noise_units import (
     convert_noise_term,
 )
 from imucalib.errors import InvalidInputError
+from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.noise import FLICKER_ALLAN_FACTOR, NoiseModel, compute_theoretical_adev
 
 __all__ = ["FIT_TERMS", "FLICKER_FACTOR", "NoiseFit", "NoiseTerm", "fit_noise_terms",
@@ -187,6 +188,17 @@ class NoiseFit:
     taus_s: F64  # points used [s]
     markov_time_constant_s: float | None = None
 
+    @property
+    def quality(self) -> FitQuality:
+        """The fit's goodness: χ²/ν against the Allan covariance, expected range, misfit flag.
+
+        :func:`~imucalib.models.fit_quality.assess_fit` of :attr:`chi2` and :attr:`dof`
+        (docs/processing-estimation.md, "Goodness of fit"); not testable without a finite χ².
+        """
+        testable = math.isfinite(self.chi2) and self.chi2 >= 0 and self.dof > 0
+        return assess_fit(self.sensor, self.chi2 if testable else 0.0,
+                          self.dof if testable else 0)
+
     def term(self, name: str) -> NoiseTerm:
         """Return the fitted term `name` (InvalidInputError if it was not fitted)."""
         for t in self.terms:
@@ -218,7 +230,13 @@ class NoiseFit:
                 "coefficients": self.coefficients.tolist(),
                 "covariance": self.covariance.tolist(), "chi2": self.chi2, "dof": self.dof,
                 "taus_s": self.taus_s.tolist(),
-                "markov_time_constant_s": self.markov_time_constant_s}
+                "markov_time_constant_s": self.markov_time_constant_s,
+                "fit_quality": {"reduced_chi2": None if self.quality.dof == 0
+                                else self.quality.reduced_chi2,
+                                "expected_high": None if self.quality.dof == 0
+                                else self.quality.expected_high,
+                                "misfit": self.quality.misfit,
+                                "sigma_scale": self.quality.sigma_scale}}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> NoiseFit:

@@ -62,6 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
+from imucalib.models.fit_quality import FitQuality
 from imucalib.models.triad import TriadKind, TriadModel
 from imucalib.units import parse_unit
 
@@ -115,64 +116,6 @@ class ResidualStats:
     std: tuple[float, ...]
     n: int
     unit: str
-
-
-@dataclass(frozen=True)
-class FitQuality:
-    """How well one fitted group (a triad) describes its data (docs/processing-estimation.md).
-
-    Computed by :func:`imucalib.estimation.goodness.assess_fit`.
-
-    Attributes
-    ----------
-    group : str
-        The fitted group: the prefix of its parameter names (``"accel"``, ``"gyro"``).
-    chi2 : float
-        rᵀC⁻¹r of the residuals, C the noise covariance of the observations.
-    dof : int
-        Degrees of freedom ν = n − p (0: nothing to test).
-    expected_low, expected_high : float
-        The range of χ²/ν that 1 % … 99 % of fits of a right model fall in (NaN when ν = 0).
-    misfit : bool
-        χ² above the `quantile` of χ²_ν: the model does not describe the data to their noise.
-    quantile : float
-        The misfit threshold's quantile (0.99).
-    """
-
-    group: str
-    chi2: float
-    dof: int
-    expected_low: float
-    expected_high: float
-    misfit: bool
-    quantile: float = 0.99
-
-    @property
-    def reduced_chi2(self) -> float:
-        """χ²/ν (NaN when ν = 0)."""
-        return self.chi2 / self.dof if self.dof > 0 else math.nan
-
-    @property
-    def birge_ratio(self) -> float:
-        """R_B = √(χ²/ν) (NaN when ν = 0)."""
-        return math.sqrt(self.reduced_chi2) if self.dof > 0 else math.nan
-
-    @property
-    def sigma_scale(self) -> float:
-        """The factor applied to the group's σ: R_B for a misfit, else 1."""
-        return self.birge_ratio if self.misfit else 1.0
-
-    def summary(self) -> str:
-        """One line: χ²/ν, its expected range and the verdict."""
-        if self.dof == 0:
-            return f"{self.group}: χ² not testable (no redundant observations)"
-        text = (f"{self.group}: χ²/ν = {self.reduced_chi2:.3g} (ν = {self.dof}; a right model "
-                f"gives {self.expected_low:.2g}–{self.expected_high:.2g})")
-        if self.misfit:
-            text += (f" — MODEL MISFIT above the {self.quantile:.0%} quantile: σ scaled by the "
-                     f"Birge ratio √(χ²/ν) = {self.birge_ratio:.3g} are reported beside the "
-                     "noise-only σ")
-        return text
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ TABLE_ROWS: dict[str, tuple[tuple[str, str, str, str, str], ...]] = {
 }
 
 
-def _cell(term: NoiseTerm | None, unit: str, note: str) -> str:
+def _cell(term: NoiseTerm | None, unit: str, note: str, sigma_scale: float = 1.0) -> str:
     if term is None:
         return "—"
     for u in term.display:
@@ -51,9 +51,17 @@ def _cell(term: NoiseTerm | None, unit: str, note: str) -> str:
                 bound = u.upper if u.upper is not None else 2 * u.std
                 return f"< {bound:.3g} (n.d.)" if math.isfinite(bound) else "n.d."
             if math.isfinite(u.std):
-                return format_pm(u.value, u.std)
+                return format_pm(u.value, u.std * sigma_scale)
             return f"{u.value:.4g}"
     raise InvalidInputError(f"no unit {unit!r} ({note}) for term {term.name!r}")
+
+
+def _quality_cell(fit: NoiseFit) -> str:
+    q = fit.quality
+    if q.dof == 0:
+        return "—"
+    text = f"{q.reduced_chi2:.2g}"
+    return f"{text} misfit: σ×{q.sigma_scale:.2g}" if q.misfit else text
 
 
 def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> str:
@@ -88,14 +96,17 @@ def format_noise_table(fits: Mapping[str, NoiseFit], *, fmt: str = "text") -> st
             for ch in chans:
                 f = fits[ch]
                 if source == "reading":
-                    term = f.reading(term_name)
-                else:
+                    cells.append(_cell(f.reading(term_name), unit, note))
+                else:  # a misfit's σ scaled by the Birge ratio (docs/processing-estimation.md)
                     term = next((t for t in f.terms if t.name == term_name), None)
-                cells.append(_cell(term, unit, note))
+                    cells.append(_cell(term, unit, note, f.quality.sigma_scale))
             rows.append([label, unit, *cells])
+        rows.append(["Fit χ²/ν", "", *(_quality_cell(fits[ch]) for ch in chans)])
     foot = ("Densities: N two-sided (IEEE 952; = Kalibr sigma_c); the noise-density row is the "
             "one-sided datasheet value sqrt(2)*N. Uncertainties are 1-sigma; '< X (n.d.)': not "
-            "detected, below the upper bound X (docs/noise.md).")
+            "detected, below the upper bound X (docs/noise.md). A fit chi2/nu above its 99 % "
+            "quantile is a misfit: that channel's fitted sigma are scaled by the Birge ratio "
+            "sqrt(chi2/nu) (docs/processing-estimation.md).")
     if fmt == "csv":
         buf = _io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")

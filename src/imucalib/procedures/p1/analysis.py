@@ -47,10 +47,10 @@ from imucalib.analysis.verification import (
     decision_rule_text,
 )
 from imucalib.estimation import compute_crlb, refine_with_kalman
-from imucalib.estimation.goodness import assess_fit
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import open_recording
-from imucalib.models.result import CalibrationResult, FitQuality, Provenance, ResidualStats
+from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
 from imucalib.models.triad import correct_triad
 from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.p1.fit import (

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from imucalib.errors import InvalidInputError
 from imucalib.estimation import solve_weighted_lsq
 from imucalib.estimation.designs import SIX_POSITION_UP_B, build_triad_design
-from imucalib.estimation.goodness import assess_fit
+from imucalib.models.fit_quality import assess_fit
 from imucalib.models.result import CalibrationResult
 
 G = 9.80665
@@ -99,3 +99,31 @@ def test_the_result_carries_fit_quality_and_scales_only_the_misfit_group():
     del doc["fit_quality"]
     old = CalibrationResult.from_dict(doc, "v1.json")
     assert old.fit_quality == () and not old.misfit and old.std(scaled=True) == old.std()
+
+
+def test_allan_fits_carry_their_goodness_and_the_table_scales_a_misfit():
+    """A white-noise record fits its model (flagged about 1 time in 100); the noise table
+    shows χ²/ν and scales a misfit channel's σ by the Birge ratio."""
+    from imucalib.analysis import compute_oadev, fit_noise_terms
+    from imucalib.models.noise import NoiseModel, simulate_noise
+    from imucalib.report.noise_table import format_noise_table
+
+    white = NoiseModel(white_density=1e-3)
+    flags, fits = 0, {}
+    for seed in range(30):
+        x = simulate_noise(white, 1 << 16, 0.01, rng=np.random.default_rng([5, seed]))[:, 0]
+        fit = fit_noise_terms(compute_oadev(x, 100.0), sensor="gyro")
+        flags += fit.quality.misfit
+        fits[f"gyro_{seed}"] = fit
+    assert flags <= 3  # 1 % expected; 3 of 30 would be a 1e-3 event
+    table = format_noise_table({"gyro_x": fits["gyro_0"]})
+    assert "Fit χ²/ν" in table
+    assert f"{fits['gyro_0'].quality.reduced_chi2:.2g}" in table
+    doc = fits["gyro_0"].to_dict()["fit_quality"]
+    assert doc["misfit"] == fits["gyro_0"].quality.misfit
+    # a fit made a misfit by hand: its σ are shown scaled by √(χ²/ν)
+    import dataclasses
+
+    bad = dataclasses.replace(fits["gyro_0"], chi2=fits["gyro_0"].dof * 100.0)
+    assert bad.quality.misfit and bad.quality.sigma_scale == pytest.approx(10.0)
+    assert "misfit: σ×10" in format_noise_table({"gyro_x": bad})

@@ -22,25 +22,85 @@ absorbed.
 
 Contents
 --------
-:func:`assess_fit` → :class:`~imucalib.models.result.FitQuality`; :data:`MISFIT_QUANTILE`.
+:class:`FitQuality` (one fit's χ², ν, expected range, misfit flag, Birge ratio), :func:`assess_fit`,
+:data:`MISFIT_QUANTILE`, :data:`EXPECTED_RANGE`. Procedures carry it in their results
+(:attr:`imucalib.models.result.CalibrationResult.fit_quality`, the Allan noise fits).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Final
 
 from scipy import stats
 
 from imucalib.errors import InvalidInputError
-from imucalib.models.result import FitQuality
 
-__all__ = ["EXPECTED_RANGE", "MISFIT_QUANTILE", "assess_fit"]
+__all__ = ["EXPECTED_RANGE", "MISFIT_QUANTILE", "FitQuality", "assess_fit"]
 
 #: The χ² quantile above which a fit is flagged as a misfit, Eq. (2).
 MISFIT_QUANTILE: Final = 0.99
 #: The quantiles of the expected range of χ²/ν, Eq. (1).
 EXPECTED_RANGE: Final = (0.01, 0.99)
+
+
+@dataclass(frozen=True)
+class FitQuality:
+    """How well one fitted group (a triad) describes its data (docs/processing-estimation.md).
+
+    Computed by :func:`assess_fit`.
+
+    Attributes
+    ----------
+    group : str
+        The fitted group: the prefix of its parameter names (``"accel"``, ``"gyro"``).
+    chi2 : float
+        rᵀC⁻¹r of the residuals, C the noise covariance of the observations.
+    dof : int
+        Degrees of freedom ν = n − p (0: nothing to test).
+    expected_low, expected_high : float
+        The range of χ²/ν that 1 % … 99 % of fits of a right model fall in (NaN when ν = 0).
+    misfit : bool
+        χ² above the `quantile` of χ²_ν: the model does not describe the data to their noise.
+    quantile : float
+        The misfit threshold's quantile (0.99).
+    """
+
+    group: str
+    chi2: float
+    dof: int
+    expected_low: float
+    expected_high: float
+    misfit: bool
+    quantile: float = 0.99
+
+    @property
+    def reduced_chi2(self) -> float:
+        """χ²/ν (NaN when ν = 0)."""
+        return self.chi2 / self.dof if self.dof > 0 else math.nan
+
+    @property
+    def birge_ratio(self) -> float:
+        """R_B = √(χ²/ν) (NaN when ν = 0)."""
+        return math.sqrt(self.reduced_chi2) if self.dof > 0 else math.nan
+
+    @property
+    def sigma_scale(self) -> float:
+        """The factor applied to the group's σ: R_B for a misfit, else 1."""
+        return self.birge_ratio if self.misfit else 1.0
+
+    def summary(self) -> str:
+        """One line: χ²/ν, its expected range and the verdict."""
+        if self.dof == 0:
+            return f"{self.group}: χ² not testable (no redundant observations)"
+        text = (f"{self.group}: χ²/ν = {self.reduced_chi2:.3g} (ν = {self.dof}; a right model "
+                f"gives {self.expected_low:.2g}–{self.expected_high:.2g})")
+        if self.misfit:
+            text += (f" — MODEL MISFIT above the {self.quantile:.0%} quantile: σ scaled by the "
+                     f"Birge ratio √(χ²/ν) = {self.birge_ratio:.3g} are reported beside the "
+                     "noise-only σ")
+        return text
 
 
 def assess_fit(group: str, chi2: float, dof: int, *,
