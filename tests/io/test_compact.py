@@ -19,7 +19,7 @@ import h5py
 import numpy as np
 import pytest
 
-from imucalib.errors import InvalidInputError, RecordingCorruptError
+from imucalib.errors import InvalidInputError, RecordingCorruptError, RecordingError
 from imucalib.io import (
     FORMAT_VERSION,
     ColumnSpec,
@@ -403,3 +403,29 @@ def test_older_files_never_gain_blosc(tmp_path):
                        for u in f["streams/imu"])
         with open_recording(report.output) as rec:
             assert len(rec.read_stream("imu", rec.streams[0].unit, t_end_s=1.0)) > 0
+
+
+def test_a_run_says_when_its_file_was_left_uncompressed(tmp_path, monkeypatch):
+    """The runner passes the writer's note on (RunSummary.storage_note), and the CLI prints it."""
+    from imucalib.io import recover as recover_module
+    from imucalib.procedures import generate_p1_plan
+    from imucalib.station.runner import RunOptions, run_plan
+    from imucalib.station.sim import SimStation
+
+    plan = generate_p1_plan(name="note", grade="consumer", rates_dps=(-90.0, 0.0, 90.0),
+                            held_out_rates_dps=(), revolutions=1, static_s=20.0, settle_s=2.0,
+                            record_s=2.0, rate_settle_s=2.0, repetitions=1, warm_up_s=2.0,
+                            sample_rate_hz=100.0, seed=3)
+    assert plan.twin is not None
+    def refuse(path, compression):
+        raise RecordingError("the copy could not be written (test)")
+
+    monkeypatch.setattr(recover_module, "compact_recording", refuse)  # imported at close
+    summary = run_plan(plan, SimStation(plan.twin), tmp_path / "run.h5",
+                       options=RunOptions(tick_s=2.0))
+    assert summary.status == "done"
+    assert "left uncompressed (the copy could not be written (test))" in summary.storage_note
+    monkeypatch.undo()
+    summary = run_plan(plan, SimStation(plan.twin), tmp_path / "run2.h5",
+                       options=RunOptions(tick_s=2.0))
+    assert summary.storage_note == ""

@@ -89,6 +89,8 @@ def _report(summary: RunSummary) -> None:
     if summary.reason:
         console.print(f"  {'stopped' if summary.status != 'done' else 'note'}: {summary.reason}",
                       highlight=False)
+    if summary.storage_note:
+        console.print(f"  note: {summary.storage_note}", highlight=False)
 
 
 @app.command()

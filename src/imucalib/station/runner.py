@@ -44,6 +44,7 @@ after its last sample. Completed steps keep their data; nothing is repeated or l
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -113,6 +114,13 @@ class RunSummary:
     start_s: float
     end_s: float
     reason: str = ""
+    storage_note: str = ""  # why the closed file was left uncompressed ("": it was compressed)
+
+
+def _with_storage_note(summary: RunSummary, writer: RecordingWriter) -> RunSummary:
+    """Return the summary with the note of a close that left the file uncompressed."""
+    note = writer.compression_skipped
+    return dataclasses.replace(summary, storage_note=note) if note else summary
 
 
 def _stream_specs(station: Station, identities: list[ImuIdentity]) -> list[StreamSpec]:
@@ -334,7 +342,7 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
         run = RunSession(plan, station, writer, opt, identities)
         summary = _drive(run, 0, truth_source)
     _disconnect(station)
-    return summary
+    return _with_storage_note(summary, writer)
 
 
 def _disconnect(station: Station) -> None:
@@ -473,7 +481,7 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         run = RunSession(point.plan, station, writer, opt, identities)
         summary = _drive(run, point.first_step)
     _disconnect(station)
-    return summary
+    return _with_storage_note(summary, writer)
 
 
 def _finished_summary(path: Path, point: ResumePoint) -> RunSummary:
