@@ -122,3 +122,16 @@ def test_unknown_imu_of_a_recording_is_named(recording):
     result = runner.invoke(app, ["segments", str(recording), "--unit", "IMU-9"])
     assert result.exit_code == 2
     assert "no IMU 'IMU-9'" in result.output and "IMU-3" in result.output
+
+
+def test_segments_of_a_twin_recording_use_the_counter_time_base(tmp_path):
+    """The twin's receive times come in bursts (equal times); segments must still run."""
+    from ..conftest import write_planless_recording
+
+    path = write_planless_recording(tmp_path / "rest.h5")
+    with open_recording(path) as rec:
+        t = rec.read_stream("imu", rec.streams[0].unit).time_s
+    assert np.any(np.diff(t) == 0.0)  # what made `segments` refuse the file
+    done = CliRunner().invoke(app, ["segments", str(path), "--window-s", "0.2",
+                                    "--min-static-s", "0.5"])
+    assert done.exit_code == 0, done.output

@@ -143,7 +143,14 @@ def _imu_arrays(path: Path, unit: str | None) -> tuple[str, Any, Any, Any]:
             data = rec.read_stream(DEVICE_IMU, chosen)
             gyro = np.column_stack([data.columns[c] for c in GYRO_COLUMNS])
             accel = np.column_stack([data.columns[c] for c in ACCEL_COLUMNS])
-            return f"{path} IMU {chosen}", data.time_s, gyro, accel
+            time_s = data.time_s
+            if "counter" in data.columns and time_s.size >= 3:
+                # receive times come in bursts (equal times); the counter gives each sample
+                # its own time on the same clock (docs/drivers.md, time synchronisation)
+                from imucalib.processing import reconstruct_time_base
+
+                time_s = reconstruct_time_base(data.columns["counter"], time_s).time_s
+            return f"{path} IMU {chosen}", time_s, gyro, accel
     from imucalib.io.csv_import import read_imu_csv
 
     df = read_imu_csv(path)
