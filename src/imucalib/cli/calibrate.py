@@ -76,7 +76,7 @@ def calibrate(
 
     The recording's procedure decides: a P1 recording gives the calibration, its checks and the
     decision; an Allan recording the noise terms (JSON, Kalibr and OpenVINS YAML, a datasheet
-    table, figures). A CSV is calibrated through its step file (``--steps``).
+    table, figures). A CSV is calibrated through its step file (--steps).
     """
     from imucalib.report.console import render_result
 
