@@ -168,7 +168,7 @@ class TemperatureModelFit:
         return self.model.order
 
     def std(self, *, scaled: bool = True) -> NDArray[np.float64]:
-        """Return the coefficients' standard uncertainties (Birge-scaled for a misfit by default)."""
+        """Return the coefficients' σ (Birge-scaled for a misfit by default)."""
         cov = self.covariance_scaled if scaled else self.covariance
         return np.sqrt(np.diag(cov))
 
