@@ -22,6 +22,9 @@ Contents
     :func:`compute_window_mean_covariance` (coloured-noise covariance of window means).
 :mod:`imucalib.estimation.observability`
     :func:`compute_observability` → :class:`ObservabilityReport`.
+:mod:`imucalib.estimation.temperature_model`
+    :func:`fit_temperature_model` → :class:`TemperatureModelFit`, :func:`check_held_out`,
+    :func:`predict_temperature_model`, :func:`to_temperature_dependence`.
 :mod:`imucalib.estimation.designs`
     :func:`build_triad_design` → :class:`LinearDesign`, :data:`SIX_POSITION_UP_B`,
     :data:`TRIAD_PARAMETER_NAMES`.
@@ -60,12 +63,24 @@ from imucalib.estimation.observability import (
     ObservabilityReport,
     compute_observability,
 )
+from imucalib.estimation.temperature_model import (
+    HeldOutCheck,
+    TemperatureModelFit,
+    TemperaturePolynomial,
+    TemperaturePrediction,
+    check_held_out,
+    fit_temperature_model,
+    from_temperature_dependence,
+    predict_temperature_model,
+    to_temperature_dependence,
+)
 
 __all__ = [
     "DEFAULT_COND_LIMIT",
     "SIX_POSITION_UP_B",
     "TRIAD_PARAMETER_NAMES",
     "CrlbResult",
+    "HeldOutCheck",
     "KalmanFilter",
     "KalmanRefinement",
     "KalmanUpdate",
@@ -74,17 +89,25 @@ __all__ = [
     "NlsSolution",
     "ObservabilityReport",
     "RateTableCrlb",
+    "TemperatureModelFit",
+    "TemperaturePolynomial",
+    "TemperaturePrediction",
     "TriadCrlb",
     "build_triad_design",
+    "check_held_out",
     "compute_crlb",
     "compute_observability",
     "compute_rate_table_gyro_crlb",
     "compute_six_position_accel_crlb",
     "compute_sphere_accel_crlb",
     "compute_window_mean_covariance",
+    "fit_temperature_model",
+    "from_temperature_dependence",
     "kf_predict",
     "kf_update",
+    "predict_temperature_model",
     "refine_with_kalman",
     "solve_nonlinear_lsq",
     "solve_weighted_lsq",
+    "to_temperature_dependence",
 ]
