@@ -78,12 +78,10 @@ makes data durable against the process dying (SIGKILL), not against power loss (
 from __future__ import annotations
 
 import json
-import math
 import os
 import sys
 import time
 from collections.abc import Mapping, Sequence
-from datetime import UTC, datetime
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -92,16 +90,22 @@ import h5py
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imucalib import __version__
 from imucalib.conventions import TIME_COLUMN
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
+from imucalib.io._layout import (
+    StreamState,
+    check_stream_specs,
+    check_truth,
+    column_compression,
+    create_layout,
+    open_stream,
+)
 from imucalib.io._schema import (
     COMMIT_GROUP,
     DEFAULT_CHUNK_ROWS,
     EXTRA_UNITS,
     FORMAT_NAME,
     FORMAT_VERSION,
-    FORMAT_VERSION_PLAIN,
     LOG_CHUNK_ROWS,
     LOG_FIELDS,
     LOG_GROUP,
@@ -110,26 +114,20 @@ from imucalib.io._schema import (
     STEP_STATUSES,
     STEPS_CHUNK_ROWS,
     STEPS_GROUP,
-    STREAMS_GROUP,
-    TRUTH_GROUP,
     TRUTH_STREAMS_GROUP,
     ColumnSpec,
     FieldSpec,
     StreamSpec,
     as_column,
-    check_key,
     check_metadata,
-    column_json,
     decode_attr,
     encode_counts,
-    json_dumps,
     step_fields,
 )
-from imucalib.io._tables import StepLogTables, create_table
+from imucalib.io._tables import StepLogTables
 from imucalib.io.compression import (
     COMPRESSIONS,
     DEFAULT_COMPRESSION,
-    compression_of,
     needs_plugin,
 )
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
@@ -174,21 +172,6 @@ def _mute_hdf5_teardown(path: Path) -> None:
     sys.unraisablehook = hook
 
 
-def _column_compression(f: h5py.File) -> tuple[bool, str | None]:
-    """Whether any stream column of an open Recording is filtered, and its compression name."""
-    found: list[h5py.Dataset] = []
-
-    def visit(_: str, obj: Any) -> None:
-        if isinstance(obj, h5py.Dataset) and obj._filters:
-            found.append(obj)
-
-    for base in (STREAMS_GROUP, TRUTH_STREAMS_GROUP):
-        group = f.get(base)
-        if isinstance(group, h5py.Group):
-            group.visititems(visit)
-    return bool(found), (compression_of(found[0]) if found else None)
-
-
 def abandoned_files() -> tuple[Path, ...]:
     """Files whose writer gave up after HDF5 failed to write (this process).
 
@@ -212,24 +195,6 @@ class _Keep:
 
 #: ``RecordingWriter.reopen(..., compression=KEEP)``: close the file with the compression it had.
 KEEP = _Keep()
-
-
-class _StreamState:
-    """Buffers and bookkeeping of one stream while writing."""
-
-    __slots__ = ("buffers", "datasets", "dtypes", "entry", "last_time_s", "n_buffered",
-                 "n_written", "scaled", "spec")
-
-    def __init__(self, spec: StreamSpec, entry: str, datasets: dict[str, h5py.Dataset]) -> None:
-        self.spec = spec
-        self.entry = entry
-        self.datasets = datasets
-        self.dtypes = {name: np.dtype(c.dtype) for name, c in spec.columns.items()}
-        self.scaled = {name: c for name, c in spec.columns.items() if c.scale is not None}
-        self.buffers: dict[str, list[NDArray[Any]]] = {name: [] for name in spec.columns}
-        self.n_buffered = 0
-        self.n_written = 0
-        self.last_time_s = -math.inf
 
 
 class RecordingWriter:
@@ -309,9 +274,9 @@ class RecordingWriter:
     ) -> None:
         self._path = Path(path)
         meta = check_metadata(metadata or {})
-        stream_specs = self._check_specs(streams, "streams")
-        truth_specs = self._check_specs(truth_streams, "truth_streams")
-        truth_items = self._check_truth(truth)
+        stream_specs = check_stream_specs(streams, "streams")
+        truth_specs = check_stream_specs(truth_streams, "truth_streams")
+        truth_items = check_truth(truth)
         if not (isinstance(flush_interval_s, int | float) and flush_interval_s >= 0):
             raise InvalidInputError(f"`flush_interval_s` must be ≥ 0 [s]; got {flush_interval_s!r}")
         if not isinstance(chunk_rows, int) or chunk_rows < 1:
@@ -333,20 +298,24 @@ class RecordingWriter:
         self._compression = compression
         self._full: StorageFullError | None = None
         self._buffered_bytes = 0
-        self._streams: dict[tuple[str, str], _StreamState] = {}
-        self._truth_streams: dict[tuple[str, str], _StreamState] = {}
         self._closed = True
         try:
             self._file = h5py.File(self._path, "w", libver="latest")
         except OSError as exc:
             raise RecordingError(f"cannot create {self._path}: {exc}") from exc
         try:
-            self._create(meta, stream_specs, truth_specs, truth_items, chunk_rows, compression)
+            layout = create_layout(self._file, meta, stream_specs, truth_specs, truth_items,
+                                   chunk_rows, compression)
             self._file.swmr_mode = True
         except BaseException:
             self._file.close()
             self._path.unlink(missing_ok=True)
             raise
+        self._streams: dict[tuple[str, str], StreamState] = layout.streams
+        self._truth_streams: dict[tuple[str, str], StreamState] = layout.truth_streams
+        self._entries = layout.entries
+        self._commit_ds = layout.commit_rows
+        self._tables = layout.tables
         self._closed = False
         self._committed = np.zeros(len(self._entries), dtype=np.int64)
         self._last_flush = time.monotonic()
@@ -382,7 +351,7 @@ class RecordingWriter:
                                     f"got {compression!r}")
         p = Path(path)
         with open_recording(p, strict=True) as rec:  # diagnoses foreign, newer, damaged and
-            filtered, had = _column_compression(rec._file)  # still-open files clearly
+            filtered, had = column_compression(rec._file)  # still-open files clearly
             version = rec.format_version
         if isinstance(compression, _Keep):
             compression = had
@@ -416,7 +385,7 @@ class RecordingWriter:
             for entry in self._entries:
                 if entry in (STEPS_GROUP, LOG_GROUP):
                     continue
-                st = self._existing_stream(entry)
+                st = open_stream(f, entry)
                 table = (self._truth_streams if entry.startswith(TRUTH_STREAMS_GROUP + "/")
                          else self._streams)
                 table[(st.spec.device, st.spec.unit)] = st
@@ -431,115 +400,6 @@ class RecordingWriter:
         self._committed = np.array(self._commit_ds[:], dtype=np.int64)
         self._last_flush = time.monotonic()
         return self
-
-    def _existing_stream(self, entry: str) -> _StreamState:
-        group = self._file[entry]
-        cols = json.loads(decode_attr(group.attrs["columns_json"]))
-        spec = StreamSpec(decode_attr(group.attrs["device"]), decode_attr(group.attrs["unit"]),
-                          {c["name"]: ColumnSpec(c["unit"], c["dtype"], c["quantity"],
-                                                 c["description"], c.get("scale"))
-                           for c in cols if c["name"] != TIME_COLUMN})
-        datasets = {name: group[name] for name in spec.columns}
-        st = _StreamState(spec, entry, datasets)
-        n = datasets[TIME_COLUMN].shape[0]
-        st.n_written = n
-        if n:
-            st.last_time_s = float(datasets[TIME_COLUMN][n - 1])
-        return st
-
-    # ----------------------------------------------------------------------------- creation
-    @staticmethod
-    def _check_specs(specs: Sequence[StreamSpec], what: str) -> list[StreamSpec]:
-        out: list[StreamSpec] = []
-        seen: set[tuple[str, str]] = set()
-        for spec in specs:
-            if not isinstance(spec, StreamSpec):
-                raise InvalidInputError(f"`{what}` must hold StreamSpec objects; "
-                                        f"got {type(spec).__name__}")
-            key = (spec.device, spec.unit)
-            if key in seen:
-                raise InvalidInputError(f"`{what}` declares stream {spec.name} twice")
-            seen.add(key)
-            out.append(spec)
-        return out
-
-    @staticmethod
-    def _check_truth(truth: Mapping[str, Any] | None) -> dict[str, tuple[str, Any]]:
-        if truth is None:
-            return {}
-        if not isinstance(truth, Mapping):
-            raise InvalidInputError(f"`truth` must be a mapping; got {type(truth).__name__}")
-        items: dict[str, tuple[str, Any]] = {}
-        for key, value in truth.items():
-            check_key(key, "truth key")
-            if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
-                items[key] = ("array", value)
-            else:
-                items[key] = ("json", json_dumps(value, f"truth[{key!r}]"))
-        return items
-
-    def _create(self, meta: dict[str, Any], stream_specs: list[StreamSpec],
-                truth_specs: list[StreamSpec], truth_items: dict[str, tuple[str, Any]],
-                chunk_rows: int, compression: str | None) -> None:
-        f = self._file
-        f.attrs["format"] = FORMAT_NAME
-        scaled = any(c.scale is not None for spec in (*stream_specs, *truth_specs)
-                     for c in spec.columns.values())
-        version = FORMAT_VERSION if scaled or needs_plugin(compression) else FORMAT_VERSION_PLAIN
-        f.attrs["format_version"] = np.int64(version)
-        f.attrs["created_utc"] = datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
-        f.attrs["software_version"] = __version__
-        for key, value in meta.items():
-            f.attrs[key] = value
-        f.create_group(STREAMS_GROUP)
-        entries: list[str] = []
-        for spec in stream_specs:
-            st = self._create_stream(STREAMS_GROUP, spec, chunk_rows, compression)
-            self._streams[(spec.device, spec.unit)] = st
-            entries.append(st.entry)
-        if truth_items or truth_specs:
-            tg = f.create_group(TRUTH_GROUP)
-            for key, (kind, value) in truth_items.items():
-                if kind == "array":
-                    tg.require_group("arrays").create_dataset(key, data=value)
-                else:
-                    tg.attrs[f"{key}_json"] = value
-            f.create_group(TRUTH_STREAMS_GROUP)
-            for spec in truth_specs:
-                st = self._create_stream(TRUTH_STREAMS_GROUP, spec, chunk_rows, compression)
-                self._truth_streams[(spec.device, spec.unit)] = st
-                entries.append(st.entry)
-        sg = f.create_group(STEPS_GROUP)
-        create_table(sg, STEP_FIELDS, STEPS_CHUNK_ROWS)
-        lg = f.create_group(LOG_GROUP)
-        create_table(lg, LOG_FIELDS, LOG_CHUNK_ROWS)
-        entries += [STEPS_GROUP, LOG_GROUP]
-        cg = f.create_group(COMMIT_GROUP)
-        cg.attrs["entries_json"] = json_dumps(entries, "commit entries")
-        self._commit_ds = cg.create_dataset("rows", data=np.zeros(len(entries), dtype=np.int64))
-        self._entries = entries
-        self._tables = StepLogTables(sg, lg)
-
-    def _create_stream(self, base: str, spec: StreamSpec, chunk_rows: int,
-                       compression: str | None) -> _StreamState:
-        group = self._file.create_group(f"{base}/{spec.device}/{spec.unit}")
-        group.attrs["device"] = spec.device
-        group.attrs["unit"] = spec.unit
-        group.attrs["columns_json"] = json_dumps(
-            [column_json(name, c) for name, c in spec.columns.items()], "columns")
-        datasets: dict[str, h5py.Dataset] = {}
-        for name, col in spec.columns.items():
-            dt = np.dtype(col.dtype)
-            ds = group.create_dataset(
-                name, shape=(0,), maxshape=(None,), chunks=(chunk_rows,), dtype=dt,
-                fillvalue=np.nan if dt.kind == "f" else None)
-            ds.attrs["unit"] = col.unit
-            ds.attrs["quantity"] = col.quantity
-            ds.attrs["description"] = col.description
-            if col.scale is not None:
-                ds.attrs["scale"] = np.float64(col.scale)
-            datasets[name] = ds
-        return _StreamState(spec, f"{base}/{spec.device}/{spec.unit}", datasets)
 
     # ------------------------------------------------------------------------------ appending
     @property
@@ -588,7 +448,7 @@ class RecordingWriter:
             raise StorageFullError(str(self._full))
         self._append(self._truth_streams, "truth stream", device, unit, columns)
 
-    def _append(self, table: dict[tuple[str, str], _StreamState], what: str, device: str,
+    def _append(self, table: dict[tuple[str, str], StreamState], what: str, device: str,
                 unit: str, columns: Mapping[str, ArrayLike]) -> None:
         st = table.get((device, unit))
         if st is None:
@@ -657,7 +517,7 @@ class RecordingWriter:
                 or time.monotonic() - self._last_flush >= self._flush_interval_s):
             self.flush()
 
-    def _write_stream(self, st: _StreamState) -> None:
+    def _write_stream(self, st: StreamState) -> None:
         """Write a stream's buffer: every column to the same length, idempotent on retry."""
         n = st.n_buffered
         if n == 0:

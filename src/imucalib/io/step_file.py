@@ -342,7 +342,6 @@ def step_file_from_recording(rec: Recording, unit: str | None = None) -> StepFil
     from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE
 
     meta = rec.metadata
-    plan_proc = ""
     tables = [s for s in rec.streams if s.device == DEVICE_TABLE]
     axes = tuple(c[len("angle_"):-len("_rad")] for c in tables[0].columns
                  if c.startswith("angle_") and c.endswith("_rad")) if tables else ("pitch", "roll")
@@ -360,7 +359,7 @@ def step_file_from_recording(rec: Recording, unit: str | None = None) -> StepFil
     for step in rec.steps:
         cmd = step.commanded if isinstance(step.commanded, dict) else {}
         last = _held_angles(cmd, last)
-        role = step.role or role_from_tags(step.kind, step.tags, plan_proc)
+        role = step.role or role_from_tags(step.kind, step.tags)
         if (role not in KNOWN_ROLES or step.status != "done" or not step.has_valid_window
                 or (name is not None and not step.concerns(name))):
             continue
