@@ -13,6 +13,7 @@ Contents
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -30,6 +31,7 @@ from imucalib.plan.bounds import (
     MIN_TEMPERATURE_DEGC,
     MIN_TIME_CONSTANT_S,
 )
+from imucalib.plan.fixture_poses import FIXTURE_AXES, FixtureAxis
 
 __all__ = [
     "LEGACY_CENTRIFUGE_NAMES",
@@ -37,12 +39,15 @@ __all__ = [
     "ChamberConfig",
     "FixtureConfig",
     "ImuConfig",
+    "MountConfig",
     "SiteConfig",
     "TableConfig",
     "TwinEquipment",
+    "hexahedral_grid_offsets_m",
 ]
 
 _ARM = Annotated[float, Field(ge=-5.0, le=5.0)]
+_OFFSET = Annotated[float, Field(ge=-1.0, le=1.0)]
 
 #: Former names of the centrifuge's unbalance coefficients (their unit read as m/s²), mapped to
 #: the unit-true names when a file written before the rename is read.
@@ -125,13 +130,49 @@ class CentrifugeConfig(_Model):
         return data
 
 
+class MountConfig(_Model):
+    """Where one IMU sits on the cube (hexahedral fixture).
+
+    The IMU lies on face `face` (its z axis along the face's outward normal, x and y as in
+    :data:`imucalib.sim.fixture.HEXAHEDRAL_FACES`), its origin at the face centre moved by
+    `offset_m` along its own x and y axes: lever arm h·n̂ + offset_x·x_b + offset_y·y_b in the
+    fixture frame, h the half edge. Each offset component must lie within ±h (checked with the
+    fixture).
+    """
+
+    face: FixtureAxis
+    offset_m: tuple[_OFFSET, _OFFSET] = Field((0.0, 0.0), description="along x_b, y_b [m]")
+
+
 class FixtureConfig(_Model):
-    """The fixture carrying the IMUs."""
+    """The fixture carrying the IMUs.
+
+    A hexahedral fixture (the cube of P2) carries up to :data:`~imucalib.plan.bounds.MAX_IMUS`
+    IMUs. With explicit `mounts` (one per IMU, in the order of the IMUs) each sits where its
+    :class:`MountConfig` says; without them the IMUs fill the faces round robin (IMU i on face
+    i mod 6, in the order +z, −z, +y, −y, +x, −x) and the k IMUs of one face sit on a centred
+    square grid of `spacing_m` pitch (⌈√k⌉ columns), which must fit inside the face.
+    """
 
     kind: Literal["single", "hexahedral", "array"] = "single"
     half_edge_m: float = Field(0.05, gt=0.0, le=1.0)
     lever_arm_m: tuple[_ARM, _ARM, _ARM] = Field((0.0, 0.0, 0.0), description="[m]")
     spacing_m: float = Field(0.05, gt=0.0, le=1.0)
+    mounts: tuple[MountConfig, ...] = Field(
+        (), max_length=MAX_IMUS, description="hexahedral only: one mount per IMU, in order")
+
+    @model_validator(mode="after")
+    def _mounts(self) -> FixtureConfig:
+        if self.mounts and self.kind != "hexahedral":
+            raise ValueError(f"`mounts` places IMUs on the faces of a hexahedral fixture; "
+                             f"fixture kind is {self.kind!r}")
+        h = self.half_edge_m
+        for i, mount in enumerate(self.mounts):
+            if max(abs(mount.offset_m[0]), abs(mount.offset_m[1])) > h:
+                raise ValueError(
+                    f"mounts.{i}: offset_m ({mount.offset_m[0]:g}, {mount.offset_m[1]:g}) m "
+                    f"leaves face {mount.face} (each component within ±half_edge_m {h:g} m)")
+        return self
 
 
 class ImuConfig(_Model):
@@ -150,6 +191,44 @@ class ImuConfig(_Model):
                                            le=MAX_TIME_CONSTANT_S)
     self_heating_degc: float = Field(0.0, ge=0.0, le=50.0)
     nonlinear: bool = True
+
+
+def hexahedral_grid_offsets_m(n_imus: int, spacing_m: float) -> list[tuple[str, float, float]]:
+    """Return the default layout of `n_imus` IMUs on the cube: (face, offset x_b, offset y_b).
+
+    IMU i sits on face i mod 6 (+z, −z, +y, −y, +x, −x); the k IMUs of one face fill a centred
+    grid of ⌈√k⌉ columns and ⌈k / columns⌉ rows with pitch `spacing_m`, row by row (x_b along a
+    row, y_b from row to row). One IMU on a face sits at its centre. [m]
+    """
+    counts = [len(range(f, n_imus, 6)) for f in range(6)]
+    grids: list[list[tuple[float, float]]] = []
+    for k in counts:
+        cols = max(1, math.ceil(math.sqrt(k)))
+        rows = max(1, math.ceil(k / cols))
+        cells = [((c - (cols - 1) / 2.0) * spacing_m, ((rows - 1) / 2.0 - r) * spacing_m)
+                 for r in range(rows) for c in range(cols)]
+        grids.append(cells[:k])
+    return [(FIXTURE_AXES[i % 6], *grids[i % 6][i // 6]) for i in range(n_imus)]
+
+
+def _check_hexahedral(fixture: FixtureConfig, n_imus: int) -> None:
+    h = fixture.half_edge_m
+    if fixture.mounts:
+        if len(fixture.mounts) != n_imus:
+            raise ValueError(f"fixture.mounts must hold one mount per IMU ({n_imus}); got "
+                             f"{len(fixture.mounts)}")
+        return
+    if n_imus <= 6:
+        return
+    per_face = math.ceil(n_imus / 6)
+    cols = math.ceil(math.sqrt(per_face))
+    reach = (cols - 1) / 2.0 * fixture.spacing_m
+    if reach > h + 1e-12:
+        raise ValueError(
+            f"{n_imus} IMUs on a hexahedral fixture: up to {per_face} per face on a "
+            f"{cols}×{math.ceil(per_face / cols)} grid of spacing_m {fixture.spacing_m:g} m reach "
+            f"{reach:g} m from the face centre, beyond half_edge_m {h:g} m; use a smaller "
+            "spacing, a larger cube or explicit fixture.mounts")
 
 
 class TwinEquipment(_Model):
@@ -173,8 +252,8 @@ class TwinEquipment(_Model):
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"IMU names must be unique; repeated: {dup}")
-        if self.fixture.kind == "hexahedral" and len(self.imus) > 6:
-            raise ValueError(f"a hexahedral fixture carries at most 6 IMUs; got {len(self.imus)}")
+        if self.fixture.kind == "hexahedral":
+            _check_hexahedral(self.fixture, len(self.imus))
         if self.fixture.kind == "single" and len(self.imus) > 1:
             raise ValueError(
                 f"fixture kind 'single' carries one IMU; got {len(self.imus)} (use 'array')"

@@ -152,6 +152,9 @@ def _what(step: PlanStep) -> str:
     if isinstance(step, StaticStep):
         return f"static record {step.duration_s:g} s"
     assert isinstance(step, OperatorCheckStep)
+    if step.remount is not None:
+        yaw = f", yaw {step.remount_yaw_deg:g}°" if step.remount_yaw_deg else ""
+        return f"operator confirms: {step.item} (remount: {step.remount} up{yaw})"
     return f"operator confirms: {step.item}"
 
 

@@ -56,6 +56,7 @@ from imucalib.plan.bounds import (
     check_record_length,
 )
 from imucalib.plan.equipment import TwinEquipment
+from imucalib.plan.fixture_poses import FixtureAxis
 
 __all__ = [
     "AcceptanceConfig",
@@ -336,10 +337,28 @@ class StaticStep(_Step):
 
 
 class OperatorCheckStep(_Step):
-    """An item the operator confirms (mounting, alignment, remount); who and when are recorded."""
+    """An item the operator confirms (mounting, alignment, remount); who and when are recorded.
+
+    ``item`` is the operator's instruction. A remount check also says, in ``remount``, which
+    fixture axis the operator places pointing up (along the table's spin axis), and in
+    ``remount_yaw_deg`` the fixture's turn about the vertical after placing it
+    (:mod:`imucalib.plan.fixture_poses`); a twin station puts its fixture in that pose once the
+    check is confirmed, a real station relies on the operator having done it.
+    """
 
     kind: Literal["operator-check"]
     item: str = Field(min_length=1, max_length=500)
+    remount: FixtureAxis | None = Field(
+        None, description="fixture axis placed pointing up (along the table's spin axis)")
+    remount_yaw_deg: float = Field(0.0, ge=-360.0, le=360.0,
+                                   description="fixture's turn about the vertical [°]")
+
+    @model_validator(mode="after")
+    def _remount(self) -> OperatorCheckStep:
+        if self.remount is None and self.remount_yaw_deg != 0.0:
+            raise ValueError(f"`remount_yaw_deg` ({self.remount_yaw_deg:g}) needs `remount` (the "
+                             "fixture axis placed pointing up)")
+        return self
 
 
 PlanStep = Annotated[

@@ -28,6 +28,7 @@ from imucalib.sim.build import BuiltRig, build_rig
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge, dynamic_radius_m
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber, imu_temperature_degc
 from imucalib.sim.fixture import (
+    HEXAHEDRAL_FACE_NAMES,
     HEXAHEDRAL_FACES,
     Fixture,
     MountedImu,
@@ -58,6 +59,7 @@ from imucalib.sim.table import (
 __all__ = [
     "BUILTIN_SCENARIOS",
     "HEXAHEDRAL_FACES",
+    "HEXAHEDRAL_FACE_NAMES",
     "AxisSpec",
     "BuiltRig",
     "CentrifugeSpec",

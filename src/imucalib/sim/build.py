@@ -19,6 +19,10 @@ Choices
 - On a centrifuge, a single IMU at the fixture origin (``fixture.lever_arm_m`` zero) is placed at
   the test position r_t on the arm with its x axis pointing **inward** (towards the spin axis), so
   that x reads +ω²·r; a given lever arm is used as it is.
+- A hexahedral fixture (the cube of P2) places its IMUs as ``fixture.mounts`` says, or else
+  round robin on the faces (IMU i on face i mod 6) on a centred grid of ``spacing_m``
+  (:func:`~imucalib.plan.equipment.hexahedral_grid_offsets_m`); up to six IMUs sit at the face
+  centres.
 - An array fixture spaces its IMUs ``spacing_m`` apart along x_m, centred on the rotation centre.
 """
 
@@ -33,7 +37,7 @@ from scipy.spatial.transform import Rotation
 from imucalib import units
 from imucalib.models.earth import Site
 from imucalib.models.imu import ImuModel, sample_imu_model
-from imucalib.plan.equipment import TwinEquipment
+from imucalib.plan.equipment import TwinEquipment, hexahedral_grid_offsets_m
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber
 from imucalib.sim.fixture import Fixture, array_fixture, hexahedral_fixture, single_imu_fixture
@@ -122,7 +126,14 @@ def _fixture(sc: TwinEquipment) -> Fixture:
     cfg = sc.fixture
     names = [imu.name for imu in sc.imus]
     if cfg.kind == "hexahedral":
-        return hexahedral_fixture(cfg.half_edge_m, names)
+        if cfg.mounts:
+            faces: list[str] = [m.face for m in cfg.mounts]
+            offsets = np.array([m.offset_m for m in cfg.mounts], dtype=float)
+        else:
+            layout = hexahedral_grid_offsets_m(len(names), cfg.spacing_m)
+            faces = [face for face, _, _ in layout]
+            offsets = np.array([(ox, oy) for _, ox, oy in layout], dtype=float)
+        return hexahedral_fixture(cfg.half_edge_m, names, faces=faces, offsets_m=offsets)
     if cfg.kind == "array":
         n = len(names)
         offsets = np.zeros((n, 3))

@@ -19,10 +19,12 @@ mounting error, or a large one to re-mount the fixture in another orientation.
 
 Hexahedral fixture
 ------------------
-A cube of half edge h centred on the rotation centre carries one IMU on each face, the IMU origin
-at the face centre (lever arm h·n̂) and the IMU's z axis along the outward normal n̂. Faces in
-order (the six orientations of P2 when m = t: z up, z down, y up, y down, x up, x down),
-with the columns of ``mat_mb`` (x_b, y_b, z_b expressed in m):
+A cube of half edge h centred on the rotation centre carries IMUs on its faces, each IMU's z axis
+along its face's outward normal n̂ and its origin at the face centre (lever arm h·n̂) or moved
+within the face along its own x_b, y_b (lever arm h·n̂ + o_x·x_b + o_y·y_b). Up to 64 IMUs fill
+the faces round robin. Faces in order (the six orientations of P2 when m = t: z up, z down, y
+up, y down, x up, x down; named by their normal in :data:`HEXAHEDRAL_FACE_NAMES`), with the
+columns of ``mat_mb`` (x_b, y_b, z_b expressed in m):
 
 ====  ========  ==============================  ====================
 face  n̂         rot_mb                          x_b, y_b, z_b in m
@@ -34,6 +36,9 @@ face  n̂         rot_mb                          x_b, y_b, z_b in m
 4     +x_m      R_y(+90°)                       −z, +y, +x
 5     −x_m      R_y(−90°)                       +z, +y, −x
 ====  ========  ==============================  ====================
+
+The cube is remounted (placed on the table with another axis up) by replacing ``rot_pm``
+(:meth:`Fixture.remounted`; the poses are :mod:`imucalib.plan.fixture_poses`).
 """
 
 from __future__ import annotations
@@ -48,9 +53,12 @@ from scipy.spatial.transform import Rotation
 
 from imucalib._checks import as_array, check_positive
 from imucalib.errors import ConfigurationError
+from imucalib.plan.bounds import MAX_IMUS
+from imucalib.plan.fixture_poses import FIXTURE_AXES
 
 __all__ = [
     "HEXAHEDRAL_FACES",
+    "HEXAHEDRAL_FACE_NAMES",
     "Fixture",
     "MountedImu",
     "array_fixture",
@@ -68,6 +76,8 @@ HEXAHEDRAL_FACES: tuple[tuple[tuple[float, float, float], tuple[tuple[float, ...
     ((1.0, 0.0, 0.0), ((0, 0, -1), (0, 1, 0), (1, 0, 0))),
     ((-1.0, 0.0, 0.0), ((0, 0, 1), (0, 1, 0), (-1, 0, 0))),
 )
+#: Names of the faces in the order of :data:`HEXAHEDRAL_FACES` (their outward normals).
+HEXAHEDRAL_FACE_NAMES: tuple[str, ...] = FIXTURE_AXES
 _HEX_NAMES = ("imu_zp", "imu_zn", "imu_yp", "imu_yn", "imu_xp", "imu_xn")
 
 
@@ -195,30 +205,71 @@ def single_imu_fixture(lever_arm_m_m: ArrayLike = (0.0, 0.0, 0.0),
 
 
 def hexahedral_fixture(half_edge_m: float, names: Sequence[str] | None = None,
-                       rot_pm: Rotation | ArrayLike | None = None) -> Fixture:
-    """Build the cube of P2 (docs/procedures.md): one IMU per face, z_b along the outward normal.
+                       rot_pm: Rotation | ArrayLike | None = None,
+                       faces: Sequence[str] | None = None,
+                       offsets_m: ArrayLike | None = None) -> Fixture:
+    """Build the cube of P2 (docs/procedures.md): IMUs on its faces, z_b along the outward normal.
 
     Parameters
     ----------
     half_edge_m : float
-        Half the cube's edge: the distance of each IMU origin from the centre. [m]
+        Half the cube's edge: the distance of each face centre from the cube's centre. [m]
     names : sequence of str, optional
-        1 to 6 names; they fill the faces in the order of :data:`HEXAHEDRAL_FACES` (+z, −z, +y,
-        −y, +x, −x; see the module docstring). Default: six IMUs ``imu_zp``, ``imu_zn``, …
+        1 to :data:`~imucalib.plan.bounds.MAX_IMUS` names. Default: six IMUs ``imu_zp``,
+        ``imu_zn``, … (one per face).
     rot_pm : Rotation or array_like (3, 3), optional
-        The cube's mounting on the platform.
+        The cube's mounting on the platform (a remount pose:
+        :func:`imucalib.plan.fixture_poses.rot_pm_for_pose`).
+    faces : sequence of str, optional
+        The face of each IMU, by its outward normal (``"+z"``, ``"-z"``, ``"+y"``, ``"-y"``,
+        ``"+x"``, ``"-x"``); default round robin in the order of :data:`HEXAHEDRAL_FACES`
+        (IMU i on face i mod 6).
+    offsets_m : array_like, shape (N, 2), optional
+        Each IMU's origin relative to its face centre, along its own x_b and y_b; each component
+        within ±`half_edge_m`. Default: every IMU at its face centre. [m]
+
+    The lever arm of an IMU on face n̂ is h·n̂ + offset_x·x_b + offset_y·y_b (x_b, y_b, z_b = n̂ as
+    in the module docstring's table).
+
+    Raises
+    ------
+    ConfigurationError
+        If the counts disagree, a face name is unknown or an offset leaves its face.
     """
     h = check_positive(half_edge_m, "half_edge_m")
     chosen = _HEX_NAMES if names is None else tuple(names)
-    if not 1 <= len(chosen) <= 6:
+    if not 1 <= len(chosen) <= MAX_IMUS:
         raise ConfigurationError(
-            f"a hexahedral fixture carries 1 to 6 IMUs; got {len(chosen)} names"
+            f"a hexahedral fixture carries 1 to {MAX_IMUS} IMUs; got {len(chosen)} names"
         )
-    mounts = tuple(
-        MountedImu(name, Rotation.from_matrix(np.array(cols, dtype=float).T), h * np.array(normal))
-        for name, (normal, cols) in zip(chosen, HEXAHEDRAL_FACES, strict=False)
-    )
-    return Fixture(mounts, _rotation_or_identity(rot_pm, "rot_pm"))
+    n = len(chosen)
+    if faces is None:
+        face_index = [i % 6 for i in range(n)]
+    else:
+        face_names = tuple(faces)
+        if len(face_names) != n:
+            raise ConfigurationError(f"`faces` must have {n} entries (one per IMU); got "
+                                     f"{len(face_names)}")
+        unknown = sorted({f for f in face_names if f not in HEXAHEDRAL_FACE_NAMES}, key=str)
+        if unknown:
+            raise ConfigurationError(f"unknown cube faces {unknown}; a face is one of "
+                                     f"{list(HEXAHEDRAL_FACE_NAMES)}")
+        face_index = [HEXAHEDRAL_FACE_NAMES.index(f) for f in face_names]
+    offsets = (np.zeros((n, 2)) if offsets_m is None
+               else as_array(offsets_m, "offsets_m", shape=(n, 2)))
+    outside = np.flatnonzero(np.max(np.abs(offsets), axis=1) > h * (1.0 + 1e-12))
+    if outside.size:
+        i = int(outside[0])
+        raise ConfigurationError(
+            f"IMU {chosen[i]!r}: offset ({offsets[i, 0]:g}, {offsets[i, 1]:g}) m leaves its face "
+            f"(each component within ±half_edge_m {h:g} m)")
+    mounts = []
+    for name, k, (ox, oy) in zip(chosen, face_index, offsets, strict=True):
+        normal, cols = HEXAHEDRAL_FACES[k]
+        mat = np.array(cols, dtype=float).T  # columns x_b, y_b, z_b in m
+        arm = h * np.array(normal) + ox * mat[:, 0] + oy * mat[:, 1]
+        mounts.append(MountedImu(name, Rotation.from_matrix(mat), arm))
+    return Fixture(tuple(mounts), _rotation_or_identity(rot_pm, "rot_pm"))
 
 
 def array_fixture(offsets_m_m: ArrayLike, names: Sequence[str] | None = None,

@@ -35,7 +35,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from imucalib._checks import check_finite_scalar, check_positive
 from imucalib.errors import ConfigurationError, InvalidInputError
@@ -177,6 +178,30 @@ class TwinRig:
     def imu_names(self) -> tuple[str, ...]:
         """Names of the IMUs, in fixture order."""
         return tuple(self.imus)
+
+    # --- remount -------------------------------------------------------------------------------
+    def remount(self, rot_pm: Rotation | ArrayLike) -> None:
+        """Place the fixture on the platform with another rotation ``rot_pm`` (a remount).
+
+        Everything generated after the rig's current time :attr:`now_s` sees the fixture in the
+        new pose; the IMUs' own mounts (``rot_mb``, lever arms in m) stay. Samples already
+        generated keep the old pose (the operator remounts between steps, with nothing being
+        recorded). The rotation is instantaneous in virtual time.
+
+        Parameters
+        ----------
+        rot_pm : Rotation or array_like (3, 3)
+            Maps fixture vectors into the platform frame
+            (:func:`imucalib.plan.fixture_poses.rot_pm_for_pose`).
+
+        Raises
+        ------
+        ConfigurationError
+            If `rot_pm` is not a single proper rotation.
+        """
+        with self.lock:
+            self.fixture = self.fixture.remounted(rot_pm)
+            self._still.clear()  # cached still inputs belong to the old pose
 
     # --- physics ------------------------------------------------------------------------------
     def imu_kinematics(self, name: str, true_time_s: _F64) -> ImuKinematics:

@@ -39,7 +39,9 @@ The Recording is the checkpoint: each step row's ``commanded`` JSON holds its pl
 (``plan_step``) and attempt. :func:`resume_run` recovers a file a killed runner left open (the
 original is kept as ``<stem>.crashed.h5``), marks the interrupted step ``aborted``, and continues
 with the first plan step not done, appending to the same file on a time base that continues
-after its last sample. Completed steps keep their data; nothing is repeated or lost.
+after its last sample. Completed steps keep their data; nothing is repeated or lost. A station
+with a ``remount`` method (the twin) is put back in the pose of the last completed remount
+operator check (:attr:`ResumePoint.remount`), since a rebuilt twin starts in the ``+z`` pose.
 """
 
 from __future__ import annotations
@@ -372,6 +374,10 @@ class ResumePoint:
         Step rows marked ``done`` whose committed samples do not cover their valid window
         (a writer killed before its samples reached the file), with the reason; they are run
         again.
+    remount : tuple of (str, float, int), optional
+        The pose of the last completed remount operator check, as (axis up, yaw [°], plan
+        step), in the order the steps ran; None when no remount step was completed. A resumed
+        twin is put back in this pose.
     """
 
     plan: Plan
@@ -379,6 +385,7 @@ class ResumePoint:
     last_time_s: float
     interrupted: tuple[int, ...]
     uncovered: Mapping[int, str] = field(default_factory=dict)
+    remount: tuple[str, float, int] | None = None
 
 
 def find_resume_point(path: str | Path) -> ResumePoint:
@@ -401,10 +408,14 @@ def find_resume_point(path: str | Path) -> ResumePoint:
         uncovered = uncovered_done_steps(rec)
         done: set[int] = set()
         interrupted = []
+        remount: tuple[str, float, int] | None = None
         for s in rec.steps:
             idx = s.commanded.get("plan_step") if isinstance(s.commanded, dict) else None
             if s.status == "done" and idx is not None and s.index not in uncovered:
                 done.add(int(idx))
+                up = s.commanded.get("remount")
+                if s.kind == "operator-check" and isinstance(up, str):
+                    remount = (up, float(s.commanded.get("remount_yaw_deg") or 0.0), int(idx))
             if s.status in ("running", "pending"):
                 interrupted.append(s.index)
         first = 0
@@ -413,7 +424,7 @@ def find_resume_point(path: str | Path) -> ResumePoint:
         last = max((info.t_last_s for info in rec.streams if info.n_samples), default=0.0)
         last = max([last, *(s.t_end_s for s in rec.steps if math.isfinite(s.t_end_s)),
                     *(e.time_s for e in rec.log)])
-    return ResumePoint(plan, first, float(last), tuple(interrupted), uncovered)
+    return ResumePoint(plan, first, float(last), tuple(interrupted), uncovered, remount)
 
 
 def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station], *,
@@ -478,6 +489,13 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
                          f"({point.plan.step_label(point.first_step)})"
                          + (" after a crash; the crashed file is kept as "
                             f"{p.stem}.crashed.h5" if was_open else ""))
+        restore = getattr(station, "remount", None)
+        if point.remount is not None and callable(restore):
+            up, yaw, k = point.remount
+            restore(up, yaw)  # the rebuilt twin starts in the +z pose; the fixture was not moved
+            writer.log_event(station.clock.now_s(), "info", "runner",
+                             f"fixture remounted: {up} up, yaw {yaw:g}° (the pose of completed "
+                             f"step {k}, restored on resume)")
         run = RunSession(point.plan, station, writer, opt, identities)
         summary = _drive(run, point.first_step)
     _disconnect(station)

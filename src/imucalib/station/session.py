@@ -585,6 +585,18 @@ class RunSession:
                 raise StepTrip(f"warm-up: output still drifting after {step.timeout_s:g} s: "
                             f"{drift()}")
 
+    def remount(self, up: str, yaw_deg: float, why: str = "") -> None:
+        """Put the fixture in pose (`up`, `yaw_deg`) on a twin; log the remount in any case.
+
+        A station with a ``remount`` method (the twin, :class:`~imucalib.station.sim.SimStation`)
+        moves its fixture; on a real station the operator has done it.
+        """
+        remount = getattr(self.station, "remount", None)
+        if callable(remount):
+            remount(up, yaw_deg)
+        self.writer.log_event(self.now(), "info", "runner",
+                              f"fixture remounted: {up} up, yaw {yaw_deg:g}°{why}")
+
     # --- the step loop ----------------------------------------------------------------------
     def execute(self, index: int, attempt: int) -> str:
         """Run plan step `index` once; return "done" (raises StepTrip, StepStop)."""
@@ -608,6 +620,8 @@ class RunSession:
                 if not answer.confirmed:
                     self.writer.update_step(row, t_end_s=self.now(), status="aborted", note=note)
                     raise StepStop(f"operator {answer.who} did not confirm: {step.item}")
+                if step.remount is not None:
+                    self.remount(step.remount, step.remount_yaw_deg)
             elif isinstance(step, PositionStep | RateStep | CentrifugeStep):
                 window = self.run_motion(step)
             elif isinstance(step, StaticStep):

@@ -17,6 +17,12 @@ Station time = ``start_time_s`` + the rig's virtual time. A resumed run builds a
 ``start_time_s`` lies after the last sample of the recording (the equipment restarted: the table
 at its home angles, the chamber at its initial temperature, the IMUs' counters from zero).
 
+Remounts
+--------
+:meth:`SimStation.remount` places the fixture in another pose (an axis up, a yaw): the runner
+calls it when a remount operator check is confirmed, and a resumed run calls it with the pose of
+the recording's last completed remount (the rebuilt twin starts in the ``+z`` pose otherwise).
+
 Fault hooks
 -----------
 ``SimMotionDevice``: :meth:`~SimMotionDevice.drop_connection` (every call raises DeviceError until
@@ -53,6 +59,7 @@ from imucalib.plan.bounds import (
     MAX_TABLE_RATE_DPS,
 )
 from imucalib.plan.equipment import TwinEquipment
+from imucalib.plan.fixture_poses import rot_pm_for_pose
 from imucalib.plan.schema import CentrifugeStep, PlanLimits, PlanStep, RateStep, SoakStep
 from imucalib.sim.build import build_rig
 from imucalib.sim.rig import RigChunk
@@ -518,6 +525,9 @@ class SimStation:
         self._schedule: list[_Scheduled] = []
         self.truth_streams = truth_streams
         self._truth: dict[str, list[ImuSamples]] = {name: [] for name in self.rig.imu_names}
+        #: The fixture's pose (axis up, yaw [°]) and every remount as (station time, up, yaw).
+        self.pose: tuple[str, float] = ("+z", 0.0)
+        self.remounts: list[tuple[float, str, float]] = []
 
     # --- what the twin can do, before anything moves ------------------------------------------
     def plan_limits(self) -> PlanLimits:
@@ -607,6 +617,27 @@ class SimStation:
         """Return a JSON-able description of the station."""
         return {"kind": "digital-twin", "twin": self.equipment.model_dump(mode="json"),
                 "start_time_s": self.start_time_s}
+
+    def remount(self, up: str, yaw_deg: float = 0.0) -> None:
+        """Place the fixture with its axis `up` pointing up, turned `yaw_deg` about the vertical.
+
+        The twin's side of a remount operator check (``OperatorCheckStep.remount``): the rig's
+        fixture takes the pose's rotation (:func:`imucalib.plan.fixture_poses.rot_pm_for_pose`)
+        from the current station time on. A real station has no such method; there the operator
+        moved the fixture.
+
+        Raises
+        ------
+        InvalidInputError
+            If `up` is not a pose name or `yaw_deg` is not finite.
+        """
+        try:
+            rot_pm = rot_pm_for_pose(up, yaw_deg)
+        except ValueError as exc:
+            raise InvalidInputError(f"remount: {exc}") from None
+        self.rig.remount(rot_pm)
+        self.pose = (up, float(yaw_deg))
+        self.remounts.append((self.clock.now_s(), up, float(yaw_deg)))
 
     def imu(self, name: str) -> SimImuSource:
         """Return the IMU source called `name`."""
