@@ -84,7 +84,10 @@ def test_bad_inputs():
         as_rotation([[1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], "rot_mb")
     with pytest.raises(InvalidInputError, match="`lever_arm_m_m of 'u'` must be finite"):
         MountedImu("u", Rotation.identity(), np.array([0.0, np.nan, 0.0]))
-    with pytest.raises(ConfigurationError, match="1 to 6 IMUs; got 7 names"):
+    with pytest.raises(ConfigurationError, match="1 to 64 IMUs; got 65 names"):
+        hexahedral_fixture(0.05, names=[f"n{i}" for i in range(65)])
+    with pytest.raises(ConfigurationError, match="IMUs 'n0' and 'n6' sit at the same place on "
+                                                 r"face \+z"):
         hexahedral_fixture(0.05, names=[f"n{i}" for i in range(7)])
     with pytest.raises(InvalidInputError, match="`half_edge_m` must be > 0"):
         hexahedral_fixture(0.0)

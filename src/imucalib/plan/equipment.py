@@ -167,7 +167,12 @@ class FixtureConfig(_Model):
             raise ValueError(f"`mounts` places IMUs on the faces of a hexahedral fixture; "
                              f"fixture kind is {self.kind!r}")
         h = self.half_edge_m
+        seen: dict[tuple[str, float, float], int] = {}
         for i, mount in enumerate(self.mounts):
+            j = seen.setdefault((mount.face, *mount.offset_m), i)
+            if j != i:
+                raise ValueError(f"mounts.{j} and mounts.{i} put two IMUs at the same place "
+                                 f"(face {mount.face}, offset_m {mount.offset_m})")
             if max(abs(mount.offset_m[0]), abs(mount.offset_m[1])) > h:
                 raise ValueError(
                     f"mounts.{i}: offset_m ({mount.offset_m[0]:g}, {mount.offset_m[1]:g}) m "

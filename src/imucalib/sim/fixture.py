@@ -234,7 +234,8 @@ def hexahedral_fixture(half_edge_m: float, names: Sequence[str] | None = None,
     Raises
     ------
     ConfigurationError
-        If the counts disagree, a face name is unknown or an offset leaves its face.
+        If the counts disagree, a face name is unknown, an offset leaves its face or two IMUs
+        share a place.
     """
     h = check_positive(half_edge_m, "half_edge_m")
     chosen = _HEX_NAMES if names is None else tuple(names)
@@ -263,6 +264,14 @@ def hexahedral_fixture(half_edge_m: float, names: Sequence[str] | None = None,
         raise ConfigurationError(
             f"IMU {chosen[i]!r}: offset ({offsets[i, 0]:g}, {offsets[i, 1]:g}) m leaves its face "
             f"(each component within ±half_edge_m {h:g} m)")
+    seen: dict[tuple[int, float, float], str] = {}
+    for name, k, (ox, oy) in zip(chosen, face_index, offsets, strict=True):
+        other = seen.setdefault((k, float(ox), float(oy)), name)
+        if other != name:
+            raise ConfigurationError(
+                f"IMUs {other!r} and {name!r} sit at the same place on face "
+                f"{HEXAHEDRAL_FACE_NAMES[k]} (offset ({ox:g}, {oy:g}) m); give each its own "
+                "`offsets_m`")
     mounts = []
     for name, k, (ox, oy) in zip(chosen, face_index, offsets, strict=True):
         normal, cols = HEXAHEDRAL_FACES[k]
