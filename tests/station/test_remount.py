@@ -9,9 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from pydantic import ValidationError
+from rich.console import Console
 
 from imucalib.conventions import ACCEL_COLUMNS
 from imucalib.io import open_recording
+from imucalib.io.inspect import summarize_recording
 from imucalib.plan import OperatorCheckStep, Plan, describe_plan, parse_plan, plan_to_toml
 from imucalib.plan.equipment import TwinEquipment
 from imucalib.station.operator import ScriptedOperator
@@ -94,6 +96,13 @@ def test_confirmed_remounts_move_the_twin_and_are_logged(tmp_path):
     assert events == ["fixture remounted: +z up, yaw 0°", "fixture remounted: -z up, yaw 0°",
                       "fixture remounted: +x up, yaw 90°"]
     assert [c["remount"] for c in commanded] == ["+z", "-z", "+x"]
+    # `imucalib inspect` lists them
+    summary_ = summarize_recording(tmp_path / "r.h5")
+    assert [m for _, m in summary_.remounts] == events
+    console = Console(record=True, width=200)
+    summary_.render(console)
+    text = console.export_text()
+    assert "fixture remounted: +x up, yaw 90°" in text and "3 fixture remount(s) above" in text
 
 
 def test_a_declined_remount_moves_nothing(tmp_path):

@@ -28,7 +28,7 @@ from imucalib.io.reader import open_recording
 if TYPE_CHECKING:
     from rich.console import Console
 
-__all__ = ["RecordingSummary", "StreamSummary", "summarize_recording"]
+__all__ = ["REMOUNT_EVENT_PREFIX", "RecordingSummary", "StreamSummary", "summarize_recording"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,10 @@ class StreamSummary:
         return 1.0 / self.median_interval_s if self.median_interval_s > 0 else float("nan")
 
 
+#: How a station run's log says that the fixture was remounted (:mod:`imucalib.station.session`).
+REMOUNT_EVENT_PREFIX = "fixture remounted"
+
+
 @dataclass(frozen=True)
 class RecordingSummary:
     """What a Recording holds."""
@@ -74,6 +78,8 @@ class RecordingSummary:
     steps: list[Any]
     n_events: int
     was_open_for_write: bool
+    #: (time [s], message) of each logged fixture remount (P2's operator checks).
+    remounts: tuple[tuple[float, str], ...] = ()
 
     def render(self, console: Console) -> None:
         """Print the summary as rich tables."""
@@ -118,7 +124,11 @@ class RecordingSummary:
                           escape(tags or "—"),
                           f"{st.valid_start_s:,.3f} – {st.valid_end_s:,.3f}", st.status)
         _print_whole(console, steps)
-        console.print(f"{self.n_events} logged event(s)")
+        for time_s, message in self.remounts:
+            console.print(f"  {time_s:,.3f} s: {escape(message)}", highlight=False)
+        console.print(f"{self.n_events} logged event(s)"
+                      + (f", {len(self.remounts)} fixture remount(s) above" if self.remounts
+                         else ""))
 
 
 def _print_whole(console: Console, table: Any) -> None:
@@ -214,12 +224,15 @@ def summarize_recording(path: str | Path, *, chunk_samples: int = 1 << 18) -> Re
     """
     with open_recording(path) as rec:
         streams = [_scan_stream(rec, info, chunk_samples) for info in rec.streams]
+        log = rec.log
         return RecordingSummary(
             path=Path(path),
             format_version=int(rec.format_version),
             metadata=dict(rec.metadata),
             streams=streams,
             steps=list(rec.steps),
-            n_events=len(rec.log),
+            n_events=len(log),
             was_open_for_write=bool(getattr(rec, "was_open_for_write", False)),
+            remounts=tuple((float(e.time_s), str(e.message)) for e in log
+                           if str(e.message).startswith(REMOUNT_EVENT_PREFIX)),
         )

@@ -60,6 +60,7 @@ from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io import StreamSpec
 from imucalib.io.coverage import uncovered_done_steps
+from imucalib.io.inspect import REMOUNT_EVENT_PREFIX
 from imucalib.io.reader import open_recording
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.recover import recover_recording
@@ -494,8 +495,8 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
             up, yaw, k = point.remount
             restore(up, yaw)  # the rebuilt twin starts in the +z pose; the fixture was not moved
             writer.log_event(station.clock.now_s(), "info", "runner",
-                             f"fixture remounted: {up} up, yaw {yaw:g}° (the pose of completed "
-                             f"step {k}, restored on resume)")
+                             f"{REMOUNT_EVENT_PREFIX}: {up} up, yaw {yaw:g}° (the pose of "
+                             f"completed step {k}, restored on resume)")
         run = RunSession(point.plan, station, writer, opt, identities)
         summary = _drive(run, point.first_step)
     _disconnect(station)

@@ -20,6 +20,7 @@ import numpy as np
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import DeviceError, RecordingError, StorageFullError
+from imucalib.io.inspect import REMOUNT_EVENT_PREFIX
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.storage import format_bytes
 from imucalib.io.streams import (
@@ -594,8 +595,9 @@ class RunSession:
         remount = getattr(self.station, "remount", None)
         if callable(remount):
             remount(up, yaw_deg)
-        self.writer.log_event(self.now(), "info", "runner",
-                              f"fixture remounted: {up} up, yaw {yaw_deg:g}°{why}")
+        message = f"{REMOUNT_EVENT_PREFIX}: {up} up, yaw {yaw_deg:g}°{why}"
+        self.writer.log_event(self.now(), "info", "runner", message)
+        self.status.last_event = message
 
     # --- the step loop ----------------------------------------------------------------------
     def execute(self, index: int, attempt: int) -> str:
