@@ -166,3 +166,16 @@ def test_resume_point_of_a_run_without_remounts(tmp_path):
     station.at(0.5, lambda: station.table.drop_connection(permanent=True))
     run_plan(plan, station, tmp_path / "p.h5")
     assert find_resume_point(tmp_path / "p.h5").remount is None
+
+
+def test_a_scenario_with_remounts_simulates(tmp_path):
+    from imucalib.sim.scenario import Scenario
+    from imucalib.station.simulate import simulate_scenario
+
+    plan = remount_plan(static_s=1.0)
+    sc = Scenario.model_validate({**TWIN.model_dump(mode="json"), "name": "remount-sc",
+                                  "steps": [s.model_dump(mode="json") for s in plan.steps]})
+    simulate_scenario(sc, tmp_path / "s.h5")
+    means = step_means(tmp_path / "s.h5")
+    np.testing.assert_allclose(means["static -z"]["ZP"], [0, 0, -G], atol=0.02 * G)
+    assert len(summarize_recording(tmp_path / "s.h5").remounts) == 3
