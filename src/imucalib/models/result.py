@@ -849,13 +849,14 @@ class _ResultReader:
             self.fail(f"{where}.temperature_range_degc",
                       f"expected [T_min, T_max] with T_min ≤ T_max; got {span}")
         held_out = self.held_out(d["held_out"], f"{where}.held_out")
+        t0 = self.number(d["reference_temperature_degc"], f"{where}.reference_temperature_degc")
+        chi2 = self.number(d["chi2"], f"{where}.chi2", nonnegative=True)
+        dof = self.integer(d["dof"], f"{where}.dof")
         try:
             return ParameterTemperatureModel(
-                name=name, reference_temperature_degc=self.number(
-                    d["reference_temperature_degc"], f"{where}.reference_temperature_degc"),
-                coefficients=tuple(coefficients), covariance=np.array(cov, dtype=np.float64),
-                chi2=self.number(d["chi2"], f"{where}.chi2", nonnegative=True),
-                dof=self.integer(d["dof"], f"{where}.dof"), order_criterion=criterion,
+                name=name, reference_temperature_degc=t0, coefficients=tuple(coefficients),
+                covariance=np.array(cov, dtype=np.float64), chi2=chi2, dof=dof,
+                order_criterion=criterion,
                 rate_coefficient=rate, leg_coefficient=leg,
                 temperature_range_degc=None if span is None else (span[0], span[1]),
                 held_out=held_out)
