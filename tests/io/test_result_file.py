@@ -104,18 +104,18 @@ def edit(doc: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
 
 
 NOT_SUPPORTED = ("calibration result {p}: format_version {v} is not supported; this imucalib "
-                 "reads versions 1..2 (a newer version needs a newer imucalib)")
+                 "reads versions 1..3 (a newer version needs a newer imucalib)")
 
 
 @pytest.mark.parametrize(("path", "value", "message"), [
-    ("format_version", 3, NOT_SUPPORTED.replace("{v}", "3")),
+    ("format_version", 4, NOT_SUPPORTED.replace("{v}", "4")),
     ("format_version", "1", NOT_SUPPORTED.replace("{v}", 'the string "1"')),
     ("format_version", True, NOT_SUPPORTED.replace("{v}", "a boolean")),
     ("notes", ..., "calibration result {p}: field '(top level)': missing field(s) ['notes']"),
     ("extra", 1, "calibration result {p}: field '(top level)': unknown field(s) ['extra']; "
                  "expected exactly ['format', 'format_version', 'sensor_id', 'procedure', "
                  "'model', 'parameters', 'covariance', 'input_units', 'residuals', "
-                 "'provenance', 'notes', 'fit_quality']"),
+                 "'provenance', 'notes', 'fit_quality', 'temperature_models']"),
     ("sensor_id", "", "calibration result {p}: field 'sensor_id': expected a non-empty string"),
     ("model", "magic", "calibration result {p}: field 'model': expected one of ['triad', "
                        "'per-axis']; got 'magic'"),

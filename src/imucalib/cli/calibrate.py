@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from imucalib.cli._app import app, console, fail
+from imucalib.cli._app import app, console, err_console, fail
 from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 
@@ -106,16 +106,31 @@ def apply(
     out: Annotated[Path, typer.Option("--out", "-o", help="Corrected CSV to write.")],
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
 ) -> None:
-    """Correct a recording's IMU stream, or a CSV file, with a calibration result."""
+    """Correct a recording's IMU stream, or a CSV file, with a calibration result.
+
+    A result with temperature models corrects each sample at the IMU's own temperature (the
+    stream's or the CSV's ``temperature_degc`` column), its rate and its heating/cooling leg
+    (docs/processing-estimation.md, "Temperature models"); temperatures beyond the fitted range
+    by more than 5 °C are corrected by extrapolation, with a warning.
+    """
     import pandas as pd
 
-    from imucalib.models.correct import correct_imu_frame
+    from imucalib.models.correct import TemperatureRate, correct_imu_frame
     from imucalib.models.result import CalibrationResult
 
     try:
         result = CalibrationResult.load(result_path)
         _check_out(out, result_path, data)
         n = 0
+        seen = _TemperatureSeen()
+        rate = TemperatureRate()
+
+        def correct(df: pd.DataFrame) -> pd.DataFrame:
+            fixed = correct_imu_frame(df, result, temperature_rate=rate)
+            if result.temperature_models:
+                seen.add(df)
+            return fixed
+
         if data.suffix.lower() in (".h5", ".hdf5"):
             from imucalib.io.reader import open_recording
 
@@ -127,7 +142,7 @@ def apply(
                         df = pd.DataFrame(chunk.columns,
                                           index=pd.Index(chunk.time_s, name="time_s"))
                         df.attrs["units"] = {c: s.unit for c, s in info.columns.items()}
-                        fixed = correct_imu_frame(df, result)
+                        fixed = correct(df)
                         _write_csv(fixed, fh, header=i == 0)
                         n += len(fixed)
         else:
@@ -135,7 +150,7 @@ def apply(
 
             df = read_imu_csv(data)
             _check_triads(data, df.columns, result)
-            fixed = correct_imu_frame(df, result)
+            fixed = correct(df)
             with open(out, "w", encoding="utf-8") as fh:
                 _write_csv(fixed, fh, header=True)
             n = len(fixed)
@@ -143,8 +158,46 @@ def apply(
         raise fail(exc) from exc
     except OSError as exc:
         raise fail(InvalidInputError(f"cannot write {out}: {exc.strerror or exc}")) from exc
+    warning = seen.extrapolation(result)
+    if warning:
+        err_console.print(f"[yellow]warning:[/] {warning}", highlight=False, soft_wrap=True)
     console.print(f"wrote {out}: {n:,} corrected samples ({result.procedure} {result.model} "
-                  f"result of {result.sensor_id})", highlight=False)
+                  f"result of {result.sensor_id}{seen.summary()})", highlight=False)
+
+
+class _TemperatureSeen:
+    """The range of the temperatures a temperature-model result was applied at."""
+
+    def __init__(self) -> None:
+        self.low = float("inf")
+        self.high = float("-inf")
+
+    def add(self, df: Any) -> None:
+        from imucalib.conventions import TEMPERATURE_COLUMN
+
+        column = df[TEMPERATURE_COLUMN]
+        if len(column):
+            self.low = min(self.low, float(column.min()))
+            self.high = max(self.high, float(column.max()))
+
+    def summary(self) -> str:
+        if self.low > self.high:
+            return ""
+        return f"; temperature model applied at {self.low:.1f} … {self.high:.1f} °C"
+
+    def extrapolation(self, result: Any) -> str:
+        """Return the warning when the data go beyond the fitted range by more than the margin."""
+        from imucalib.models.correct import EXTRAPOLATION_MARGIN_DEGC
+
+        margin = EXTRAPOLATION_MARGIN_DEGC
+        fitted = result.temperature_range_degc
+        if fitted is None or self.low > self.high:
+            return ""
+        if self.low >= fitted[0] - margin and self.high <= fitted[1] + margin:
+            return ""
+        return (f"the data reach {self.low:.1f} … {self.high:.1f} °C, beyond the temperature "
+                f"models' fitted range {fitted[0]:.1f} … {fitted[1]:.1f} °C by more than "
+                f"{margin:g} °C; those samples are corrected by extrapolating the polynomials")
 
 
 def _check_out(out: Path, *inputs: Path) -> None:

@@ -17,8 +17,12 @@ Contents
 :mod:`imucalib.models.earth`
     :class:`Site` (Earth rate, normal gravity, the table's heading), imported from its module.
 :mod:`imucalib.models.correct`
-    :func:`correct_imu`, :func:`correct_imu_frame` (a calibration result applied to data),
-    imported from its module.
+    :func:`correct_imu`, :func:`correct_imu_frame` (a calibration result applied to data, at
+    each sample's temperature when the result has temperature models), :func:`temperature_leg`,
+    :class:`TemperatureRate`, imported from its module.
+:mod:`imucalib.models.temperature_record`
+    :class:`ParameterTemperatureModel` (one parameter's fitted temperature model, as a
+    calibration result carries it), :class:`HeldOutOutcome`, imported from its module.
 """
 
 from __future__ import annotations

@@ -44,7 +44,12 @@ A result file is checked field by field before anything uses it; each defect is 
 - the covariance: k × k for k parameters, variances ≥ 0, symmetric to a relative 10⁻⁹, each
   ``std`` equal to √ of its variance to 10⁻⁹ (a hand-edited value is caught), zero rows where
   a variance is zero, and positive semi-definite (the correlation matrix's smallest eigenvalue
-  ≥ −10⁻⁸).
+  ≥ −10⁻⁸);
+- the temperature models (format version 3, ``temperature_models[i].…``): each field as
+  :class:`~imucalib.models.temperature_record.ParameterTemperatureModel` wants it (the rate and
+  leg coefficients, the temperature range and the held-out check may be null), the covariance
+  q × q for the terms present and checked like the result's, the name a parameter of the result
+  and given once, one T0 for all, and c_0 equal to the parameter's value to 10⁻⁹ relative.
 """
 
 from __future__ import annotations
@@ -63,6 +68,12 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.temperature import TemperatureDependence
+from imucalib.models.temperature_record import (
+    ORDER_CRITERIA,
+    HeldOutOutcome,
+    ParameterTemperatureModel,
+)
 from imucalib.models.triad import TriadKind, TriadModel
 from imucalib.units import parse_unit
 
@@ -72,15 +83,18 @@ __all__ = [
     "RESULT_FORMAT_VERSION",
     "CalibrationResult",
     "FitQuality",
+    "HeldOutOutcome",
+    "ParameterTemperatureModel",
     "Provenance",
     "ResidualStats",
     "triad_parameter_names",
 ]
 
 RESULT_FORMAT: Final = "imucalib-calibration-result"
-#: Version 2 adds ``fit_quality`` (χ²/ν, expected range, misfit flag per fitted triad); version 1
-#: files are read with none.
-RESULT_FORMAT_VERSION: Final = 2
+#: Version 2 adds ``fit_quality`` (χ²/ν, expected range, misfit flag per fitted triad); version 3
+#: adds ``temperature_models`` (one per temperature-dependent parameter). Files of versions 1 and
+#: 2 are read with none of what they lack.
+RESULT_FORMAT_VERSION: Final = 3
 MODELS: Final = ("triad", "per-axis")
 #: Largest result file :meth:`CalibrationResult.load` reads (a P1 result is about 40 kB). [B]
 MAX_RESULT_BYTES: Final = 16 * 2**20
@@ -172,7 +186,20 @@ class CalibrationResult:
         The goodness of fit of each fitted triad (format version 2). `covariance` is the
         noise-only covariance; where a triad's fit is a misfit, :meth:`covariance_scaled`
         scales its block by the Birge ratio (docs/processing-estimation.md).
+    temperature_models : tuple of ParameterTemperatureModel
+        The temperature model of each temperature-dependent parameter (format version 3;
+        docs/processing-estimation.md, "Temperature models", Eq. (T1)): at most one per
+        parameter, all about the same T0, and c_0 equal to the parameter's value in `values`
+        (the values hold at T0). Parameters without one do not depend on temperature.
     format_version : int
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown model, repeated names, arrays of the wrong shape or not finite, an asymmetric
+        covariance or a negative variance, missing units, a group named twice in
+        `fit_quality`, or temperature models that name an unknown parameter, name one twice,
+        differ in T0, disagree with `values` at T0, or appear in a format version below 3.
     """
 
     sensor_id: str
@@ -188,6 +215,7 @@ class CalibrationResult:
     provenance: Provenance = field(default_factory=Provenance)
     notes: tuple[str, ...] = ()
     fit_quality: tuple[FitQuality, ...] = ()
+    temperature_models: tuple[ParameterTemperatureModel, ...] = ()
     format_version: int = RESULT_FORMAT_VERSION
 
     def __post_init__(self) -> None:
@@ -216,6 +244,40 @@ class CalibrationResult:
         groups = [q.group for q in self.fit_quality]
         if len(set(groups)) != len(groups):
             raise InvalidInputError(f"`fit_quality` names a group twice: {groups}")
+        self._check_temperature_models()
+
+    def _check_temperature_models(self) -> None:
+        models = tuple(self.temperature_models)
+        object.__setattr__(self, "temperature_models", models)
+        if not models:
+            return
+        if self.format_version < 3:
+            raise InvalidInputError("`temperature_models` need result format version 3; got "
+                                    f"`format_version` {self.format_version}")
+        seen: set[str] = set()
+        for i, tm in enumerate(models):
+            where = f"`temperature_models[{i}]`"
+            if not isinstance(tm, ParameterTemperatureModel):
+                raise InvalidInputError(f"{where} must be a ParameterTemperatureModel; got "
+                                        f"{type(tm).__name__}")
+            if tm.name not in self.param_names:
+                raise InvalidInputError(f"{where} names {tm.name!r}, not a parameter of this "
+                                        "result")
+            if tm.name in seen:
+                raise InvalidInputError(f"{where} names {tm.name!r} a second time (one model "
+                                        "per parameter)")
+            seen.add(tm.name)
+            t0 = models[0].reference_temperature_degc
+            if tm.reference_temperature_degc != t0:
+                raise InvalidInputError(
+                    f"{where}: T0 = {tm.reference_temperature_degc!r} °C differs from "
+                    f"{t0!r} °C of temperature_models[0] (one T0 per result: its values hold "
+                    "there)")
+            value = float(self.values[self.param_names.index(tm.name)])
+            if not math.isclose(tm.coefficients[0], value, rel_tol=_RTOL, abs_tol=0.0):
+                raise InvalidInputError(
+                    f"{where}: c_0 = {tm.coefficients[0]!r} of {tm.name!r} differs from its "
+                    f"value {value!r} (the values hold at T0)")
 
     # --- access -----------------------------------------------------------------------------
     def std(self, *, scaled: bool = False) -> dict[str, float]:
@@ -265,20 +327,101 @@ class CalibrationResult:
                 f"no parameter {name!r} in this {self.model} result; have {self.param_names}"
             ) from None
 
+    # --- temperature ------------------------------------------------------------------------
+    @property
+    def reference_temperature_degc(self) -> float | None:
+        """T0 of the temperature models, at which `values` hold; None without any. [°C]"""
+        return self.temperature_models[0].reference_temperature_degc \
+            if self.temperature_models else None
+
+    @property
+    def temperature_range_degc(self) -> tuple[float, float] | None:
+        """The narrowest (T_min, T_max) of the temperature models that state one; else None.
+
+        The intersection: a temperature outside it is outside some parameter's fitted range.
+        """
+        ranges = [tm.temperature_range_degc for tm in self.temperature_models
+                  if tm.temperature_range_degc is not None]
+        if not ranges:
+            return None
+        return max(r[0] for r in ranges), min(r[1] for r in ranges)
+
+    def temperature_model(self, name: str) -> ParameterTemperatureModel | None:
+        """Return the temperature model of parameter `name`, or None when it has none."""
+        self._index(name)
+        return next((tm for tm in self.temperature_models if tm.name == name), None)
+
+    def values_at(self, temperature_degc: ArrayLike,
+                  temperature_rate_degc_ps: ArrayLike | None = None,
+                  leg: ArrayLike | None = None
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Return every parameter at the given temperatures, with its σ.
+
+        p(T, Ṫ, ℓ) and σ_p² = aᵀ C a of docs/processing-estimation.md, Eqs. (T1) and (T4), for a
+        parameter with a temperature model; its value and σ from `covariance` for one without.
+
+        Parameters
+        ----------
+        temperature_degc : float or array_like, shape (n,)
+            T. [°C]
+        temperature_rate_degc_ps : float or array_like, shape (n,), optional
+            Ṫ; 0 when omitted. [°C/s]
+        leg : float or array_like, shape (n,), optional
+            ℓ: +1 heating, −1 cooling, 0 (the default) the mean of both legs.
+
+        Returns
+        -------
+        values, std : ndarray, shape (n, k)
+            Columns in the order of `param_names`, SI.
+        """
+        t = np.atleast_1d(np.asarray(temperature_degc, dtype=np.float64))
+        if t.ndim != 1 or not np.all(np.isfinite(t)):
+            raise InvalidInputError("`temperature_degc` must be a finite scalar or shape (n,)")
+        n, k = t.size, len(self.param_names)
+        values = np.broadcast_to(self.values, (n, k)).copy()
+        std = np.broadcast_to(np.sqrt(np.diag(self.covariance)), (n, k)).copy()
+        for tm in self.temperature_models:
+            i = self.param_names.index(tm.name)
+            values[:, i], std[:, i] = tm.evaluate(t, temperature_rate_degc_ps, leg)
+        return values, std
+
     def has_triad(self, triad: str) -> bool:
         """Whether the result calibrates the ``"gyro"`` or ``"accel"`` triad."""
         return any(n.startswith(f"{triad}_") for n in self.param_names)
 
-    def triad_model(self, triad: TriadKind) -> TriadModel:
+    def triad_model(self, triad: TriadKind, *, leg: int = 0) -> TriadModel:
         """Return the deterministic model of one triad (bias, scale/misalignment, G).
 
         The per-axis model y_i = K_i·(x_i + b_i) becomes bias K_i·b_i and M = diag(K − 1).
+
+        With temperature models, the triad model carries them as a
+        :class:`~imucalib.models.temperature.TemperatureDependence` (T0, c_1 … c_m and d of
+        Eq. (T1), docs/processing-estimation.md); a leg term cannot be held there, so the base
+        values are c_0 + h·`leg` (``leg`` 0: the mean of both legs, ±1: heating or cooling).
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown triad, one the result does not calibrate, a `leg` other than −1, 0, 1,
+            or a per-axis result with temperature models (K_i·b_i is not a polynomial of the
+            form of Eq. (T1); :meth:`values_at` and
+            :func:`~imucalib.models.correct.correct_imu` handle it).
         """
+        if leg not in (-1, 0, 1):
+            raise InvalidInputError(f"`leg` must be -1, 0 or 1; got {leg!r}")
         if triad not in ("gyro", "accel"):
             raise InvalidInputError(f"`triad` must be 'gyro' or 'accel'; got {triad!r}")
         if not self.has_triad(triad):
             raise InvalidInputError(f"this result does not calibrate the {triad} triad")
         v = self.as_dict()
+        mine = [tm for tm in self.temperature_models if tm.name.startswith(f"{triad}_")]
+        if self.model == "per-axis" and mine:
+            raise InvalidInputError(
+                "the per-axis result's temperature models cannot be written as a triad model's "
+                "TemperatureDependence (bias K_i·b_i is a product); use values_at or correct_imu")
+        for tm in mine:
+            if tm.leg_coefficient is not None:
+                v[tm.name] += tm.leg_coefficient * leg
         if self.model == "per-axis":
             k = np.array([v[f"{triad}_K_{a}"] for a in AXES])
             b = np.array([v[f"{triad}_b_{a}"] for a in AXES])
@@ -289,7 +432,40 @@ class CalibrationResult:
         if f"{triad}_G_xx" in v:
             kwargs["g_sensitivity"] = np.array([[v[f"{triad}_G_{i}{j}"] for j in AXES]
                                                 for i in AXES])
+        if mine:
+            kwargs["temperature"] = self._temperature_dependence(triad, mine)
         return TriadModel(kind=triad, bias=bias, scale_misalignment=m, **kwargs)
+
+    def _temperature_dependence(self, triad: str, models: list[ParameterTemperatureModel]
+                                ) -> TemperatureDependence:
+        """Return a triad's temperature models as a TriadModel's TemperatureDependence."""
+        pairs = [((r, c), f"{i}{j}") for r, i in enumerate(AXES) for c, j in enumerate(AXES)]
+        fields: dict[str, list[tuple[Any, str]]] = {
+            "bias": [(r, f"{triad}_bias_{a}") for r, a in enumerate(AXES)],
+            "scale_misalignment": [(pos, f"{triad}_M_{ij}") for pos, ij in pairs],
+            "g_sensitivity": [(pos, f"{triad}_G_{ij}") for pos, ij in pairs]}
+        by_name = {tm.name: tm for tm in models}
+        coefficients: dict[str, NDArray[np.float64]] = {}
+        rates: dict[str, NDArray[np.float64]] = {}
+        for field_name, entries in fields.items():
+            present = [(pos, by_name[n]) for pos, n in entries if n in by_name]
+            if not present:
+                continue
+            shape = (3,) if field_name == "bias" else (3, 3)
+            order = max(tm.order for _, tm in present)
+            if order > 0:
+                poly = np.zeros((order, *shape))
+                for pos, tm in present:
+                    idx = (slice(0, tm.order), *np.atleast_1d(pos))
+                    poly[idx] = tm.coefficients[1:]
+                coefficients[field_name] = poly
+            if any(tm.rate_coefficient is not None for _, tm in present):
+                rate = np.zeros(shape)
+                for pos, tm in present:
+                    rate[pos] = tm.rate_coefficient or 0.0
+                rates[field_name] = rate
+        t0 = models[0].reference_temperature_degc
+        return TemperatureDependence(t0, coefficients, rates)
 
     # --- JSON -------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -317,6 +493,9 @@ class CalibrationResult:
             "notes": list(self.notes),
             **({"fit_quality": [_fit_quality_dict(q) for q in self.fit_quality]}
                if self.format_version >= 2 else {}),
+            **({"temperature_models": [_temperature_model_dict(tm)
+                                       for tm in self.temperature_models]}
+               if self.format_version >= 3 else {}),
         }
 
     def to_json(self) -> str:
@@ -397,6 +576,19 @@ class CalibrationResult:
                 and np.allclose(self.covariance, other.covariance, rtol=rtol, atol=atol))
 
 
+def _temperature_model_dict(tm: ParameterTemperatureModel) -> dict[str, Any]:
+    ho = tm.held_out
+    return {"name": tm.name, "reference_temperature_degc": tm.reference_temperature_degc,
+            "coefficients": list(tm.coefficients), "rate_coefficient": tm.rate_coefficient,
+            "leg_coefficient": tm.leg_coefficient, "covariance": tm.covariance.tolist(),
+            "chi2": tm.chi2, "dof": tm.dof, "order_criterion": tm.order_criterion,
+            "temperature_range_degc": None if tm.temperature_range_degc is None
+            else list(tm.temperature_range_degc),
+            "held_out": None if ho is None else {
+                "max_abs_z": ho.max_abs_z, "chi2": ho.chi2, "dof": ho.dof,
+                "p_value": ho.p_value, "consistent": ho.consistent}}
+
+
 def _fit_quality_dict(q: FitQuality) -> dict[str, Any]:
     nan = math.isnan
     return {"group": q.group, "chi2": q.chi2, "dof": q.dof,
@@ -412,7 +604,13 @@ def _fit_quality_dict(q: FitQuality) -> dict[str, Any]:
 _FIELDS_V1: Final = ("format", "format_version", "sensor_id", "procedure", "model",
                      "parameters", "covariance", "input_units", "residuals", "provenance",
                      "notes")
-_FIELDS: Final = (*_FIELDS_V1, "fit_quality")
+_FIELDS_V2: Final = (*_FIELDS_V1, "fit_quality")
+_FIELDS: Final = (*_FIELDS_V2, "temperature_models")
+_TEMPERATURE_MODEL_FIELDS: Final = ("name", "reference_temperature_degc", "coefficients",
+                                    "rate_coefficient", "leg_coefficient", "covariance", "chi2",
+                                    "dof", "order_criterion", "temperature_range_degc",
+                                    "held_out")
+_HELD_OUT_FIELDS: Final = ("max_abs_z", "chi2", "dof", "p_value", "consistent")
 _FIT_QUALITY_FIELDS: Final = ("group", "chi2", "dof", "reduced_chi2", "expected_low",
                               "expected_high", "quantile", "misfit", "birge_ratio",
                               "sigma_scale")
@@ -606,9 +804,92 @@ class _ResultReader:
                           f"({derived!r}; a hand-edited file?)")
         return out
 
+    def integer(self, value: object, where: str, *, low: int = 0) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            self.fail(where, f"expected an integer ≥ {low}; got {_kind(value)}")
+        return value
+
+    def optional_number(self, value: object, where: str) -> float | None:
+        return None if value is None else self.number(value, where)
+
+    def held_out(self, value: object, where: str) -> HeldOutOutcome | None:
+        if value is None:
+            return None
+        h = self.obj(value, where, _HELD_OUT_FIELDS)
+        consistent = h["consistent"]
+        if not isinstance(consistent, bool):
+            self.fail(f"{where}.consistent", f"expected true or false; got {_kind(consistent)}")
+        p = self.number(h["p_value"], f"{where}.p_value", nonnegative=True)
+        if p > 1.0:
+            self.fail(f"{where}.p_value", f"expected a probability in [0, 1]; got {p!r}")
+        return HeldOutOutcome(
+            max_abs_z=self.number(h["max_abs_z"], f"{where}.max_abs_z", nonnegative=True),
+            chi2=self.number(h["chi2"], f"{where}.chi2", nonnegative=True),
+            dof=self.integer(h["dof"], f"{where}.dof", low=1), p_value=p,
+            consistent=consistent)
+
+    def temperature_model(self, value: object, where: str) -> ParameterTemperatureModel:
+        d = self.obj(value, where, _TEMPERATURE_MODEL_FIELDS)
+        name = self.text(d["name"], f"{where}.name", nonempty=True)
+        coefficients = self.numbers(d["coefficients"], f"{where}.coefficients")
+        if not coefficients:
+            self.fail(f"{where}.coefficients", "expected c_0 … c_m (at least c_0); got []")
+        rate = self.optional_number(d["rate_coefficient"], f"{where}.rate_coefficient")
+        leg = self.optional_number(d["leg_coefficient"], f"{where}.leg_coefficient")
+        q = len(coefficients) + (rate is not None) + (leg is not None)
+        rows = self.array(d["covariance"], f"{where}.covariance", q)
+        cov = [self.numbers(r, f"{where}.covariance[{i}]", q) for i, r in enumerate(rows)]
+        criterion = self.text(d["order_criterion"], f"{where}.order_criterion")
+        if criterion not in ORDER_CRITERIA:
+            self.fail(f"{where}.order_criterion",
+                      f"expected one of {list(ORDER_CRITERIA)}; got {criterion!r}")
+        rng = d["temperature_range_degc"]
+        span = None if rng is None else self.numbers(rng, f"{where}.temperature_range_degc", 2)
+        if span is not None and span[0] > span[1]:
+            self.fail(f"{where}.temperature_range_degc",
+                      f"expected [T_min, T_max] with T_min ≤ T_max; got {span}")
+        held_out = self.held_out(d["held_out"], f"{where}.held_out")
+        t0 = self.number(d["reference_temperature_degc"], f"{where}.reference_temperature_degc")
+        chi2 = self.number(d["chi2"], f"{where}.chi2", nonnegative=True)
+        dof = self.integer(d["dof"], f"{where}.dof")
+        try:
+            return ParameterTemperatureModel(
+                name=name, reference_temperature_degc=t0, coefficients=tuple(coefficients),
+                covariance=np.array(cov, dtype=np.float64), chi2=chi2, dof=dof,
+                order_criterion=criterion,
+                rate_coefficient=rate, leg_coefficient=leg,
+                temperature_range_degc=None if span is None else (span[0], span[1]),
+                held_out=held_out)
+        except InvalidInputError as exc:  # the covariance's symmetry and PSD checks
+            self.fail(f"{where}.covariance", str(exc))
+
+    def temperature_models(self, value: object, names: list[str], values: list[float]
+                           ) -> tuple[ParameterTemperatureModel, ...]:
+        out: list[ParameterTemperatureModel] = []
+        for i, v in enumerate(self.array(value, "temperature_models")):
+            where = f"temperature_models[{i}]"
+            tm = self.temperature_model(v, where)
+            if tm.name not in names:
+                self.fail(f"{where}.name", f"{tm.name!r} is not a parameter of this result")
+            if any(o.name == tm.name for o in out):
+                self.fail(f"{where}.name", f"{tm.name!r} has a temperature model already "
+                          "(one per parameter)")
+            if out and tm.reference_temperature_degc != out[0].reference_temperature_degc:
+                self.fail(f"{where}.reference_temperature_degc",
+                          f"{tm.reference_temperature_degc!r} differs from "
+                          f"{out[0].reference_temperature_degc!r} of temperature_models[0] "
+                          "(one T0 per result)")
+            value0 = values[names.index(tm.name)]
+            if not math.isclose(tm.coefficients[0], value0, rel_tol=_RTOL, abs_tol=0.0):
+                self.fail(f"{where}.coefficients[0]",
+                          f"c_0 = {tm.coefficients[0]!r} differs from the value {value0!r} of "
+                          f"{tm.name!r} (the values hold at T0)")
+            out.append(tm)
+        return tuple(out)
+
     def read(self, cls: type[CalibrationResult], data: object) -> CalibrationResult:
         version = self.header(data)
-        doc = self.obj(data, "(top level)", _FIELDS if version >= 2 else _FIELDS_V1)
+        doc = self.obj(data, "(top level)", {1: _FIELDS_V1, 2: _FIELDS_V2}.get(version, _FIELDS))
         sensor_id = self.text(doc["sensor_id"], "sensor_id", nonempty=True)
         procedure = self.text(doc["procedure"], "procedure")
         model = self.text(doc["model"], "model")
@@ -655,11 +936,14 @@ class _ResultReader:
         groups = [q.group for q in fit_quality]
         if len(set(groups)) != len(groups):
             self.fail("fit_quality", f"a group appears twice: {groups}")
+        temperature_models = self.temperature_models(
+            doc["temperature_models"], names, values) if version >= 3 else ()
         try:
             return cls(sensor_id=sensor_id, procedure=procedure, model=model,
                        param_names=tuple(names), values=np.array(values, dtype=np.float64),
                        covariance=cov, units=units, input_units=dict(input_units),
                        residuals=residuals, provenance=Provenance(**texts, details=details),
-                       notes=notes, fit_quality=fit_quality, format_version=version)
+                       notes=notes, fit_quality=fit_quality,
+                       temperature_models=temperature_models, format_version=version)
         except InvalidInputError as exc:  # pragma: no cover - the checks above come first
             raise InvalidInputError(f"calibration result {self.source}: {exc}") from exc
