@@ -59,8 +59,9 @@ __all__ = ["TemperatureDependence", "evaluate_parameter", "hysteresis_state"]
 _DEFAULT_WIDTH_DEGC = 5.0
 #: Largest |ΔT|/w of one step used (exp(−40) ≈ 4e-18: the state has reached ±1 to within rounding).
 _MAX_STEP = 40.0
-#: Largest span of cumulated |ΔT|/w in one block of the vectorised recurrence (exp(500) is finite).
-_MAX_BLOCK = 500.0
+#: Largest growth of the cumulated |ΔT|/w within one block of the vectorised recurrence: e^C
+#: stays moderate and the rounding of s near 30·ε (about 1e-14).
+_MAX_BLOCK = 30.0
 
 
 class _ReadOnlyMapping(Mapping[str, NDArray[np.float64]]):
@@ -306,8 +307,8 @@ def hysteresis_state(
     its final state, and drop the first returned state: the result does not depend on the
     chunking (up to rounding). The linear recurrence s_k = a_k·s_{k−1} + (1 − a_k)·σ_k is
     vectorised as s_k = e^{−C_k}·(s_0 + Σ_{j≤k} e^{C_j}·(1 − a_j)·σ_j) with C_k = Σ_{j≤k} |ΔT_j|/w,
-    in blocks over which C grows by at most 500 so that e^{C} stays finite. A constant
-    temperature leaves s unchanged exactly.
+    in blocks over which C grows by at most 30, so that e^{C} stays moderate and the rounding
+    error of s about 1e-14. A constant temperature leaves s unchanged exactly.
     """
     temp = _as_temperature_vector(temperature_degc, "temperature_degc")
     s0 = check_finite_scalar(state0, "state0")
