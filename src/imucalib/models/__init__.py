@@ -6,14 +6,14 @@ Contents
     :class:`TriadModel`, :func:`apply_triad` (true → measured), :func:`correct_triad`
     (measured → true), :data:`PARAMETER_NAMES`, :data:`TriadKind`.
 :mod:`imucalib.models.temperature`
-    :class:`TemperatureDependence`, :func:`evaluate_parameter`.
+    :class:`TemperatureDependence`, :func:`evaluate_parameter`, :func:`hysteresis_state`.
 :mod:`imucalib.models.noise`
     :class:`NoiseModel`, :class:`NoiseGenerator`, :func:`simulate_noise`,
     :func:`compute_theoretical_adev`.
 :mod:`imucalib.models.sensor`
     :class:`SensorSpec` (range, resolution, bandwidth), :class:`OutputChain`.
 :mod:`imucalib.models.imu`
-    :class:`ImuModel`, :data:`GRADES`, :func:`sample_imu_model`.
+    :class:`ImuModel`, :data:`GRADES`, :data:`THERMAL_GRADES`, :func:`sample_imu_model`.
 :mod:`imucalib.models.earth`
     :class:`Site` (Earth rate, normal gravity, the table's heading), imported from its module.
 :mod:`imucalib.models.correct`
@@ -27,7 +27,7 @@ Contents
 
 from __future__ import annotations
 
-from imucalib.models.imu import GRADES, GradeSpec, ImuModel, sample_imu_model
+from imucalib.models.imu import GRADES, THERMAL_GRADES, GradeSpec, ImuModel, sample_imu_model
 from imucalib.models.noise import (
     NoiseGenerator,
     NoiseModel,
@@ -35,7 +35,11 @@ from imucalib.models.noise import (
     simulate_noise,
 )
 from imucalib.models.sensor import OutputChain, SensorSpec, apply_output_chain
-from imucalib.models.temperature import TemperatureDependence, evaluate_parameter
+from imucalib.models.temperature import (
+    TemperatureDependence,
+    evaluate_parameter,
+    hysteresis_state,
+)
 from imucalib.models.triad import (
     PARAMETER_NAMES,
     TriadKind,
@@ -47,6 +51,7 @@ from imucalib.models.triad import (
 __all__ = [
     "GRADES",
     "PARAMETER_NAMES",
+    "THERMAL_GRADES",
     "GradeSpec",
     "ImuModel",
     "NoiseGenerator",
@@ -61,6 +66,7 @@ __all__ = [
     "compute_theoretical_adev",
     "correct_triad",
     "evaluate_parameter",
+    "hysteresis_state",
     "sample_imu_model",
     "simulate_noise",
 ]

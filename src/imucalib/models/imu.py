@@ -9,8 +9,36 @@ Contents
 :class:`GradeSpec`, :data:`GRADES`
     One-sigma spreads of the error parameters of consumer-MEMS, tactical and navigation-grade IMUs
     (docs/equations.md §13), used to draw realistic truths for the twin.
+:class:`ThermalGradeSpec`, :data:`THERMAL_GRADES`, :data:`THERMAL_RANGE_DEGC`
+    Typical temperature swings of the biases, scale factors and misalignments per grade
+    (docs/equations.md §13), used to draw temperature-dependent truths.
 :func:`sample_imu_model`
-    Draw a random IMU of a grade (every random function takes ``rng``).
+    Draw a random IMU of a grade (every random function takes ``rng``), optionally with a
+    temperature dependence and thermal hysteresis of its biases, scale factors and misalignments.
+
+Typical temperature dependence
+------------------------------
+With ``temperature_dependence="typical"`` every bias b_i, scale factor M_ii and misalignment
+M_ij (i ≠ j) of both triads gets a cubic in (T − T0) (docs/equations.md §4)::
+
+    p(T) = p0 + c1·(T − T0) + c2·(T − T0)² + c3·(T − T0)³ + h·s
+
+Its swing (max − min over :data:`THERMAL_RANGE_DEGC`, −40 … +85 °C) is drawn uniformly in
+[0.5, 1.5] × the grade's typical swing below, and its shape at random with a real cubic part: the
+Legendre P3 component over the range (the part no quadratic in T represents) spans at least 25 %
+of the swing, so a quadratic fit leaves visible residuals. The hysteresis amplitude is
+h = ``hysteresis_fraction`` × swing with a random sign, width w = 5 °C.
+
+============  ===========  ==========  ==============  =============  =====================
+grade         gyro bias    accel bias  gyro scale      accel scale    misalignments
+============  ===========  ==========  ==============  =============  =====================
+consumer      0.3 °/s      20 mg       10000 ppm       10000 ppm      2 mrad (σ/4)
+tactical      10 °/h       0.5 mg      300 ppm         300 ppm        0.125 mrad (σ/4)
+navigation    0.05 °/h     30 µg       5 ppm           100 ppm        0.005 mrad (σ/4)
+============  ===========  ==========  ==============  =============  =====================
+
+The coefficients come from a child generator spawned from the IMU's generator after its other
+draws, so the truth drawn with ``temperature_dependence="none"`` is unchanged.
 """
 
 from __future__ import annotations
@@ -19,17 +47,24 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+from numpy.polynomial import Legendre, Polynomial
+from numpy.typing import NDArray
 
 from imucalib import units
-from imucalib._checks import check_positive
-from imucalib.errors import ConfigurationError
+from imucalib._checks import check_finite_scalar, check_positive
+from imucalib.errors import ConfigurationError, InvalidInputError
 from imucalib.models.noise import NoiseModel
 from imucalib.models.sensor import SensorSpec
+from imucalib.models.temperature import TemperatureDependence, evaluate_parameter
 from imucalib.models.triad import TriadModel
 
-__all__ = ["GRADES", "GradeName", "GradeSpec", "ImuModel", "sample_imu_model"]
+__all__ = ["GRADES", "THERMAL_GRADES", "THERMAL_RANGE_DEGC", "GradeName", "GradeSpec",
+           "ImuModel", "TemperatureDependenceKind", "ThermalGradeSpec", "sample_imu_model"]
 
 GradeName = Literal["consumer", "tactical", "navigation"]
+#: Temperature dependence drawn by :func:`sample_imu_model`.
+TemperatureDependenceKind = Literal["none", "typical"]
+_AXES = "xyz"
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +117,54 @@ class ImuModel:
             accel=TriadModel.ideal("accel"),
             sample_rate_hz=sample_rate_hz,
         )
+
+    def parameters_at(self, temperature_degc: float,
+                      hysteresis_state: float = 0.0) -> dict[str, float]:
+        """Return the true value of every calibration parameter at a temperature and state.
+
+        Parameters
+        ----------
+        temperature_degc : float
+            Sensor temperature T. [°C]
+        hysteresis_state : float
+            Thermal hysteresis state s in [−1, 1]: +1 after heating, −1 after cooling by several
+            hysteresis widths, 0 without thermal history (docs/equations.md §4). [–]
+
+        Returns
+        -------
+        dict of str to float
+            ``<triad>_bias_<i>`` [rad/s | m/s²], ``<triad>_M_<ij>`` (y = b + (I + M)·x, row i the
+            sensor axis, column j the input axis) [–] for ``gyro`` and ``accel``, and
+            ``gyro_G_<ij>`` [rad/s per m/s²]: the names of
+            :func:`~imucalib.models.result.triad_parameter_names`.
+
+        Raises
+        ------
+        InvalidInputError
+            If the temperature is not finite or the state is outside [−1, 1].
+        """
+        temp = check_finite_scalar(temperature_degc, "temperature_degc")
+        state = check_finite_scalar(hysteresis_state, "hysteresis_state")
+        if abs(state) > 1.0:
+            raise InvalidInputError(f"`hysteresis_state` must be within [-1, 1]; got {state}")
+        out: dict[str, float] = {}
+        for triad, tm in (("gyro", self.gyro), ("accel", self.accel)):
+            def at(name: str, tm: TriadModel = tm) -> NDArray[np.float64]:
+                value = evaluate_parameter(getattr(tm, name), name, tm.temperature, temp, None,
+                                           state)
+                return value.reshape(getattr(tm, name).shape)
+            bias, mat = at("bias"), at("scale_misalignment")
+            for i, a in enumerate(_AXES):
+                out[f"{triad}_bias_{a}"] = float(bias[i])
+            for i, a in enumerate(_AXES):
+                for j, b in enumerate(_AXES):
+                    out[f"{triad}_M_{a}{b}"] = float(mat[i, j])
+            if triad == "gyro":
+                g = at("g_sensitivity")
+                for i, a in enumerate(_AXES):
+                    for j, b in enumerate(_AXES):
+                        out[f"gyro_G_{a}{b}"] = float(g[i, j])
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-able description (exact round trip through :meth:`from_dict`)."""
@@ -215,12 +298,111 @@ GRADES: dict[str, GradeSpec] = {
 }
 
 
+#: The temperature range over which :data:`THERMAL_GRADES` gives the swings. [°C]
+THERMAL_RANGE_DEGC: tuple[float, float] = (-40.0, 85.0)
+
+
+@dataclass(frozen=True)
+class ThermalGradeSpec:
+    """Typical swing (max − min over :data:`THERMAL_RANGE_DEGC`) of parameters with temperature.
+
+    Biases swing by about the grade's bias σ, scale factors by its scale σ and misalignments by a
+    quarter of its misalignment σ (docs/equations.md §13), in the units of their names.
+    """
+
+    gyro_bias_dph: float
+    accel_bias_ug: float
+    gyro_scale_ppm: float
+    accel_scale_ppm: float
+    gyro_misalignment_mrad: float
+    accel_misalignment_mrad: float
+
+
+#: Typical temperature swings per grade (module docstring's table).
+THERMAL_GRADES: dict[str, ThermalGradeSpec] = {
+    "consumer": ThermalGradeSpec(
+        gyro_bias_dph=1080.0,  # 0.3 °/s
+        accel_bias_ug=20000.0,  # 20 mg
+        gyro_scale_ppm=10000.0,
+        accel_scale_ppm=10000.0,
+        gyro_misalignment_mrad=2.0,
+        accel_misalignment_mrad=2.0,
+    ),
+    "tactical": ThermalGradeSpec(
+        gyro_bias_dph=10.0,
+        accel_bias_ug=500.0,
+        gyro_scale_ppm=300.0,
+        accel_scale_ppm=300.0,
+        gyro_misalignment_mrad=0.125,
+        accel_misalignment_mrad=0.125,
+    ),
+    "navigation": ThermalGradeSpec(
+        gyro_bias_dph=0.05,
+        accel_bias_ug=30.0,
+        gyro_scale_ppm=5.0,
+        accel_scale_ppm=100.0,
+        gyro_misalignment_mrad=0.005,
+        accel_misalignment_mrad=0.005,
+    ),
+}
+
+_SWING_GRID_POINTS = 501  # temperatures at which a drawn curve's swing is evaluated
+_MIN_CUBIC_SHARE = 0.25  # least span of the Legendre P3 part, as a fraction of the swing
+_HYSTERESIS_WIDTH_DEGC = 5.0
+
+
+def _draw_curve(gen: np.random.Generator, swing: float, t0_degc: float,
+                hysteresis_fraction: float) -> tuple[NDArray[np.float64], float]:
+    """Draw (c1, c2, c3) in (T − T0) and a hysteresis amplitude for one parameter entry."""
+    lo, hi = THERMAL_RANGE_DEGC
+    grid = np.linspace(lo - t0_degc, hi - t0_degc, _SWING_GRID_POINTS)
+    while True:  # a cubic whose P3 part spans ≥ _MIN_CUBIC_SHARE of the swing (P3 spans 2)
+        beta = gen.normal(0.0, 1.0, 3)
+        poly = Legendre(np.concatenate([[0.0], beta]),
+                        domain=[lo - t0_degc, hi - t0_degc]).convert(kind=Polynomial)
+        coef = np.zeros(4)
+        coef[: poly.coef.size] = poly.coef
+        coef[0] = 0.0  # p(T0) = p0
+        values = Polynomial(coef)(grid)
+        span = float(values.max() - values.min())
+        if span > 0.0 and 2.0 * abs(beta[2]) >= _MIN_CUBIC_SHARE * span:
+            break
+    target = swing * gen.uniform(0.5, 1.5)
+    sign = 1.0 if gen.random() < 0.5 else -1.0
+    return coef[1:] * (target / span), sign * hysteresis_fraction * target
+
+
+def _typical_dependence(gen: np.random.Generator, bias_swing: float, scale_swing: float,
+                        misalignment_swing: float, t0_degc: float,
+                        hysteresis_fraction: float) -> TemperatureDependence:
+    """Draw a triad's typical dependence: bias (3 entries), then M row by row (9 entries)."""
+    bias_c, bias_h = np.zeros((3, 3)), np.zeros(3)
+    for i in range(3):
+        bias_c[:, i], bias_h[i] = _draw_curve(gen, bias_swing, t0_degc, hysteresis_fraction)
+    mat_c, mat_h = np.zeros((3, 3, 3)), np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            swing = scale_swing if i == j else misalignment_swing
+            mat_c[:, i, j], mat_h[i, j] = _draw_curve(gen, swing, t0_degc, hysteresis_fraction)
+    hysteresis = ({"bias": bias_h, "scale_misalignment": mat_h} if hysteresis_fraction > 0.0
+                  else {})
+    return TemperatureDependence(
+        reference_temperature_degc=t0_degc,
+        coefficients={"bias": bias_c, "scale_misalignment": mat_c},
+        hysteresis=hysteresis,
+        hysteresis_width_degc=_HYSTERESIS_WIDTH_DEGC,
+    )
+
+
 def sample_imu_model(
     grade: str,
     rng: np.random.Generator | int | None = None,
     *,
     sample_rate_hz: float | None = None,
     nonlinear: bool = True,
+    temperature_dependence: TemperatureDependenceKind = "none",
+    hysteresis_fraction: float = 0.0,
+    reference_temperature_degc: float = 25.0,
 ) -> ImuModel:
     """Draw a random IMU of a grade: the truth the twin simulates.
 
@@ -234,20 +416,45 @@ def sample_imu_model(
         Output data rate; the grade's default when omitted. [Hz]
     nonlinear : bool
         Draw accelerometer K2 (quadratic) terms too.
+    temperature_dependence : {"none", "typical"}
+        ``"typical"`` draws a cubic temperature dependence of every bias, scale factor and
+        misalignment of both triads with the grade's :data:`THERMAL_GRADES` swing (module
+        docstring); ``"none"`` draws none.
+    hysteresis_fraction : float
+        With ``"typical"``: thermal hysteresis amplitude h of each of those parameters as a
+        fraction of its swing, in [0, 0.5] (random sign, width 5 °C). [–]
+    reference_temperature_degc : float
+        T0, the temperature at which the drawn biases, scale factors and misalignments hold
+        (with ``"typical"``). [°C]
 
     Returns
     -------
     ImuModel
-        Biases, scale factors and misalignments drawn as N(0, σ²) with the grade's σ; noise
-        coefficients at the grade's nominal values.
+        Biases, scale factors and misalignments drawn as N(0, σ²) with the grade's σ (their
+        values at T0 with ``"typical"``); noise coefficients at the grade's nominal values.
 
     Raises
     ------
     ConfigurationError
-        If `grade` is not one of the known grades.
+        If `grade` or `temperature_dependence` is not one of the known ones.
+    InvalidInputError
+        If `hysteresis_fraction` is outside [0, 0.5] or given without ``"typical"``, or
+        `reference_temperature_degc` is not finite.
     """
     if grade not in GRADES:
         raise ConfigurationError(f"unknown IMU grade {grade!r}; expected one of {sorted(GRADES)}")
+    if temperature_dependence not in ("none", "typical"):
+        raise ConfigurationError(
+            f"`temperature_dependence` must be 'none' or 'typical'; got {temperature_dependence!r}"
+        )
+    fraction = check_finite_scalar(hysteresis_fraction, "hysteresis_fraction")
+    if not 0.0 <= fraction <= 0.5:
+        raise InvalidInputError(f"`hysteresis_fraction` must be in [0, 0.5]; got {fraction}")
+    if fraction > 0.0 and temperature_dependence == "none":
+        raise InvalidInputError(
+            "`hysteresis_fraction` > 0 needs temperature_dependence='typical'"
+        )
+    t0 = check_finite_scalar(reference_temperature_degc, "reference_temperature_degc")
     spec = GRADES[grade]
     gen = np.random.default_rng(rng)
     fs = spec.sample_rate_hz if sample_rate_hz is None else check_positive(
@@ -290,6 +497,16 @@ def sample_imu_model(
         white_density=spec.accel_vrw_ug_rthz * units.UG_PER_RTHZ,
         bias_instability=spec.accel_bias_instability_ug * units.UG,
     )
+    if temperature_dependence == "typical":
+        # a child generator spawned after every other draw: the draws above stay as they were
+        tgen = gen.spawn(1)[0]
+        th = THERMAL_GRADES[grade]
+        gyro = gyro.replace(temperature=_typical_dependence(
+            tgen, th.gyro_bias_dph * units.DEG_PER_H, th.gyro_scale_ppm * units.PPM,
+            th.gyro_misalignment_mrad * units.MRAD, t0, fraction))
+        accel = accel.replace(temperature=_typical_dependence(
+            tgen, th.accel_bias_ug * units.UG, th.accel_scale_ppm * units.PPM,
+            th.accel_misalignment_mrad * units.MRAD, t0, fraction))
     bw = min(spec.bandwidth_hz, 0.45 * fs)
     gyro_range = spec.gyro_range_dps * units.DEG_PER_S
     accel_range = spec.accel_range_g * units.G0_MPS2

@@ -98,7 +98,7 @@ class TriadModel:
         the IMU origin, in b. [m]
     temperature : TemperatureDependence or None
         Temperature dependence of any of the parameters above, keyed by their names; the base
-        values above hold at its reference temperature.
+        values above hold at its reference temperature (and hysteresis state 0).
 
     Raises
     ------
@@ -173,12 +173,14 @@ class TriadModel:
                         f"`temperature.coefficients[{name!r}]` must have shape "
                         f"(K, {', '.join(map(str, _SHAPES[name]))}); got {coeffs.shape}"
                     )
-            for name, d in dep.rate_coefficients.items():
-                if d.shape != _SHAPES[name]:
-                    raise InvalidInputError(
-                        f"`temperature.rate_coefficients[{name!r}]` must have shape "
-                        f"{_SHAPES[name]}; got {d.shape}"
-                    )
+            for label, arrays in (("rate_coefficients", dep.rate_coefficients),
+                                  ("hysteresis", dep.hysteresis)):
+                for name, d in arrays.items():
+                    if d.shape != _SHAPES[name]:
+                        raise InvalidInputError(
+                            f"`temperature.{label}[{name!r}]` must have shape "
+                            f"{_SHAPES[name]}; got {d.shape}"
+                        )
         for name in _NOT_FOR[self.kind]:
             if self._active(name):
                 what = "an accelerometer" if self.kind == "accel" else "a gyro"
@@ -229,8 +231,9 @@ class TriadModel:
         theirs = other.temperature or TemperatureDependence()
         if self.temperature is None or other.temperature is None:
             # without coefficients the reference temperature is irrelevant
-            mine = TemperatureDependence(theirs.reference_temperature_degc,
-                                         mine.coefficients, mine.rate_coefficients)
+            mine = dataclasses.replace(
+                mine, reference_temperature_degc=theirs.reference_temperature_degc
+            )
         return mine.isclose(theirs, atol=atol)
 
     def is_linear(self) -> bool:
@@ -320,25 +323,37 @@ def _resolve(
     n: int,
     temperature_degc: ArrayLike | None,
     temperature_rate_degc_ps: ArrayLike | None,
+    hysteresis_state: ArrayLike | None = None,
 ) -> _Resolved:
     dep = model.temperature
     p = {name: getattr(model, name) for name in PARAMETER_NAMES}
-    if dep is not None and dep.parameter_names:
+    if dep is None:
+        return _Resolved(p)
+    thermal = sorted(set(dep.coefficients) | set(dep.rate_coefficients))
+    hyst = list(dep.hysteresis) if hysteresis_state is not None else []
+    if not (thermal or hyst):
+        return _Resolved(p)
+    temp = rate = state = np.zeros(1)
+    if thermal:
         if temperature_degc is None:
             raise InvalidInputError(
                 f"`temperature_degc` is required: the {model.kind} model's "
-                f"{', '.join(dep.parameter_names)} depend(s) on temperature"
+                f"{', '.join(thermal)} depend(s) on temperature"
             )
         temp = _temperature_arg(temperature_degc, "temperature_degc", n)
-        rate = (np.zeros(1) if temperature_rate_degc_ps is None
-                else _temperature_arg(temperature_rate_degc_ps, "temperature_rate_degc_ps", n))
-        constant = temp.size == 1 and rate.size == 1
-        if not constant:
-            temp = np.broadcast_to(temp, (n,))
-            rate = np.broadcast_to(rate, (n,))
-        for name in dep.parameter_names:
-            value = evaluate_parameter(p[name], name, dep, temp, rate)
-            p[name] = value[0] if constant else value
+        if temperature_rate_degc_ps is not None:
+            rate = _temperature_arg(temperature_rate_degc_ps, "temperature_rate_degc_ps", n)
+    if hyst and hysteresis_state is not None:
+        state = _temperature_arg(hysteresis_state, "hysteresis_state", n)
+    constant = temp.size == 1 and rate.size == 1 and state.size == 1
+    if not constant:
+        temp = np.broadcast_to(temp, (n,))
+        rate = np.broadcast_to(rate, (n,))
+        state = np.broadcast_to(state, (n,))
+    for name in sorted(set(thermal) | set(hyst)):
+        value = evaluate_parameter(p[name], name, dep, temp, rate,
+                                   state if name in hyst else None)
+        p[name] = value[0] if constant else value
     return _Resolved(p)
 
 
@@ -526,6 +541,7 @@ def apply_triad(
     angular_accel_b_rps2: ArrayLike | None = None,
     temperature_degc: ArrayLike | None = None,
     temperature_rate_degc_ps: ArrayLike | None = None,
+    hysteresis_state: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Pass the true input through the triad's error model (true → measured).
 
@@ -551,6 +567,10 @@ def apply_triad(
         Sensor temperature; required when the model depends on temperature. [°C]
     temperature_rate_degc_ps : float or array_like, shape (n,), optional
         Temperature rate dT/dt; 0 when omitted. [°C/s]
+    hysteresis_state : float or array_like, shape (n,), optional
+        Thermal hysteresis state s in [−1, 1]
+        (:func:`~imucalib.models.temperature.hysteresis_state`); the hysteresis terms h·s of
+        the temperature dependence are added only when given (omitted means s = 0). [–]
 
     Returns
     -------
@@ -571,7 +591,7 @@ def apply_triad(
     """
     x, single = _samples(input_b, "input_b")
     n = x.shape[0]
-    r = _resolve(model, n, temperature_degc, temperature_rate_degc_ps)
+    r = _resolve(model, n, temperature_degc, temperature_rate_degc_ps, hysteresis_state)
     A = r.p["scale_misalignment"] + _EYE3
     u = _matvec(A, x)
     if model.kind == "accel":
@@ -596,6 +616,7 @@ def correct_triad(
     angular_accel_b_rps2: ArrayLike | None = None,
     temperature_degc: ArrayLike | None = None,
     temperature_rate_degc_ps: ArrayLike | None = None,
+    hysteresis_state: ArrayLike | None = None,
     tol: float = 1e-13,
     max_iter: int = 50,
 ) -> NDArray[np.float64]:
@@ -617,6 +638,10 @@ def correct_triad(
         Sensor temperature; required when the model depends on temperature. [°C]
     temperature_rate_degc_ps : float or array_like, shape (n,), optional
         Temperature rate dT/dt; 0 when omitted. [°C/s]
+    hysteresis_state : float or array_like, shape (n,), optional
+        Thermal hysteresis state s in [−1, 1]
+        (:func:`~imucalib.models.temperature.hysteresis_state`); the hysteresis terms h·s of
+        the temperature dependence are added only when given (omitted means s = 0). [–]
     tol : float
         Relative tolerance of the Newton iteration that inverts h. [–]
     max_iter : int
@@ -648,7 +673,7 @@ def correct_triad(
         raise InvalidInputError(f"`max_iter` must be an integer ≥ 1; got {max_iter!r}")
     y, single = _samples(measured_s, "measured_s")
     n = y.shape[0]
-    r = _resolve(model, n, temperature_degc, temperature_rate_degc_ps)
+    r = _resolve(model, n, temperature_degc, temperature_rate_degc_ps, hysteresis_state)
     rest = y - r.p["bias"]
     if model.kind == "gyro":
         g = _g_terms(r, specific_force_b_mps2, n)

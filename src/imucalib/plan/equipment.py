@@ -181,7 +181,7 @@ class FixtureConfig(_Model):
 
 
 class ImuConfig(_Model):
-    """One IMU unit: its grade (the truth is drawn from it) and its clock."""
+    """One IMU unit: its grade (its truth, thermal behaviour included, is drawn from it), clock."""
 
     name: str = Field(min_length=1, max_length=64)
     grade: Literal["consumer", "tactical", "navigation"] = "tactical"
@@ -196,6 +196,21 @@ class ImuConfig(_Model):
                                            le=MAX_TIME_CONSTANT_S)
     self_heating_degc: float = Field(0.0, ge=0.0, le=50.0)
     nonlinear: bool = True
+    temperature_dependence: Literal["none", "typical"] = Field(
+        "none", description="'typical': cubic temperature dependence of biases, scale factors "
+        "and misalignments (imucalib.models.imu.sample_imu_model)")
+    hysteresis_fraction: float = Field(
+        0.0, ge=0.0, le=0.5, description="thermal hysteresis amplitude as a fraction of each "
+        "parameter's swing over -40…85 °C (with 'typical') [–]")
+    reference_temperature_degc: float = Field(
+        25.0, ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC,
+        description="T0, where the drawn parameters hold (with 'typical') [°C]")
+
+    @model_validator(mode="after")
+    def _thermal(self) -> ImuConfig:
+        if self.hysteresis_fraction > 0.0 and self.temperature_dependence == "none":
+            raise ValueError("hysteresis_fraction > 0 needs temperature_dependence = 'typical'")
+        return self
 
 
 def hexahedral_grid_offsets_m(n_imus: int, spacing_m: float) -> list[tuple[str, float, float]]:

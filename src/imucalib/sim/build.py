@@ -163,7 +163,10 @@ def build_rig(sc: TwinEquipment) -> BuiltRig:
         model_seed = (cfg.seed if cfg.seed is not None
                       else np.random.default_rng(scenario_seed(sc.seed, "imu-model", i)))
         model = sample_imu_model(cfg.grade, model_seed, sample_rate_hz=cfg.sample_rate_hz,
-                                 nonlinear=cfg.nonlinear)
+                                 nonlinear=cfg.nonlinear,
+                                 temperature_dependence=cfg.temperature_dependence,
+                                 hysteresis_fraction=cfg.hysteresis_fraction,
+                                 reference_temperature_degc=cfg.reference_temperature_degc)
         period_s = 1.0 / model.sample_rate_hz
         phase_s = float(np.random.default_rng(scenario_seed(sc.seed, "imu-phase", i)).uniform(
             0.0, period_s))

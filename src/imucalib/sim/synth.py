@@ -26,6 +26,13 @@ rate, δ the oscillator error (``drift_ppm``·1e-6) and φ the phase. The device
 ``time_s = t_k + latency + jitter·ε_k`` (ε standard normal), made non-decreasing as a host clock
 stamping a serial stream would. A dropped sample (probability ``drop_probability``) is generated
 (its noise is part of the physical process) but not delivered, so the counter shows a gap.
+
+Thermal hysteresis
+------------------
+When a triad's temperature dependence has hysteresis terms, its state s
+(:func:`~imucalib.models.temperature.hysteresis_state`, docs/equations.md §4) follows the IMU's
+true temperature at its samples, from s = 0 at the first sample, and is carried from one chunk to
+the next (the last temperature and state), so that the record does not depend on the chunking.
 """
 
 from __future__ import annotations
@@ -41,7 +48,8 @@ from imucalib.errors import ConfigurationError, InvalidInputError
 from imucalib.models.imu import ImuModel
 from imucalib.models.noise import NoiseGenerator
 from imucalib.models.sensor import OutputChain
-from imucalib.models.triad import apply_triad
+from imucalib.models.temperature import hysteresis_state
+from imucalib.models.triad import TriadModel, apply_triad
 from imucalib.sim.chamber import ImuThermalSpec
 from imucalib.sim.fixture import MountedImu
 from imucalib.sim.kinematics import ImuKinematics
@@ -196,6 +204,33 @@ class ImuSynthesizer:
         self._accel_out = OutputChain(model.accel_output, model.sample_rate_hz)
         self._next_index = 0
         self._last_time_s = -np.inf
+        # per triad: (true temperature [°C], hysteresis state) at the last sample generated
+        self._hysteresis: dict[str, tuple[float, float]] = {}
+
+    @property
+    def hysteresis_states(self) -> dict[str, float]:
+        """Thermal hysteresis state at the last sample generated, per triad with hysteresis.
+
+        Keys ``"gyro"`` and ``"accel"``; a triad without hysteresis terms, or one not yet
+        sampled, has no entry. [–]
+        """
+        return {kind: state for kind, (_, state) in self._hysteresis.items()}
+
+    def _hysteresis_state(self, triad: TriadModel,
+                          temp_degc: NDArray[np.float64]) -> NDArray[np.float64] | None:
+        """Advance `triad`'s hysteresis state over this chunk's true temperatures."""
+        dep = triad.temperature
+        if dep is None or not dep.has_hysteresis:
+            return None
+        last = self._hysteresis.get(triad.kind)
+        if last is None:  # the first sample: state 0
+            states, final = hysteresis_state(temp_degc, 0.0, dep.hysteresis_width_degc)
+        else:
+            history = np.concatenate([[last[0]], temp_degc])
+            states, final = hysteresis_state(history, last[1], dep.hysteresis_width_degc)
+            states = states[1:]
+        self._hysteresis[triad.kind] = (float(temp_degc[-1]), final)
+        return states
 
     @property
     def true_period_s(self) -> float:
@@ -242,6 +277,9 @@ class ImuSynthesizer:
         temp_degc, temp_rate = temperature(t_true)
         temp_arg = temp_degc if model.gyro.temperature or model.accel.temperature else None
         rate_arg = temp_rate if temp_arg is not None else None
+        true_temp = np.asarray(temp_degc, dtype=np.float64).reshape(-1)
+        gyro_state = self._hysteresis_state(model.gyro, true_temp)
+        accel_state = self._hysteresis_state(model.accel, true_temp)
         # exact shortcut: inputs known to be constant (a platform at rest) and no temperature
         # dependence give every sample the deterministic output of the first
         rows = slice(0, 1) if n > 1 and temp_arg is None and kin.constant else slice(None)
@@ -251,6 +289,7 @@ class ImuSynthesizer:
             specific_force_b_mps2=kin.specific_force_b_mps2[rows],
             temperature_degc=temp_arg,
             temperature_rate_degc_ps=rate_arg,
+            hysteresis_state=gyro_state,
         )
         accel = apply_triad(
             model.accel,
@@ -259,6 +298,7 @@ class ImuSynthesizer:
             angular_accel_b_rps2=kin.angular_accel_b_rps2[rows],
             temperature_degc=temp_arg,
             temperature_rate_degc_ps=rate_arg,
+            hysteresis_state=accel_state,
         )
         if gyro.shape[0] != n:
             gyro, accel = np.repeat(gyro, n, axis=0), np.repeat(accel, n, axis=0)
