@@ -13,6 +13,7 @@ Hierarchy
   - :class:`InsufficientExcitationError`: a rank-deficient design; names the unobservable parameters
   - :class:`ConvergenceError`: an iterative solver that stopped before converging
   - :class:`RecordingError`: a recording that cannot be written or read
+    - :class:`MissingSegmentError`: a segment the analysis needs is missing or unusable
     - :class:`RecordingFormatError`: not an imucalib recording, or a newer format version
     - :class:`RecordingCorruptError`: truncated or damaged file
     - :class:`RecordingOpenForWriteError`: a file a crashed writer left open
@@ -39,6 +40,7 @@ __all__ = [
     "InsufficientExcitationError",
     "InvalidInputError",
     "LimitExceededError",
+    "MissingSegmentError",
     "RecordingCorruptError",
     "RecordingError",
     "RecordingFormatError",
@@ -93,6 +95,14 @@ class ConvergenceError(CalibrationError):
 
 class RecordingError(CalibrationError):
     """A recording that cannot be written or read."""
+
+
+class MissingSegmentError(RecordingError):
+    """A segment an analysis needs is missing or unusable.
+
+    An orientation, a turning direction or a temperature point that is not there, or one that
+    cannot be used (dropouts, too few revolutions).
+    """
 
 
 class RecordingFormatError(RecordingError):

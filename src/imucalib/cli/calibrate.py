@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -19,20 +19,44 @@ __all__ = ["apply", "calibrate", "run_calibration"]
 
 
 def run_calibration(recording: Path, imu: str | None, model: str, out: Path | None, *,
-                    progress: Callable[[float], None] | None = None
-                    ) -> tuple[ProcedureResult, list[Path]]:
+                    progress: Callable[[float], None] | None = None,
+                    extra: dict[str, Any] | None = None,
+                    more: Sequence[Path] = ()) -> tuple[ProcedureResult, list[Path]]:
     """Analyse a recording with its procedure (the registry's choice); write its outputs.
 
     `progress` is given the fraction of the analysis done (the procedure's own measure).
+    `extra` holds procedure options given on the command line (refused by a procedure that
+    does not take them); `more` further recordings of a lot (P2 only).
     """
     from imucalib.exports.outputs import write_outputs
     from imucalib.io.reader import open_recording
     from imucalib.procedures import registry
 
     with open_recording(recording) as rec:
-        procedure = registry.get(registry.identify(rec))
-    options = {"model": model} if "model" in procedure.analysis_options else {}
-    result = procedure.analyze(recording, unit=imu, options=options, progress=progress)
+        name = registry.identify(rec)
+    procedure = registry.get(name)
+    options: dict[str, Any] = {"model": model} if "model" in procedure.analysis_options else {}
+    given = {k: v for k, v in (extra or {}).items() if v is not None}
+    refused = sorted(set(given) - set(procedure.analysis_options))
+    if refused:
+        raise InvalidInputError(
+            f"{recording} is a {name} recording; its analysis does not take "
+            f"{', '.join('--' + k.replace('_', '-') for k in refused)}")
+    options.update(given)
+    if more:
+        if name != "p2":
+            raise InvalidInputError(f"several recordings are calibrated together only by P2 "
+                                    f"(a production lot); {recording} is a {name} recording")
+        from imucalib.procedures.p2.analysis import P2Options
+        from imucalib.procedures.p2.batch import analyze_p2
+
+        workers = int(options.pop("workers", 1))
+        scheduler = options.pop("scheduler", None)
+        result: ProcedureResult = analyze_p2(
+            [recording, *more], units=[imu] if imu else None, options=P2Options(**options),
+            workers=workers, scheduler=scheduler, progress=progress)
+    else:
+        result = procedure.analyze(recording, unit=imu, options=options, progress=progress)
     folder = out if out is not None else recording.parent
     try:
         return result, write_outputs(result, folder, name=recording.stem)
@@ -62,6 +86,9 @@ def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path |
 def calibrate(
     recording: Annotated[Path, typer.Argument(
         help="Recording (.h5) of a plan run or a simulation; or a CSV with --steps.")],
+    more: Annotated[list[Path] | None, typer.Argument(
+        metavar="[MORE]...", help="Further P2 recordings calibrated with the first as one "
+                                  "production lot.")] = None,
     imu: Annotated[str | None, typer.Option(help="IMU stream (default: the only one).")] = None,
     model: Annotated[str, typer.Option(help="triad (full) or per-axis (P1's simple model).")]
     = "triad",
@@ -71,6 +98,18 @@ def calibrate(
         "--steps", help="Step file (TOML) saying what each interval of a CSV is; the CSV is "
                         "first imported into OUT/<name>.imported.h5 (docs/import.md).")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)] = False,
+    workers: Annotated[int | None, typer.Option(
+        help="P2: units analysed in parallel on this many local processes.")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        help="P2: a Dask scheduler address (tcp://host:8786); the workers must see the "
+             "recordings at the same paths (the dask extra).")] = None,
+    lever_arm: Annotated[str | None, typer.Option(
+        help="P2: estimate (default), cancel (accelerometer from static windows) or ignore "
+             "the centripetal term (docs/p2.md).")] = None,
+    criterion: Annotated[str | None, typer.Option(
+        help="P2: how a temperature model's order is chosen: aicc (default) or cv.")] = None,
+    max_order: Annotated[int | None, typer.Option(
+        help="P2: the highest order of a temperature model (default 3).")] = None,
 ) -> None:
     """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
 
@@ -91,7 +130,10 @@ def calibrate(
                                     "`imucalib segments DATA --step-file FILE` writes one to "
                                     "complete")
         with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
-            result, written = run_calibration(recording, imu, model, out, progress=update)
+            result, written = run_calibration(
+                recording, imu, model, out, progress=update, more=tuple(more or ()),
+                extra={"workers": workers, "scheduler": scheduler, "lever_arm": lever_arm,
+                       "criterion": criterion, "max_order": max_order})
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_result(console, result, written)

@@ -22,7 +22,16 @@ format             file                           content
 ``figures``        ``….figures/``                 Allan deviation figures (PNG)
 ``residuals-png``  ``….residuals.png``            residual mean per window and axis with ±2σ
                                                   bars, χ²/ν (a calibration)
+``temperature-png`` ``….temperature.png``         P2: every parameter against temperature with
+                                                  its model and 2σ band
 =================  =============================  ================================================
+
+A batch (P2: one result per unit, :class:`~imucalib.procedures.p2.batch.P2BatchResult`) is
+written unit by unit, each unit's files named after it (a unit that could not be calibrated
+gets its ``report.json`` only, which holds the error), then the batch's own files:
+``<name>.<array|lot>.p2.summary.json`` and ``.summary.csv`` (one row per unit: pass/fail, the
+compensated errors, the parameters furthest from the lot, the error) and, for two or more
+calibrated units, ``.lot.png`` (every parameter's spread across the units).
 
 The record index ``.k`` appears only when the characterisation holds more than one record.
 
@@ -140,6 +149,48 @@ def _residuals_png(result: Any, folder: Path, stem: str) -> list[Path]:
     return [save_residual_figure(result, folder / f"{stem}.residuals.png")]
 
 
+def _temperature_png(result: Any, folder: Path, stem: str) -> list[Path]:
+    from imucalib.report.p2_figures import save_temperature_figure
+
+    if not getattr(result, "models", None):
+        raise InvalidInputError(f"output 'temperature-png' needs temperature models; a "
+                                f"{result.procedure} result holds none")
+    return [save_temperature_figure(result, folder / f"{stem}.temperature.png")]
+
+
+def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> list[Path]:
+    """Write every unit's files, then the batch's summary (module docstring)."""
+    from imucalib.procedures.p2.batch import summary_rows
+
+    written: list[Path] = []
+    for unit_result in batch.results:
+        stem = f"{name}.{unit_result.unit}.{batch.procedure}"
+        formats = chosen if unit_result.error == "" else ("report-json",)
+        for fmt in formats:
+            written += OUTPUT_FORMATS[fmt](unit_result, out, stem)
+    stem = f"{name}.{batch.unit}.{batch.procedure}"
+    rows = summary_rows(batch)
+    summary = out / f"{stem}.summary.json"
+    summary.write_text(json.dumps({"procedure": batch.procedure, "passed": batch.passed,
+                                   "recordings": list(batch.recordings), "units": rows},
+                                  indent=1, allow_nan=True) + "\n", encoding="utf-8")
+    table = out / f"{stem}.summary.csv"
+    with open(table, "w", encoding="utf-8", newline="") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(["unit", "passed", "accel_error_mps2", "gyro_error_rps",
+                         "worst_parameters", "error"])
+        for row in rows:
+            writer.writerow([row["unit"], row["passed"], row["accel_error_mps2"],
+                             row["gyro_error_rps"], "; ".join(row["worst_parameters"]),
+                             row["error"]])
+    written += [summary, table]
+    if sum(r.result is not None for r in batch.results) >= 2:
+        from imucalib.report.p2_figures import save_lot_figure
+
+        written.append(save_lot_figure(batch, out / f"{stem}.lot.png"))
+    return written
+
+
 #: Output format → writer(result, folder, stem) returning the paths written.
 OUTPUT_FORMATS: dict[str, _Writer] = {
     "result-json": _result_json,
@@ -151,6 +202,7 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "noise-table": _per_record("noise-table", _table, ".table.md"),
     "figures": _figures,
     "residuals-png": _residuals_png,
+    "temperature-png": _temperature_png,
 }
 
 
@@ -191,6 +243,8 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
                                 f"{', '.join(OUTPUT_FORMATS)}")
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
+    if hasattr(result, "results"):
+        return _write_batch(result, out, chosen, name)
     stem = f"{name}.{result.unit}.{result.procedure}"
     written: list[Path] = []
     for fmt in chosen:

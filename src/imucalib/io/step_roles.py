@@ -21,6 +21,19 @@ P1 (two-dimensional calibration on a dual-axis table):
 
 Allan: :data:`ALLAN_STATIC` ``"allan.static"``, a static record whose noise is characterised.
 
+P2 (array full-temperature calibration, docs/p2.md); every P2 step carries the tags
+``point=<k>`` (its temperature point) and ``leg=heating|cooling``, the held-out points also
+``held-out``, and the steps after a remount ``pose=<axis>`` (the fixture axis up):
+
+:data:`P2_SOAK` ``"p2.soak"``
+    Reach a temperature point and wait until chamber and IMUs are stable.
+:data:`P2_REMOUNT` ``"p2.remount"``
+    The operator places the fixture with another face up (an operator check).
+:data:`P2_STATIC` ``"p2.static"``
+    A static record in the current pose (tag ``angle=<deg>``: at two angles 180° apart).
+:data:`P2_RATE` ``"p2.rate"``
+    A turn at +ω or −ω over whole revolutions.
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -41,6 +54,11 @@ __all__ = [
     "P1_HELD_OUT_POSITION",
     "P1_HELD_OUT_RATE",
     "P1_ROLES",
+    "P2_RATE",
+    "P2_REMOUNT",
+    "P2_ROLES",
+    "P2_SOAK",
+    "P2_STATIC",
     "role_from_tags",
 ]
 
@@ -53,6 +71,13 @@ P1_HELD_OUT_RATE: Final = "p1.held-out-rate"
 P1_ROLES: Final = (P1_ACCEL_POSITION, P1_GYRO_BIAS, P1_GYRO_RATE, P1_HELD_OUT_POSITION,
                    P1_HELD_OUT_RATE)
 ALLAN_STATIC: Final = "allan.static"
+
+P2_SOAK: Final = "p2.soak"
+P2_REMOUNT: Final = "p2.remount"
+P2_STATIC: Final = "p2.static"
+P2_RATE: Final = "p2.rate"
+#: Every P2 role.
+P2_ROLES: Final = (P2_SOAK, P2_REMOUNT, P2_STATIC, P2_RATE)
 
 
 def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:

@@ -33,6 +33,7 @@ __all__ = ["BUILTIN", "get", "identify", "names", "procedure_of_roles", "registe
 BUILTIN: dict[str, str] = {
     "p1": "imucalib.procedures.p1.procedure",
     "allan": "imucalib.procedures.allan.procedure",
+    "p2": "imucalib.procedures.p2.procedure",
 }
 
 _registered: dict[str, Procedure] = {}

@@ -115,8 +115,37 @@ def _render_other(console: Console, result: Any, written: Sequence[Path]) -> Non
     _wrote(console, written)
 
 
+def render_p2(console: Console, batch: Any, written: Sequence[Path]) -> None:
+    """Print a P2 batch: one row per unit (decision, errors after compensation, lever arm)."""
+    table = Table("unit", "decision", Column("accel error [mg]", justify="right"),
+                  Column("gyro error [°/h]", justify="right"),
+                  Column("lever arm [cm]", justify="right"), "points", "note",
+                  title=f"P2 {batch.unit}: temperature-compensated calibration of "
+                        f"{len(batch.results)} unit(s)")
+    for r in batch.results:
+        if r.error:
+            table.add_row(r.unit, "[red]FAIL[/]", "", "", "", "", r.error)
+            continue
+        arm = r.result.provenance.details.get("lever_arm_m", [0.0, 0.0, 0.0])
+        err = r.compensated_error
+        table.add_row(
+            r.unit, "[green]PASS[/]" if r.passed else "[red]FAIL[/]",
+            f"{err['accel_mps2'] / (1e-3 * units.G0_MPS2):.3g}",
+            f"{err['gyro_rps'] / units.DEG_PER_H:.3g}",
+            ", ".join(f"{100 * a:+.1f}" for a in arm),
+            f"{sum(not p.held_out for p in r.points)} + {sum(p.held_out for p in r.points)}"
+            " held out", "; ".join(r.reasons))
+    console.print(table)
+    verdict = "PASS" if batch.passed else "FAIL"
+    n_ok = sum(bool(r.passed) for r in batch.results)
+    console.print(f"decision: {verdict} ({n_ok} of {len(batch.results)} unit(s) passed)",
+                  highlight=False)
+    _wrote(console, written)
+
+
 _RENDERERS: dict[str, Callable[[Console, Any, Sequence[Path]], None]] = {
     "p1": render_calibration,
+    "p2": render_p2,
     "allan": render_noise_characterization,
 }
 

@@ -8,13 +8,15 @@ Here:
 
 - :class:`RunningMoments`: the exact mean and scatter of a long window read in blocks (bounded
   memory), each block shifted by the first block's mean to keep the sums well conditioned;
+- :func:`table_angle_at`: the table angle at IMU sample times, extrapolated at the window's rate
+  just outside the feedback span (so a window of exactly N revolutions keeps N whole ones);
 - :func:`harmonic_residual_std`: the scatter of a turning window about what a calibrated model
   predicts there, the mean plus the once-per-revolution harmonic of the table angle
   (g-sensitivity to the gravity turning in the IMU, the horizontal Earth rate; docs/p1.md).
 
 Contents
 --------
-:class:`RunningMoments`, :func:`harmonic_residual_std`
+:class:`RunningMoments`, :func:`harmonic_residual_std`, :func:`table_angle_at`
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["RunningMoments", "harmonic_residual_std"]
+__all__ = ["RunningMoments", "harmonic_residual_std", "table_angle_at"]
 
 _F64 = NDArray[np.float64]
 
@@ -85,3 +87,19 @@ def harmonic_residual_std(values: _F64, angle_rad: _F64) -> _F64:
     resid = values - A @ coef
     dof = max(values.shape[0] - 3, 1)
     return np.asarray(np.sqrt(np.sum(resid**2, axis=0) / dof), dtype=np.float64)
+
+
+def table_angle_at(t: _F64, fb_t: _F64, fb_angle: _F64) -> _F64:
+    """Return the table angle at times `t`: interpolated in the feedback span, else extrapolated.
+
+    Outside ``[fb_t[0], fb_t[-1]]`` the angle continues at the mean rate of the feedback span
+    (the table turns at constant rate through a rate window).
+    """
+    out = np.interp(t, fb_t, fb_angle)
+    span = float(fb_t[-1] - fb_t[0])
+    if span > 0:
+        rate = float(fb_angle[-1] - fb_angle[0]) / span
+        before, after = t < fb_t[0], t > fb_t[-1]
+        out[before] = fb_angle[0] + rate * (t[before] - fb_t[0])
+        out[after] = fb_angle[-1] + rate * (t[after] - fb_t[-1])
+    return out

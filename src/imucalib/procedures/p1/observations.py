@@ -92,6 +92,7 @@ from imucalib.procedures.common.reference import (
 )
 from imucalib.procedures.common.windows import RunningMoments as _Moments
 from imucalib.procedures.common.windows import harmonic_residual_std as _harmonic_residual_std
+from imucalib.procedures.common.windows import table_angle_at as _angle_at
 from imucalib.processing import (
     compute_integer_revolution_window,
     compute_window_statistics,
@@ -378,22 +379,6 @@ def _recorded_config(rec: Recording, key: str, model: type[_Config]) -> _Config 
     except ValueError as exc:
         raise RecordingError(f"{rec.path}: metadata {key} is not a valid "
                              f"{model.__name__}: {exc}") from exc
-
-
-def _angle_at(t: _F64, fb_t: _F64, fb_angle: _F64) -> _F64:
-    """Return the table angle at times `t`: interpolated in the feedback span, else extrapolated.
-
-    Outside ``[fb_t[0], fb_t[-1]]`` the angle continues at the mean rate of the feedback span
-    (the table turns at constant rate through a rate window).
-    """
-    out = np.interp(t, fb_t, fb_angle)
-    span = float(fb_t[-1] - fb_t[0])
-    if span > 0:
-        rate = float(fb_angle[-1] - fb_angle[0]) / span
-        before, after = t < fb_t[0], t > fb_t[-1]
-        out[before] = fb_angle[0] + rate * (t[before] - fb_t[0])
-        out[after] = fb_angle[-1] + rate * (t[after] - fb_t[-1])
-    return out
 
 
 def _stored_plan(rec: Recording) -> Plan | None:

@@ -1,0 +1,507 @@
+"""P2's analysis of one unit: points, temperature models, the result at T0, the decision.
+
+:func:`analyze_unit` turns one unit's windows (:mod:`~imucalib.procedures.p2.observations`)
+into
+
+1. per temperature point, the parameters by the full least squares and by the patent's closed
+   form (:mod:`~imucalib.procedures.p2.reduction`), which must agree (the largest difference
+   in σ of the least-squares estimate is reported; above :data:`AGREEMENT_LIMIT` the unit
+   fails), and the naive closed form that ignores the lever arm, whose difference shows the
+   error a lever-arm-blind analysis would make;
+2. per parameter, a temperature model (:func:`~imucalib.estimation.fit_temperature_model`:
+   polynomial in T − T0 of the order AICc or cross-validation picks, at most
+   :attr:`P2Options.max_order`; a hysteresis term when both legs were run; a dT/dt term on
+   request) fitted to the calibration points with their σ (Birge-scaled where a point's fit is
+   a misfit), and checked at the held-out points;
+3. the CalibrationResult: every parameter at T0 (the models' c_0) with the joint covariance of
+   those c_0 across parameters (each model's GLS weights applied to the per-point covariance,
+   docs/p2.md Eq. (P2.12)), the per-point fit quality, and the temperature models;
+4. the decision: at every held-out point (at every calibration point when none was held out)
+   the output error left after compensation at the reference input (1 g, |ω|) must be within
+   the specification's accuracy (``imu.accel_accuracy_g``, ``imu.gyro_accuracy_dps``).
+
+Contents
+--------
+:class:`P2Options`, :class:`PointResult`, :class:`P2UnitResult`, :func:`analyze_unit`,
+:func:`assemble_point`, :data:`AGREEMENT_LIMIT`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any, Final, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib import __version__
+from imucalib import units as u
+from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentError
+from imucalib.estimation.temperature_model import (
+    DEFAULT_MAX_ORDER,
+    HeldOutCheck,
+    TemperatureModelFit,
+    check_held_out,
+    fit_temperature_model,
+    predict_temperature_model,
+)
+from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.result import CalibrationResult, Provenance
+from imucalib.procedures.p2.observations import (
+    P2Processing,
+    P2Window,
+    UnitObservations,
+    detect_orientations,
+    where,
+)
+from imucalib.procedures.p2.reduction import (
+    LEVER_ARM_MODES,
+    ORIENTATIONS,
+    PARAM_NAMES,
+    LeverArmMode,
+    PointEstimate,
+    PointWindows,
+    closed_form,
+    least_squares,
+)
+
+__all__ = ["AGREEMENT_LIMIT", "P2Options", "P2UnitResult", "PointResult", "analyze_unit",
+           "assemble_point", "failed_unit"]
+
+_F64 = NDArray[np.float64]
+
+#: The largest |closed form − least squares| accepted, in σ of the least-squares estimate.
+AGREEMENT_LIMIT: Final = 4.0
+
+
+@dataclass(frozen=True)
+class P2Options:
+    """Options of P2's analysis (docs/p2.md, "Options").
+
+    Attributes
+    ----------
+    lever_arm : {"estimate", "cancel", "ignore"}
+        How the centripetal term is treated
+        (:data:`~imucalib.procedures.p2.reduction.LEVER_ARM_MODES`).
+    max_order : int
+        The highest polynomial order of a temperature model.
+    order : int or None
+        A fixed order for every model (None: chosen by `criterion`).
+    criterion : {"aicc", "cv"}
+        How the order is chosen.
+    rate_term : bool
+        Add a dT/dt term to every temperature model.
+    hysteresis : {"auto", "on", "off"}
+        A heating/cooling term: ``auto`` when both legs were run.
+    reference_temperature_degc : float
+        T0 of the models and of the result's values. [°C]
+    accel_accuracy_g, gyro_accuracy_dps : float or None
+        The accuracy the compensated model must keep; None: the stored plan's (else the
+        consumer grade's 0.01 g and 0.5 °/s).
+    processing : P2Processing
+    """
+
+    lever_arm: LeverArmMode = "estimate"
+    max_order: int = DEFAULT_MAX_ORDER
+    order: int | None = None
+    criterion: Literal["aicc", "cv"] = "aicc"
+    rate_term: bool = False
+    hysteresis: Literal["auto", "on", "off"] = "auto"
+    reference_temperature_degc: float = 25.0
+    accel_accuracy_g: float | None = None
+    gyro_accuracy_dps: float | None = None
+    processing: P2Processing = field(default_factory=P2Processing)
+
+    def __post_init__(self) -> None:
+        checks = (("lever_arm", self.lever_arm in LEVER_ARM_MODES, f"one of {LEVER_ARM_MODES}"),
+                  ("criterion", self.criterion in ("aicc", "cv"), "'aicc' or 'cv'"),
+                  ("hysteresis", self.hysteresis in ("auto", "on", "off"),
+                   "'auto', 'on' or 'off'"),
+                  ("max_order", isinstance(self.max_order, int) and 0 <= self.max_order <= 5,
+                   "an integer 0 … 5"),
+                  ("order", self.order is None or (isinstance(self.order, int)
+                                                   and 0 <= self.order <= 5),
+                   "None or an integer 0 … 5"),
+                  ("reference_temperature_degc",
+                   math.isfinite(float(self.reference_temperature_degc)), "a finite number"))
+        for name, ok, want in checks:
+            if not ok:
+                raise InvalidInputError(f"P2 option {name} (--{name.replace('_', '-')}) must be "
+                                        f"{want}; got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True)
+class PointResult:
+    """One temperature point of one unit.
+
+    Attributes
+    ----------
+    point, leg, held_out : int, str, bool
+    temperature_degc, temperature_rate_degc_ps : float
+        Mean internal temperature of the point's windows and their mean slope.
+    least_squares, closed_form, naive : PointEstimate
+        The full fit, the patent's closed form, and the closed form ignoring the lever arm.
+    agreement_sigma : float
+        max |closed form − least squares| / σ(least squares) over the parameters.
+    """
+
+    point: int
+    leg: str
+    held_out: bool
+    temperature_degc: float
+    temperature_rate_degc_ps: float
+    least_squares: PointEstimate
+    closed_form: PointEstimate
+    naive: PointEstimate
+    agreement_sigma: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form."""
+        ls = self.least_squares
+        std = np.sqrt(np.diag(ls.covariance_scaled()))
+        return {
+            "point": self.point, "leg": self.leg, "held_out": self.held_out,
+            "temperature_degc": self.temperature_degc,
+            "temperature_rate_degc_ps": self.temperature_rate_degc_ps,
+            "parameters": {n: {"value": float(v), "std": float(s),
+                               "closed_form": float(c), "naive": float(nv)}
+                           for n, v, s, c, nv in zip(ls.names, ls.values, std,
+                                                     self.closed_form.values,
+                                                     self.naive.values, strict=True)},
+            "fit_quality": [_quality_dict(q) for q in ls.fit_quality],
+            "agreement_sigma": self.agreement_sigma,
+        }
+
+
+def _quality_dict(q: FitQuality) -> dict[str, Any]:
+    return {"group": q.group, "chi2": q.chi2, "dof": q.dof, "reduced_chi2": q.reduced_chi2,
+            "misfit": q.misfit, "birge_ratio": q.birge_ratio}
+
+
+@dataclass(frozen=True)
+class P2UnitResult:
+    """The P2 result of one unit (a :class:`~imucalib.procedures.common.procedure.ProcedureResult`).
+
+    ``error`` is set (and everything else empty) when the unit could not be calibrated; the
+    other units of the array are not affected.
+    """
+
+    unit: str
+    passed: bool | None
+    points: tuple[PointResult, ...] = ()
+    models: Mapping[str, TemperatureModelFit] = field(default_factory=dict)
+    held_out: Mapping[str, HeldOutCheck] = field(default_factory=dict)
+    result: CalibrationResult | None = None
+    compensated_error: Mapping[str, float] = field(default_factory=dict)
+    reasons: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
+    error: str = ""
+    error_type: str = ""
+    procedure: str = "p2"
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the whole result as JSON-able data."""
+        return {
+            "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+            "error": self.error, "error_type": self.error_type,
+            "reasons": list(self.reasons), "notes": list(self.notes),
+            "compensated_error": dict(self.compensated_error),
+            "points": [p.to_dict() for p in self.points],
+            "temperature_models": {
+                n: {"order": m.order, "criterion": m.criterion,
+                    "reference_temperature_degc": m.model.reference_temperature_degc,
+                    "coefficients": list(m.model.coefficients),
+                    "coefficients_std": m.std().tolist(),
+                    "rate_coefficient": m.model.rate_coefficient,
+                    "leg_coefficient": m.model.leg_coefficient,
+                    "chi2": m.chi2, "dof": m.dof, "misfit": m.quality.misfit, "note": m.note,
+                    **({"held_out": {"max_abs_z": float(np.max(np.abs(
+                        self.held_out[n].normalised_residuals))),
+                        "chi2": self.held_out[n].chi2, "dof": self.held_out[n].dof,
+                        "p_value": self.held_out[n].p_value,
+                        "consistent": self.held_out[n].consistent}}
+                       if n in self.held_out else {})}
+                for n, m in self.models.items()},
+            "result": None if self.result is None else self.result.to_dict(),
+        }
+
+
+# ---------------------------------------------------------------------------------------------
+# one point
+
+
+def _combine(means: Sequence[_F64], ses: Sequence[_F64]) -> tuple[_F64, _F64]:
+    """Return the plain mean of windows and its standard error (independent windows)."""
+    m = np.mean(np.array(means), axis=0)
+    se = np.sqrt(np.sum(np.array(ses) ** 2, axis=0)) / len(ses)
+    return m, se
+
+
+def assemble_point(unit: str, point: int, windows: Sequence[P2Window], gravity_mps2: float,
+                   earth_rate_up_rps: float) -> PointWindows:
+    """Group one point's windows by orientation into :class:`PointWindows`.
+
+    Raises
+    ------
+    MissingSegmentError
+        An orientation without a static window, or without a turn in either direction; it
+        names the unit, the point and the orientation.
+    """
+    temp = float(np.mean([w.temperature_degc for w in windows])) if windows else math.nan
+    rows: dict[str, list[Any]] = {k: [] for k in (
+        "s_a", "s_ase", "p_g", "p_gse", "m_g", "m_gse", "p_a", "p_ase", "m_a", "m_ase", "p_w",
+        "m_w")}
+    for o in ORIENTATIONS:
+        mine = [w for w in windows if w.orientation == o]
+        static = [w for w in mine if w.kind == "static"]
+        plus = [w for w in mine if w.kind == "rate" and w.table_rate_rps > 0]
+        minus = [w for w in mine if w.kind == "rate" and w.table_rate_rps < 0]
+        missing = [name for name, got in (("static", static), ("+ω turn", plus),
+                                          ("−ω turn", minus)) if not got]
+        if missing:
+            have = sorted({w.orientation for w in windows if w.orientation})
+            raise MissingSegmentError(
+                f"{where(unit, point, temp, None)}: orientation {o} up has no "
+                f"{' and no '.join(missing)} (orientations seen: {have}); P2 needs every body "
+                "axis up and down, each static and turning both ways")
+        for key, group, attr in (("s_a", static, "accel_mean_mps2"),
+                                 ("p_g", plus, "gyro_mean_rps"), ("m_g", minus, "gyro_mean_rps"),
+                                 ("p_a", plus, "accel_mean_mps2"),
+                                 ("m_a", minus, "accel_mean_mps2")):
+            se_attr = "accel_se_mps2" if attr.startswith("accel") else "gyro_se_rps"
+            m, se = _combine([getattr(w, attr) for w in group], [getattr(w, se_attr)
+                                                                  for w in group])
+            rows[key].append(m)
+            rows[key + "se"].append(se)
+        rows["p_w"].append(np.mean([w.table_rate_rps for w in plus]))
+        rows["m_w"].append(np.mean([w.table_rate_rps for w in minus]))
+    arr = {k: np.array(v) for k, v in rows.items()}
+    return PointWindows(
+        static_accel_mps2=arr["s_a"], static_accel_se_mps2=arr["s_ase"],
+        plus_gyro_rps=arr["p_g"], plus_gyro_se_rps=arr["p_gse"],
+        minus_gyro_rps=arr["m_g"], minus_gyro_se_rps=arr["m_gse"],
+        plus_accel_mps2=arr["p_a"], plus_accel_se_mps2=arr["p_ase"],
+        minus_accel_mps2=arr["m_a"], minus_accel_se_mps2=arr["m_ase"],
+        plus_rate_rps=arr["p_w"], minus_rate_rps=arr["m_w"], gravity_mps2=gravity_mps2,
+        earth_rate_up_rps=earth_rate_up_rps)
+
+
+def _point(obs: UnitObservations, point: int, windows: Sequence[P2Window],
+           lever_arm: LeverArmMode) -> PointResult:
+    pw = assemble_point(obs.unit, point, windows, obs.gravity_mps2, obs.earth_rate_up_rps)
+    ls = least_squares(pw, lever_arm=lever_arm)
+    cf = closed_form(pw, lever_arm=lever_arm)
+    naive = closed_form(pw, lever_arm="ignore")
+    n = len(PARAM_NAMES) + (3 if lever_arm == "estimate" else 0)
+    std = np.sqrt(np.diag(ls.covariance))[:n]
+    agree = float(np.max(np.abs(cf.values[:n] - ls.values[:n]) / np.where(std > 0, std, np.inf)))
+    return PointResult(
+        point=point, leg=windows[0].leg, held_out=windows[0].held_out,
+        temperature_degc=float(np.mean([w.temperature_degc for w in windows])),
+        temperature_rate_degc_ps=float(np.mean([w.temperature_rate_degc_ps for w in windows])),
+        least_squares=ls, closed_form=cf, naive=naive, agreement_sigma=agree)
+
+
+# ---------------------------------------------------------------------------------------------
+# temperature models and the result
+
+
+def _design_row(fit: TemperatureModelFit, temp: float, rate: float, leg: float) -> _F64:
+    m = fit.model
+    row = [(temp - m.reference_temperature_degc) ** j for j in range(m.order + 1)]
+    if m.rate_coefficient is not None:
+        row.append(rate)
+    if m.leg_coefficient is not None:
+        row.append(leg)
+    return np.array(row)
+
+
+def _gls_weights(fit: TemperatureModelFit, temps: _F64, rates: _F64, legs: _F64,
+                 var: _F64) -> _F64:
+    """W with β̂ = W·p for the fitted model's design and diagonal covariance (Eq. (P2.12))."""
+    a = np.array([_design_row(fit, t, r, g) for t, r, g in zip(temps, rates, legs,
+                                                                 strict=True)])
+    aw = a / var[:, None]
+    return np.asarray(np.linalg.solve(a.T @ aw, aw.T), dtype=np.float64)
+
+
+def _leg_value(leg: str) -> float:
+    return 1.0 if leg == "heating" else -1.0
+
+
+def _units_of(name: str) -> str:
+    if name.startswith("gyro_bias"):
+        return "rad/s"
+    if name.startswith("accel_bias"):
+        return "m/s^2"
+    return "1"
+
+
+def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
+                 source: str = "", recording_sha256: str = "") -> P2UnitResult:
+    """Analyse one unit's P2 windows (module docstring).
+
+    Raises
+    ------
+    MissingSegmentError
+        A point that cannot be used (its first defect, naming unit, temperature and step), or
+        fewer than two calibration points.
+    InsufficientExcitationError
+        A design that cannot resolve the parameters.
+    """
+    opt = options or P2Options()
+    if obs.failures:
+        first = min(obs.failures)
+        raise MissingSegmentError(obs.failures[first])
+    windows, failures = detect_orientations(obs, opt.processing)
+    if failures:
+        raise MissingSegmentError(failures[min(failures)])
+    by_point: dict[int, list[P2Window]] = {}
+    for w in windows:
+        by_point.setdefault(w.point, []).append(w)
+    points = tuple(_point(obs, k, by_point[k], opt.lever_arm) for k in sorted(by_point))
+    cal = [p for p in points if not p.held_out]
+    if len(cal) < 2:
+        raise MissingSegmentError(f"unit {obs.unit}: {len(cal)} usable calibration temperature "
+                                  "point(s); a temperature model needs at least 2")
+    legs_seen = {p.leg for p in cal}
+    use_leg = opt.hysteresis == "on" or (opt.hysteresis == "auto" and len(legs_seen) == 2)
+    temps = np.array([p.temperature_degc for p in cal])
+    rates = np.array([p.temperature_rate_degc_ps for p in cal])
+    legs = np.array([_leg_value(p.leg) for p in cal])
+    covs = [p.least_squares.covariance_scaled() for p in cal]
+    n_par = len(PARAM_NAMES)
+    models: dict[str, TemperatureModelFit] = {}
+    weights: list[_F64] = []
+    scales: list[float] = []
+    for i, name in enumerate(PARAM_NAMES):
+        values = np.array([p.least_squares.values[i] for p in cal])
+        var = np.array([c[i, i] for c in covs])
+        fit = fit_temperature_model(
+            temps, values, var, name=name, order=opt.order, max_order=opt.max_order,
+            criterion=opt.criterion,
+            reference_temperature_degc=opt.reference_temperature_degc,
+            temperature_rate_degc_ps=rates if opt.rate_term else None,
+            leg=legs if use_leg else None)
+        models[name] = fit
+        weights.append(_gls_weights(fit, temps, rates, legs, var)[0])
+        scales.append(fit.quality.birge_ratio if fit.quality.misfit else 1.0)
+    # joint covariance of the c_0 (Eq. (P2.12)): Cov(c0_i, c0_j) = Σ_k W_ik W_jk C_k[i, j]
+    w_mat = np.array(weights)                                   # (n_par, K)
+    cov0 = np.zeros((n_par, n_par))
+    for k, c in enumerate(covs):
+        cov0 += np.outer(w_mat[:, k], w_mat[:, k]) * c[:n_par, :n_par]
+    s = np.array(scales)
+    cov0 = cov0 * np.outer(s, s)
+    values0 = np.array([models[n].model.coefficients[0] for n in PARAM_NAMES])
+    # held-out checks and the compensated error
+    held = [p for p in points if p.held_out]
+    checks: dict[str, HeldOutCheck] = {}
+    if held:
+        t_h = np.array([p.temperature_degc for p in held])
+        r_h = np.array([p.temperature_rate_degc_ps for p in held])
+        l_h = np.array([_leg_value(p.leg) for p in held])
+        for i, name in enumerate(PARAM_NAMES):
+            checks[name] = check_held_out(
+                models[name], t_h, [p.least_squares.values[i] for p in held],
+                [math.sqrt(p.least_squares.covariance_scaled()[i, i]) for p in held],
+                temperature_rate_degc_ps=r_h if opt.rate_term else None,
+                leg=l_h if use_leg else None)
+    judged = held or cal
+    errors = _compensated_error(models, judged, obs, opt, use_leg)
+    accel_lim, gyro_lim = _limits(opt)
+    reasons = []
+    if errors["accel_mps2"] > accel_lim * u.G0_MPS2:
+        reasons.append(f"accelerometer error after compensation "
+                       f"{errors['accel_mps2'] / u.G0_MPS2:.3g} g exceeds {accel_lim:g} g at "
+                       f"the {'held-out' if held else 'calibration'} points")
+    if errors["gyro_rps"] > gyro_lim * u.DEG:
+        reasons.append(f"gyro error after compensation {errors['gyro_rps'] / u.DEG:.3g} °/s "
+                       f"exceeds {gyro_lim:g} °/s at the {'held-out' if held else 'calibration'} "
+                       "points")
+    worst = max(points, key=lambda p: p.agreement_sigma)
+    if worst.agreement_sigma > AGREEMENT_LIMIT:
+        reasons.append(f"closed form and least squares differ by {worst.agreement_sigma:.2g} σ "
+                       f"at point {worst.point} ({worst.temperature_degc:+.1f} °C)")
+    notes = [
+        f"{len(cal)} calibration and {len(held)} held-out temperature point(s); lever arm "
+        f"{opt.lever_arm}; temperature models chosen by {opt.criterion.upper()} up to order "
+        f"{opt.max_order}" + ("; heating/cooling hysteresis term" if use_leg else ""),
+        "static gyro means are not used (their horizontal Earth-rate projection depends on the "
+        "unit's heading on the fixture); gyro parameters come from the ±ω turns",
+    ]
+    inconsistent = [n for n, c in checks.items() if not c.consistent]
+    if inconsistent:
+        notes.append(f"held-out check: the models of {', '.join(inconsistent)} do not predict "
+                     "the held-out points within their uncertainty")
+    quality = tuple(max((q for p in cal for q in p.least_squares.fit_quality if q.group == g),
+                        key=lambda q: q.reduced_chi2) for g in ("gyro", "accel"))
+    result = CalibrationResult(
+        sensor_id=obs.unit, procedure="p2", model="triad", param_names=PARAM_NAMES,
+        values=values0, covariance=0.5 * (cov0 + cov0.T),
+        units={n: _units_of(n) for n in PARAM_NAMES},
+        provenance=Provenance(recording=Path(source).name if source else "",
+                              recording_sha256=recording_sha256, software_version=__version__,
+                              created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+                              details={"reference_temperature_degc":
+                                       opt.reference_temperature_degc,
+                                       "lever_arm_m": _mean_lever_arm(cal)}),
+        notes=(f"parameters at T0 = {opt.reference_temperature_degc:g} °C, the c_0 of each "
+               "temperature model; their temperature dependence is in the P2 report",),
+        fit_quality=tuple(_relabel(q) for q in quality),
+    )
+    return P2UnitResult(unit=obs.unit, passed=not reasons, points=points, models=models,
+                        held_out=checks, result=result, compensated_error=errors,
+                        reasons=tuple(reasons), notes=tuple(notes))
+
+
+def _relabel(q: FitQuality) -> FitQuality:
+    return assess_fit(q.group, q.chi2, q.dof)
+
+
+def _mean_lever_arm(points: Sequence[PointResult]) -> list[float]:
+    return [float(np.mean([p.least_squares.values[-3 + j] for p in points])) for j in range(3)]
+
+
+def _limits(opt: P2Options) -> tuple[float, float]:
+    return (opt.accel_accuracy_g if opt.accel_accuracy_g is not None else 0.01,
+            opt.gyro_accuracy_dps if opt.gyro_accuracy_dps is not None else 0.5)
+
+
+def _compensated_error(models: Mapping[str, TemperatureModelFit], points: Sequence[PointResult],
+                       obs: UnitObservations, opt: P2Options, use_leg: bool) -> dict[str, float]:
+    """Return the largest output error left after compensation (docs/p2.md, "The decision").
+
+    At each point, the difference δ between the point's estimates and the models' prediction
+    gives the error of the compensated output of sensor i for an input along axis j:
+    |δb_i| + |δM_ij|·x_ref (+ |δG_ij|·g for a gyro on a 1 g bench, + |δK2_i|·g² for an
+    accelerometer); the largest over i and j, with x_ref = g for the accelerometer and the
+    turns' |ω| for the gyro.
+    """
+    rate_ref = float(np.mean([abs(w.table_rate_rps) for w in obs.windows if w.kind == "rate"]
+                             or [0.0]))
+    g = obs.gravity_mps2
+    worst = {"accel_mps2": 0.0, "gyro_rps": 0.0}
+    for p in points:
+        pred = np.array([float(predict_temperature_model(
+            models[n], [p.temperature_degc],
+            temperature_rate_degc_ps=[p.temperature_rate_degc_ps] if opt.rate_term else None,
+            leg=[_leg_value(p.leg)] if use_leg else None).value[0]) for n in PARAM_NAMES])
+        d = np.abs(p.least_squares.values[:len(PARAM_NAMES)] - pred)
+        gyro = d[0:3] + d[3:12].reshape(3, 3).max(axis=1) * rate_ref \
+            + d[12:21].reshape(3, 3).max(axis=1) * g
+        accel = d[21:24] + d[24:33].reshape(3, 3).max(axis=1) * g + d[33:36] * g**2
+        worst["gyro_rps"] = max(worst["gyro_rps"], float(gyro.max()))
+        worst["accel_mps2"] = max(worst["accel_mps2"], float(accel.max()))
+    return worst
+
+
+def failed_unit(unit: str, exc: CalibrationError) -> P2UnitResult:
+    """Return the result of a unit that could not be calibrated (its typed error)."""
+    return P2UnitResult(unit=unit, passed=False, error=str(exc), error_type=type(exc).__name__,
+                        reasons=(str(exc),))
+

@@ -1,0 +1,257 @@
+"""P2 in batch: every unit of one or many array recordings, on local cores or a Dask cluster.
+
+One task per (recording, unit): it opens the file, reduces that unit's windows one step at a
+time and analyses them (:func:`analyze_unit_file`), so a task's memory is that of one step of
+one unit, whatever the number of units, and the tasks share nothing but the file. A unit that
+cannot be calibrated returns a result holding its typed error
+(:func:`~imucalib.procedures.p2.analysis.failed_unit`); the others go on.
+
+Where the tasks run:
+
+- ``workers=1``: in this process, one after the other;
+- ``workers=N``: a pool of N local processes (:class:`concurrent.futures.ProcessPoolExecutor`);
+- ``scheduler="tcp://host:8786"``: an existing Dask cluster (``dask.distributed.Client``, the
+  ``dask`` extra); the workers must see the recordings at the same paths (a shared file
+  system). A :class:`dask.distributed.Client` may be passed instead of an address.
+
+The results do not depend on where they ran (each task is a pure function of the file).
+
+Contents
+--------
+:class:`P2BatchResult`, :func:`analyze_p2`, :func:`analyze_unit_file`, :func:`summary_rows`.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imucalib.errors import CalibrationError, ConfigurationError, InvalidInputError
+from imucalib.io.hashing import file_sha256
+from imucalib.io.reader import Recording, open_recording
+from imucalib.io.step_roles import P2_SOAK
+from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
+from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
+from imucalib.procedures.p2.reduction import PARAM_NAMES
+
+__all__ = ["P2BatchResult", "analyze_p2", "analyze_unit_file", "batch_json", "summary_rows"]
+
+
+@dataclass(frozen=True)
+class P2BatchResult:
+    """Every unit's P2 result, of one recording (an array) or many (a production lot).
+
+    A :class:`~imucalib.procedures.common.procedure.ProcedureResult`: ``unit`` is ``"array"``
+    (or ``"lot"``), ``passed`` whether every unit passed.
+    """
+
+    recordings: tuple[str, ...]
+    results: tuple[P2UnitResult, ...]
+    procedure: str = "p2"
+
+    @property
+    def unit(self) -> str:
+        """``"array"`` for one recording, ``"lot"`` for several."""
+        return "array" if len(self.recordings) == 1 else "lot"
+
+    @property
+    def passed(self) -> bool:
+        """Whether every unit passed."""
+        return all(r.passed for r in self.results)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the summary and every unit's result, JSON-able."""
+        return {"procedure": "p2", "recordings": list(self.recordings), "passed": self.passed,
+                "summary": summary_rows(self), "units": [r.to_dict() for r in self.results]}
+
+
+def summary_rows(batch: P2BatchResult) -> list[dict[str, Any]]:
+    """One row per unit: pass/fail, the compensated errors, the worst parameters, the error.
+
+    The worst parameters are those whose value at T0 lies furthest from nominal in units of the
+    lot's spread (|x − median| / (1.4826·MAD)), the three largest; empty for fewer than three
+    calibrated units.
+    """
+    done = [r for r in batch.results if r.result is not None]
+    spread: dict[str, tuple[float, float]] = {}
+    if len(done) >= 3:
+        for name in PARAM_NAMES:
+            x = np.array([r.result.value(name) for r in done if r.result is not None])
+            med = float(np.median(x))
+            mad = float(np.median(np.abs(x - med))) * 1.4826
+            spread[name] = (med, mad)
+    rows = []
+    for r in batch.results:
+        worst: list[str] = []
+        if r.result is not None and spread:
+            scores = {n: abs(r.result.value(n) - m) / s for n, (m, s) in spread.items() if s > 0}
+            worst = [f"{n} ({v:.1f} MAD)" for n, v in sorted(scores.items(),
+                                                              key=lambda kv: -kv[1])[:3]]
+        rows.append({"unit": r.unit, "passed": r.passed,
+                     "accel_error_mps2": r.compensated_error.get("accel_mps2"),
+                     "gyro_error_rps": r.compensated_error.get("gyro_rps"),
+                     "worst_parameters": worst, "error": r.error})
+    return rows
+
+
+def _plan_limits(rec: Recording) -> tuple[float | None, float | None]:
+    """Return the held-out accuracy of the stored plan (accelerometer [g], gyro [°/s])."""
+    text = rec.metadata.get("plan_toml")
+    if not text:
+        return None, None
+    try:
+        from imucalib.plan.io import parse_plan
+
+        plan = parse_plan(str(text))
+    except CalibrationError:
+        return None, None
+    return plan.imu.accel_accuracy_g, plan.imu.gyro_accuracy_dps
+
+
+def _soak_failures(rec: Recording, unit: str) -> dict[int, str]:
+    """Temperature points whose soak did not complete: never reached."""
+    out: dict[int, str] = {}
+    for step in rec.steps:
+        if step.role != P2_SOAK or not step.concerns(unit) or step.status == "done":
+            continue
+        point = step.tag_value("point")
+        target = step.commanded.get("temperature_degc") if isinstance(step.commanded,
+                                                                      dict) else None
+        key = int(point) if point is not None and point.isdigit() else -1
+        out.setdefault(key, (
+            f"unit {unit}, temperature point {key}"
+            + (f" ({float(target):+g} °C)" if isinstance(target, int | float) else "")
+            + f", step {step.index} ({step.label}): the temperature was never reached (soak "
+            f"{step.status}{': ' + step.note if step.note else ''})"))
+    return out
+
+
+def analyze_unit_file(path: str | os.PathLike[str], unit: str, options: P2Options | None = None,
+                      recording_sha256: str = "") -> P2UnitResult:
+    """Analyse one unit of a P2 recording; a unit that cannot be calibrated returns its error.
+
+    Pure in the file: the same (file, unit, options) give the same result wherever it runs.
+    """
+    opt = options or P2Options()
+    try:
+        with open_recording(path) as rec:
+            if opt.accel_accuracy_g is None or opt.gyro_accuracy_dps is None:
+                acc, gyr = _plan_limits(rec)
+                import dataclasses
+
+                opt = dataclasses.replace(
+                    opt, accel_accuracy_g=opt.accel_accuracy_g if opt.accel_accuracy_g
+                    is not None else acc,
+                    gyro_accuracy_dps=opt.gyro_accuracy_dps if opt.gyro_accuracy_dps
+                    is not None else gyr)
+            soaks = _soak_failures(rec, unit)
+            if soaks:
+                from imucalib.errors import MissingSegmentError
+
+                raise MissingSegmentError(soaks[min(soaks)])
+            obs = extract_unit_observations(rec, unit, processing=opt.processing)
+        return analyze_unit(obs, opt, source=str(path), recording_sha256=recording_sha256)
+    except CalibrationError as exc:
+        return failed_unit(unit, exc)
+    except (np.linalg.LinAlgError, ValueError) as exc:  # a defect the checks did not name
+        return failed_unit(unit, InvalidInputError(f"unit {unit}: {exc}"))
+
+
+def _tasks(paths: Sequence[Path], units: Sequence[str] | None) -> list[tuple[str, str, str]]:
+    tasks = []
+    for path in paths:
+        with open_recording(path) as rec:
+            have = p2_units(rec)
+        chosen = list(units) if units else have
+        missing = [x for x in chosen if x not in have]
+        if missing:
+            raise InvalidInputError(f"{path} has no IMU stream(s) {missing}; it has {have}")
+        sha = file_sha256(path)
+        tasks += [(str(path), x, sha) for x in chosen]
+    return tasks
+
+
+def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]], *,
+               units: Sequence[str] | None = None, options: P2Options | None = None,
+               workers: int = 1, scheduler: Any = None,
+               progress: Callable[[float], None] | None = None) -> P2BatchResult:
+    """Calibrate every unit of one or many P2 recordings (module docstring).
+
+    Parameters
+    ----------
+    paths : path or sequence of paths
+        The recordings (a lot: several arrays).
+    units : sequence of str, optional
+        Only these units (each recording must have them); default every IMU stream.
+    options : P2Options, optional
+    workers : int
+        Local processes (1: in this process).
+    scheduler : str or dask.distributed.Client, optional
+        A Dask scheduler address or client; then `workers` is ignored.
+    progress : callable, optional
+        Called with the fraction of units done.
+
+    Raises
+    ------
+    InvalidInputError
+        No recording, a unit not in a recording, `workers` < 1.
+    ConfigurationError
+        A scheduler given without the ``dask`` extra installed.
+    """
+    items = [paths] if isinstance(paths, str | os.PathLike) else list(paths)
+    files = [Path(p) for p in items]
+    if not files:
+        raise InvalidInputError("give at least one recording")
+    if workers < 1:
+        raise InvalidInputError(f"--workers must be ≥ 1; got {workers}")
+    opt = options or P2Options()
+    tasks = _tasks(files, units)
+    results: dict[int, P2UnitResult] = {}
+
+    def done(i: int, res: P2UnitResult) -> None:
+        results[i] = res
+        if progress is not None:
+            progress(len(results) / len(tasks))
+
+    if scheduler is not None:
+        try:
+            from dask.distributed import Client
+            from dask.distributed import as_completed as dask_completed
+        except ImportError as exc:
+            raise ConfigurationError("--scheduler needs the dask extra: pip install "
+                                     "'imucalib[dask]'") from exc
+        client = scheduler if isinstance(scheduler, Client) else Client(str(scheduler))
+        try:
+            futures = {client.submit(analyze_unit_file, p, x, opt, sha, pure=False): i
+                       for i, (p, x, sha) in enumerate(tasks)}
+            for fut in dask_completed(list(futures)):
+                done(futures[fut], fut.result())
+        finally:
+            if client is not scheduler:
+                client.close()
+    elif workers == 1 or len(tasks) == 1:
+        for i, (p, x, sha) in enumerate(tasks):
+            done(i, analyze_unit_file(p, x, opt, sha))
+    else:
+        # spawn: a forked child would inherit the HDF5 library's and the BLAS threads' state
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=ctx) as pool:
+            pending = {pool.submit(analyze_unit_file, p, x, opt, sha): i
+                       for i, (p, x, sha) in enumerate(tasks)}
+            for fut in as_completed(pending):
+                done(pending[fut], fut.result())
+    return P2BatchResult(recordings=tuple(str(f) for f in files),
+                         results=tuple(results[i] for i in range(len(tasks))))
+
+
+def batch_json(batch: P2BatchResult) -> str:
+    """Return the batch's JSON (summary and every unit)."""
+    return json.dumps(batch.to_dict(), indent=1, allow_nan=True)

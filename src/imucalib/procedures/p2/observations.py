@@ -1,0 +1,367 @@
+"""From a P2 Recording to the window means of one unit, grouped by temperature point.
+
+One step's valid window of one unit at a time (memory bounded by the longest step, whatever
+the number of units):
+
+1. the unit's samples of the window (gyro, accelerometer, counter, internal temperature);
+2. its time base from the sample counter (docs/drivers.md, "Time synchronisation practice");
+   samples lost in the window beyond :attr:`P2Processing.max_lost_fraction` (or one gap
+   longer than :attr:`P2Processing.max_gap_s`) make the window unusable;
+3. a static window (role ``p2.static``) is averaged over its samples; a turning one
+   (``p2.rate``) over the longest span of whole table revolutions, the table angle of every
+   sample interpolated from the feedback
+   (:func:`~imucalib.processing.statistics.compute_integer_revolution_window`), and it must hold
+   the commanded number of whole revolutions;
+4. the standard error of each mean from the window's own Allan variance
+   (:func:`~imucalib.processing.statistics.compute_window_statistics`), a turning window's
+   taken about its mean and once-per-revolution harmonic (what the averaging cancels);
+5. the internal temperature's mean and slope over the window.
+
+Which orientation a window belongs to is read from the data: each pose's static windows say
+which body axis reads +g (:func:`~imucalib.procedures.p2.reduction.orientation_of`), so the
+analysis needs neither the fixture geometry nor the unit's place on it; the turning windows of
+the same pose and point share it.
+
+Contents
+--------
+:class:`P2Processing`, :class:`P2Window`, :class:`UnitObservations`,
+:func:`extract_unit_observations`, :func:`p2_units`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
+from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentError, RecordingError
+from imucalib.io.reader import Recording, StepRecord
+from imucalib.io.step_roles import P2_RATE, P2_STATIC
+from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
+from imucalib.procedures.common.reference import site_vectors
+from imucalib.procedures.common.windows import table_angle_at
+from imucalib.procedures.p2.reduction import orientation_of
+from imucalib.processing import (
+    compute_integer_revolution_window,
+    compute_window_statistics,
+    reconstruct_time_base,
+)
+
+__all__ = ["P2Processing", "P2Window", "UnitObservations", "extract_unit_observations",
+           "p2_units", "where"]
+
+_F64 = NDArray[np.float64]
+_COLUMNS = (*GYRO_COLUMNS, *ACCEL_COLUMNS)
+
+
+@dataclass(frozen=True)
+class P2Processing:
+    """Processing options of P2's window reduction (module docstring).
+
+    Attributes
+    ----------
+    max_lost_fraction : float
+        Samples lost to dropouts a window may miss (fraction of those expected).
+    max_gap_s : float
+        Longest single dropout in a window. [s]
+    orientation_tolerance : float
+        How far (in g) a static mean may be from ±g on its up axis and from 0 on the others.
+    gravity_mps2 : float or None
+        Local gravity; None: the normal gravity at the recorded latitude and height.
+    """
+
+    max_lost_fraction: float = 0.01
+    max_gap_s: float = 0.5
+    orientation_tolerance: float = 0.25
+    gravity_mps2: float | None = None
+
+
+@dataclass(frozen=True)
+class P2Window:
+    """One window of one unit, reduced (module docstring).
+
+    Attributes
+    ----------
+    step_index, label : int, str
+        The recorded step.
+    point : int
+        The temperature point (tag ``point=<k>``).
+    leg : str
+        ``"heating"`` or ``"cooling"``.
+    held_out : bool
+        The point is held out of the temperature-model fit.
+    pose : str
+        The fixture pose (tag ``pose=<axis>``; ``""`` when the step has none).
+    kind : str
+        ``"static"`` or ``"rate"``.
+    table_rate_rps : float
+        Mean measured table rate over the averaged span (0 for a static window). [rad/s]
+    n_revolutions : int
+        Whole revolutions averaged (0 static).
+    gyro_mean_rps, accel_mean_mps2, gyro_se_rps, accel_se_mps2 : ndarray, shape (3,)
+        Means and their standard errors.
+    temperature_degc, temperature_rate_degc_ps : float
+        Mean internal temperature and its slope over the window. [°C], [°C/s]
+    duration_s : float
+        Span averaged. [s]
+    n_samples, n_lost : int
+        Samples averaged; samples lost to dropouts in the window.
+    orientation : str
+        The body axis up (``"+x"`` …) from the static means of the window's pose and point.
+    """
+
+    step_index: int
+    label: str
+    point: int
+    leg: str
+    held_out: bool
+    pose: str
+    kind: str
+    table_rate_rps: float
+    n_revolutions: int
+    gyro_mean_rps: _F64
+    accel_mean_mps2: _F64
+    gyro_se_rps: _F64
+    accel_se_mps2: _F64
+    temperature_degc: float
+    temperature_rate_degc_ps: float
+    duration_s: float
+    n_samples: int
+    n_lost: int
+    orientation: str = ""
+
+
+@dataclass(frozen=True)
+class UnitObservations:
+    """Every usable P2 window of one unit, and what the analysis needs of the site.
+
+    ``failures`` holds, per temperature point, why a window of it could not be used (the point
+    is then left out for this unit; other points and units go on).
+    """
+
+    unit: str
+    windows: tuple[P2Window, ...]
+    gravity_mps2: float
+    earth_rate_up_rps: float
+    latitude_deg: float
+    sample_rate_hz: float
+    failures: dict[int, str] = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
+
+
+def p2_units(rec: Recording) -> list[str]:
+    """Return the IMU units of a recording, in stream order."""
+    return [s.unit for s in rec.streams if s.device == DEVICE_IMU]
+
+
+def _tag_int(step: StepRecord, key: str) -> int | None:
+    value = step.tag_value(key)
+    if value is None:
+        return None
+    try:
+        return int(value)
+    except ValueError:
+        raise RecordingError(f"step {step.index} ({step.label}): tag {key}={value!r} is not an "
+                             "integer") from None
+
+
+def where(unit: str, point: int, temperature_degc: float | None, step: StepRecord | None) -> str:
+    """Name a unit, a temperature point and a step for an error message."""
+    temp = "" if temperature_degc is None or not math.isfinite(temperature_degc) \
+        else f" ({temperature_degc:+.1f} °C)"
+    at = "" if step is None else f", step {step.index} ({step.label})"
+    return f"unit {unit}, temperature point {point}{temp}{at}"
+
+
+class _Reducer:
+    def __init__(self, rec: Recording, unit: str, opt: P2Processing) -> None:
+        self.rec, self.unit, self.opt = rec, unit, opt
+        tables = [s for s in rec.streams if s.device == DEVICE_TABLE]
+        if not tables:
+            raise RecordingError(f"{rec.path} has no table stream: P2 needs the table feedback")
+        self.table = tables[0]
+        names = [c[len("angle_"):-len("_rad")] for c in self.table.columns
+                 if c.startswith("angle_") and c.endswith("_rad")]
+        if len(names) != 1:
+            raise RecordingError(f"{rec.path}: P2 needs a single-axis table; the table stream "
+                                 f"has the axes {names}")
+        self.angle_col, self.rate_col = axis_columns(names[0])[:2]
+        self.sample_rate_hz = 0.0
+
+    def read(self, step: StepRecord, point: int, margin_s: float = 0.0
+             ) -> tuple[_F64, _F64, _F64, int]:
+        """Return (counter times, values (n, 6), temperatures, samples lost) of a window.
+
+        `margin_s` widens the valid window on both sides (a turn: see :meth:`reduce`).
+        """
+        data = self.rec.read_stream(DEVICE_IMU, self.unit,
+                                    [*_COLUMNS, "counter", TEMPERATURE_COLUMN],
+                                    step.valid_start_s - margin_s, step.valid_end_s + margin_s)
+        if len(data) < 10:
+            raise MissingSegmentError(f"{where(self.unit, point, None, step)}: only {len(data)} "
+                                      "samples in its valid window")
+        values = np.column_stack([data.columns[c] for c in _COLUMNS])
+        temp = np.asarray(data.columns[TEMPERATURE_COLUMN], dtype=np.float64)
+        if not (np.all(np.isfinite(values)) and np.all(np.isfinite(temp))):
+            raise InvalidInputError(f"{where(self.unit, point, None, step)}: the window holds "
+                                    "NaN or infinite samples")
+        base = reconstruct_time_base(data.columns["counter"], data.time_s)
+        if self.sample_rate_hz <= 0.0:
+            self.sample_rate_hz = base.sample_rate_hz
+        lost = int(base.n_missing)
+        expected = len(data) + lost
+        longest = 0.0
+        if base.gap_indices.size:
+            jumps = np.diff(base.counter)[base.gap_indices - 1] - 1
+            longest = float(np.max(jumps)) * base.sample_period_s
+        if lost > self.opt.max_lost_fraction * expected or longest > self.opt.max_gap_s:
+            raise MissingSegmentError(
+                f"{where(self.unit, point, float(np.mean(temp)), step)}: {lost} of {expected} "
+                f"samples lost to dropouts (longest gap {longest:.3g} s; at most "
+                f"{self.opt.max_lost_fraction:.0%} and {self.opt.max_gap_s:g} s are accepted)")
+        return base.time_s, values, temp, lost
+
+    def reduce(self, step: StepRecord, point: int, leg: str, held: bool) -> P2Window:
+        kind = "rate" if step.role == P2_RATE else "static"
+        # a turn's valid window spans exactly its revolutions, and the samples inside it one
+        # sample period less: one period more on each side (the table is at rate there: it
+        # settled before and decelerates only after the step) lets the whole-revolution span
+        # hold all of them
+        margin = 1.5 / self.sample_rate_hz if kind == "rate" and self.sample_rate_hz > 0 \
+            else 0.0
+        t, values, temp, lost = self.read(step, point, margin)
+        fs = self.sample_rate_hz
+        n_rev, rate = 0, 0.0
+        if kind == "rate":
+            fb = self.rec.read_stream(DEVICE_TABLE, self.table.unit,
+                                      [self.angle_col, self.rate_col],
+                                      step.valid_start_s - margin,
+                                      step.valid_end_s + margin)
+            if len(fb) < 2:
+                raise MissingSegmentError(f"{where(self.unit, point, None, step)}: fewer than 2 "
+                                          "table feedback samples in the window")
+            angle = table_angle_at(t, fb.time_s, np.unwrap(fb.columns[self.angle_col]))
+            try:
+                win = compute_integer_revolution_window(t, values, angle_rad=angle)
+            except InvalidInputError as exc:
+                raise MissingSegmentError(f"{where(self.unit, point, float(np.mean(temp)), step)}"
+                                          f": {exc}") from None
+            wanted = step.commanded.get("revolutions") if isinstance(step.commanded,
+                                                                      dict) else None
+            n_rev = int(win.n_revolutions)
+            if isinstance(wanted, int | float) and n_rev < int(wanted):
+                raise MissingSegmentError(
+                    f"{where(self.unit, point, float(np.mean(temp)), step)}: the turn holds "
+                    f"{n_rev} whole revolution(s) of the {int(wanted)} commanded (short of an "
+                    "integer number of revolutions)")
+            sl = slice(win.start_index, win.stop_index)
+            mean = np.asarray(win.mean, dtype=np.float64)
+            a = angle[sl]
+            design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
+            coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
+            resid = values[sl] - design @ coef
+            stats = compute_window_statistics(resid, fs)
+            span_t = t[sl]
+            rate = float((angle[sl][-1] - angle[sl][0]) / (span_t[-1] - span_t[0]))
+            t_used, temp_used = span_t, temp[sl]
+        else:
+            stats = compute_window_statistics(values, fs)
+            mean = values.mean(axis=0)
+            t_used, temp_used = t, temp
+        slope = float(np.polyfit(t_used - t_used[0], temp_used, 1)[0]) if t_used.size > 2 \
+            else 0.0
+        se = np.asarray(stats.standard_error, dtype=np.float64)
+        return P2Window(
+            step_index=step.index, label=step.label, point=point, leg=leg, held_out=held,
+            pose=step.tag_value("pose") or "", kind=kind, table_rate_rps=rate,
+            n_revolutions=n_rev, gyro_mean_rps=mean[:3], accel_mean_mps2=mean[3:],
+            gyro_se_rps=se[:3], accel_se_mps2=se[3:],
+            temperature_degc=float(np.mean(temp_used)), temperature_rate_degc_ps=slope,
+            duration_s=float(t_used[-1] - t_used[0]), n_samples=int(t_used.size), n_lost=lost)
+
+
+def extract_unit_observations(rec: Recording, unit: str, *,
+                              processing: P2Processing | None = None,
+                              progress: Callable[[float], None] | None = None
+                              ) -> UnitObservations:
+    """Reduce every P2 window of one unit (module docstring).
+
+    A window that cannot be used (dropouts, a short turn, NaN) is recorded in ``failures`` for
+    its temperature point, and the point is left out for this unit; the others go on.
+
+    Raises
+    ------
+    RecordingError
+        No IMU stream `unit`, no table stream, no latitude, or no step with a P2 role.
+    """
+    opt = processing or P2Processing()
+    units = p2_units(rec)
+    if unit not in units:
+        raise RecordingError(f"{rec.path} has no IMU stream {unit!r}; it has {units}")
+    meta = rec.metadata
+    lat = float(meta.get("latitude_deg", math.nan))
+    if not math.isfinite(lat):
+        raise RecordingError(f"{rec.path} does not record the latitude (latitude_deg): the "
+                             "vertical Earth rate needs it")
+    g, earth_t = site_vectors(lat, float(meta.get("heading_deg", 0.0)), opt.gravity_mps2)
+    steps = [s for s in rec.steps if s.role in (P2_STATIC, P2_RATE) and s.concerns(unit)]
+    if not steps:
+        raise RecordingError(f"{rec.path}: no step has a P2 role ({P2_STATIC}, {P2_RATE}); "
+                             "is it a P2 recording?")
+    red = _Reducer(rec, unit, opt)
+    windows: list[P2Window] = []
+    failures: dict[int, str] = {}
+    for i, step in enumerate(steps, start=1):
+        point = _tag_int(step, "point")
+        if point is None:
+            raise RecordingError(f"step {step.index} ({step.label}) has the role {step.role} "
+                                 "but no point=<k> tag")
+        if step.status == "done" and step.has_valid_window and point not in failures:
+            try:
+                windows.append(red.reduce(step, point, step.tag_value("leg") or "heating",
+                                          "held-out" in step.tags))
+            except CalibrationError as exc:
+                failures[point] = str(exc)
+        if progress is not None:
+            progress(i / len(steps))
+    return UnitObservations(unit=unit, windows=tuple(windows), gravity_mps2=g,
+                            earth_rate_up_rps=float(earth_t[2]), latitude_deg=lat,
+                            sample_rate_hz=red.sample_rate_hz, failures=failures)
+
+
+def detect_orientations(obs: UnitObservations, opt: P2Processing | None = None
+                        ) -> tuple[list[P2Window], dict[int, str]]:
+    """Give every window the orientation its pose's static means show (module docstring).
+
+    Returns the windows with ``orientation`` set and, per point, why it cannot be used (a
+    pose whose static means show no axis up, or two poses showing the same).
+    """
+    import dataclasses
+
+    tol = (opt or P2Processing()).orientation_tolerance
+    failures: dict[int, str] = {}
+    by_key: dict[tuple[int, str], str] = {}
+    for w in obs.windows:
+        if w.kind != "static":
+            continue
+        found = orientation_of(w.accel_mean_mps2.tolist(), obs.gravity_mps2, tolerance=tol)
+        key = (w.point, w.pose)
+        if found is None:
+            failures.setdefault(w.point, (
+                f"{where(obs.unit, w.point, w.temperature_degc, None)}, step {w.step_index} "
+                f"({w.label}): no body axis reads ±g (static mean "
+                f"{np.round(w.accel_mean_mps2, 3).tolist()} m/s²): the unit is not square to "
+                "the fixture"))
+        elif by_key.setdefault(key, found) != found:
+            failures.setdefault(w.point, (
+                f"{where(obs.unit, w.point, w.temperature_degc, None)}: the static windows of "
+                f"pose {w.pose or '?'} show {by_key[key]} and {found} up"))
+    out = []
+    for w in obs.windows:
+        o = by_key.get((w.point, w.pose), "")
+        out.append(dataclasses.replace(w, orientation=o))
+    return out, failures

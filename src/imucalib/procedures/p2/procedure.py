@@ -1,0 +1,79 @@
+"""P2 as a :class:`~imucalib.procedures.common.procedure.Procedure` (registered as ``"p2"``).
+
+The plan is :func:`~imucalib.procedures.p2.plan.generate_p2_plan`; the analysis
+:func:`~imucalib.procedures.p2.batch.analyze_p2` (every unit of the array, each through
+:func:`~imucalib.procedures.p2.analysis.analyze_unit`), imported when first used. With `unit`
+given, only that unit is analysed; the result is a
+:class:`~imucalib.procedures.p2.batch.P2BatchResult` either way.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.p2.batch import P2BatchResult
+
+__all__ = ["PROCEDURE", "P2Procedure"]
+
+
+class P2Procedure:
+    """Procedure P2: array full-temperature calibration on a cube in a chamber."""
+
+    name = "p2"
+    description = ("array full-temperature calibration: IMUs on a cube in a thermal chamber on "
+                   "a single-axis table, six orientations × static and ±ω at every "
+                   "temperature, temperature models of every parameter")
+    plan_options = frozenset({"n_imus", "grade", "temperatures_degc", "held_out_degc",
+                              "hysteresis", "rate_dps", "revolutions", "static_s", "settle_s",
+                              "stable_for_s", "resoak_s", "pose_order", "sample_rate_hz",
+                              "seed", "half_edge_m", "ramp_degc_per_min"})
+    analysis_options = frozenset({"lever_arm", "max_order", "criterion", "rate_term",
+                                  "hysteresis", "reference_temperature_degc", "workers",
+                                  "scheduler"})
+    outputs = ("result-json", "report-json", "temperature-png")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.p2.plan.generate_p2_plan` (its keywords)."""
+        from imucalib.procedures.p2.plan import generate_p2_plan
+
+        return generate_p2_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> P2BatchResult:
+        """Run :func:`~imucalib.procedures.p2.batch.analyze_p2` on a recording.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
+        from imucalib.procedures.p2.analysis import P2Options
+        from imucalib.procedures.p2.batch import analyze_p2
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure p2 takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        workers = int(opts.pop("workers", 1))
+        scheduler = opts.pop("scheduler", None)
+        try:
+            p2_options = P2Options(**opts)
+        except TypeError as exc:
+            raise InvalidInputError(f"procedure p2: {exc}") from None
+        path = Path(recording.path if hasattr(recording, "path") else recording)
+        return analyze_p2(path, units=[unit] if unit else None, options=p2_options,
+                          workers=workers, scheduler=scheduler, progress=progress)
+
+
+#: The registered P2 procedure.
+PROCEDURE = P2Procedure()
