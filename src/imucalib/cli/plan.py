@@ -13,8 +13,10 @@ from rich.table import Table
 from imucalib.cli._app import app, console, fail, typer_app
 from imucalib.errors import CalibrationError, ConfigurationError
 from imucalib.plan.bounds import (
+    MAX_IMUS,
     MAX_RECORD_S,
     MAX_SAMPLE_RATE_HZ,
+    MAX_TABLE_RATE_DPS,
     MIN_SAMPLE_RATE_HZ,
     format_validation_error,
 )
@@ -87,7 +89,10 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
 _PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "static_s",
                  "sample_rate_hz": "sample_rate_hz", "seed": "seed", "record_s": "record_s",
                  "temperatures": "temperatures_degc", "serial": "serial", "model": "model",
-                 "maker": "maker", "acceptance": "acceptance"}
+                 "maker": "maker", "acceptance": "acceptance", "n_imus": "n_imus",
+                 "held_out": "held_out_degc", "hysteresis": "hysteresis",
+                 "rate_dps": "rate_dps", "revolutions": "revolutions",
+                 "pose_order": "pose_order"}
 
 
 def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
@@ -111,10 +116,22 @@ def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: fr
         raise ConfigurationError(f"the {procedure} plan takes no {flag}{where}")
 
 
+def _numbers(text: str | None, flag: str) -> list[float] | None:
+    """Parse '-10,20,60' into numbers (None stays None)."""
+    if text is None:
+        return None
+    try:
+        return [float(t) for t in text.split(",") if t.strip()]
+    except ValueError as exc:
+        raise ConfigurationError(f"{flag} must be numbers separated by commas; got "
+                                 f"{text!r}") from exc
+
+
 @plan_app.command("new")
 def new(
     ctx: typer.Context,
-    procedure: Annotated[str, typer.Argument(help="Procedure: p1 or allan (the registry's).")],
+    procedure: Annotated[str, typer.Argument(
+        help="Procedure: p1, allan or p2 (the registry's).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
     "tactical",
@@ -136,6 +153,19 @@ def new(
     maker: Annotated[str, typer.Option(help="P1: the unit's maker.")] = "",
     acceptance: Annotated[str, typer.Option(
         help="P1: decision rule, simple or guarded (|value| + 2u within the limit).")] = "simple",
+    n_imus: Annotated[int, typer.Option(help="P2: units on the cube (the twin's).", min=1,
+                                        max=MAX_IMUS)] = 8,
+    held_out: Annotated[str | None, typer.Option(
+        help="P2: temperature points held out of the models, e.g. '-10,55' [°C].")] = None,
+    hysteresis: Annotated[bool, typer.Option(
+        help="P2: visit the points heating then cooling (a hysteresis term).")] = False,
+    rate_dps: Annotated[float, typer.Option(help="P2: |ω| of the turns [°/s].", min=1.0,
+                                            max=MAX_TABLE_RATE_DPS)] = 60.0,
+    revolutions: Annotated[int, typer.Option(help="P2: whole revolutions per turn.", min=1,
+                                             max=1000)] = 2,
+    pose_order: Annotated[str, typer.Option(
+        help="P2: temperature-major (six remounts per point) or pose-major (six sweeps).")]
+    = "temperature-major",
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
@@ -144,19 +174,19 @@ def new(
     try:
         proc = registry.get(procedure)
         _refuse_foreign_options(ctx, procedure, proc.plan_options)
-        temps = None
-        if temperatures is not None and "temperatures_degc" in proc.plan_options:
-            try:
-                temps = [float(t) for t in temperatures.split(",") if t.strip()]
-            except ValueError as exc:
-                raise ConfigurationError(
-                    f"--temperatures must be numbers separated by commas; got "
-                    f"{temperatures!r}") from exc
         given = {"grade": grade, "repetitions": repetitions, "static_s": static_s,
                  "sample_rate_hz": sample_rate_hz, "seed": seed, "record_s": record_s,
-                 "temperatures_degc": temps, "serial": serial, "model": model, "maker": maker,
-                 "acceptance": acceptance}
-        plan = proc.generate_plan(**{k: v for k, v in given.items() if k in proc.plan_options})
+                 "temperatures_degc": _numbers(temperatures, "--temperatures"),
+                 "serial": serial, "model": model, "maker": maker, "acceptance": acceptance,
+                 "n_imus": n_imus, "held_out_degc": _numbers(held_out, "--held-out"),
+                 "hysteresis": hysteresis, "rate_dps": rate_dps, "revolutions": revolutions,
+                 "pose_order": pose_order}
+        # only what the command line gave: each generator keeps its own defaults
+        explicit = {keyword for param, keyword in _PLAN_OPTIONS.items()
+                    if (src := ctx.get_parameter_source(param)) is not None
+                    and src.name != "DEFAULT"}
+        plan = proc.generate_plan(**{k: v for k, v in given.items()
+                                     if k in proc.plan_options and k in explicit})
         write_plan(plan, out)
     except ValidationError as exc:  # options the plan's bounds refuse (NaN passes a range)
         raise fail(ConfigurationError(format_validation_error(

@@ -69,6 +69,7 @@ from imucalib._checks import as_array, check_finite_scalar
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.temperature import TemperatureDependence
+from imucalib.models.temperature_record import HeldOutOutcome, ParameterTemperatureModel
 
 __all__ = [
     "DEFAULT_MAX_ORDER",
@@ -80,6 +81,7 @@ __all__ = [
     "fit_temperature_model",
     "from_temperature_dependence",
     "predict_temperature_model",
+    "to_parameter_record",
     "to_temperature_dependence",
 ]
 
@@ -657,3 +659,27 @@ def from_temperature_dependence(dep: TemperatureDependence, name: str,
         reference_temperature_degc=dep.reference_temperature_degc, coefficients=cs,
         rate_coefficient=None if rate is None else float(rate.reshape(-1)[0]),
     )
+
+
+def to_parameter_record(fit: TemperatureModelFit, *,
+                        temperature_range_degc: tuple[float, float] | None = None,
+                        held_out: HeldOutCheck | None = None) -> ParameterTemperatureModel:
+    """Return a fit as the record a CalibrationResult carries (σ Birge-scaled for a misfit).
+
+    The record's covariance is :attr:`TemperatureModelFit.covariance_scaled`, so what a result
+    reports is the uncertainty that owns up to a misfit (docs/processing-estimation.md).
+    """
+    outcome = None
+    if held_out is not None:
+        outcome = HeldOutOutcome(
+            max_abs_z=float(np.max(np.abs(held_out.normalised_residuals))),
+            chi2=float(held_out.chi2), dof=int(held_out.dof),
+            p_value=float(held_out.p_value), consistent=bool(held_out.consistent))
+    m = fit.model
+    return ParameterTemperatureModel(
+        name=fit.name, reference_temperature_degc=m.reference_temperature_degc,
+        coefficients=tuple(float(c) for c in m.coefficients),
+        covariance=np.asarray(fit.covariance_scaled, dtype=np.float64), chi2=float(fit.chi2),
+        dof=int(fit.dof), order_criterion=fit.criterion, rate_coefficient=m.rate_coefficient,
+        leg_coefficient=m.leg_coefficient, temperature_range_degc=temperature_range_degc,
+        held_out=outcome)

@@ -21,6 +21,8 @@ Parameter names
 - ``bias_x`` … the bias b of y = b + (I + M)·x [m/s² | rad/s];
 - ``M_xy`` … the scale/misalignment matrix M (row: sensor axis, column: input axis) [–];
 - ``G_xy`` … gyro g-sensitivity, y += G·f [rad/s per m/s²];
+- ``K2_x`` … accelerometer quadratic scale factor, y_i += K2_i·x_i² [1/(m/s²)] (procedure P2,
+  docs/p2.md);
 - the per-axis model of procedure P1 (docs/p1.md, steps 1 and 3), y_i = K_i·(x_i + b_i):
   ``K_x`` [–] and ``b_x`` (a bias in input units) [m/s² | rad/s].
 
@@ -39,8 +41,9 @@ A result file is checked field by field before anything uses it; each defect is 
   or an unknown field is refused; ``provenance.details`` alone is free-form);
 - the values: strings where strings belong, numbers that are numbers (not strings, booleans or
   null) and finite (the JSON extensions NaN and Infinity are refused, in ``details`` too); the
-  parameter names exactly one model's set per triad (G terms only for the gyro of a triad
-  model); known ``input_units``; residual counts that are integers ≥ 0;
+  parameter names exactly one model's set per triad (optional G terms only for the gyro and
+  K2 terms only for the accelerometer of a triad model); known ``input_units``; residual
+  counts that are integers ≥ 0;
 - the covariance: k × k for k parameters, variances ≥ 0, symmetric to a relative 10⁻⁹, each
   ``std`` equal to √ of its variance to 10⁻⁹ (a hand-edited value is caught), zero rows where
   a variance is zero, and positive semi-definite (the correlation matrix's smallest eigenvalue
@@ -100,8 +103,8 @@ MODELS: Final = ("triad", "per-axis")
 MAX_RESULT_BYTES: Final = 16 * 2**20
 
 
-def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False
-                          ) -> tuple[str, ...]:
+def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False,
+                          k2: bool = False) -> tuple[str, ...]:
     """Return the parameter names of one triad under `model` (module docstring)."""
     if model == "per-axis":
         return (*(f"{triad}_K_{a}" for a in AXES), *(f"{triad}_b_{a}" for a in AXES))
@@ -109,6 +112,8 @@ def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False
              *(f"{triad}_M_{i}{j}" for i in AXES for j in AXES)]
     if g_sensitivity:
         names += [f"{triad}_G_{i}{j}" for i in AXES for j in AXES]
+    if k2:
+        names += [f"{triad}_K2_{a}" for a in AXES]
     return tuple(names)
 
 
@@ -432,6 +437,8 @@ class CalibrationResult:
         if f"{triad}_G_xx" in v:
             kwargs["g_sensitivity"] = np.array([[v[f"{triad}_G_{i}{j}"] for j in AXES]
                                                 for i in AXES])
+        if f"{triad}_K2_x" in v:
+            kwargs["k2"] = np.array([v[f"{triad}_K2_{a}"] for a in AXES])
         if mine:
             kwargs["temperature"] = self._temperature_dependence(triad, mine)
         return TriadModel(kind=triad, bias=bias, scale_misalignment=m, **kwargs)
@@ -443,7 +450,8 @@ class CalibrationResult:
         fields: dict[str, list[tuple[Any, str]]] = {
             "bias": [(r, f"{triad}_bias_{a}") for r, a in enumerate(AXES)],
             "scale_misalignment": [(pos, f"{triad}_M_{ij}") for pos, ij in pairs],
-            "g_sensitivity": [(pos, f"{triad}_G_{ij}") for pos, ij in pairs]}
+            "g_sensitivity": [(pos, f"{triad}_G_{ij}") for pos, ij in pairs],
+            "k2": [(r, f"{triad}_K2_{a}") for r, a in enumerate(AXES)]}
         by_name = {tm.name: tm for tm in models}
         coefficients: dict[str, NDArray[np.float64]] = {}
         rates: dict[str, NDArray[np.float64]] = {}
@@ -451,7 +459,7 @@ class CalibrationResult:
             present = [(pos, by_name[n]) for pos, n in entries if n in by_name]
             if not present:
                 continue
-            shape = (3,) if field_name == "bias" else (3, 3)
+            shape = (3,) if field_name in ("bias", "k2") else (3, 3)
             order = max(tm.order for _, tm in present)
             if order > 0:
                 poly = np.zeros((order, *shape))
@@ -734,14 +742,15 @@ class _ResultReader:
         for triad in sorted(triads):
             have = {n for n in names if n.startswith(f"{triad}_")}
             base = set(triad_parameter_names(triad, model))
-            full = set(triad_parameter_names(triad, model, g_sensitivity=True))
-            if have == base or (triad == "gyro" and model == "triad" and have == full):
+            # a triad model may add the gyro's G terms or the accelerometer's K2 terms
+            extra = {"gyro": "G terms", "accel": "K2 terms"}[triad] if model == "triad" else ""
+            full = set(triad_parameter_names(triad, model, g_sensitivity=triad == "gyro",
+                                             k2=triad == "accel")) if extra else base
+            if have in (base, full):
                 continue
-            allowed = full if (triad == "gyro" and model == "triad") else base
             self.fail("parameters", f"the {triad} parameters of a {model} result must be "
-                      f"{sorted(base)}" + (" (and optionally the G terms)"
-                                           if allowed != base else "")
-                      + f"; missing {sorted(base - have)}, unexpected {sorted(have - allowed)}")
+                      f"{sorted(base)}" + (f" (and optionally the {extra})" if extra else "")
+                      + f"; missing {sorted(base - have)}, unexpected {sorted(have - full)}")
 
     def covariance(self, value: object, std: list[float]) -> NDArray[np.float64]:
         k = len(std)

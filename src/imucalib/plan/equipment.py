@@ -142,6 +142,16 @@ class MountConfig(_Model):
 
     face: FixtureAxis
     offset_m: tuple[_OFFSET, _OFFSET] = Field((0.0, 0.0), description="along x_b, y_b [m]")
+    lever_arm_m: tuple[_ARM, _ARM, _ARM] | None = Field(
+        None, description="the IMU origin in the fixture frame, replacing the face position "
+                          "(a unit on a bracket, inside or off the cube); the face still sets "
+                          "its orientation [m]")
+
+    @model_validator(mode="after")
+    def _one_position(self) -> MountConfig:
+        if self.lever_arm_m is not None and self.offset_m != (0.0, 0.0):
+            raise ValueError("give `offset_m` (on the face) or `lever_arm_m` (anywhere), not both")
+        return self
 
 
 class FixtureConfig(_Model):
@@ -167,9 +177,10 @@ class FixtureConfig(_Model):
             raise ValueError(f"`mounts` places IMUs on the faces of a hexahedral fixture; "
                              f"fixture kind is {self.kind!r}")
         h = self.half_edge_m
-        seen: dict[tuple[str, float, float], int] = {}
+        seen: dict[tuple[Any, ...], int] = {}
         for i, mount in enumerate(self.mounts):
-            j = seen.setdefault((mount.face, *mount.offset_m), i)
+            place = mount.lever_arm_m if mount.lever_arm_m is not None else mount.offset_m
+            j = seen.setdefault((mount.face, *place), i)
             if j != i:
                 raise ValueError(f"mounts.{j} and mounts.{i} put two IMUs at the same place "
                                  f"(face {mount.face}, offset_m {mount.offset_m})")
@@ -196,6 +207,10 @@ class ImuConfig(_Model):
                                            le=MAX_TIME_CONSTANT_S)
     self_heating_degc: float = Field(0.0, ge=0.0, le=50.0)
     nonlinear: bool = True
+    noise: Literal["grade", "white"] = Field(
+        "grade", description="grade: the grade's noise (white, bias instability, random walks); "
+                             "white: its white noise only — a bias that does not wander, for "
+                             "checks against the deterministic truth")
     temperature_dependence: Literal["none", "typical"] = Field(
         "none", description="'typical': cubic temperature dependence of biases, scale factors "
         "and misalignments (imucalib.models.imu.sample_imu_model)")

@@ -387,7 +387,11 @@ def compute_integer_revolution_window(
     # boundary angle after each sample: θ_{i+1}, the last one extrapolated
     bound = np.concatenate([th, [th[-1] + (th[-1] - th[-2])]])
     t_bound = np.concatenate([t, [t[-1] + (t[-1] - t[-2])]])
-    n_rev = int(np.floor((bound[-1] - bound[0]) / (2.0 * np.pi) + 1e-12))
+    # a span short of N revolutions by less than half a sample step counts as N (the servo's
+    # rate noise moves the last boundary by a fraction of a step); the window's angle_error_rad
+    # says by how much
+    half_step = 0.5 * float(np.median(step * sign))
+    n_rev = int(np.floor((bound[-1] - bound[0] + half_step) / (2.0 * np.pi) + 1e-12))
     if n_rev < 1:
         raise InvalidInputError(
             "the step must cover at least one revolution; got "

@@ -13,7 +13,9 @@ Contents
 Choices
 -------
 - Each IMU's truth is drawn with :func:`~imucalib.models.imu.sample_imu_model` from its grade,
-  seeded by ``ImuConfig.seed`` or else by the scenario seed and the IMU's position.
+  seeded by ``ImuConfig.seed`` or else by the scenario seed and the IMU's position; with
+  ``ImuConfig.noise = "white"`` its noise keeps the grade's white terms only (a bias that does
+  not wander: closed-loop checks against the deterministic truth, docs/p2.md).
 - The sample clock's phase is drawn uniformly within one sample period, so IMUs are not aligned
   with the controller's feedback grid (as on a real station).
 - On a centrifuge, a single IMU at the fixture origin (``fixture.lever_arm_m`` zero) is placed at
@@ -22,12 +24,13 @@ Choices
 - A hexahedral fixture (the cube of P2) places its IMUs as ``fixture.mounts`` says, or else
   round robin on the faces (IMU i on face i mod 6) on a centred grid of ``spacing_m``
   (:func:`~imucalib.plan.equipment.hexahedral_grid_offsets_m`); up to six IMUs sit at the face
-  centres.
+  centres. A mount with ``lever_arm_m`` keeps its face's orientation and sits where it says.
 - An array fixture spaces its IMUs ``spacing_m`` apart along x_m, centred on the rotation centre.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,6 +40,7 @@ from scipy.spatial.transform import Rotation
 from imucalib import units
 from imucalib.models.earth import Site
 from imucalib.models.imu import ImuModel, sample_imu_model
+from imucalib.models.noise import NoiseModel
 from imucalib.plan.equipment import TwinEquipment, hexahedral_grid_offsets_m
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber
@@ -133,7 +137,17 @@ def _fixture(sc: TwinEquipment) -> Fixture:
             layout = hexahedral_grid_offsets_m(len(names), cfg.spacing_m)
             faces = [face for face, _, _ in layout]
             offsets = np.array([(ox, oy) for _, ox, oy in layout], dtype=float)
-        return hexahedral_fixture(cfg.half_edge_m, names, faces=faces, offsets_m=offsets)
+        arms = [m.lever_arm_m for m in cfg.mounts] or [None] * len(names)
+        if all(a is None for a in arms):
+            return hexahedral_fixture(cfg.half_edge_m, names, faces=faces, offsets_m=offsets)
+        # units on brackets: the face's orientation, the origin as given
+        mounts = []
+        for name, face, offset, given in zip(names, faces, offsets, arms, strict=True):
+            mount = hexahedral_fixture(cfg.half_edge_m, [name], faces=[face],
+                                       offsets_m=[offset]).mounts[0]
+            mounts.append(mount if given is None else dataclasses.replace(
+                mount, lever_arm_m_m=np.asarray(given, dtype=float)))
+        return Fixture(tuple(mounts))
     if cfg.kind == "array":
         n = len(names)
         offsets = np.zeros((n, 3))
@@ -167,6 +181,10 @@ def build_rig(sc: TwinEquipment) -> BuiltRig:
                                  temperature_dependence=cfg.temperature_dependence,
                                  hysteresis_fraction=cfg.hysteresis_fraction,
                                  reference_temperature_degc=cfg.reference_temperature_degc)
+        if cfg.noise == "white":
+            model = dataclasses.replace(
+                model, gyro_noise=NoiseModel(white_density=model.gyro_noise.white_density),
+                accel_noise=NoiseModel(white_density=model.accel_noise.white_density))
         period_s = 1.0 / model.sample_rate_hz
         phase_s = float(np.random.default_rng(scenario_seed(sc.seed, "imu-phase", i)).uniform(
             0.0, period_s))

@@ -48,6 +48,7 @@ from imucalib.estimation.temperature_model import (
     check_held_out,
     fit_temperature_model,
     predict_temperature_model,
+    to_parameter_record,
 )
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.result import CalibrationResult, Provenance
@@ -96,7 +97,7 @@ class P2Options:
     rate_term : bool
         Add a dT/dt term to every temperature model.
     hysteresis : {"auto", "on", "off"}
-        A heating/cooling term: ``auto`` when both legs were run.
+        A heating/cooling term: ``auto`` when each leg holds two calibration points or more.
     reference_temperature_degc : float
         T0 of the models and of the result's values. [°C]
     accel_accuracy_g, gyro_accuracy_dps : float or None
@@ -296,8 +297,8 @@ def _point(obs: UnitObservations, point: int, windows: Sequence[P2Window],
     ls = least_squares(pw, lever_arm=lever_arm)
     cf = closed_form(pw, lever_arm=lever_arm)
     naive = closed_form(pw, lever_arm="ignore")
-    n = len(PARAM_NAMES) + (3 if lever_arm == "estimate" else 0)
-    std = np.sqrt(np.diag(ls.covariance))[:n]
+    n = len(PARAM_NAMES) + (3 if lever_arm != "ignore" else 0)
+    std = np.sqrt(np.diag(ls.covariance_scaled()))[:n]
     agree = float(np.max(np.abs(cf.values[:n] - ls.values[:n]) / np.where(std > 0, std, np.inf)))
     return PointResult(
         point=point, leg=windows[0].leg, held_out=windows[0].held_out,
@@ -338,6 +339,10 @@ def _units_of(name: str) -> str:
         return "rad/s"
     if name.startswith("accel_bias"):
         return "m/s^2"
+    if name.startswith("gyro_G"):
+        return "rad/s/(m/s^2)"
+    if name.startswith("accel_K2"):
+        return "1/(m/s^2)"
     return "1"
 
 
@@ -368,8 +373,8 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     if len(cal) < 2:
         raise MissingSegmentError(f"unit {obs.unit}: {len(cal)} usable calibration temperature "
                                   "point(s); a temperature model needs at least 2")
-    legs_seen = {p.leg for p in cal}
-    use_leg = opt.hysteresis == "on" or (opt.hysteresis == "auto" and len(legs_seen) == 2)
+    per_leg = [sum(p.leg == leg for p in cal) for leg in ("heating", "cooling")]
+    use_leg = opt.hysteresis == "on" or (opt.hysteresis == "auto" and min(per_leg) >= 2)
     temps = np.array([p.temperature_degc for p in cal])
     rates = np.array([p.temperature_rate_degc_ps for p in cal])
     legs = np.array([_leg_value(p.leg) for p in cal])
@@ -423,6 +428,7 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         reasons.append(f"gyro error after compensation {errors['gyro_rps'] / u.DEG:.3g} °/s "
                        f"exceeds {gyro_lim:g} °/s at the {'held-out' if held else 'calibration'} "
                        "points")
+    t_range = (float(temps.min()), float(temps.max()))
     worst = max(points, key=lambda p: p.agreement_sigma)
     if worst.agreement_sigma > AGREEMENT_LIMIT:
         reasons.append(f"closed form and least squares differ by {worst.agreement_sigma:.2g} σ "
@@ -451,8 +457,12 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
                                        opt.reference_temperature_degc,
                                        "lever_arm_m": _mean_lever_arm(cal)}),
         notes=(f"parameters at T0 = {opt.reference_temperature_degc:g} °C, the c_0 of each "
-               "temperature model; their temperature dependence is in the P2 report",),
+               "temperature model; `imucalib apply` corrects each sample at the unit's "
+               "internal temperature with the models (docs/p2.md)",),
         fit_quality=tuple(_relabel(q) for q in quality),
+        temperature_models=tuple(
+            to_parameter_record(models[n], temperature_range_degc=t_range,
+                                held_out=checks.get(n)) for n in PARAM_NAMES),
     )
     return P2UnitResult(unit=obs.unit, passed=not reasons, points=points, models=models,
                         held_out=checks, result=result, compensated_error=errors,

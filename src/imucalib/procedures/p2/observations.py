@@ -42,6 +42,8 @@ from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentE
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.io.step_roles import P2_RATE, P2_STATIC
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
+from imucalib.models.noise import NoiseModel
+from imucalib.procedures.common.noise import FLICKER_FACTOR, window_mean_se
 from imucalib.procedures.common.reference import site_vectors
 from imucalib.procedures.common.windows import table_angle_at
 from imucalib.procedures.p2.reduction import orientation_of
@@ -133,6 +135,7 @@ class P2Window:
     n_samples: int
     n_lost: int
     orientation: str = ""
+    allan_fit: _F64 | None = None
 
 
 @dataclass(frozen=True)
@@ -192,15 +195,13 @@ class _Reducer:
         self.angle_col, self.rate_col = axis_columns(names[0])[:2]
         self.sample_rate_hz = 0.0
 
-    def read(self, step: StepRecord, point: int, margin_s: float = 0.0
-             ) -> tuple[_F64, _F64, _F64, int]:
-        """Return (counter times, values (n, 6), temperatures, samples lost) of a window.
-
-        `margin_s` widens the valid window on both sides (a turn: see :meth:`reduce`).
-        """
+    def read(self, step: StepRecord, point: int) -> tuple[_F64, _F64, _F64, int]:
+        """Return (counter times, values (n, 6), temperatures, samples lost) of a window."""
+        # (read_stream over the step's window: Recording.read_step would look the step up in
+        # the whole steps table again for every window)
         data = self.rec.read_stream(DEVICE_IMU, self.unit,
                                     [*_COLUMNS, "counter", TEMPERATURE_COLUMN],
-                                    step.valid_start_s - margin_s, step.valid_end_s + margin_s)
+                                    step.valid_start_s, step.valid_end_s)
         if len(data) < 10:
             raise MissingSegmentError(f"{where(self.unit, point, None, step)}: only {len(data)} "
                                       "samples in its valid window")
@@ -227,20 +228,13 @@ class _Reducer:
 
     def reduce(self, step: StepRecord, point: int, leg: str, held: bool) -> P2Window:
         kind = "rate" if step.role == P2_RATE else "static"
-        # a turn's valid window spans exactly its revolutions, and the samples inside it one
-        # sample period less: one period more on each side (the table is at rate there: it
-        # settled before and decelerates only after the step) lets the whole-revolution span
-        # hold all of them
-        margin = 1.5 / self.sample_rate_hz if kind == "rate" and self.sample_rate_hz > 0 \
-            else 0.0
-        t, values, temp, lost = self.read(step, point, margin)
+        t, values, temp, lost = self.read(step, point)
         fs = self.sample_rate_hz
         n_rev, rate = 0, 0.0
         if kind == "rate":
             fb = self.rec.read_stream(DEVICE_TABLE, self.table.unit,
                                       [self.angle_col, self.rate_col],
-                                      step.valid_start_s - margin,
-                                      step.valid_end_s + margin)
+                                      step.valid_start_s, step.valid_end_s)
             if len(fb) < 2:
                 raise MissingSegmentError(f"{where(self.unit, point, None, step)}: fewer than 2 "
                                           "table feedback samples in the window")
@@ -281,7 +275,9 @@ class _Reducer:
             n_revolutions=n_rev, gyro_mean_rps=mean[:3], accel_mean_mps2=mean[3:],
             gyro_se_rps=se[:3], accel_se_mps2=se[3:],
             temperature_degc=float(np.mean(temp_used)), temperature_rate_degc_ps=slope,
-            duration_s=float(t_used[-1] - t_used[0]), n_samples=int(t_used.size), n_lost=lost)
+            duration_s=float(t_used[-1] - t_used[0]), n_samples=int(t_used.size), n_lost=lost,
+            allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
+                                 stats.random_walk]))
 
 
 def extract_unit_observations(rec: Recording, unit: str, *,
@@ -328,9 +324,45 @@ def extract_unit_observations(rec: Recording, unit: str, *,
                 failures[point] = str(exc)
         if progress is not None:
             progress(i / len(steps))
-    return UnitObservations(unit=unit, windows=tuple(windows), gravity_mps2=g,
-                            earth_rate_up_rps=float(earth_t[2]), latitude_deg=lat,
-                            sample_rate_hz=red.sample_rate_hz, failures=failures)
+    return UnitObservations(unit=unit, windows=tuple(pooled_standard_errors(windows)),
+                            gravity_mps2=g, earth_rate_up_rps=float(earth_t[2]),
+                            latitude_deg=lat, sample_rate_hz=red.sample_rate_hz,
+                            failures=failures,
+                            notes=("standard errors of the window means from the noise model "
+                                   "pooled over each temperature point's windows (median "
+                                   "Allan-fit coefficients, docs/p2.md)",))
+
+
+def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
+    """Give each window the standard error of a noise model pooled over its point's windows.
+
+    One short window's own Allan fit is heavy-tailed (its SE² is right in the median but 2.5–4
+    times too large on average, docs/processing-estimation.md), and every window of one unit
+    and temperature point sees the same sensor noise: the median of the windows' white,
+    flicker and random-walk coefficients is a noise model (:class:`~imucalib.models.noise.
+    NoiseModel`) whose Allan deviation at each window's duration is its standard error
+    (:func:`~imucalib.procedures.common.noise.window_mean_se`).
+    """
+    import dataclasses
+
+    by_point: dict[int, list[P2Window]] = {}
+    for w in windows:
+        by_point.setdefault(w.point, []).append(w)
+    out: dict[int, P2Window] = {}
+    for mine in by_point.values():
+        fits = [np.nan_to_num(w.allan_fit, nan=0.0) for w in mine if w.allan_fit is not None]
+        if len(fits) < 3:
+            continue
+        fit = np.median(np.array(fits), axis=0)
+        noise = {triad: NoiseModel(white_density=np.maximum(fit[0, cols], 0.0),
+                                   bias_instability=np.sqrt(np.maximum(fit[1, cols], 0.0)
+                                                            / FLICKER_FACTOR),
+                                   random_walk=np.maximum(fit[2, cols], 0.0))
+                 for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6)))}
+        for w in mine:
+            gyro, accel = window_mean_se(noise, w.duration_s)
+            out[id(w)] = dataclasses.replace(w, gyro_se_rps=gyro, accel_se_mps2=accel)
+    return [out.get(id(w), w) for w in windows]
 
 
 def detect_orientations(obs: UnitObservations, opt: P2Processing | None = None

@@ -4,15 +4,18 @@
 :class:`~imucalib.plan.schema.Plan`:
 
 1. an operator check of the mounting (the units on the cube's faces, cables, the chamber);
-2. for each temperature point, in sweep order (heating; with ``hysteresis=True`` heating then
-   cooling, the top point once), a soak: the chamber ramps at `ramp_degc_per_min` to the
-   point and holds until its air is within `band_degc` of the setpoint and every IMU's internal
-   temperature has stayed within `imu_band_degc` for `stable_for_s`;
+2. for each temperature point, in sweep order (heating from the coldest; with
+   ``hysteresis=True`` heating then cooling back, the extremes once; each point's leg the
+   direction it is approached from, :func:`sweep`), a soak: the chamber ramps at
+   `ramp_degc_per_min` to the point and holds until its air is within `band_degc` of the
+   setpoint and every IMU's internal temperature has stayed within `imu_band_degc` for
+   `stable_for_s`;
 3. at each point, the six orientations of every unit: the operator places the cube with each
    of its six faces up (a remount, an operator-check step whose ``remount`` field tells the
    twin, and the operator, which face), followed by a short re-soak (the chamber was opened);
-   in each pose two static records at table angles 0° and 180° (their mean cancels a tilt of
-   the spin axis) and turns at +ω and −ω over `revolutions` whole revolutions each.
+   in each pose turns at +ω and −ω over `revolutions` whole revolutions each, then two static
+   records at table angles 0° and 180° (their mean cancels a tilt of the spin axis; the table
+   stands still for the next remount).
 
 ``pose_order="pose-major"`` puts the six poses outermost instead: six remounts in all, each
 followed by the whole temperature sweep (fewer chamber openings, six sweeps). Both orders give
@@ -79,11 +82,14 @@ GRADE_ACCURACY: dict[str, tuple[float, float]] = {
 
 
 def sweep(temperatures_degc: Sequence[float], held_out_degc: Sequence[float], *,
-          hysteresis: bool) -> list[tuple[float, str, bool]]:
+          hysteresis: bool, start_degc: float = 25.0) -> list[tuple[float, str, bool]]:
     """Return the temperature points in visiting order: (temperature, leg, held out).
 
     Heating from the coldest point to the hottest; with `hysteresis`, then cooling back to the
-    coldest (the hottest point is visited once, on the heating leg).
+    second coldest (the hottest point is visited once). A point's leg is the direction it is
+    approached from — the coldest, reached first from `start_degc` (the chamber's temperature
+    before the run), is on the cooling leg when it lies below it: thermal hysteresis depends
+    on where the temperature came from, not on the plan's intent.
 
     Raises
     ------
@@ -101,9 +107,12 @@ def sweep(temperatures_degc: Sequence[float], held_out_degc: Sequence[float], *,
         raise ConfigurationError(f"temperature points must be distinct; repeated {dup} (a "
                                  "held-out point must not also be a calibration point)")
     points = sorted((t, t in held) for t in every)
-    order = [(t, "heating", h) for t, h in points]
-    if hysteresis:
-        order += [(t, "cooling", h) for t, h in reversed(points[:-1])]
+    visits = points + (list(reversed(points[1:-1])) if hysteresis else [])
+    order = []
+    previous = float(start_degc)
+    for t, h in visits:
+        order.append((t, "heating" if t > previous else "cooling", h))
+        previous = t
     return order
 
 
@@ -147,6 +156,7 @@ def generate_p2_plan(
     seed: int = 0,
     half_edge_m: float = 0.06,
     twin: TwinEquipment | None = None,
+    start_degc: float = 25.0,
     name: str = "p2-array-temperature",
 ) -> Plan:
     """Return procedure P2's plan (module docstring).
@@ -175,6 +185,8 @@ def generate_p2_plan(
         The twin's IMU rate, seed and cube half edge.
     twin : TwinEquipment, optional
         Another twin station (its IMUs replace `n_imus`).
+    start_degc : float
+        The chamber's temperature before the run (the first point's leg, :func:`sweep`). [°C]
     name : str
         The plan's name.
 
@@ -194,10 +206,11 @@ def generate_p2_plan(
     if rate_dps <= 0.0 or revolutions < 1:
         raise ConfigurationError(f"`rate_dps` must be > 0 and `revolutions` ≥ 1; got "
                                  f"{rate_dps:g}, {revolutions}")
-    order = sweep(temperatures_degc, held_out_degc, hysteresis=hysteresis)
+    order = sweep(temperatures_degc, held_out_degc, hysteresis=hysteresis,
+                  start_degc=start_degc)
     temps = [t for t, _, _ in order]
     equipment = twin if twin is not None else _twin(
-        n_imus, grade, sample_rate_hz, seed, half_edge_m, temps, 25.0)
+        n_imus, grade, sample_rate_hz, seed, half_edge_m, temps, start_degc)
     steps: list[PlanStep] = [OperatorCheckStep(
         kind="operator-check",
         item=(f"{len(equipment.imus)} units on the cube's faces, square to the faces, cables "
@@ -216,15 +229,18 @@ def generate_p2_plan(
     def pose_steps(k: int, temp: float, leg: str, held: bool, pose: str) -> list[PlanStep]:
         tags = (*point_tags(k, leg, held), f"pose={pose}")
         where = f"{temp:+g} °C {leg}, {pose} up"
+        # the turns first, the static records last: the table stands still when the operator
+        # remounts the cube after them
         out: list[PlanStep] = [
-            PositionStep(kind="position", angles_deg=(angle,), settle_s=settle_s,
-                         record_s=static_s, role=P2_STATIC, tags=(*tags, f"angle={angle:g}"),
-                         label=f"{where}, static {angle:g}°")
-            for angle in (0.0, 180.0)]
-        out += [RateStep(kind="rate", axis=0, rate_dps=sign * rate_dps, settle_s=settle_s,
-                         revolutions=revolutions, role=P2_RATE, tags=tags,
-                         label=f"{where}, {sign * rate_dps:+g} °/s")
-                for sign in (1.0, -1.0)]
+            RateStep(kind="rate", axis=0, rate_dps=sign * rate_dps, settle_s=settle_s,
+                     revolutions=revolutions, role=P2_RATE, tags=tags,
+                     label=f"{where}, {sign * rate_dps:+g} °/s")
+            for sign in (1.0, -1.0)]
+        out += [PositionStep(kind="position", angles_deg=(angle,), settle_s=settle_s,
+                             record_s=static_s, role=P2_STATIC,
+                             tags=(*tags, f"angle={angle:g}"),
+                             label=f"{where}, static {angle:g}°")
+                for angle in (0.0, 180.0)]
         return out
 
     def remount(k: int, temp: float, leg: str, held: bool, pose: FixtureAxis
