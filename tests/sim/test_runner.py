@@ -203,8 +203,8 @@ def test_existing_file_is_kept(tmp_path):
      'duration_s = 1\n', r"imus\.0\.grade"),
     ('name = "x"\n[[imus]]\nname = "a"\n[[steps]]\nkind = "soak"\ntemperature_degc = 40\n'
      'duration_s = 10\n', r"soak step needs `chamber.enabled = true`"),
-    ('name = "x"\n[[imus]]\nname = "a"\nnoise = 3\n[[steps]]\nkind = "static"\n'
-     'duration_s = 1\n', r"imus\.0\.noise: Extra inputs are not permitted"),
+    ('name = "x"\n[[imus]]\nname = "a"\nnoisy = 3\n[[steps]]\nkind = "static"\n'
+     'duration_s = 1\n', r"imus\.0\.noisy: Extra inputs are not permitted"),
     ('name = "x"\n[table]\nkind = "dual-axis"\n[[imus]]\nname = "a"\n[[steps]]\n'
      'kind = "position"\nangles_deg = [10]\n', r"`angles_deg` needs 2 value\(s\)"),
     ("name = [broken\n", "not valid TOML"),
