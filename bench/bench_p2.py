@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 _CHILD = r"""
-import json, resource, sys, time
+import json, sys, time
 mode, path = sys.argv[1], sys.argv[2]
 t0 = time.perf_counter()
 out = {}
@@ -64,7 +64,10 @@ else:
     out["units"] = len(batch.results)
     out["errors"] = [r.error for r in batch.results if r.error]
 out["seconds"] = time.perf_counter() - t0
-out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+# VmHWM: this process's own peak (ru_maxrss survives fork and exec: it would be the parent's)
+with open("/proc/self/status") as fh:
+    hwm = [line for line in fh if line.startswith("VmHWM:")]
+out["peak_rss_mib"] = int(hwm[0].split()[1]) / 1024 if hwm else float("nan")
 print(json.dumps(out))
 """
 

@@ -102,8 +102,10 @@ def test_temperature_models_predict_the_held_out_points_and_choose_their_order(b
             constant = "_G_" in name or "_K2_" in name
             right_order += (model.order == 0) if constant else (model.order >= 2)
             assert model.model.leg_coefficient is not None  # both legs: hysteresis term
+    # measured: 97.9 % consistent; the order right for 99.3 % (all 192 thermal models cubic,
+    # 94 of the 96 constant ones order 0)
     assert consistent / n > 0.9
-    assert right_order / n > 0.7
+    assert right_order / n > 0.9
 
 
 def test_the_result_carries_its_models_and_corrects_at_any_temperature(batch, tmp_path):

@@ -367,6 +367,7 @@ def fit_temperature_model(
     reference_temperature_degc: float | None = None,
     temperature_rate_degc_ps: ArrayLike | None = None,
     leg: ArrayLike | None = None,
+    compute_cv: bool = True,
 ) -> TemperatureModelFit:
     """Fit Eq. (1) to per-temperature estimates by GLS and choose its order, Eqs. (2)–(9).
 
@@ -393,6 +394,9 @@ def fit_temperature_model(
         Mean dT/dt of each point; given, the model has the rate term d. [°C/s]
     leg : array_like of ±1, shape (K,), or None
         +1 heating, −1 cooling; given, the model has the hysteresis term h.
+    compute_cv : bool
+        Compute CV(m) of Eq. (9) for every order also when AICc chooses (for comparison);
+        False leaves it NaN then (it costs K fits per order: most of a fit's time).
 
     Returns
     -------
@@ -455,7 +459,8 @@ def fit_temperature_model(
             break  # higher orders are singular too
         fits[m] = fit
         aicc[m] = _aicc(fit[2], a.shape[1], k)
-        cv[m] = _cv_score(a, p, cov) if order is None else math.nan
+        wanted = order is None and (compute_cv or criterion == "cv")
+        cv[m] = _cv_score(a, p, cov) if wanted else math.nan
 
     if order is not None:
         chosen, used, why = order, "fixed", f"order {order} given"

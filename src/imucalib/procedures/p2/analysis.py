@@ -391,7 +391,7 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
             criterion=opt.criterion,
             reference_temperature_degc=opt.reference_temperature_degc,
             temperature_rate_degc_ps=rates if opt.rate_term else None,
-            leg=legs if use_leg else None)
+            leg=legs if use_leg else None, compute_cv=opt.criterion == "cv")
         models[name] = fit
         weights.append(_gls_weights(fit, temps, rates, legs, var)[0])
         scales.append(fit.quality.birge_ratio if fit.quality.misfit else 1.0)

@@ -1,28 +1,33 @@
 """P2 in batch: every unit of one or many array recordings, on local cores or a Dask cluster.
 
-One task per (recording, unit): it opens the file, reduces that unit's windows one step at a
-time and analyses them (:func:`analyze_unit_file`), so a task's memory is that of one step of
-one unit, whatever the number of units, and the tasks share nothing but the file. A unit that
-cannot be calibrated returns a result holding its typed error
+One job per run of units of one recording: it opens the file once and, unit by unit, reduces
+that unit's windows one step at a time (:func:`analyze_units_file`), so a job's memory is that
+of one step of one unit, whatever the number of units, and the jobs share nothing but the file.
+A unit that cannot be calibrated returns a result holding its typed error
 (:func:`~imucalib.procedures.p2.analysis.failed_unit`); the others go on.
 
-Where the tasks run:
+Where the jobs run:
 
-- ``workers=1``: in this process, one after the other;
-- ``workers=N``: a pool of N local processes (:class:`concurrent.futures.ProcessPoolExecutor`);
+- ``workers=1``: in this process, all units of a recording in one job;
+- ``workers=N``: a pool of N local processes (:class:`concurrent.futures.ProcessPoolExecutor`,
+  spawned, each asked for one BLAS/Blosc thread), the units in 2N runs;
 - ``scheduler="tcp://host:8786"``: an existing Dask cluster (``dask.distributed.Client``, the
   ``dask`` extra); the workers must see the recordings at the same paths (a shared file
   system). A :class:`dask.distributed.Client` may be passed instead of an address.
 
-The results do not depend on where they ran (each task is a pure function of the file).
+The results do not depend on where they ran (each unit's result is a pure function of the
+file).
 
 Contents
 --------
-:class:`P2BatchResult`, :func:`analyze_p2`, :func:`analyze_unit_file`, :func:`summary_rows`.
+:class:`P2BatchResult`, :func:`analyze_p2`, :func:`analyze_unit_file`,
+:func:`analyze_units_file`, :func:`summary_rows`, :func:`batch_json`.
 """
 
 from __future__ import annotations
 
+import ctypes
+import dataclasses
 import json
 import multiprocessing
 import os
@@ -34,15 +39,21 @@ from typing import Any
 
 import numpy as np
 
-from imucalib.errors import CalibrationError, ConfigurationError, InvalidInputError
+from imucalib.errors import (
+    CalibrationError,
+    ConfigurationError,
+    InvalidInputError,
+    MissingSegmentError,
+)
 from imucalib.io.hashing import file_sha256
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.reader import Recording, StepRecord, open_recording
 from imucalib.io.step_roles import P2_SOAK
 from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
 
-__all__ = ["P2BatchResult", "analyze_p2", "analyze_unit_file", "batch_json", "summary_rows"]
+__all__ = ["P2BatchResult", "analyze_p2", "analyze_unit_file", "analyze_units_file",
+           "batch_json", "summary_rows"]
 
 
 @dataclass(frozen=True)
@@ -116,10 +127,10 @@ def _plan_limits(rec: Recording) -> tuple[float | None, float | None]:
     return plan.imu.accel_accuracy_g, plan.imu.gyro_accuracy_dps
 
 
-def _soak_failures(rec: Recording, unit: str) -> dict[int, str]:
-    """Temperature points whose soak did not complete: never reached."""
+def _soak_failures(steps: Sequence[StepRecord], unit: str) -> dict[int, str]:
+    """Return the temperature points whose soak did not complete (never reached)."""
     out: dict[int, str] = {}
-    for step in rec.steps:
+    for step in steps:
         if step.role != P2_SOAK or not step.concerns(unit) or step.status == "done":
             continue
         point = step.tag_value("point")
@@ -140,29 +151,102 @@ def analyze_unit_file(path: str | os.PathLike[str], unit: str, options: P2Option
 
     Pure in the file: the same (file, unit, options) give the same result wherever it runs.
     """
+    return analyze_units_file(path, [unit], options, recording_sha256)[0]
+
+
+def analyze_units_file(path: str | os.PathLike[str], units: Sequence[str],
+                       options: P2Options | None = None, recording_sha256: str = ""
+                       ) -> list[P2UnitResult]:
+    """Analyse some units of a P2 recording, one after the other, opening the file once.
+
+    Each unit as :func:`analyze_unit_file` would (the same results); the file is opened and
+    checked, and its steps table read, once for all of them.
+    """
     opt = options or P2Options()
     try:
-        with open_recording(path) as rec:
-            if opt.accel_accuracy_g is None or opt.gyro_accuracy_dps is None:
-                acc, gyr = _plan_limits(rec)
-                import dataclasses
-
-                opt = dataclasses.replace(
-                    opt, accel_accuracy_g=opt.accel_accuracy_g if opt.accel_accuracy_g
-                    is not None else acc,
-                    gyro_accuracy_dps=opt.gyro_accuracy_dps if opt.gyro_accuracy_dps
-                    is not None else gyr)
-            soaks = _soak_failures(rec, unit)
-            if soaks:
-                from imucalib.errors import MissingSegmentError
-
-                raise MissingSegmentError(soaks[min(soaks)])
-            obs = extract_unit_observations(rec, unit, processing=opt.processing)
-        return analyze_unit(obs, opt, source=str(path), recording_sha256=recording_sha256)
+        rec_cm = open_recording(path)
     except CalibrationError as exc:
-        return failed_unit(unit, exc)
-    except (np.linalg.LinAlgError, ValueError) as exc:  # a defect the checks did not name
-        return failed_unit(unit, InvalidInputError(f"unit {unit}: {exc}"))
+        return [failed_unit(unit, exc) for unit in units]
+    out = []
+    with rec_cm as rec:
+        if opt.accel_accuracy_g is None or opt.gyro_accuracy_dps is None:
+            acc, gyr = _plan_limits(rec)
+            opt = dataclasses.replace(
+                opt, accel_accuracy_g=opt.accel_accuracy_g if opt.accel_accuracy_g
+                is not None else acc,
+                gyro_accuracy_dps=opt.gyro_accuracy_dps if opt.gyro_accuracy_dps
+                is not None else gyr)
+        steps = rec.steps
+        for unit in units:
+            try:
+                soaks = _soak_failures(steps, unit)
+                if soaks:
+                    raise MissingSegmentError(soaks[min(soaks)])
+                obs = extract_unit_observations(rec, unit, processing=opt.processing,
+                                                steps=steps)
+                out.append(analyze_unit(obs, opt, source=str(path),
+                                        recording_sha256=recording_sha256))
+            except CalibrationError as exc:
+                out.append(failed_unit(unit, exc))
+            except (np.linalg.LinAlgError, ValueError) as exc:  # a defect no check named
+                out.append(failed_unit(unit, InvalidInputError(f"unit {unit}: {exc}")))
+            _return_freed_memory()
+    return out
+
+
+def _return_freed_memory() -> None:
+    """Hand the heap a unit freed back to the system (glibc only; elsewhere nothing).
+
+    A unit's windows are many mid-sized arrays; glibc keeps what they freed in its heap, so
+    the resident size grew by about 10 MiB a unit without this (bench/bench_p2.py) — memory
+    that is free but looks taken. ``malloc_trim(0)`` returns it.
+    """
+    global _TRIM  # looked up once per process
+    if _TRIM is None:
+        try:
+            _TRIM = ctypes.CDLL("libc.so.6").malloc_trim
+        except (OSError, AttributeError):
+            _TRIM = False
+    if _TRIM:
+        _TRIM(0)
+
+
+_TRIM: Any = None
+
+
+def _chunks(items: list[int], n: int) -> list[list[int]]:
+    """Split `items` into at most `n` runs of consecutive items of near-equal length."""
+    n = max(1, min(n, len(items)))
+    size, extra = divmod(len(items), n)
+    out, start = [], 0
+    for k in range(n):
+        stop = start + size + (1 if k < extra else 0)
+        out.append(items[start:stop])
+        start = stop
+    return [c for c in out if c]
+
+
+def _single_threaded_children() -> dict[str, str | None]:
+    """Ask the worker processes for one thread each (BLAS, OpenMP, Blosc); return the old env.
+
+    Each worker is one core's worth of work: the numerical libraries' own threads would make
+    the processes fight over the cores (bench/bench_p2.py measured the pool slower than one
+    process before this).
+    """
+    keys = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLOSC_NTHREADS",
+            "NUMBA_NUM_THREADS")
+    old = {k: os.environ.get(k) for k in keys}
+    for k in keys:
+        os.environ[k] = "1"
+    return old
+
+
+def _restore(old: dict[str, str | None]) -> None:
+    for k, v in old.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
 
 
 def _tasks(paths: Sequence[Path], units: Sequence[str] | None) -> list[tuple[str, str, str]]:
@@ -215,11 +299,22 @@ def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
     opt = options or P2Options()
     tasks = _tasks(files, units)
     results: dict[int, P2UnitResult] = {}
+    # a job: a run of consecutive units of one recording (one open of the file per run)
+    by_file: dict[tuple[str, str], list[int]] = {}
+    for i, (p, _, sha) in enumerate(tasks):
+        by_file.setdefault((p, sha), []).append(i)
+    parallel = scheduler is not None or workers > 1
+    n_runs = (2 * workers if scheduler is None else 8) if parallel else 1
+    jobs = [(p, sha, run) for (p, sha), idx in by_file.items() for run in _chunks(idx, n_runs)]
 
-    def done(i: int, res: P2UnitResult) -> None:
-        results[i] = res
+    def done(run: list[int], res: list[P2UnitResult]) -> None:
+        for i, r in zip(run, res, strict=True):
+            results[i] = r
         if progress is not None:
             progress(len(results) / len(tasks))
+
+    def names(run: list[int]) -> list[str]:
+        return [tasks[i][1] for i in run]
 
     if scheduler is not None:
         try:
@@ -230,24 +325,29 @@ def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
                                      "'imucalib[dask]'") from exc
         client = scheduler if isinstance(scheduler, Client) else Client(str(scheduler))
         try:
-            futures = {client.submit(analyze_unit_file, p, x, opt, sha, pure=False): i
-                       for i, (p, x, sha) in enumerate(tasks)}
+            futures = {client.submit(analyze_units_file, p, names(run), opt, sha,
+                                     pure=False): run for p, sha, run in jobs}
             for fut in dask_completed(list(futures)):
                 done(futures[fut], fut.result())
         finally:
             if client is not scheduler:
                 client.close()
-    elif workers == 1 or len(tasks) == 1:
-        for i, (p, x, sha) in enumerate(tasks):
-            done(i, analyze_unit_file(p, x, opt, sha))
+    elif not parallel or len(tasks) == 1:
+        for p, sha, run in jobs:
+            done(run, analyze_units_file(p, names(run), opt, sha))
     else:
         # spawn: a forked child would inherit the HDF5 library's and the BLAS threads' state
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=ctx) as pool:
-            pending = {pool.submit(analyze_unit_file, p, x, opt, sha): i
-                       for i, (p, x, sha) in enumerate(tasks)}
-            for fut in as_completed(pending):
-                done(pending[fut], fut.result())
+        old = _single_threaded_children()
+        try:
+            with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
+                                     mp_context=ctx) as pool:
+                pending = {pool.submit(analyze_units_file, p, names(run), opt, sha): run
+                           for p, sha, run in jobs}
+                for fut in as_completed(pending):
+                    done(pending[fut], fut.result())
+        finally:
+            _restore(old)
     return P2BatchResult(recordings=tuple(str(f) for f in files),
                          results=tuple(results[i] for i in range(len(tasks))))
 

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentError, RecordingError
-from imucalib.io.reader import Recording, StepRecord
+from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import P2_RATE, P2_STATIC
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
@@ -172,6 +172,15 @@ def _tag_int(step: StepRecord, key: str) -> int | None:
                              "integer") from None
 
 
+def _slope(t: _F64, y: _F64) -> float:
+    """Return the least-squares slope of y on t (0 for fewer than three points)."""
+    if t.size < 3:
+        return 0.0
+    dt = t - t.mean()
+    den = float(dt @ dt)
+    return float(dt @ (y - y.mean()) / den) if den > 0 else 0.0
+
+
 def where(unit: str, point: int, temperature_degc: float | None, step: StepRecord | None) -> str:
     """Name a unit, a temperature point and a step for an error message."""
     temp = "" if temperature_degc is None or not math.isfinite(temperature_degc) \
@@ -195,13 +204,9 @@ class _Reducer:
         self.angle_col, self.rate_col = axis_columns(names[0])[:2]
         self.sample_rate_hz = 0.0
 
-    def read(self, step: StepRecord, point: int) -> tuple[_F64, _F64, _F64, int]:
+    def read(self, step: StepRecord, point: int, data: StreamData
+             ) -> tuple[_F64, _F64, _F64, int]:
         """Return (counter times, values (n, 6), temperatures, samples lost) of a window."""
-        # (read_stream over the step's window: Recording.read_step would look the step up in
-        # the whole steps table again for every window)
-        data = self.rec.read_stream(DEVICE_IMU, self.unit,
-                                    [*_COLUMNS, "counter", TEMPERATURE_COLUMN],
-                                    step.valid_start_s, step.valid_end_s)
         if len(data) < 10:
             raise MissingSegmentError(f"{where(self.unit, point, None, step)}: only {len(data)} "
                                       "samples in its valid window")
@@ -226,15 +231,15 @@ class _Reducer:
                 f"{self.opt.max_lost_fraction:.0%} and {self.opt.max_gap_s:g} s are accepted)")
         return base.time_s, values, temp, lost
 
-    def reduce(self, step: StepRecord, point: int, leg: str, held: bool) -> P2Window:
+    def reduce(self, step: StepRecord, point: int, leg: str, held: bool, data: StreamData,
+               fb: StreamData | None) -> P2Window:
+        """Reduce one window (`data`: the unit's rows; `fb`: the table's, for a turn)."""
         kind = "rate" if step.role == P2_RATE else "static"
-        t, values, temp, lost = self.read(step, point)
+        t, values, temp, lost = self.read(step, point, data)
         fs = self.sample_rate_hz
         n_rev, rate = 0, 0.0
         if kind == "rate":
-            fb = self.rec.read_stream(DEVICE_TABLE, self.table.unit,
-                                      [self.angle_col, self.rate_col],
-                                      step.valid_start_s, step.valid_end_s)
+            assert fb is not None
             if len(fb) < 2:
                 raise MissingSegmentError(f"{where(self.unit, point, None, step)}: fewer than 2 "
                                           "table feedback samples in the window")
@@ -266,8 +271,7 @@ class _Reducer:
             stats = compute_window_statistics(values, fs)
             mean = values.mean(axis=0)
             t_used, temp_used = t, temp
-        slope = float(np.polyfit(t_used - t_used[0], temp_used, 1)[0]) if t_used.size > 2 \
-            else 0.0
+        slope = _slope(t_used, temp_used)
         se = np.asarray(stats.standard_error, dtype=np.float64)
         return P2Window(
             step_index=step.index, label=step.label, point=point, leg=leg, held_out=held,
@@ -282,12 +286,14 @@ class _Reducer:
 
 def extract_unit_observations(rec: Recording, unit: str, *,
                               processing: P2Processing | None = None,
-                              progress: Callable[[float], None] | None = None
-                              ) -> UnitObservations:
+                              progress: Callable[[float], None] | None = None,
+                              steps: list[StepRecord] | None = None) -> UnitObservations:
     """Reduce every P2 window of one unit (module docstring).
 
     A window that cannot be used (dropouts, a short turn, NaN) is recorded in ``failures`` for
     its temperature point, and the point is left out for this unit; the others go on.
+
+    `steps` (the recording's, read once) saves reading the steps table again for each unit.
 
     Raises
     ------
@@ -304,26 +310,41 @@ def extract_unit_observations(rec: Recording, unit: str, *,
         raise RecordingError(f"{rec.path} does not record the latitude (latitude_deg): the "
                              "vertical Earth rate needs it")
     g, earth_t = site_vectors(lat, float(meta.get("heading_deg", 0.0)), opt.gravity_mps2)
-    steps = [s for s in rec.steps if s.role in (P2_STATIC, P2_RATE) and s.concerns(unit)]
+    steps = [s for s in (rec.steps if steps is None else steps)
+             if s.role in (P2_STATIC, P2_RATE) and s.concerns(unit)]
     if not steps:
         raise RecordingError(f"{rec.path}: no step has a P2 role ({P2_STATIC}, {P2_RATE}); "
                              "is it a P2 recording?")
     red = _Reducer(rec, unit, opt)
     windows: list[P2Window] = []
     failures: dict[int, str] = {}
-    for i, step in enumerate(steps, start=1):
+    points = {}
+    for step in steps:
         point = _tag_int(step, "point")
         if point is None:
             raise RecordingError(f"step {step.index} ({step.label}) has the role {step.role} "
                                  "but no point=<k> tag")
-        if step.status == "done" and step.has_valid_window and point not in failures:
+        points[step.index] = point
+    usable = [s for s in steps if s.status == "done" and s.has_valid_window]
+    # every window of the unit (and the table's of every turn) in time order, the datasets held
+    # open: one decompression per chunk (Recording.iter_windows)
+    imu_rows = rec.iter_windows(DEVICE_IMU, unit,
+                                [(s.valid_start_s, s.valid_end_s) for s in usable],
+                                [*_COLUMNS, "counter", TEMPERATURE_COLUMN])
+    table_rows = rec.iter_windows(DEVICE_TABLE, red.table.unit,
+                                  [(s.valid_start_s, s.valid_end_s) for s in usable
+                                   if s.role == P2_RATE], [red.angle_col, red.rate_col])
+    for i, (step, data) in enumerate(zip(usable, imu_rows, strict=True), start=1):
+        fb = next(table_rows) if step.role == P2_RATE else None
+        point = points[step.index]
+        if point not in failures:
             try:
                 windows.append(red.reduce(step, point, step.tag_value("leg") or "heating",
-                                          "held-out" in step.tags))
+                                          "held-out" in step.tags, data, fb))
             except CalibrationError as exc:
                 failures[point] = str(exc)
         if progress is not None:
-            progress(i / len(steps))
+            progress(i / len(usable))
     return UnitObservations(unit=unit, windows=tuple(pooled_standard_errors(windows)),
                             gravity_mps2=g, earth_rate_up_rps=float(earth_t[2]),
                             latitude_deg=lat, sample_rate_hz=red.sample_rate_hz,
