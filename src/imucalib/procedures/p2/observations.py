@@ -74,12 +74,17 @@ class P2Processing:
         How far (in g) a static mean may be from ±g on its up axis and from 0 on the others.
     gravity_mps2 : float or None
         Local gravity; None: the normal gravity at the recorded latitude and height.
+    noise_windows : int
+        Windows of each point whose Allan variance is fitted for the pooled noise model (the
+        first ones, turns and static records of the first poses; every window when fewer):
+        the pool's median needs a handful, and the fit is most of a window's reduction time.
     """
 
     max_lost_fraction: float = 0.01
     max_gap_s: float = 0.5
     orientation_tolerance: float = 0.25
     gravity_mps2: float | None = None
+    noise_windows: int = 8
 
 
 @dataclass(frozen=True)
@@ -203,6 +208,7 @@ class _Reducer:
                                  f"has the axes {names}")
         self.angle_col, self.rate_col = axis_columns(names[0])[:2]
         self.sample_rate_hz = 0.0
+        self._fitted: dict[int, int] = {}
 
     def read(self, step: StepRecord, point: int, data: StreamData
              ) -> tuple[_F64, _F64, _F64, int]:
@@ -215,21 +221,30 @@ class _Reducer:
         if not (np.all(np.isfinite(values)) and np.all(np.isfinite(temp))):
             raise InvalidInputError(f"{where(self.unit, point, None, step)}: the window holds "
                                     "NaN or infinite samples")
-        base = reconstruct_time_base(data.columns["counter"], data.time_s)
-        if self.sample_rate_hz <= 0.0:
-            self.sample_rate_hz = base.sample_rate_hz
-        lost = int(base.n_missing)
+        counter = np.asarray(data.columns["counter"], dtype=np.int64)
+        steps = np.diff(counter)
+        if np.any(steps <= 0):
+            raise InvalidInputError(f"{where(self.unit, point, None, step)}: the sample counter "
+                                    "repeats or goes backwards in the window")
+        if step.role == P2_RATE:
+            # a turn's mean weights samples by the table angle at their own instants: the
+            # counter's time base (receive-time jitter removed)
+            base = reconstruct_time_base(counter, data.time_s)
+            t, period = base.time_s, base.sample_period_s
+        else:  # a static mean needs no instants: the receive times serve
+            t = np.asarray(data.time_s, dtype=np.float64)
+            period = float(t[-1] - t[0]) / float(counter[-1] - counter[0])
+        if self.sample_rate_hz <= 0.0 and period > 0:
+            self.sample_rate_hz = 1.0 / period
+        lost = int(np.sum(steps - 1))
         expected = len(data) + lost
-        longest = 0.0
-        if base.gap_indices.size:
-            jumps = np.diff(base.counter)[base.gap_indices - 1] - 1
-            longest = float(np.max(jumps)) * base.sample_period_s
+        longest = float(np.max(steps) - 1) * period
         if lost > self.opt.max_lost_fraction * expected or longest > self.opt.max_gap_s:
             raise MissingSegmentError(
                 f"{where(self.unit, point, float(np.mean(temp)), step)}: {lost} of {expected} "
                 f"samples lost to dropouts (longest gap {longest:.3g} s; at most "
                 f"{self.opt.max_lost_fraction:.0%} and {self.opt.max_gap_s:g} s are accepted)")
-        return base.time_s, values, temp, lost
+        return t, values, temp, lost
 
     def reduce(self, step: StepRecord, point: int, leg: str, held: bool, data: StreamData,
                fb: StreamData | None) -> P2Window:
@@ -259,20 +274,25 @@ class _Reducer:
                     "integer number of revolutions)")
             sl = slice(win.start_index, win.stop_index)
             mean = np.asarray(win.mean, dtype=np.float64)
-            a = angle[sl]
-            design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
-            coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
-            resid = values[sl] - design @ coef
-            stats = compute_window_statistics(resid, fs)
+            fit_noise = self.count(point)
+            if fit_noise:
+                a = angle[sl]
+                design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
+                coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
+                stats = compute_window_statistics(values[sl] - design @ coef, fs)
             span_t = t[sl]
             rate = float((angle[sl][-1] - angle[sl][0]) / (span_t[-1] - span_t[0]))
             t_used, temp_used = span_t, temp[sl]
         else:
-            stats = compute_window_statistics(values, fs)
+            fit_noise = self.count(point)
+            if fit_noise:
+                stats = compute_window_statistics(values, fs)
             mean = values.mean(axis=0)
             t_used, temp_used = t, temp
         slope = _slope(t_used, temp_used)
-        se = np.asarray(stats.standard_error, dtype=np.float64)
+        # the pooled model (pooled_standard_errors) gives every window its standard error
+        se = np.asarray(stats.standard_error, dtype=np.float64) if fit_noise \
+            else np.full(6, np.nan)
         return P2Window(
             step_index=step.index, label=step.label, point=point, leg=leg, held_out=held,
             pose=step.tag_value("pose") or "", kind=kind, table_rate_rps=rate,
@@ -281,7 +301,15 @@ class _Reducer:
             temperature_degc=float(np.mean(temp_used)), temperature_rate_degc_ps=slope,
             duration_s=float(t_used[-1] - t_used[0]), n_samples=int(t_used.size), n_lost=lost,
             allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
-                                 stats.random_walk]))
+                                 stats.random_walk]) if fit_noise else None)
+
+    def count(self, point: int) -> bool:
+        """Whether this window of `point` is one whose noise is fitted (and count it)."""
+        done = self._fitted.get(point, 0)
+        if done >= self.opt.noise_windows > 0:
+            return False
+        self._fitted[point] = done + 1
+        return True
 
 
 def extract_unit_observations(rec: Recording, unit: str, *,
@@ -369,10 +397,13 @@ def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
     by_point: dict[int, list[P2Window]] = {}
     for w in windows:
         by_point.setdefault(w.point, []).append(w)
+    every = [np.nan_to_num(w.allan_fit, nan=0.0) for w in windows if w.allan_fit is not None]
     out: dict[int, P2Window] = {}
     for mine in by_point.values():
         fits = [np.nan_to_num(w.allan_fit, nan=0.0) for w in mine if w.allan_fit is not None]
-        if len(fits) < 3:
+        if len(fits) < 3:  # a point cut short: the unit's windows pooled
+            fits = every
+        if not fits:
             continue
         fit = np.median(np.array(fits), axis=0)
         noise = {triad: NoiseModel(white_density=np.maximum(fit[0, cols], 0.0),
