@@ -36,6 +36,7 @@ bench: venv
 	$(BIN)/python bench/bench_processing_estimation.py
 	$(BIN)/python bench/bench_drivers.py
 	$(BIN)/python bench/bench_p1.py
+	$(BIN)/python bench/bench_p2.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache
