@@ -18,7 +18,6 @@ from imucalib.errors import (
     RecordingFormatError,
 )
 from imucalib.io import FORMAT_VERSION, ColumnSpec, RecordingWriter, StreamSpec, open_recording
-from imucalib.io import reader as reader_module
 
 
 def _mask(data, t0, t1):
@@ -86,7 +85,9 @@ def test_time_window_matches_mask(helpers, shared_path, a, b):
 
 
 def test_bisection_on_long_stream_with_repeated_times(tmp_path, monkeypatch):
-    monkeypatch.setattr(reader_module, "_SEARCH_BLOCK", 64)
+    import imucalib.io._search as search_module
+
+    monkeypatch.setattr(search_module, "_SEARCH_BLOCK", 64)
     rng = np.random.default_rng(3)
     t = np.cumsum(rng.integers(0, 2, 50_000)) * 0.5  # many repeated values
     spec = StreamSpec("chamber", "main", {"temperature_degc": ColumnSpec("degC")})

@@ -63,6 +63,7 @@ from imucalib.io._schema import (
     parse_string_list,
     step_fields,
 )
+from imucalib.io._search import search_sorted_dataset
 from imucalib.io._v1 import v1_plan, v1_role_and_tags
 from imucalib.io._validate import (
     H5PY_ERRORS,
@@ -83,7 +84,6 @@ if TYPE_CHECKING:
 __all__ = ["LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo", "open_recording"]
 
 _T = TypeVar("_T")
-_SEARCH_BLOCK = 1 << 14  # rows read at once when the bisection has narrowed down
 
 
 @dataclass(frozen=True)
@@ -509,37 +509,7 @@ class Recording:
         return [c for c in dict.fromkeys(columns) if c != TIME_COLUMN]
 
     def _search(self, ds: h5py.Dataset, n: int, t: float, side: str) -> int:
-        """Find where `t` goes in the non-decreasing dataset `ds[:n]` without loading it whole.
-
-        One interpolation probe first (sampling is nearly uniform, so it usually lands on the
-        answer: three small reads), then bisection with single-element reads, then one block.
-        """
-        if math.isinf(t):
-            return 0 if t < 0 else n
-        lo, hi = 0, n  # the answer lies in [lo, hi]
-        block = _SEARCH_BLOCK
-        if n > block:
-            t_first, t_last = float(ds[0]), float(ds[n - 1])
-            if t_last > t_first:
-                frac = min(max((t - t_first) / (t_last - t_first), 0.0), 1.0)
-                a = min(max(int(frac * (n - 1)) - block // 2, 0), n - block)
-                seg = ds[a:a + block]
-                k = int(np.searchsorted(seg, t, side=side))  # type: ignore[call-overload]
-                if 0 < k < block:
-                    return a + k
-                if k == 0:
-                    hi = a
-                else:
-                    lo = a + block
-        while hi - lo > block:
-            mid = (lo + hi) // 2
-            v = float(ds[mid])
-            if v < t or (side == "right" and v == t):
-                lo = mid + 1
-            else:
-                hi = mid
-        seg = ds[lo:hi]
-        return lo + int(np.searchsorted(seg, t, side=side))  # type: ignore[call-overload]
+        return search_sorted_dataset(ds, n, t, side)
 
     def _row_range(self, path: str, n: int, t_start_s: float | None,
                    t_end_s: float | None) -> tuple[int, int]:
