@@ -50,7 +50,7 @@ from imucalib.estimation.temperature_model import (
     predict_temperature_model,
     to_parameter_record,
 )
-from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.fit_quality import FitQuality
 from imucalib.models.result import CalibrationResult, Provenance
 from imucalib.procedures.p2.observations import (
     P2Processing,
@@ -459,7 +459,7 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         notes=(f"parameters at T0 = {opt.reference_temperature_degc:g} °C, the c_0 of each "
                "temperature model; `imucalib apply` corrects each sample at the unit's "
                "internal temperature with the models (docs/p2.md)",),
-        fit_quality=tuple(_relabel(q) for q in quality),
+        fit_quality=quality,
         temperature_models=tuple(
             to_parameter_record(models[n], temperature_range_degc=t_range,
                                 held_out=checks.get(n)) for n in PARAM_NAMES),
@@ -467,10 +467,6 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     return P2UnitResult(unit=obs.unit, passed=not reasons, points=points, models=models,
                         held_out=checks, result=result, compensated_error=errors,
                         reasons=tuple(reasons), notes=tuple(notes))
-
-
-def _relabel(q: FitQuality) -> FitQuality:
-    return assess_fit(q.group, q.chi2, q.dof)
 
 
 def _mean_lever_arm(points: Sequence[PointResult]) -> list[float]:
