@@ -5,7 +5,8 @@ accelerometer bias, scale and misalignment terms): the per-point least-squares e
 2σ bars (calibration points filled, held-out points open; heating and cooling legs in their
 own colours), the fitted temperature model (docs/p2.md, "Temperature models") and its 2σ
 prediction band, with the model's order and χ²/ν in the panel title. Biases are in °/h and mg,
-scale and misalignment terms in ppm.
+scale and misalignment terms in ppm, the gyro g-sensitivity in (°/h)/g, the accelerometer K2
+in µg/g².
 
 :func:`save_lot_figure` draws, for a batch, each parameter's value at T0 across the units (one
 point per unit with its 2σ bar), so an outlying unit stands out.
@@ -40,6 +41,10 @@ def _display(name: str) -> tuple[float, str]:
         return units.DEG_PER_H, "°/h"
     if name.startswith("accel_bias"):
         return 1e-3 * units.G0_MPS2, "mg"
+    if name.startswith("gyro_G"):  # rad/s per m/s² → (°/h)/g
+        return units.DEG_PER_H / units.G0_MPS2, "(°/h)/g"
+    if name.startswith("accel_K2"):  # per m/s² → µg/g²
+        return 1e-6 / units.G0_MPS2, "µg/g²"
     return 1e-6, "ppm"
 
 
