@@ -106,6 +106,32 @@ def test_bisection_on_long_stream_with_repeated_times(tmp_path, monkeypatch):
                 assert i0 == int(np.argmax(keep))
 
 
+@pytest.mark.parametrize("scan_from", [1, 10**9])  # one pass over the column, or searches
+def test_iter_windows_reads_what_read_stream_reads(tmp_path, monkeypatch, scan_from):
+    import imucalib.io._search as search_module
+    import imucalib.io.reader as reader_module
+
+    monkeypatch.setattr(search_module, "_SCAN_BLOCK", 97)  # many blocks, windows across them
+    monkeypatch.setattr(reader_module, "_SCAN_WINDOWS", scan_from)
+    rng = np.random.default_rng(5)
+    t = np.cumsum(rng.integers(0, 2, 5_000)) * 0.5  # repeated values
+    spec = StreamSpec("chamber", "main", {"temperature_degc": ColumnSpec("degC")})
+    path = tmp_path / "w.h5"
+    with RecordingWriter(path, streams=[spec], chunk_rows=300) as w:
+        w.append("chamber", "main", {"time_s": t, "temperature_degc": t * 2})
+    windows = [(t[10], t[900]), (-5.0, 0.5), (t[2000], t[2000]), (t[4000], 1e9),
+               (t[1500], t[1600]), (100.25, 100.25), (t[-1], t[-1] + 1.0)]
+    with open_recording(path) as rec:
+        got = list(rec.iter_windows("chamber", "main", windows, ["temperature_degc"]))
+        for (t0, t1), d in zip(windows, got, strict=True):
+            want = rec.read_stream("chamber", "main", ["temperature_degc"], t0, t1)
+            assert np.array_equal(d.time_s, want.time_s), (t0, t1)
+            assert np.array_equal(d.columns["temperature_degc"],
+                                  want.columns["temperature_degc"])
+        with pytest.raises(InvalidInputError, match="before"):
+            list(rec.iter_windows("chamber", "main", [(2.0, 1.0)]))
+
+
 @pytest.mark.parametrize("chunk", [7, 999, 4096, 1 << 18])
 def test_iter_stream_concatenates_to_read_stream(recording, chunk):
     path, _ = recording

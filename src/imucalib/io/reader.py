@@ -63,7 +63,7 @@ from imucalib.io._schema import (
     parse_string_list,
     step_fields,
 )
-from imucalib.io._search import search_sorted_dataset
+from imucalib.io._search import scan_sorted_dataset, search_sorted_dataset
 from imucalib.io._v1 import v1_plan, v1_role_and_tags
 from imucalib.io._validate import (
     H5PY_ERRORS,
@@ -82,6 +82,10 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo", "open_recording"]
+
+#: Window ends from which :meth:`Recording.iter_windows` finds its rows by one pass over the
+#: time column rather than a search per end (a search costs a few small reads).
+_SCAN_WINDOWS = 32
 
 _T = TypeVar("_T")
 
@@ -592,10 +596,16 @@ class Recording:
             if t_end_s < t_start_s:
                 raise InvalidInputError(f"`t_end_s` ({t_end_s}) is before `t_start_s` "
                                         f"({t_start_s})")
-            i0 = self._guard(f"stream {device}/{unit} time_s", self._search, time_ds, n,
-                             float(t_start_s), "left")
-            i1 = self._guard(f"stream {device}/{unit} time_s", self._search, time_ds, n,
-                             float(t_end_s), "left")
+        ends = np.asarray(windows, dtype=np.float64).reshape(-1)
+        if ends.size >= _SCAN_WINDOWS:  # many windows: one pass over the time column
+            rows = self._guard(f"stream {device}/{unit} time_s", scan_sorted_dataset, time_ds,
+                               n, ends)
+        else:
+            rows = np.array([self._guard(f"stream {device}/{unit} time_s", self._search,
+                                         time_ds, n, float(t), "left") for t in ends],
+                            dtype=np.int64)
+        for k in range(len(windows)):
+            i0, i1 = int(rows[2 * k]), int(rows[2 * k + 1])
             yield self._read_rows(path, layout, names, i0, max(i0, i1), dsets)
 
     def read_stream(self, device: str, unit: str, columns: Sequence[str] | None = None,
