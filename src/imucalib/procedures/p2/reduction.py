@@ -348,9 +348,11 @@ def _solve(h: _F64, z: _F64, se: _F64, what: str) -> tuple[_F64, _F64, float]:
     zw = z / se
     u, sv, vt = np.linalg.svd(hw, full_matrices=False)
     if sv[-1] <= sv[0] * 1e-10:
-        raise InsufficientExcitationError(f"{what}: the design is rank deficient (condition "
-                                          f"{sv[0] / max(sv[-1], 1e-300):.3g}); the six "
-                                          "orientations and both turning directions are needed")
+        raise InsufficientExcitationError(
+            [f"{what} parameters"],
+            f"{what}: the design is rank deficient (condition "
+            f"{sv[0] / max(sv[-1], 1e-300):.3g}); the six orientations and both turning "
+            "directions are needed")
     theta = vt.T @ ((u.T @ zw) / sv)
     cov = (vt.T / sv**2) @ vt
     resid = zw - hw @ theta
