@@ -2,8 +2,9 @@
 
 Docstrings, docs and benchmarks may cite the project's own ``docs/`` pages and the published
 literature, never the private working notes outside the repository (the project brief, its
-design and style notes, the reference notes on standards and devices, or anything under
-``../shared``). Every ``docs/<name>.md`` that a docstring or a page cites must exist.
+design and style notes, the reference notes on standards and devices, or anything else in
+the working folder beside the repository). Every ``docs/<name>.md`` that a docstring or a
+page cites must exist.
 """
 
 from __future__ import annotations
