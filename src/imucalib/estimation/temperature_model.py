@@ -80,6 +80,7 @@ __all__ = [
     "check_held_out",
     "fit_temperature_model",
     "from_temperature_dependence",
+    "gls_weights",
     "predict_temperature_model",
     "to_parameter_record",
     "to_temperature_dependence",
@@ -518,6 +519,30 @@ def _model_design(model: TemperaturePolynomial, temp: NDArray[np.float64],
             raise InvalidInputError("`leg` is required: the model has a hysteresis term")
         cols.append(lg)
     return np.column_stack(cols)
+
+
+def gls_weights(fit: TemperatureModelFit, temperature_degc: ArrayLike, variances: ArrayLike,
+                temperature_rate_degc_ps: ArrayLike | None = None,
+                leg: ArrayLike | None = None) -> NDArray[np.float64]:
+    """Return W with β̂ = W·p: the fitted model's GLS estimator for independent estimates.
+
+    ``W = (Aᵀ V⁻¹ A)⁻¹ Aᵀ V⁻¹`` with A the model's design at the fit's points (Eq. (2),
+    physical units) and V = diag(`variances`); row 0 gives c_0. It carries the covariance of
+    several parameters' estimates at the same temperatures into their models' coefficients:
+    Cov(β_i, β_j) = W_i C_ij W_jᵀ (docs/p2.md, Eq. (P2.12)).
+
+    Raises
+    ------
+    InvalidInputError
+        Mis-shaped or non-finite inputs, a variance ≤ 0, a missing leg.
+    """
+    temp = _vector(temperature_degc, "temperature_degc")
+    var = _vector(variances, "variances", temp.size)
+    if np.any(var <= 0):
+        raise InvalidInputError("`variances` must be positive")
+    a = _model_design(fit.model, temp, temperature_rate_degc_ps, leg)
+    aw = a / var[:, None]
+    return np.asarray(np.linalg.solve(a.T @ aw, aw.T), dtype=np.float64)
 
 
 def _coefficient_vector(model: TemperaturePolynomial) -> NDArray[np.float64]:

@@ -47,6 +47,7 @@ from imucalib.estimation.temperature_model import (
     TemperatureModelFit,
     check_held_out,
     fit_temperature_model,
+    gls_weights,
     predict_temperature_model,
     to_parameter_record,
 )
@@ -311,25 +312,6 @@ def _point(obs: UnitObservations, point: int, windows: Sequence[P2Window],
 # temperature models and the result
 
 
-def _design_row(fit: TemperatureModelFit, temp: float, rate: float, leg: float) -> _F64:
-    m = fit.model
-    row = [(temp - m.reference_temperature_degc) ** j for j in range(m.order + 1)]
-    if m.rate_coefficient is not None:
-        row.append(rate)
-    if m.leg_coefficient is not None:
-        row.append(leg)
-    return np.array(row)
-
-
-def _gls_weights(fit: TemperatureModelFit, temps: _F64, rates: _F64, legs: _F64,
-                 var: _F64) -> _F64:
-    """W with β̂ = W·p for the fitted model's design and diagonal covariance (Eq. (P2.12))."""
-    a = np.array([_design_row(fit, t, r, g) for t, r, g in zip(temps, rates, legs,
-                                                                 strict=True)])
-    aw = a / var[:, None]
-    return np.asarray(np.linalg.solve(a.T @ aw, aw.T), dtype=np.float64)
-
-
 def _leg_value(leg: str) -> float:
     return 1.0 if leg == "heating" else -1.0
 
@@ -393,7 +375,8 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
             temperature_rate_degc_ps=rates if opt.rate_term else None,
             leg=legs if use_leg else None, compute_cv=opt.criterion == "cv")
         models[name] = fit
-        weights.append(_gls_weights(fit, temps, rates, legs, var)[0])
+        weights.append(gls_weights(fit, temps, var, rates if opt.rate_term else None,
+                                   legs if use_leg else None)[0])
         scales.append(fit.quality.birge_ratio if fit.quality.misfit else 1.0)
     # joint covariance of the c_0 (Eq. (P2.12)): Cov(c0_i, c0_j) = Σ_k W_ik W_jk C_k[i, j]
     w_mat = np.array(weights)                                   # (n_par, K)

@@ -30,6 +30,7 @@ Contents
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -392,8 +393,6 @@ def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
     NoiseModel`) whose Allan deviation at each window's duration is its standard error
     (:func:`~imucalib.procedures.common.noise.window_mean_se`).
     """
-    import dataclasses
-
     by_point: dict[int, list[P2Window]] = {}
     for w in windows:
         by_point.setdefault(w.point, []).append(w)
@@ -424,8 +423,6 @@ def detect_orientations(obs: UnitObservations, opt: P2Processing | None = None
     Returns the windows with ``orientation`` set and, per point, why it cannot be used (a
     pose whose static means show no axis up, or two poses showing the same).
     """
-    import dataclasses
-
     tol = (opt or P2Processing()).orientation_tolerance
     failures: dict[int, str] = {}
     by_key: dict[tuple[int, str], str] = {}
