@@ -95,3 +95,21 @@ def test_cli_refuses_p2_options_on_other_procedures_and_bad_p2_options(tmp_path,
                                    "--held-out", "ten"])
     assert res.exit_code == 2 and "--held-out must be numbers" in res.output
     assert Path(tmp_path / "p2.toml").exists() is False
+
+
+def test_cli_writes_a_p2_plan_with_its_options(tmp_path):
+    from imucalib.plan.io import load_plan
+
+    path = tmp_path / "p2.toml"
+    res = CliRunner().invoke(app, ["plan", "new", "p2", "-o", str(path), "--n-imus", "12",
+                                   "--hysteresis", "--temperatures=-30,0,30,60",
+                                   "--held-out", "15", "--rate-dps", "90"])
+    assert res.exit_code == 0, res.output
+    plan = load_plan(path)
+    assert plan.procedure == "p2" and plan.twin is not None and len(plan.twin.imus) == 12
+    legs = {t for s in plan.steps if s.role == "p2.soak" for t in s.tags if t.startswith("leg=")}
+    assert legs == {"leg=heating", "leg=cooling"}
+    rates = {abs(s.rate_dps) for s in plan.steps if isinstance(s, RateStep)}
+    assert rates == {90.0}
+    remounts = [s.remount for s in plan.steps if getattr(s, "remount", None)]
+    assert remounts[:6] == ["+z", "-z", "+y", "-y", "+x", "-x"]

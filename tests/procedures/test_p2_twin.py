@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -137,17 +138,41 @@ def _same(results) -> dict[str, str]:
     return out
 
 
-def test_workers_and_a_dask_cluster_give_the_local_result(array_run, batch):
+def test_workers_and_a_dask_cluster_give_the_local_result(array_run, batch, tmp_path):
+    from dask import distributed  # a dev dependency (the `dask` extra)
+
     units = ["U0", "U1", "U5"]
     local = _same(r for r in batch.results if r.unit in units)
     pooled = analyze_p2(array_run, units=units, workers=2)
     assert _same(pooled.results) == local
-    distributed = pytest.importorskip("dask.distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  host="127.0.0.1", dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
-        remote = analyze_p2(array_run, units=units, scheduler=client)
-    assert _same(remote.results) == local
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            remote = analyze_p2(array_run, units=units, scheduler=client)
+        assert _same(remote.results) == local
+        # the command line's --scheduler takes the cluster's address
+        res = CliRunner().invoke(app, ["calibrate", str(array_run), "--imu", "U1",
+                                       "--scheduler", cluster.scheduler_address,
+                                       "--out", str(tmp_path), "-q"])
+        assert res.exit_code == 0, res.output
+    cli = CalibrationResult.load(tmp_path / f"{array_run.stem}.U1.p2.result.json")
+    by = {r.unit: r for r in batch.results}
+    assert by["U1"].result is not None
+    np.testing.assert_array_equal(cli.values, by["U1"].result.values)
+
+
+def test_a_lot_of_several_recordings_is_one_batch(array_run, batch, tmp_path):
+    copy = tmp_path / "second.h5"
+    shutil.copyfile(array_run, copy)
+    lot = analyze_p2([array_run, copy], units=["U2"])
+    assert lot.unit == "lot" and len(lot.results) == 2 and lot.passed
+    first = next(r for r in batch.results if r.unit == "U2")
+    assert first.result is not None
+    for r in lot.results:
+        assert r.result is not None
+        np.testing.assert_array_equal(r.result.values, first.result.values)
+    rows = lot.to_dict()["summary"]
+    assert [row["unit"] for row in rows] == ["U2", "U2"]
 
 
 def test_cli_calibrates_the_array_writes_every_file_and_applies_a_unit(array_run, tmp_path):
