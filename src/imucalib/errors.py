@@ -14,6 +14,7 @@ Hierarchy
   - :class:`ConvergenceError`: an iterative solver that stopped before converging
   - :class:`RecordingError`: a recording that cannot be written or read
     - :class:`MissingSegmentError`: a segment the analysis needs is missing or unusable
+    - :class:`SaturationError`: samples the analysis needs reached the sensor's range
     - :class:`RecordingFormatError`: not an imucalib recording, or a newer format version
     - :class:`RecordingCorruptError`: truncated or damaged file
     - :class:`RecordingOpenForWriteError`: a file a crashed writer left open
@@ -45,6 +46,7 @@ __all__ = [
     "RecordingError",
     "RecordingFormatError",
     "RecordingOpenForWriteError",
+    "SaturationError",
     "StorageFullError",
     "UnitError",
 ]
@@ -102,6 +104,14 @@ class MissingSegmentError(RecordingError):
 
     An orientation, a turning direction or a temperature point that is not there, or one that
     cannot be used (dropouts, too few revolutions).
+    """
+
+
+class SaturationError(RecordingError):
+    """Recorded samples an analysis needs reached the sensor's range (flagged saturated).
+
+    A mean over clipped samples is wrong by an unknown amount; the analysis refuses it and
+    names the unit and the step.
     """
 
 

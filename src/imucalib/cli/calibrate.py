@@ -82,6 +82,24 @@ def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path |
                               step_file_text=steps.read_text(encoding="utf-8"))
 
 
+def _pairs(given: list[str] | None, flag: str) -> dict[str, tuple[float, float]] | None:
+    """Parse ``UNIT=VALUE,STD`` options into {unit: (value, std)} (None when none given)."""
+    if not given:
+        return None
+    out = {}
+    for text in given:
+        unit, sep, numbers = text.partition("=")
+        parts = numbers.split(",")
+        try:
+            if not (sep and unit.strip() and len(parts) == 2):
+                raise ValueError
+            out[unit.strip()] = (float(parts[0]), float(parts[1]))
+        except ValueError:
+            raise InvalidInputError(f"{flag} wants UNIT=VALUE,STD (e.g. REF-A=1.00002,5e-6); "
+                                    f"got {text!r}") from None
+    return out
+
+
 @app.command()
 def calibrate(
     recording: Annotated[Path, typer.Argument(
@@ -110,12 +128,24 @@ def calibrate(
         help="P2: how a temperature model's order is chosen: aicc (default) or cv.")] = None,
     max_order: Annotated[int | None, typer.Option(
         help="P2: the highest order of a temperature model (default 3).")] = None,
+    reference_a: Annotated[str | None, typer.Option(
+        help="P3: reference A's unit (default: the recording's mounting check says).")] = None,
+    reference_b: Annotated[str | None, typer.Option(help="P3: reference B's unit.")] = None,
+    test: Annotated[str | None, typer.Option(help="P3: the test accelerometer's unit.")] = None,
+    k1: Annotated[list[str] | None, typer.Option(
+        help="P3: UNIT=VALUE,STD — an accelerometer's scale factor (output per m/s²) and its "
+             "standard uncertainty instead of its tumble's; repeat per unit.")] = None,
+    k2_target: Annotated[float | None, typer.Option(
+        help="P3: the expanded uncertainty (k = 2) K2 must reach [g/g²] (default 1e-7).")]
+    = None,
 ) -> None:
     """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
 
     The recording's procedure decides: a P1 recording gives the calibration, its checks and the
     decision; an Allan recording the noise terms (JSON, Kalibr and OpenVINS YAML, a datasheet
-    table, figures). A CSV is calibrated through its step file (--steps).
+    table, figures); a P2 recording every unit with its temperature models; a P3 recording
+    the test accelerometer's K2 on the centrifuge with the unbalance removed. A CSV is
+    calibrated through its step file (--steps).
     """
     from imucalib.report.console import render_result
 
@@ -133,7 +163,9 @@ def calibrate(
             result, written = run_calibration(
                 recording, imu, model, out, progress=update, more=tuple(more or ()),
                 extra={"workers": workers, "scheduler": scheduler, "lever_arm": lever_arm,
-                       "criterion": criterion, "max_order": max_order})
+                       "criterion": criterion, "max_order": max_order,
+                       "reference_a": reference_a, "reference_b": reference_b, "test": test,
+                       "k1": _pairs(k1, "--k1"), "k2_target_g_per_g2": k2_target})
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_result(console, result, written)

@@ -92,7 +92,10 @@ _PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "st
                  "maker": "maker", "acceptance": "acceptance", "n_imus": "n_imus",
                  "held_out": "held_out_degc", "hysteresis": "hysteresis",
                  "rate_dps": "rate_dps", "revolutions": "revolutions",
-                 "pose_order": "pose_order"}
+                 "pose_order": "pose_order", "radius_m": "static_radius_m",
+                 "test_range_g": "test_range_g", "n_rates": "n_rates",
+                 "test_load_kg": "test_load_kg", "unbalance_um": "unbalance_um",
+                 "tumble": "tumble", "both_directions": "both_directions"}
 
 
 def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
@@ -131,7 +134,7 @@ def _numbers(text: str | None, flag: str) -> list[float] | None:
 def new(
     ctx: typer.Context,
     procedure: Annotated[str, typer.Argument(
-        help="Procedure: p1, allan or p2 (the registry's).")],
+        help="Procedure: p1, allan, p2 or p3 (the registry's).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
     "tactical",
@@ -166,6 +169,22 @@ def new(
     pose_order: Annotated[str, typer.Option(
         help="P2: temperature-major (six remounts per point) or pose-major (six sweeps).")]
     = "temperature-major",
+    radius_m: Annotated[float, typer.Option(
+        help="P3: static radius r_t of the test position [m].", min=0.01, max=20.0)] = 1.0,
+    test_range_g: Annotated[float, typer.Option(
+        help="P3: specific force at r_t at the top rate [g].", min=0.1, max=1000.0)] = 20.0,
+    n_rates: Annotated[int, typer.Option(help="P3: rate points (at least 4).", min=1,
+                                         max=100)] = 5,
+    test_load_kg: Annotated[float, typer.Option(
+        help="P3: the test load mounted for the last configuration [kg].", min=0.0,
+        max=1000.0)] = 2.0,
+    unbalance_um: Annotated[float, typer.Option(
+        help="P3: the twin's rotor-centre shift at the top rate, loaded [µm].", min=0.0,
+        max=1000.0)] = 10.0,
+    tumble: Annotated[bool, typer.Option(
+        help="P3: record the 1 g tumble (K1, K0 of each accelerometer).")] = True,
+    both_directions: Annotated[bool, typer.Option(
+        help="P3: run every rate at +ω and −ω.")] = False,
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
@@ -180,7 +199,10 @@ def new(
                  "serial": serial, "model": model, "maker": maker, "acceptance": acceptance,
                  "n_imus": n_imus, "held_out_degc": _numbers(held_out, "--held-out"),
                  "hysteresis": hysteresis, "rate_dps": rate_dps, "revolutions": revolutions,
-                 "pose_order": pose_order}
+                 "pose_order": pose_order, "static_radius_m": radius_m,
+                 "test_range_g": test_range_g, "n_rates": n_rates,
+                 "test_load_kg": test_load_kg, "unbalance_um": unbalance_um, "tumble": tumble,
+                 "both_directions": both_directions}
         # only what the command line gave: each generator keeps its own defaults
         explicit = {keyword for param, keyword in _PLAN_OPTIONS.items()
                     if (src := ctx.get_parameter_source(param)) is not None

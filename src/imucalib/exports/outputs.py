@@ -14,7 +14,8 @@ format             file                           content
 ``report-json``    ``….report.json``              the whole result: checks, decision, per
                                                   repetition (``result.to_dict()``)
 ``parameters-csv`` ``….parameters.csv``           one row per parameter: value, standard
-                                                  uncertainty, SI unit
+                                                  uncertainty, SI unit (a result with
+                                                  ``parameter_rows()``, P3, gives its own)
 ``noise-json``     ``….json``                     the versioned noise characterisation
 ``kalibr-yaml``    ``…[.k].kalibr.yaml``          Kalibr ``imu.yaml``, per static record k
 ``openvins-yaml``  ``…[.k].openvins.yaml``        OpenVINS ``kalibr_imu_chain.yaml``, per record
@@ -90,14 +91,19 @@ def _report_json(result: Any, folder: Path, stem: str) -> list[Path]:
 
 
 def _parameters_csv(result: Any, folder: Path, stem: str) -> list[Path]:
-    cal = _calibration(result, "parameters-csv")
+    rows_of = getattr(result, "parameter_rows", None)
+    if callable(rows_of):  # a result that is not a triad calibration (P3)
+        rows = [(n, repr(v), repr(s), u) for n, v, s, u in rows_of()]
+    else:
+        cal = _calibration(result, "parameters-csv")
+        std = cal.std()
+        rows = [(n, repr(cal.value(n)), repr(std[n]), cal.units.get(n, ""))
+                for n in cal.param_names]
     path = folder / f"{stem}.parameters.csv"
-    std = cal.std()
     with open(path, "w", encoding="utf-8", newline="") as fh:
         out = csv.writer(fh, lineterminator="\n")
         out.writerow(["parameter", "value", "std_uncertainty", "unit"])
-        for name in cal.param_names:
-            out.writerow([name, repr(cal.value(name)), repr(std[name]), cal.units.get(name, "")])
+        out.writerows(rows)
     return [path]
 
 

@@ -34,6 +34,27 @@ P2 (array full-temperature calibration, docs/p2.md); every P2 step carries the t
 :data:`P2_RATE` ``"p2.rate"``
     A turn at +ω or −ω over whole revolutions.
 
+P3 (accelerometer K2 on a centrifuge with dynamic-unbalance compensation, docs/p3.md); every
+P3 step of a configuration carries the tag ``config=<k>`` (1: reference A on the test side, no
+test load; 2: A and B swapped; 3: A back on the test side, the test load mounted); the first
+mounting check names the units with ``ref-a=<unit>``, ``ref-b=<unit>`` and ``test=<unit>``:
+
+:data:`P3_MOUNT` ``"p3.mount"``
+    An operator check that mounts the accelerometers or turns them for the 1 g tumble.
+:data:`P3_TUMBLE` ``"p3.tumble"``
+    A record at rest with the input axes vertical (tag ``pose=+x|-x``, the fixture axis up): K1
+    and K0 of each accelerometer from ±1 g.
+:data:`P3_REST` ``"p3.rest"``
+    A record at rest at one of the four arm positions (tags ``arm=<deg>`` and
+    ``phase=before|after`` the configuration's rates).
+:data:`P3_RATE` ``"p3.rate"``
+    A record spinning at one rate over whole revolutions.
+:data:`P3_SWAP` ``"p3.swap"``
+    The operator exchanges references A and B (an operator check, ``swap_units``).
+:data:`P3_LOAD` ``"p3.load"``
+    The operator puts A and B back and mounts the test accelerometer and its load
+    (``swap_units`` and ``centrifuge_load_kg``).
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -59,6 +80,13 @@ __all__ = [
     "P2_ROLES",
     "P2_SOAK",
     "P2_STATIC",
+    "P3_LOAD",
+    "P3_MOUNT",
+    "P3_RATE",
+    "P3_REST",
+    "P3_ROLES",
+    "P3_SWAP",
+    "P3_TUMBLE",
     "role_from_tags",
 ]
 
@@ -78,6 +106,15 @@ P2_STATIC: Final = "p2.static"
 P2_RATE: Final = "p2.rate"
 #: Every P2 role.
 P2_ROLES: Final = (P2_SOAK, P2_REMOUNT, P2_STATIC, P2_RATE)
+
+P3_MOUNT: Final = "p3.mount"
+P3_TUMBLE: Final = "p3.tumble"
+P3_REST: Final = "p3.rest"
+P3_RATE: Final = "p3.rate"
+P3_SWAP: Final = "p3.swap"
+P3_LOAD: Final = "p3.load"
+#: Every P3 role.
+P3_ROLES: Final = (P3_MOUNT, P3_TUMBLE, P3_REST, P3_RATE, P3_SWAP, P3_LOAD)
 
 
 def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:

@@ -34,6 +34,7 @@ BUILTIN: dict[str, str] = {
     "p1": "imucalib.procedures.p1.procedure",
     "allan": "imucalib.procedures.allan.procedure",
     "p2": "imucalib.procedures.p2.procedure",
+    "p3": "imucalib.procedures.p3.procedure",
 }
 
 _registered: dict[str, Procedure] = {}

@@ -1,6 +1,6 @@
 """Procedure P3: accelerometer K2 on a centrifuge with dynamic-unbalance compensation.
 
-Work in progress (issue 13): ``roundrobin`` (the reduction of the round-robin's series to K2 of
-both references, the unbalance c and c′, and K2 of the test accelerometer) is built and tested
-on synthetic series; the plan, the analysis of a recording and the registration are not yet.
+docs/p3.md. :mod:`.plan` (:func:`~imucalib.procedures.p3.plan.generate_p3_plan`), :mod:`.observations`
+(records → means), :mod:`.roundrobin` (the reduction, Eqs. (P3.1)–(P3.4)), :mod:`.analysis`
+(:func:`~imucalib.procedures.p3.analysis.analyze_p3`), :mod:`.procedure` (the registry's ``p3``).
 """

@@ -7,44 +7,55 @@ indistinguishable from its quadratic coefficient K2 unless c is measured: two re
 accelerometers A and B at r_t/3 on opposite sides, swapped half-way, give c and their own K2;
 with the test load mounted they give the loaded c′, and the test accelerometer's ω⁴ coefficient
 minus c′ gives its K2 (the patent "一种基于动不平衡补偿的加速度计二次项系数精确标定方法";
-docs/procedures.md, "P3"). This module is the pure reduction; the equations are
-docs/equations.md §7 (the centrifuge input) and the following.
+docs/p3.md derives every equation). This module is the pure reduction.
 
-Model, per accelerometer j in configuration k, with Δ the whole-revolution mean output minus the
-rest mean (four arm positions), K0/K1 its bias and scale factor (known from a tumble), ω_e the
-inertial spin rate (table rate plus the vertical Earth rate), r_j its static radius and s_j = +1
-on the side the centre moves towards, −1 on the other::
+Model, per accelerometer j in configuration k, with V its mean output (at rest: averaged over
+the four arm positions; spinning: over whole revolutions), K1 its scale factor (from the 1 g
+tumble), ω the table rate, Ω_U the vertical Earth rate, r_j its static radius and s_j = +1 on
+the side the centre moves towards, −1 on the other::
 
-    Δ_j(ω)/K1_j = a + K2_j·a²,   a = ω_e²·(r_j + s_j·c_k·ω_e²)                     (P3.1)
-               = r_j·ω_e² + (s_j·c_k + K2_j·r_j²)·ω_e⁴ + O(ω_e⁶)                     (P3.2)
+    V/K1 = p0 + a + K2_j·a²,   a = x·(r_j + s_j·c_k·ω²),   x = (ω + Ω_U)² − Ω_U²         (P3.1)
+         = p0 + r_j·x + (s_j·c_k + K2_j·r_j²)·x² + O(x³)                               (P3.2)
 
-so the ω_e⁴ coefficient of each series is m = s·c_k + K2·r² (the ω_e² one absorbs radius and
-scale-factor errors). The seven series of the round-robin (A and B before and after their
-swap, both with the test load, and the test accelerometer) give::
+(p0 = K0/K1 plus whatever the rest records share with the spinning ones: cross-axis gravity,
+the constant K2·g²·sin²θ/2 of a tilted spin axis; x·ω² = x² to 2Ω_U/ω ≈ 1e-5 of the c term).
+So the x² coefficient of each series is m = s·c_k + K2·r², and its x coefficient is the
+accelerometer's effective radius (it absorbs the errors of the static radius and of K1, as
+IEEE Std 836 prescribes: the linear term left free). The seven series of the round-robin (A
+and B before and after their swap, both with the test load, and the test accelerometer)
+give::
 
-    m1 = c + K2_A·r_A²     m2 = −c + K2_B·r_B²      (A on the test side)
-    m3 = −c + K2_A·r_A²    m4 = c + K2_B·r_B²       (swapped)
-    m5 = c′ + K2_A·r_A²    m6 = −c′ + K2_B·r_B²     (test load, A on the test side)
-    m7 = c′ + K2_T·r_t²                                                             (P3.3)
+    m1 = c + K2_A·r₁²     m2 = −c + K2_B·r₂²      (A on the test side)
+    m3 = −c + K2_A·r₃²    m4 = c + K2_B·r₄²       (swapped)
+    m5 = c′ + K2_A·r₅²    m6 = −c′ + K2_B·r₆²     (test load, A on the test side)
+    m7 = c′ + K2_T·r₇²                                                              (P3.3)
 
-seven equations in (K2_A, K2_B, c, c′, K2_T), solved by weighted least squares with the m's
-covariance (P3.4); the naive K2_T = m7/r_t² that ignores the unbalance is biased by c′/r_t².
+seven equations in (K2_A, K2_B, c, c′, K2_T), r_k the series' own effective radius (so that a
+reference that sits at another radius after the swap costs nothing), solved by generalised
+least squares with the m's full covariance (P3.4): the noise of each series' fit and the Type B
+uncertainty of each K1, which scales every m of one accelerometer alike (δm = −m·δK1/K1) and
+so correlates its three series. The naive K2_T = m7/r₇² that ignores the unbalance is biased
+by c′/r₇².
 
-Precision: with five rates up to 20 g at r_t = 0.6 m, window means good to σ give K2_T to
-about 1.1e-6·σ/µg g/g² (tests/procedures/test_p3_roundrobin.py: 0.1 µg → 1.1e-7 g/g²,
-0.03 µg → 3.2e-8): the method's 1e-7 g/g² needs means good to about 0.08 µg — a navigation
-accelerometer averaged over minutes at each rate.
+Precision: with five rates up to 20 g at r_t = 1 m, series means good to σ give K2_T to about
+1.1e-8·σ/µg g/g² (tests/procedures/test_p3_roundrobin.py): the method's 1e-7 g/g² needs means
+good to a few µg — a navigation-grade accelerometer averaged for a minute.
 
-Each series' coefficients come from a weighted fit of Δ/K1 on (ω_e², ω_e⁴) over the rate
-points (:func:`fit_series`), ≥ 4 rates (two degrees of freedom test the fit). The ω_e⁶ term
-of (P3.1), 2·K2·r·s·c, is left out: it biases K2_T by about 2e-9 g/g² (tests), fifty times
+Each series' coefficients come from a weighted fit of V/K1 on (1, x, x²) over its rest and rate
+points (:func:`fit_series`), ≥ 4 distinct rates and at least one rest point (the rate points
+give x and x² with two degrees of freedom to test the fit, the rest points p0). The x³ term of
+(P3.1), 2·K2·r·s·c, is left out: it biases K2_T by about 1e-9 g/g² (tests), a hundred times
 below the method's claim, while fitting it would multiply the σ of m by about ten (its column
-is nearly collinear with ω_e⁴).
+is nearly collinear with x²).
+
+Misfit: a series whose χ² exceeds its 99 % quantile has the σ of its m scaled by its Birge
+ratio, and a round-robin misfit (the seven equations inconsistent beyond their σ, ν = 2)
+scales the covariance of the five unknowns by its own (docs/processing-estimation.md).
 
 Contents
 --------
 :class:`Series`, :func:`fit_series`, :class:`RoundRobinEstimate`, :func:`solve_round_robin`,
-:data:`SERIES_NAMES`.
+:data:`SERIES_NAMES`, :data:`PARAMETERS`.
 """
 
 from __future__ import annotations
@@ -60,8 +71,8 @@ from imucalib._checks import as_array
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
-__all__ = ["PARAMETERS", "SERIES_NAMES", "RoundRobinEstimate", "Series", "fit_series",
-           "solve_round_robin"]
+__all__ = ["MIN_RATES", "PARAMETERS", "SERIES_NAMES", "RoundRobinEstimate", "Series",
+           "fit_series", "series_covariance", "solve_round_robin"]
 
 _F64 = NDArray[np.float64]
 
@@ -69,76 +80,94 @@ _F64 = NDArray[np.float64]
 SERIES_NAMES: Final = ("A1", "B1", "A2", "B2", "A3", "B3", "T3")
 #: The unknowns of (P3.3), in the order of :attr:`RoundRobinEstimate.values`.
 PARAMETERS: Final = ("K2_A", "K2_B", "c", "c_loaded", "K2_T")
-#: Rate points a series needs (two polynomial terms and two degrees of freedom).
+#: Distinct rates a series needs (the x and x² terms and two degrees of freedom).
 MIN_RATES: Final = 4
 
 
 @dataclass(frozen=True)
 class Series:
-    """One accelerometer's ω_e⁴ coefficient in one configuration, from :func:`fit_series`.
+    """One accelerometer's coefficients in one configuration, from :func:`fit_series`.
 
     Attributes
     ----------
     m : float
-        The ω_e⁴ coefficient of Δ/K1. [m/(rad/s)²]
+        The x² coefficient of V/K1, Eq. (P3.2). [m/(rad/s)²]
     m_std : float
-        Its standard uncertainty (noise and the Type B σ of K1 propagated). [m/(rad/s)²]
-    radius_m : float
-        The ω_e² coefficient: the accelerometer's effective radius. [m]
+        Its standard uncertainty: the fit's (Birge-scaled on a misfit) and the Type B σ of K1.
+        [m/(rad/s)²]
+    m_fit_std : float
+        The fit's part alone (Birge-scaled on a misfit). [m/(rad/s)²]
+    k1_rel_std : float
+        σ(K1)/K1, common to every series of the accelerometer.
+    radius_m, radius_std_m : float
+        The x coefficient (the effective radius) and its σ. [m]
+    rest_output : float
+        p0·K1, the fitted output at rest. [output unit]
     quality : FitQuality
         χ²/ν of the series' fit.
     """
 
     m: float
     m_std: float
+    m_fit_std: float
+    k1_rel_std: float
     radius_m: float
+    radius_std_m: float
+    rest_output: float
     quality: FitQuality
 
 
-def fit_series(rate_rps: ArrayLike, delta_output: ArrayLike, delta_std: ArrayLike, *,
+def fit_series(rate_rps: ArrayLike, output: ArrayLike, output_std: ArrayLike, *,
                k1: float, k1_std: float = 0.0, earth_rate_up_rps: float = 0.0,
                name: str = "series") -> Series:
-    """Fit Δ/K1 = p1·ω_e² + p2·ω_e⁴ over the rate points, Eq. (P3.2).
+    """Fit V/K1 = p0 + p1·x + p2·x² over a series' rest and rate points, Eq. (P3.2).
 
     Parameters
     ----------
     rate_rps : array_like, shape (n,)
-        The table's mean rates over whole revolutions, n ≥ :data:`MIN_RATES`, signed. [rad/s]
-    delta_output, delta_std : array_like, shape (n,)
-        Output at each rate minus the rest output, and its standard error. [output unit]
+        The table's mean rate over each record's whole revolutions, 0 for a rest record (the
+        mean over the four arm positions), signed. [rad/s]
+    output, output_std : array_like, shape (n,)
+        Mean output of each record and its standard error. [output unit]
     k1, k1_std : float
         Scale factor (output unit per m/s²) and its standard uncertainty.
     earth_rate_up_rps : float
-        The vertical Earth rate Ω_U added to the table rate (ω_e = ω + Ω_U). [rad/s]
+        The vertical Earth rate Ω_U (x = (ω + Ω_U)² − Ω_U²). [rad/s]
     name : str
         For messages and the FitQuality.
 
     Raises
     ------
     InsufficientExcitationError
-        Fewer than :data:`MIN_RATES` distinct |rates|.
+        Fewer than :data:`MIN_RATES` distinct non-zero |rates|, or no rest record.
     InvalidInputError
         Mis-shaped or non-finite inputs, a σ ≤ 0, K1 not positive.
     """
     w = as_array(rate_rps, "rate_rps", shape=(None,))
     n = w.size
-    d = as_array(delta_output, "delta_output", shape=(n,))
-    s = as_array(delta_std, "delta_std", shape=(n,))
+    v = as_array(output, "output", shape=(n,))
+    s = as_array(output_std, "output_std", shape=(n,))
     if np.any(s <= 0):
-        raise InvalidInputError(f"{name}: `delta_std` must be positive")
+        raise InvalidInputError(f"{name}: `output_std` must be positive")
     if not (np.isfinite(k1) and k1 > 0 and np.isfinite(k1_std) and k1_std >= 0):
         raise InvalidInputError(f"{name}: K1 must be a positive number and its σ ≥ 0; got "
                                 f"{k1!r} ± {k1_std!r}")
-    distinct = np.unique(np.round(np.abs(w), 9)).size
+    spinning = np.abs(w) > 0
+    distinct = np.unique(np.round(np.abs(w[spinning]), 9)).size
     if distinct < MIN_RATES:
         raise InsufficientExcitationError(
-            [f"{name}: m (ω⁴ coefficient)"],
+            [f"{name}: m (x² coefficient)"],
             f"{name}: {distinct} distinct rate(s); the ω⁴ coefficient needs at least "
             f"{MIN_RATES} rate points (ω² and ω⁴ terms and two degrees of freedom)")
-    we2 = (w + earth_rate_up_rps) ** 2
-    y = d / k1
+    if spinning.all():
+        raise InsufficientExcitationError(
+            [f"{name}: p0 (rest output)"],
+            f"{name}: no rest record; the rest output (the four arm positions at ω = 0) is "
+            "what the spinning outputs are measured from")
+    x = (w + earth_rate_up_rps) ** 2 - earth_rate_up_rps**2
+    y = v / k1
     sy = s / k1
-    h = np.column_stack([we2, we2**2])
+    h = np.column_stack([np.ones(n), x, x**2])
     scale = np.abs(h).max(axis=0)
     hw = h / scale / sy[:, None]
     coef_s, *_ = np.linalg.lstsq(hw, y / sy, rcond=None)
@@ -146,11 +175,15 @@ def fit_series(rate_rps: ArrayLike, delta_output: ArrayLike, delta_std: ArrayLik
     coef = coef_s / scale
     cov = cov_s / np.outer(scale, scale)
     resid = (y - h @ coef) / sy
-    quality = assess_fit(name, float(resid @ resid), n - 2)
+    quality = assess_fit(name, float(resid @ resid), n - 3)
+    birge = quality.sigma_scale
+    fit_std = float(np.sqrt(cov[2, 2])) * birge
+    rel = float(k1_std / k1)
     # a relative K1 error scales every coefficient alike (Type B): δm = −m·δK1/K1
-    var_m = cov[1, 1] + (coef[1] * k1_std / k1) ** 2
-    return Series(m=float(coef[1]), m_std=float(np.sqrt(var_m)), radius_m=float(coef[0]),
-                  quality=quality)
+    return Series(m=float(coef[2]), m_std=float(np.hypot(fit_std, coef[2] * rel)),
+                  m_fit_std=fit_std, k1_rel_std=rel, radius_m=float(coef[1]),
+                  radius_std_m=float(np.hypot(np.sqrt(cov[1, 1]) * birge, coef[1] * rel)),
+                  rest_output=float(coef[0] * k1), quality=quality)
 
 
 @dataclass(frozen=True)
@@ -162,16 +195,24 @@ class RoundRobinEstimate:
     values : ndarray, shape (5,)
         K2_A, K2_B [1/(m/s²)], c, c′ [m/(rad/s)²], K2_T [1/(m/s²)] (:data:`PARAMETERS`).
     covariance : ndarray, shape (5, 5)
+        Their covariance, Birge-scaled when the seven equations are a misfit.
+    covariance_noise : ndarray, shape (5, 5)
+        Before that scaling.
     quality : FitQuality
-        χ² of the seven equations against the m's σ (two degrees of freedom).
-    naive_k2_t : float
-        m7/r_t², the K2 an analysis ignoring the unbalance reports. [1/(m/s²)]
+        χ² of the seven equations against the m's covariance (two degrees of freedom).
+    naive_k2_t, naive_k2_t_std : float
+        m7/r₇², the K2 an analysis ignoring the unbalance reports, and its σ. [1/(m/s²)]
+    radii_m : ndarray, shape (7,)
+        The radius of each series used in (P3.3). [m]
     """
 
     values: _F64
     covariance: _F64
+    covariance_noise: _F64
     quality: FitQuality
     naive_k2_t: float
+    naive_k2_t_std: float
+    radii_m: _F64
 
     def value(self, name: str) -> float:
         """Return one parameter of :data:`PARAMETERS`."""
@@ -183,51 +224,74 @@ class RoundRobinEstimate:
         return float(np.sqrt(self.covariance[i, i]))
 
 
-def solve_round_robin(series: Mapping[str, Series], *, radius_a_m: float, radius_b_m: float,
-                      radius_t_m: float) -> RoundRobinEstimate:
-    """Solve (P3.3) for K2_A, K2_B, c, c′ and K2_T by weighted least squares, Eq. (P3.4).
+def series_covariance(series: Mapping[str, Series]) -> _F64:
+    """Return the 7×7 covariance of the m's of :data:`SERIES_NAMES`, Eq. (P3.4).
+
+    Each series' fit variance on the diagonal; m_i·m_j·(σ(K1)/K1)² between series of the same
+    accelerometer (A, B or the test one: the series' first letter).
+    """
+    m = np.array([series[k].m for k in SERIES_NAMES])
+    fit = np.array([series[k].m_fit_std for k in SERIES_NAMES])
+    rel = np.array([series[k].k1_rel_std for k in SERIES_NAMES])
+    same = np.array([[a[0] == b[0] for b in SERIES_NAMES] for a in SERIES_NAMES])
+    return np.diag(fit**2) + np.where(same, np.outer(m * rel, m * rel), 0.0)
+
+
+def solve_round_robin(series: Mapping[str, Series], *,
+                      radii_m: Mapping[str, float] | None = None) -> RoundRobinEstimate:
+    """Solve (P3.3) for K2_A, K2_B, c, c′ and K2_T by generalised least squares, Eq. (P3.4).
 
     Parameters
     ----------
     series : mapping of str to Series
         The seven series by :data:`SERIES_NAMES`.
-    radius_a_m, radius_b_m, radius_t_m : float
-        Static radii of the references and the test accelerometer (positive). [m]
+    radii_m : mapping of str to float, optional
+        The radius of each series in (P3.3) (e.g. the nominal r_t/3 and r_t, to see what the
+        nominal geometry costs); default each series' own effective radius.
 
     Raises
     ------
     InvalidInputError
-        A missing series (naming it: the swap or the test load not recorded), radii not
-        positive.
+        A missing series (naming it: the swap or the test load not recorded), a radius not
+        positive, a covariance that is not positive definite.
     """
     missing = [k for k in SERIES_NAMES if k not in series]
     if missing:
         raise InvalidInputError(
             f"the round-robin needs the series {list(SERIES_NAMES)}; missing {missing} (A1/B1 "
             "before the swap of A and B, A2/B2 after it, A3/B3/T3 with the test load)")
-    for name, r in (("radius_a_m", radius_a_m), ("radius_b_m", radius_b_m),
-                    ("radius_t_m", radius_t_m)):
-        if not (np.isfinite(r) and r > 0):
-            raise InvalidInputError(f"`{name}` must be a positive radius [m]; got {r!r}")
-    ra2, rb2, rt2 = radius_a_m**2, radius_b_m**2, radius_t_m**2
-    #            K2_A   K2_B   c     c′    K2_T
-    h = np.array([[ra2, 0.0, 1.0, 0.0, 0.0],    # A1
-                  [0.0, rb2, -1.0, 0.0, 0.0],   # B1
-                  [ra2, 0.0, -1.0, 0.0, 0.0],   # A2
-                  [0.0, rb2, 1.0, 0.0, 0.0],    # B2
-                  [ra2, 0.0, 0.0, 1.0, 0.0],    # A3
-                  [0.0, rb2, 0.0, -1.0, 0.0],   # B3
-                  [0.0, 0.0, 0.0, 1.0, rt2]])   # T3
+    radii = np.array([float((radii_m or {}).get(k, series[k].radius_m)) for k in SERIES_NAMES])
+    bad = [k for k, r in zip(SERIES_NAMES, radii, strict=True) if not (np.isfinite(r) and r > 0)]
+    if bad:
+        raise InvalidInputError(f"the radii of the series {bad} must be positive [m]; got "
+                                f"{[float(r) for r in radii]} (an input axis pointing outward "
+                                "reads −ω²r: mount the accelerometers pointing inward)")
+    r2 = radii**2
+    #                K2_A   K2_B   c     c′    K2_T
+    h = np.array([[r2[0], 0.0, 1.0, 0.0, 0.0],     # A1
+                  [0.0, r2[1], -1.0, 0.0, 0.0],    # B1
+                  [r2[2], 0.0, -1.0, 0.0, 0.0],    # A2
+                  [0.0, r2[3], 1.0, 0.0, 0.0],     # B2
+                  [r2[4], 0.0, 0.0, 1.0, 0.0],     # A3
+                  [0.0, r2[5], 0.0, -1.0, 0.0],    # B3
+                  [0.0, 0.0, 0.0, 1.0, r2[6]]])    # T3
     m = np.array([series[k].m for k in SERIES_NAMES])
-    sm = np.array([series[k].m_std for k in SERIES_NAMES])
-    if np.any(sm <= 0):
-        raise InvalidInputError("every series needs a positive σ of its ω⁴ coefficient")
+    cm = series_covariance(series)
+    try:
+        chol = np.linalg.cholesky(cm)
+    except np.linalg.LinAlgError:
+        raise InvalidInputError("the covariance of the series' ω⁴ coefficients is not positive "
+                                "definite (a σ of zero?)") from None
     scale = np.abs(h).max(axis=0)
-    hw = h / scale / sm[:, None]
+    hw = np.linalg.solve(chol, h / scale)
+    mw = np.linalg.solve(chol, m)
     cov_s = np.linalg.inv(hw.T @ hw)
-    theta = (cov_s @ hw.T @ (m / sm)) / scale
+    theta = (cov_s @ hw.T @ mw) / scale
     cov = cov_s / np.outer(scale, scale)
-    resid = (m - h @ theta) / sm
+    cov = 0.5 * (cov + cov.T)
+    resid = mw - hw @ (theta * scale)
     quality = assess_fit("round-robin", float(resid @ resid), len(m) - len(PARAMETERS))
-    return RoundRobinEstimate(values=theta, covariance=0.5 * (cov + cov.T), quality=quality,
-                              naive_k2_t=float(series["T3"].m / rt2))
+    return RoundRobinEstimate(values=theta, covariance=cov * quality.sigma_scale**2,
+                              covariance_noise=cov, quality=quality,
+                              naive_k2_t=float(m[6] / r2[6]),
+                              naive_k2_t_std=float(np.sqrt(cm[6, 6]) / r2[6]), radii_m=radii)

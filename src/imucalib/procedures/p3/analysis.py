@@ -1,0 +1,424 @@
+"""P3's analysis: from the records of a run to K2 of the test accelerometer (docs/p3.md).
+
+1. Every record of the three units reduced (:mod:`~imucalib.procedures.p3.observations`).
+2. K1 and K0 of each accelerometer from its 1 g tumble (the records with the input axis up and
+   down: K1 = (V₊ − V₋)/2g, K0 = (V₊ + V₋)/2, Eq. (P3.5)), or given as inputs with their
+   uncertainty (:attr:`P3Options.k1`); local g from the recorded latitude (normal gravity,
+   with a Type B relative σ :attr:`P3Options.gravity_rel_std`) unless given.
+3. Each series (one accelerometer in one configuration): the rest records of each phase
+   (before and after the rates) averaged over the arm positions — every position must be
+   there, their mean is what cancels the gravity a tilted spin axis leaks into the radial
+   input — and the rate records, fitted by :func:`~imucalib.procedures.p3.roundrobin.fit_series`.
+4. The round-robin (:func:`~imucalib.procedures.p3.roundrobin.solve_round_robin`): K2 of A, B and
+   the test accelerometer, c and c′ with their covariance; the naive K2_T beside it.
+5. The decision: the test accelerometer's K2 passes when its expanded uncertainty (k = 2,
+   Birge-scaled on a misfit) is within :attr:`P3Options.k2_target_g_per_g2`.
+
+Contents
+--------
+:class:`P3Options`, :class:`AccelerometerScale`, :class:`P3Result`, :func:`analyze_p3`,
+:func:`tumble_scale`, :func:`build_series`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imucalib import units
+from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
+from imucalib.io.reader import Recording, open_recording
+from imucalib.io.step_roles import P3_RATE, P3_REST, P3_TUMBLE
+from imucalib.models.earth import Site
+from imucalib.procedures.p3.observations import (
+    P3Processing,
+    P3Window,
+    extract_p3_windows,
+    p3_unit_names,
+)
+from imucalib.procedures.p3.roundrobin import (
+    PARAMETERS,
+    SERIES_NAMES,
+    RoundRobinEstimate,
+    Series,
+    fit_series,
+    solve_round_robin,
+)
+
+__all__ = ["AccelerometerScale", "P3Options", "P3Result", "analyze_p3", "build_series",
+           "tumble_scale"]
+
+#: Which unit role and configuration each series of (P3.3) comes from.
+SERIES_SOURCES: dict[str, tuple[str, int]] = {
+    "A1": ("ref-a", 1), "B1": ("ref-b", 1), "A2": ("ref-a", 2), "B2": ("ref-b", 2),
+    "A3": ("ref-a", 3), "B3": ("ref-b", 3), "T3": ("test", 3)}
+_ROLES = ("ref-a", "ref-b", "test")
+_G_PER_G2 = units.G0_MPS2  # K2 [1/(m/s²)] × g0 = K2 [g/g²]
+
+
+@dataclass(frozen=True)
+class P3Options:
+    """Options of :func:`analyze_p3`.
+
+    Attributes
+    ----------
+    reference_a, reference_b, test : str, optional
+        The units (IMU streams) of reference A, reference B and the test accelerometer;
+        default: the names the recording's first mounting check gives.
+    k1 : mapping of str to (float, float)
+        K1 (output per m/s²) and its standard uncertainty per unit, instead of the tumble's.
+    k0 : mapping of str to (float, float)
+        K0 (output) and its uncertainty per unit, reported with the result (K0 does not enter
+        K2: the rest records are fitted).
+    gravity_mps2 : float, optional
+        Local gravity for the tumble; default the normal gravity at the recorded latitude.
+    gravity_rel_std : float, optional
+        Its relative standard uncertainty; default 2e-5 for normal gravity (the anomalies of a
+        laboratory site), 0 for a given value.
+    radii : {"fitted", "nominal"}
+        The radius of each series in (P3.3): its own effective radius (the x coefficient) or
+        the nominal ones (:attr:`nominal_radii_m`).
+    nominal_radii_m : (float, float)
+        Reference and test radii for ``radii="nominal"``. [m]
+    k2_target_g_per_g2 : float
+        The expanded uncertainty (k = 2) the test accelerometer's K2 must reach. [g/g²]
+    processing : P3Processing
+        The window reduction's options (input axis, dropouts, noise windows).
+    """
+
+    reference_a: str | None = None
+    reference_b: str | None = None
+    test: str | None = None
+    k1: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    k0: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    gravity_mps2: float | None = None
+    gravity_rel_std: float | None = None
+    radii: str = "fitted"
+    nominal_radii_m: tuple[float, float] | None = None
+    k2_target_g_per_g2: float = 1e-7
+    processing: P3Processing = field(default_factory=P3Processing)
+
+    def __post_init__(self) -> None:
+        if self.radii not in ("fitted", "nominal"):
+            raise InvalidInputError(f"`radii` must be 'fitted' or 'nominal'; got {self.radii!r}")
+        if self.radii == "nominal" and self.nominal_radii_m is None:
+            raise InvalidInputError("`radii='nominal'` needs `nominal_radii_m` (reference, test)")
+        if not (math.isfinite(self.k2_target_g_per_g2) and self.k2_target_g_per_g2 > 0):
+            raise InvalidInputError(f"`k2_target_g_per_g2` must be positive; got "
+                                    f"{self.k2_target_g_per_g2!r}")
+        for what, given in (("k1", self.k1), ("k0", self.k0)):
+            for unit, pair in given.items():
+                ok = (isinstance(pair, Sequence) and len(pair) == 2
+                      and all(isinstance(v, int | float) and math.isfinite(v) for v in pair)
+                      and pair[1] >= 0 and (what == "k0" or pair[0] > 0))
+                if not ok:
+                    raise InvalidInputError(
+                        f"`{what}` of unit {unit!r} must be (value, standard uncertainty) with a "
+                        f"{'positive value and ' if what == 'k1' else ''}σ ≥ 0; got {pair!r}")
+
+
+@dataclass(frozen=True)
+class AccelerometerScale:
+    """K1 and K0 of one accelerometer with their standard uncertainties.
+
+    ``source`` is ``"tumble"`` (Eq. (P3.5)) or ``"input"``. K1 [output per m/s²], K0 [output].
+    """
+
+    unit: str
+    k1: float
+    k1_std: float
+    k0: float
+    k0_std: float
+    source: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON-able fields."""
+        return {"unit": self.unit, "k1": self.k1, "k1_std": self.k1_std, "k0": self.k0,
+                "k0_std": self.k0_std, "source": self.source}
+
+
+def tumble_scale(unit: str, windows: Sequence[P3Window], gravity_mps2: float,
+                 gravity_rel_std: float) -> AccelerometerScale:
+    """K1 = (V₊ − V₋)/2g and K0 = (V₊ + V₋)/2 from the tumble records, Eq. (P3.5).
+
+    V₊ is the mean of the records whose output is above zero (input axis up), V₋ of those below.
+
+    Raises
+    ------
+    MissingSegmentError
+        No record with the axis up, or none with it down.
+    """
+    tumble = [w for w in windows if w.role == P3_TUMBLE]
+    up = [w for w in tumble if w.mean > 0.5 * gravity_mps2]
+    down = [w for w in tumble if w.mean < -0.5 * gravity_mps2]
+    if not up or not down:
+        found = [round(w.mean / gravity_mps2, 3) for w in tumble]
+        raise MissingSegmentError(
+            f"unit {unit}: the 1 g tumble needs a record with the input axis up (+1 g) and one "
+            f"with it down (−1 g); the tumble records read {found} g — give K1 as an input "
+            "(k1) instead")
+
+    def mean(ws: list[P3Window]) -> tuple[float, float]:
+        return (float(np.mean([w.mean for w in ws])),
+                float(np.sqrt(np.sum([w.se**2 for w in ws]))) / len(ws))
+
+    vp, sp = mean(up)
+    vm, sm = mean(down)
+    k1 = (vp - vm) / (2.0 * gravity_mps2)
+    k1_std = math.hypot(math.hypot(sp, sm) / (2.0 * gravity_mps2), k1 * gravity_rel_std)
+    return AccelerometerScale(unit=unit, k1=k1, k1_std=k1_std, k0=(vp + vm) / 2.0,
+                              k0_std=math.hypot(sp, sm) / 2.0, source="tumble")
+
+
+def _rest_points(unit: str, config: int, rests: list[P3Window]
+                 ) -> tuple[list[float], list[float]]:
+    """One rest point per complete phase: the mean over the arm positions (module docstring)."""
+    arms = sorted({w.arm_deg for w in rests})
+    means, stds = [], []
+    incomplete = []
+    for phase in sorted({w.phase for w in rests}):
+        mine = [w for w in rests if w.phase == phase]
+        got = sorted({w.arm_deg for w in mine})
+        if got != arms:
+            incomplete.append(f"{phase or 'rest'}: arm positions {got} of {arms}")
+            continue
+        by_arm = [np.mean([w.mean for w in mine if w.arm_deg == a]) for a in arms]
+        se = [math.sqrt(np.mean([w.se**2 for w in mine if w.arm_deg == a])) for a in arms]
+        means.append(float(np.mean(by_arm)))
+        stds.append(float(np.sqrt(np.sum(np.square(se)))) / len(arms))
+    if not means:
+        raise MissingSegmentError(
+            f"unit {unit}, configuration {config}: no complete set of rest records at the arm "
+            f"positions ({'; '.join(incomplete) or 'none recorded'}); their mean over the "
+            "positions is what the spinning outputs are measured from")
+    return means, stds
+
+
+def build_series(windows: Mapping[str, Sequence[P3Window]], roles: Mapping[str, str],
+                 scales: Mapping[str, AccelerometerScale], earth_rate_up_rps: float
+                 ) -> dict[str, Series]:
+    """Fit the seven series of (P3.3) from the reduced records (module docstring, step 3).
+
+    Raises
+    ------
+    MissingSegmentError
+        A configuration without records of a unit (the swap or the test load not run).
+    InsufficientExcitationError
+        A series with fewer than four rates.
+    """
+    out = {}
+    for name, (role, config) in SERIES_SOURCES.items():
+        unit = roles[role]
+        mine = [w for w in windows[unit] if w.config == config]
+        rates = [w for w in mine if w.role == P3_RATE]
+        rests = [w for w in mine if w.role == P3_REST]
+        if not rates and not rests:
+            what = {1: "before the swap", 2: "after the swap of A and B",
+                    3: "with the test load"}[config]
+            raise MissingSegmentError(
+                f"series {name}: unit {unit} has no records in configuration {config} ({what})"
+                "; the round-robin needs all three configurations")
+        rest_v, rest_s = _rest_points(unit, config, rests)
+        w = np.array([0.0] * len(rest_v) + [r.rate_rps for r in rates])
+        v = np.array(rest_v + [r.mean for r in rates])
+        s = np.array(rest_s + [r.se for r in rates])
+        sc = scales[unit]
+        out[name] = fit_series(w, v, s, k1=sc.k1, k1_std=sc.k1_std,
+                               earth_rate_up_rps=earth_rate_up_rps,
+                               name=f"{name} ({unit}, configuration {config})")
+    return out
+
+
+@dataclass(frozen=True)
+class P3Result:
+    """The result of P3 for one test accelerometer (docs/p3.md).
+
+    Attributes
+    ----------
+    unit : str
+        The test accelerometer's unit.
+    roles : mapping of str to str
+        ``ref-a``, ``ref-b``, ``test`` → unit.
+    estimate : RoundRobinEstimate
+        K2_A, K2_B, c, c′, K2_T with covariance; the naive K2_T.
+    series : mapping of str to Series
+    scales : mapping of str to AccelerometerScale
+    windows : tuple of P3Window
+    k2_target_g_per_g2 : float
+    notes : tuple of str
+    """
+
+    unit: str
+    roles: Mapping[str, str]
+    estimate: RoundRobinEstimate
+    series: Mapping[str, Series]
+    scales: Mapping[str, AccelerometerScale]
+    windows: tuple[P3Window, ...]
+    k2_target_g_per_g2: float
+    notes: tuple[str, ...] = ()
+    procedure: str = "p3"
+
+    @property
+    def k2_test_g_per_g2(self) -> tuple[float, float]:
+        """K2 of the test accelerometer and its σ. [g/g²]"""
+        return (self.estimate.value("K2_T") * _G_PER_G2, self.estimate.std("K2_T") * _G_PER_G2)
+
+    @property
+    def passed(self) -> bool:
+        """2σ of K2_T within the target (Birge-scaled on a misfit)."""
+        return 2.0 * self.k2_test_g_per_g2[1] <= self.k2_target_g_per_g2
+
+    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
+        """(name, value, standard uncertainty, unit) of every estimate, SI."""
+        units_of = {"K2_A": "1/(m/s^2)", "K2_B": "1/(m/s^2)", "K2_T": "1/(m/s^2)",
+                    "c": "m/(rad/s)^2", "c_loaded": "m/(rad/s)^2"}
+        rows = [(p, self.estimate.value(p), self.estimate.std(p), units_of[p])
+                for p in PARAMETERS]
+        rows.append(("K2_T_naive", self.estimate.naive_k2_t, self.estimate.naive_k2_t_std,
+                     "1/(m/s^2)"))
+        for role in _ROLES:
+            sc = self.scales[self.roles[role]]
+            rows += [(f"K1_{role}", sc.k1, sc.k1_std, "1"), (f"K0_{role}", sc.k0, sc.k0_std,
+                                                              "m/s^2")]
+        return rows
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the whole result as JSON-able data."""
+        est = self.estimate
+        k2, k2_std = self.k2_test_g_per_g2
+        return {
+            "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+            "roles": dict(self.roles),
+            "k2_test_g_per_g2": k2, "k2_test_std_g_per_g2": k2_std,
+            "k2_test_naive_g_per_g2": est.naive_k2_t * _G_PER_G2,
+            "k2_target_g_per_g2": self.k2_target_g_per_g2,
+            "parameters": [{"name": n, "value": v, "std": s, "unit": u}
+                           for n, v, s, u in self.parameter_rows()],
+            "covariance": {"names": list(PARAMETERS), "matrix": est.covariance.tolist(),
+                           "noise_only": est.covariance_noise.tolist()},
+            "round_robin_fit": {"chi2": est.quality.chi2, "dof": est.quality.dof,
+                                "misfit": est.quality.misfit,
+                                "summary": est.quality.summary()},
+            "series": {k: {"m": s.m, "m_std": s.m_std, "radius_m": s.radius_m,
+                           "radius_std_m": s.radius_std_m, "rest_output": s.rest_output,
+                           "chi2": s.quality.chi2, "dof": s.quality.dof,
+                           "misfit": s.quality.misfit, "radius_used_m": float(r)}
+                       for (k, s), r in zip(self.series.items(), est.radii_m, strict=True)},
+            "scales": {u: sc.to_dict() for u, sc in self.scales.items()},
+            "records": [{"step": w.step_index, "label": w.label, "unit": w.unit,
+                         "role": w.role, "config": w.config, "rate_rps": w.rate_rps,
+                         "revolutions": w.n_revolutions, "mean_mps2": w.mean,
+                         "se_mps2": w.se, "duration_s": w.duration_s}
+                        for w in self.windows],
+            "notes": list(self.notes),
+        }
+
+
+def _roles(rec: Recording, opt: P3Options, steps: Sequence[Any]) -> dict[str, str]:
+    named = p3_unit_names(rec, steps)
+    given = {"ref-a": opt.reference_a, "ref-b": opt.reference_b, "test": opt.test}
+    roles = {r: given[r] or named.get(r, "") for r in _ROLES}
+    missing = [r for r in _ROLES if not roles[r]]
+    if missing:
+        raise RecordingError(
+            f"{rec.path}: which unit is {', '.join(missing)}? The recording's mounting check "
+            "does not name them (tags ref-a=, ref-b=, test=); give reference_a, reference_b "
+            "and test")
+    if len(set(roles.values())) != 3:
+        raise InvalidInputError(f"references A, B and the test accelerometer must be three "
+                                f"different units; got {roles}")
+    return roles
+
+
+def analyze_p3(recording: Recording | str | os.PathLike[str], *,
+               options: P3Options | None = None,
+               progress: Callable[[float], None] | None = None) -> P3Result:
+    """Analyse a P3 recording (module docstring).
+
+    Raises
+    ------
+    RecordingError
+        Not a P3 recording, units not named, no latitude.
+    MissingSegmentError
+        A configuration, a rest phase or a tumble pose missing; a record with dropouts or
+        short of its revolutions.
+    SaturationError
+        A record with saturated samples.
+    InsufficientExcitationError
+        A series with fewer than four rates.
+    """
+    opt = options or P3Options()
+    if isinstance(recording, Recording):
+        return _analyze(recording, opt, progress)
+    with open_recording(Path(recording)) as rec:
+        return _analyze(rec, opt, progress)
+
+
+def _analyze(rec: Recording, opt: P3Options,
+             progress: Callable[[float], None] | None) -> P3Result:
+    meta = rec.metadata
+    lat = float(meta.get("latitude_deg", math.nan))
+    if not math.isfinite(lat):
+        raise RecordingError(f"{rec.path} does not record the latitude (latitude_deg): the "
+                             "vertical Earth rate needs it")
+    site = Site(latitude_deg=lat, gravity_mps2=opt.gravity_mps2)
+    g = site.local_gravity_mps2
+    g_rel = (opt.gravity_rel_std if opt.gravity_rel_std is not None
+             else (0.0 if opt.gravity_mps2 is not None else 2e-5))
+    earth_up = float(site.earth_rate_t_rps[2])
+    steps = rec.steps
+    roles = _roles(rec, opt, steps)
+    windows: dict[str, list[P3Window]] = {}
+    for i, role in enumerate(_ROLES):
+        unit = roles[role]
+
+        def part(f: float, i: int = i) -> None:
+            if progress is not None:
+                progress((i + f) / 3.0)
+
+        windows[unit] = extract_p3_windows(rec, unit, processing=opt.processing, steps=steps,
+                                           progress=part)
+    scales: dict[str, AccelerometerScale] = {}
+    notes = []
+    for role in _ROLES:
+        unit = roles[role]
+        if unit in opt.k1:
+            k1, k1_std = opt.k1[unit]
+            k0, k0_std = opt.k0.get(unit, (math.nan, math.nan))
+            scales[unit] = AccelerometerScale(unit, float(k1), float(k1_std), float(k0),
+                                              float(k0_std), "input")
+        else:
+            if not any(w.role == P3_TUMBLE for w in windows[unit]):
+                raise MissingSegmentError(
+                    f"unit {unit}: no tumble records (role {P3_TUMBLE}) and no K1 given: "
+                    "record the 1 g tumble or give k1 (value, σ)")
+            scales[unit] = tumble_scale(unit, windows[unit], g, g_rel)
+    notes.append(f"local gravity {g:.7g} m/s² ({'given' if opt.gravity_mps2 else 'normal'}"
+                 f" gravity, relative σ {g_rel:.1g}); vertical Earth rate "
+                 f"{earth_up / units.DEG_PER_H:.4g} °/h")
+    series = build_series(windows, roles, scales, earth_up)
+    radii = None
+    if opt.radii == "nominal":
+        assert opt.nominal_radii_m is not None
+        r_ref, r_t = opt.nominal_radii_m
+        radii = {k: (r_t if k == "T3" else r_ref) for k in SERIES_NAMES}
+        notes.append(f"nominal radii in (P3.3): references {r_ref:g} m, test {r_t:g} m")
+    else:
+        notes.append("each series' own effective radius (its ω² coefficient) in (P3.3)")
+    estimate = solve_round_robin(series, radii_m=radii)
+    misfits = [s.quality.summary() for s in series.values() if s.quality.misfit]
+    notes += misfits
+    if estimate.quality.misfit:
+        notes.append(estimate.quality.summary())
+    if progress is not None:
+        progress(1.0)
+    return P3Result(unit=roles["test"], roles=roles, estimate=estimate, series=series,
+                    scales=scales,
+                    windows=tuple(w for unit in windows for w in windows[unit]),
+                    k2_target_g_per_g2=opt.k2_target_g_per_g2, notes=tuple(notes))

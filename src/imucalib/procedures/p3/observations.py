@@ -1,0 +1,328 @@
+"""From a P3 Recording to the mean output of each accelerometer in each record.
+
+One step's valid window of one unit at a time (memory bounded by the longest step):
+
+1. the unit's samples of the window: its input-axis accelerometer (``accel_x`` by default,
+   :attr:`P3Processing.input_axis`), the sample counter and the saturation flags; a window
+   with a saturated sample is refused (:class:`~imucalib.errors.SaturationError`: a clipped
+   mean would bias K2 silently), one with dropouts beyond :attr:`P3Processing.max_lost_fraction`
+   (or a gap longer than :attr:`P3Processing.max_gap_s`) is missing;
+2. a record at rest (roles ``p3.rest``, ``p3.tumble``) is averaged over its samples;
+3. a spinning record (``p3.rate``) over the longest span of whole revolutions of the arm,
+   each sample's arm angle interpolated from the centrifuge's encoder feedback on the
+   counter's time base (:func:`~imucalib.processing.statistics.compute_integer_revolution_window`);
+   the span must hold the commanded revolutions, and its mean rate is the encoder's angle
+   over the span's time (what the record's x = (ω + Ω_U)² − Ω_U² uses: IEEE Std 836 wants
+   the rate counted over whole revolutions);
+4. the standard error of each mean from a noise model of the unit: the median of the Allan
+   fits (white, flicker, random walk) of its first :attr:`P3Processing.noise_windows` windows
+   (a spinning one's taken about its once-per-revolution harmonic), evaluated at each window's
+   duration (docs/p2.md, "Standard errors": one window's own fit is heavy-tailed).
+
+Contents
+--------
+:class:`P3Processing`, :class:`P3Window`, :func:`extract_p3_windows`, :func:`p3_unit_names`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.conventions import ACCEL_COLUMNS
+from imucalib.errors import (
+    InvalidInputError,
+    MissingSegmentError,
+    RecordingError,
+    SaturationError,
+)
+from imucalib.io.reader import Recording, StepRecord, StreamData
+from imucalib.io.step_roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
+from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
+from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.procedures.common.noise import FLICKER_FACTOR
+from imucalib.procedures.common.windows import table_angle_at
+from imucalib.processing import (
+    compute_integer_revolution_window,
+    compute_window_statistics,
+    reconstruct_time_base,
+)
+
+__all__ = ["P3Processing", "P3Window", "extract_p3_windows", "p3_unit_names"]
+
+_F64 = NDArray[np.float64]
+_AXES = {"x": 0, "y": 1, "z": 2}
+#: Roles whose windows the analysis reduces.
+WINDOW_ROLES = (P3_TUMBLE, P3_REST, P3_RATE)
+
+
+@dataclass(frozen=True)
+class P3Processing:
+    """Processing options of P3's window reduction (module docstring).
+
+    Attributes
+    ----------
+    input_axis : {"x", "y", "z"}
+        The accelerometer of each unit that is the instrument (its input axis radial,
+        pointing towards the spin axis).
+    max_lost_fraction : float
+        Samples lost to dropouts a window may miss (fraction of those expected).
+    max_gap_s : float
+        Longest single dropout in a window. [s]
+    noise_windows : int
+        Windows of each unit whose Allan variance is fitted for its noise model.
+    """
+
+    input_axis: str = "x"
+    max_lost_fraction: float = 0.01
+    max_gap_s: float = 0.5
+    noise_windows: int = 8
+
+    def __post_init__(self) -> None:
+        if self.input_axis not in _AXES:
+            raise InvalidInputError(f"`input_axis` must be 'x', 'y' or 'z'; got "
+                                    f"{self.input_axis!r}")
+
+
+@dataclass(frozen=True)
+class P3Window:
+    """One record of one unit, reduced (module docstring).
+
+    Attributes
+    ----------
+    step_index, label, role : int, str, str
+        The recorded step.
+    unit : str
+        The unit (its IMU stream).
+    config : int
+        The configuration (tag ``config=<k>``; 0 for a tumble record).
+    pose : str
+        A tumble record's fixture axis up (tag ``pose=``); ``""`` otherwise.
+    arm_deg : float
+        A rest record's arm position (tag ``arm=``); NaN otherwise. [°]
+    phase : str
+        A rest record's ``before`` or ``after`` the rates.
+    rate_rps : float
+        Mean measured rate over the averaged revolutions (0 at rest). [rad/s]
+    n_revolutions : int
+        Whole revolutions averaged (0 at rest).
+    mean, se : float
+        Mean output of the input axis and its standard error. [m/s²]
+    duration_s : float
+        Span averaged. [s]
+    n_samples, n_lost : int
+        Samples averaged; samples lost to dropouts in the window.
+    """
+
+    step_index: int
+    label: str
+    role: str
+    unit: str
+    config: int
+    pose: str
+    arm_deg: float
+    phase: str
+    rate_rps: float
+    n_revolutions: int
+    mean: float
+    se: float
+    duration_s: float
+    n_samples: int
+    n_lost: int
+    allan_fit: _F64 | None = None
+
+
+def p3_unit_names(rec: Recording, steps: Sequence[StepRecord] | None = None
+                  ) -> dict[str, str]:
+    """Return the units the first ``p3.mount`` check names: ``ref-a``, ``ref-b``, ``test``.
+
+    Empty when no such check names them (an import: the analysis is then told the names).
+    """
+    for step in (rec.steps if steps is None else steps):
+        if step.role == P3_MOUNT:
+            found = {k: v for k in ("ref-a", "ref-b", "test")
+                     if (v := step.tag_value(k)) is not None}
+            if found:
+                return found
+    return {}
+
+
+def _where(unit: str, step: StepRecord) -> str:
+    return f"unit {unit}, step {step.index} ({step.label})"
+
+
+def _tag_int(step: StepRecord, key: str) -> int:
+    value = step.tag_value(key)
+    try:
+        return int(value) if value is not None else 0
+    except ValueError:
+        raise RecordingError(f"step {step.index} ({step.label}): tag {key}={value!r} is not an "
+                             "integer") from None
+
+
+def _tag_float(step: StepRecord, key: str) -> float:
+    value = step.tag_value(key)
+    try:
+        return float(value) if value is not None else math.nan
+    except ValueError:
+        raise RecordingError(f"step {step.index} ({step.label}): tag {key}={value!r} is not a "
+                             "number") from None
+
+
+class _Reducer:
+    def __init__(self, unit: str, opt: P3Processing, angle_col: str) -> None:
+        self.unit, self.opt, self.angle_col = unit, opt, angle_col
+        self.column = ACCEL_COLUMNS[_AXES[opt.input_axis]]
+        self.fitted = 0
+
+    def reduce(self, step: StepRecord, data: StreamData, fb: StreamData | None) -> P3Window:
+        where = _where(self.unit, step)
+        if len(data) < 10:
+            raise MissingSegmentError(f"{where}: only {len(data)} samples in its valid window")
+        values = np.asarray(data.columns[self.column], dtype=np.float64)
+        if not np.all(np.isfinite(values)):
+            raise InvalidInputError(f"{where}: the window holds NaN or infinite samples")
+        saturated = int(np.count_nonzero(np.asarray(data.columns["saturated"])))
+        if saturated:
+            raise SaturationError(
+                f"{where}: {saturated} of {len(data)} samples flagged saturated (the output "
+                f"reached its range, e.g. {np.max(np.abs(values)):.6g} m/s² on "
+                f"{self.column}); a clipped mean would bias K2 — lower the top rate or use "
+                "an accelerometer of a larger range")
+        counter = np.asarray(data.columns["counter"], dtype=np.int64)
+        steps = np.diff(counter)
+        if np.any(steps <= 0):
+            raise InvalidInputError(f"{where}: the sample counter repeats or goes backwards")
+        spinning = step.role == P3_RATE
+        if spinning:
+            base = reconstruct_time_base(counter, data.time_s)
+            t, period = base.time_s, base.sample_period_s
+        else:
+            t = np.asarray(data.time_s, dtype=np.float64)
+            period = float(t[-1] - t[0]) / float(counter[-1] - counter[0])
+        lost = int(np.sum(steps - 1))
+        expected = len(data) + lost
+        longest = float(np.max(steps) - 1) * period
+        if lost > self.opt.max_lost_fraction * expected or longest > self.opt.max_gap_s:
+            raise MissingSegmentError(
+                f"{where}: {lost} of {expected} samples lost to dropouts (longest gap "
+                f"{longest:.3g} s; at most {self.opt.max_lost_fraction:.0%} and "
+                f"{self.opt.max_gap_s:g} s are accepted)")
+        rate, n_rev = 0.0, 0
+        fit_noise = self.fitted < self.opt.noise_windows
+        self.fitted += int(fit_noise)
+        residual = values
+        if spinning:
+            assert fb is not None
+            if len(fb) < 2:
+                raise MissingSegmentError(f"{where}: fewer than 2 centrifuge feedback samples "
+                                          "in the window")
+            angle = table_angle_at(t, fb.time_s, np.unwrap(fb.columns[self.angle_col]))
+            try:
+                win = compute_integer_revolution_window(t, values[:, None], angle_rad=angle)
+            except InvalidInputError as exc:
+                raise MissingSegmentError(f"{where}: {exc}") from None
+            n_rev = int(win.n_revolutions)
+            wanted = step.commanded.get("revolutions") if isinstance(step.commanded,
+                                                                      dict) else None
+            if isinstance(wanted, int | float) and n_rev < int(wanted):
+                raise MissingSegmentError(
+                    f"{where}: the record holds {n_rev} whole revolution(s) of the "
+                    f"{int(wanted)} commanded (the arm did not turn whole revolutions)")
+            sl = slice(win.start_index, win.stop_index)
+            t, a = t[sl], angle[sl]
+            rate = float((a[-1] - a[0]) / (t[-1] - t[0]))
+            mean = float(np.asarray(win.mean).ravel()[0])
+            if fit_noise:  # the noise about the once-per-revolution harmonic
+                design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
+                coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
+                residual = values[sl] - design @ coef
+            n = t.size
+        else:
+            mean = float(values.mean())
+            n = values.size
+        fit = None
+        if fit_noise:
+            stats = compute_window_statistics(residual, 1.0 / period)
+            fit = np.array([float(np.ravel(stats.white_density)[0]),
+                            float(np.ravel(stats.flicker_variance)[0]),
+                            float(np.ravel(stats.random_walk)[0])])
+        return P3Window(
+            step_index=step.index, label=step.label, role=step.role, unit=self.unit,
+            config=_tag_int(step, "config"), pose=step.tag_value("pose") or "",
+            arm_deg=_tag_float(step, "arm"), phase=step.tag_value("phase") or "",
+            rate_rps=rate, n_revolutions=n_rev, mean=mean, se=math.nan,
+            duration_s=float(t[-1] - t[0]), n_samples=int(n), n_lost=lost, allan_fit=fit)
+
+
+def _pooled(windows: list[P3Window]) -> list[P3Window]:
+    """Give each window the standard error of the unit's pooled noise model (module docstring)."""
+    fits = [np.nan_to_num(w.allan_fit, nan=0.0) for w in windows if w.allan_fit is not None]
+    if not fits:
+        return windows
+    white, flicker, walk = np.maximum(np.median(np.array(fits), axis=0), 0.0)
+    noise = NoiseModel(white_density=white,
+                       bias_instability=math.sqrt(flicker / FLICKER_FACTOR),
+                       random_walk=walk)
+    out = []
+    for w in windows:
+        se = float(compute_theoretical_adev(noise, np.array([max(w.duration_s, 1e-3)]))[0])
+        out.append(dataclasses.replace(w, se=max(se, 1e-300)))
+    return out
+
+
+def extract_p3_windows(rec: Recording, unit: str, *, processing: P3Processing | None = None,
+                       steps: Sequence[StepRecord] | None = None,
+                       progress: Callable[[float], None] | None = None) -> list[P3Window]:
+    """Reduce every P3 record (tumble, rest, rate) of one unit (module docstring).
+
+    Raises
+    ------
+    RecordingError
+        No IMU stream `unit`, no centrifuge stream, no step with a P3 role.
+    MissingSegmentError
+        A record with too many dropouts, fewer whole revolutions than commanded.
+    SaturationError
+        A record with saturated samples.
+    InvalidInputError
+        NaN samples, a counter going backwards.
+    """
+    opt = processing or P3Processing()
+    imus = [s.unit for s in rec.streams if s.device == DEVICE_IMU]
+    if unit not in imus:
+        raise RecordingError(f"{rec.path} has no IMU stream {unit!r}; it has {imus}")
+    fuges = [s for s in rec.streams if s.device == DEVICE_CENTRIFUGE]
+    if not fuges:
+        raise RecordingError(f"{rec.path} has no centrifuge stream: P3 needs the centrifuge's "
+                             "encoder feedback")
+    names = [c[len("angle_"):-len("_rad")] for c in fuges[0].columns
+             if c.startswith("angle_") and c.endswith("_rad")]
+    if len(names) != 1:
+        raise RecordingError(f"{rec.path}: the centrifuge stream must have one axis; it has "
+                             f"{names}")
+    angle_col, rate_col = axis_columns(names[0])
+    chosen = [s for s in (rec.steps if steps is None else steps)
+              if s.role in WINDOW_ROLES and s.concerns(unit)]
+    if not chosen:
+        raise RecordingError(f"{rec.path}: no step has a P3 role ({', '.join(WINDOW_ROLES)}); "
+                             "is it a P3 recording?")
+    usable = [s for s in chosen if s.status == "done" and s.has_valid_window]
+    red = _Reducer(unit, opt, angle_col)
+    imu_rows = rec.iter_windows(DEVICE_IMU, unit,
+                                [(s.valid_start_s, s.valid_end_s) for s in usable],
+                                [*ACCEL_COLUMNS, "counter", "saturated"])
+    fb_rows = rec.iter_windows(DEVICE_CENTRIFUGE, fuges[0].unit,
+                               [(s.valid_start_s, s.valid_end_s) for s in usable
+                                if s.role == P3_RATE], [angle_col, rate_col])
+    windows = []
+    for i, (step, data) in enumerate(zip(usable, imu_rows, strict=True), start=1):
+        fb = next(fb_rows) if step.role == P3_RATE else None
+        windows.append(red.reduce(step, data, fb))
+        if progress is not None:
+            progress(i / len(usable))
+    return _pooled(windows)

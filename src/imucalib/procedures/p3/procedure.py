@@ -1,0 +1,79 @@
+"""P3 as a :class:`~imucalib.procedures.common.procedure.Procedure` (registered as ``"p3"``).
+
+The plan is :func:`~imucalib.procedures.p3.plan.generate_p3_plan`; the analysis
+:func:`~imucalib.procedures.p3.analysis.analyze_p3`, imported when first used. The result is
+about the test accelerometer; `unit`, when given, must be it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.p3.analysis import P3Result
+
+__all__ = ["PROCEDURE", "P3Procedure"]
+
+
+class P3Procedure:
+    """Procedure P3: accelerometer K2 on a centrifuge with dynamic-unbalance compensation."""
+
+    name = "p3"
+    description = ("accelerometer K2 on a precision centrifuge: two reference accelerometers "
+                   "in a round-robin measure the rotor's dynamic unbalance, which is removed "
+                   "from the test accelerometer's ω⁴ term")
+    plan_options = frozenset({"static_radius_m", "reference_radius_m", "test_range_g",
+                              "n_rates", "rates_dps", "both_directions", "rate_record_s",
+                              "rest_record_s", "settle_s", "arm_positions_deg",
+                              "test_load_kg", "tumble", "tumble_record_s", "unbalance_um",
+                              "grade", "sample_rate_hz", "seed"})
+    analysis_options = frozenset({"reference_a", "reference_b", "test", "k1", "k0",
+                                  "gravity_mps2", "gravity_rel_std", "radii", "nominal_radii_m",
+                                  "k2_target_g_per_g2", "input_axis"})
+    outputs = ("report-json", "parameters-csv")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.p3.plan.generate_p3_plan` (its keywords)."""
+        from imucalib.procedures.p3.plan import generate_p3_plan
+
+        return generate_p3_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> P3Result:
+        """Run :func:`~imucalib.procedures.p3.analysis.analyze_p3` on a recording.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option, or `unit` that is not the test accelerometer.
+        """
+        from imucalib.procedures.p3.analysis import P3Options, analyze_p3
+        from imucalib.procedures.p3.observations import P3Processing
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure p3 takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        axis = opts.pop("input_axis", None)
+        if unit is not None and opts.get("test") not in (None, unit):
+            raise InvalidInputError(f"unit {unit!r} and test {opts['test']!r} disagree")
+        if unit is not None:
+            opts["test"] = unit
+        try:
+            p3_options = P3Options(**opts, **({"processing": P3Processing(input_axis=axis)}
+                                              if axis else {}))
+        except TypeError as exc:
+            raise InvalidInputError(f"procedure p3: {exc}") from None
+        return analyze_p3(recording, options=p3_options, progress=progress)
+
+
+#: The registered P3 procedure.
+PROCEDURE = P3Procedure()
