@@ -28,7 +28,8 @@ from imucalib.io.reader import open_recording
 if TYPE_CHECKING:
     from rich.console import Console
 
-__all__ = ["REMOUNT_EVENT_PREFIX", "RecordingSummary", "StreamSummary", "summarize_recording"]
+__all__ = ["LOAD_EVENT_PREFIX", "REMOUNT_EVENT_PREFIX", "SWAP_EVENT_PREFIX", "RecordingSummary",
+           "StreamSummary", "summarize_recording"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,10 @@ class StreamSummary:
 
 #: How a station run's log says that the fixture was remounted (:mod:`imucalib.station.session`).
 REMOUNT_EVENT_PREFIX = "fixture remounted"
+#: How a station run's log says that two units were exchanged on the fixture.
+SWAP_EVENT_PREFIX = "units swapped"
+#: How a station run's log says that the centrifuge arm's test load was changed.
+LOAD_EVENT_PREFIX = "centrifuge load set"
 
 
 @dataclass(frozen=True)
@@ -80,6 +85,8 @@ class RecordingSummary:
     was_open_for_write: bool
     #: (time [s], message) of each logged fixture remount (P2's operator checks).
     remounts: tuple[tuple[float, str], ...] = ()
+    #: (time [s], message) of each logged unit swap and centrifuge load change (P3).
+    swaps_and_loads: tuple[tuple[float, str], ...] = ()
 
     def render(self, console: Console) -> None:
         """Print the summary as rich tables."""
@@ -126,9 +133,13 @@ class RecordingSummary:
         _print_whole(console, steps)
         for time_s, message in self.remounts:
             console.print(f"  {time_s:,.3f} s: {escape(message)}", highlight=False)
+        for time_s, message in self.swaps_and_loads:
+            console.print(f"  {time_s:,.3f} s: {escape(message)}", highlight=False)
         console.print(f"{self.n_events} logged event(s)"
                       + (f", {len(self.remounts)} fixture remount(s) above" if self.remounts
-                         else ""))
+                         else "")
+                      + (f", {len(self.swaps_and_loads)} unit swap(s) or load change(s) above"
+                         if self.swaps_and_loads else ""))
 
 
 def _print_whole(console: Console, table: Any) -> None:
@@ -235,4 +246,7 @@ def summarize_recording(path: str | Path, *, chunk_samples: int = 1 << 18) -> Re
             was_open_for_write=bool(getattr(rec, "was_open_for_write", False)),
             remounts=tuple((float(e.time_s), str(e.message)) for e in log
                            if str(e.message).startswith(REMOUNT_EVENT_PREFIX)),
+            swaps_and_loads=tuple(
+                (float(e.time_s), str(e.message)) for e in log
+                if str(e.message).startswith((SWAP_EVENT_PREFIX, LOAD_EVENT_PREFIX))),
         )

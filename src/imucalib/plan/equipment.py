@@ -48,6 +48,7 @@ __all__ = [
 
 _ARM = Annotated[float, Field(ge=-5.0, le=5.0)]
 _OFFSET = Annotated[float, Field(ge=-1.0, le=1.0)]
+_ARM_RADIUS = Annotated[float, Field(ge=-20.0, le=20.0)]
 
 #: Former names of the centrifuge's unbalance coefficients (their unit read as m/s²), mapped to
 #: the unit-true names when a file written before the rename is read.
@@ -106,6 +107,12 @@ class CentrifugeConfig(_Model):
     The dynamic unbalance shifts the radius by (c0 + c·load)·ω² with ω in rad/s, so both
     coefficients are metres per (rad/s)² (c per kilogram of load as well). Files written with
     the former names (:data:`LEGACY_CENTRIFUGE_NAMES`) are read with the new ones.
+
+    ``spin_axis_tilt_deg`` tilts the spin axis from the vertical and ``arm_stretch_s2`` is the
+    arm's elastic stretch κ (Δr = κ·r·ω²), both passed to
+    :class:`~imucalib.sim.centrifuge.CentrifugeSpec`. The controller's own imbalance alarm
+    latches a fault and stops the spin when the rotor's excursion |c|·ω² (c with the current
+    load) exceeds ``imbalance_alarm_um``.
     """
 
     enabled: bool = False
@@ -116,6 +123,13 @@ class CentrifugeConfig(_Model):
         0.0, ge=-1e-3, le=1e-3, description="change of c0 per kg of load [m/(rad/s)²/kg]")
     load_kg: float = Field(0.0, ge=0.0, le=1000.0)
     max_rate_dps: float = Field(720.0, gt=0.0, le=MAX_CENTRIFUGE_RATE_DPS)
+    spin_axis_tilt_deg: float = Field(
+        0.0, ge=0.0, le=5.0, description="tilt of the spin axis from the vertical [°]")
+    arm_stretch_s2: float = Field(
+        0.0, ge=0.0, le=1e-4, description="elastic radial stretch κ, Δr = κ·r·ω² [s²]")
+    imbalance_alarm_um: float = Field(
+        200.0, gt=0.0, le=10000.0,
+        description="the controller's imbalance alarm: rotor excursion |c|·ω² [µm]")
 
     @model_validator(mode="before")
     @classmethod
@@ -162,17 +176,34 @@ class FixtureConfig(_Model):
     :class:`MountConfig` says; without them the IMUs fill the faces round robin (IMU i on face
     i mod 6, in the order +z, −z, +y, −y, +x, −x) and the k IMUs of one face sit on a centred
     square grid of `spacing_m` pitch (⌈√k⌉ columns), which must fit inside the face.
+
+    An arm fixture (``kind = "arm"``, on a centrifuge) places IMU i at (r_i, 0, 0) in the fixture
+    frame, r_i = ``arm_radii_m[i]`` (one signed position per IMU, in the order of the IMUs):
+    x of the fixture frame is the arm direction x_p, positive on the test side (where the test
+    position ``centrifuge.static_radius_m`` is). Each IMU's x axis points inward, towards the
+    spin axis, so that its x accelerometer reads +ω²·|r_i|: rot_mb is 180° about z for r_i > 0
+    and the identity for r_i < 0 (r_i = 0 is refused).
     """
 
-    kind: Literal["single", "hexahedral", "array"] = "single"
+    kind: Literal["single", "hexahedral", "array", "arm"] = "single"
     half_edge_m: float = Field(0.05, gt=0.0, le=1.0)
     lever_arm_m: tuple[_ARM, _ARM, _ARM] = Field((0.0, 0.0, 0.0), description="[m]")
     spacing_m: float = Field(0.05, gt=0.0, le=1.0)
     mounts: tuple[MountConfig, ...] = Field(
         (), max_length=MAX_IMUS, description="hexahedral only: one mount per IMU, in order")
+    arm_radii_m: tuple[_ARM_RADIUS, ...] = Field(
+        (), max_length=MAX_IMUS,
+        description="arm only: each IMU's signed position along the arm, + on the test side [m]")
 
     @model_validator(mode="after")
     def _mounts(self) -> FixtureConfig:
+        if self.arm_radii_m and self.kind != "arm":
+            raise ValueError(f"`arm_radii_m` places IMUs along a centrifuge arm (fixture kind "
+                             f"'arm'); fixture kind is {self.kind!r}")
+        for i, r in enumerate(self.arm_radii_m):
+            if r == 0.0:
+                raise ValueError(f"arm_radii_m.{i} is 0: an IMU on the spin axis has no inward "
+                                 "direction; give a signed position (+ on the test side)")
         if self.mounts and self.kind != "hexahedral":
             raise ValueError(f"`mounts` places IMUs on the faces of a hexahedral fixture; "
                              f"fixture kind is {self.kind!r}")
@@ -192,7 +223,12 @@ class FixtureConfig(_Model):
 
 
 class ImuConfig(_Model):
-    """One IMU unit: its grade (its truth, thermal behaviour included, is drawn from it), clock."""
+    """One IMU unit: its grade (its truth, thermal behaviour included, is drawn from it), clock.
+
+    ``gyro_range_dps`` and ``accel_range_g`` replace the grade's full scale (None keeps it): a
+    navigation-grade gyro (±400 °/s) on a centrifuge spinning faster, or a reference whose
+    accelerometer saturates on purpose. With a converter word length the LSB scales with it.
+    """
 
     name: str = Field(min_length=1, max_length=64)
     grade: Literal["consumer", "tactical", "navigation"] = "tactical"
@@ -203,6 +239,11 @@ class ImuConfig(_Model):
     jitter_s: float = Field(0.0, ge=0.0, le=0.1)
     latency_s: float = Field(0.0, ge=0.0, le=1.0)
     drop_probability: float = Field(0.0, ge=0.0, lt=1.0)
+    gyro_range_dps: float | None = Field(
+        None, gt=0.0, le=100000.0, description="gyro full scale ±, replacing the grade's [°/s]")
+    accel_range_g: float | None = Field(
+        None, gt=0.0, le=10000.0, description="accelerometer full scale ±, replacing the "
+                                              "grade's [g]")
     thermal_time_constant_s: float = Field(600.0, ge=MIN_TIME_CONSTANT_S,
                                            le=MAX_TIME_CONSTANT_S)
     self_heating_degc: float = Field(0.0, ge=0.0, le=50.0)
@@ -289,6 +330,10 @@ class TwinEquipment(_Model):
             raise ValueError(f"IMU names must be unique; repeated: {dup}")
         if self.fixture.kind == "hexahedral":
             _check_hexahedral(self.fixture, len(self.imus))
+        if self.fixture.kind == "arm" and len(self.fixture.arm_radii_m) != len(self.imus):
+            raise ValueError(
+                f"fixture kind 'arm' needs one arm_radii_m entry per IMU ({len(self.imus)}: "
+                f"{names}); got {len(self.fixture.arm_radii_m)}")
         if self.fixture.kind == "single" and len(self.imus) > 1:
             raise ValueError(
                 f"fixture kind 'single' carries one IMU; got {len(self.imus)} (use 'array')"

@@ -152,10 +152,15 @@ def _what(step: PlanStep) -> str:
     if isinstance(step, StaticStep):
         return f"static record {step.duration_s:g} s"
     assert isinstance(step, OperatorCheckStep)
+    extras = []
     if step.remount is not None:
         yaw = f", yaw {step.remount_yaw_deg:g}°" if step.remount_yaw_deg else ""
-        return f"operator confirms: {step.item} (remount: {step.remount} up{yaw})"
-    return f"operator confirms: {step.item}"
+        extras.append(f"remount: {step.remount} up{yaw}")
+    if step.swap_units is not None:
+        extras.append(f"swap: {step.swap_units[0]} ↔ {step.swap_units[1]}")
+    if step.centrifuge_load_kg is not None:
+        extras.append(f"centrifuge load {step.centrifuge_load_kg:g} kg")
+    return f"operator confirms: {step.item}" + (f" ({'; '.join(extras)})" if extras else "")
 
 
 def describe_plan(plan: Plan) -> list[PlanRow]:

@@ -9,7 +9,8 @@ Contents
 --------
 :class:`Plan` and its parts :class:`PlanLimits`, :class:`GuardConfig`, :class:`ImuSpecConfig`;
 the step kinds :class:`SoakStep`, :class:`WarmUpStep`, :class:`PositionStep`, :class:`RateStep`,
-:class:`CentrifugeStep`, :class:`StaticStep`, :class:`OperatorCheckStep`; :data:`PlanStep`.
+:class:`CentrifugeStep`, :class:`StaticStep`, :class:`OperatorCheckStep`; :data:`PlanStep`;
+:func:`operator_check_problems` (unit swaps and load changes a station cannot do).
 
 Example
 -------
@@ -32,6 +33,7 @@ Example
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -74,6 +76,7 @@ __all__ = [
     "SpecLimits",
     "StaticStep",
     "WarmUpStep",
+    "operator_check_problems",
     "plan_min_duration_s",
     "step_min_duration_s",
 ]
@@ -344,6 +347,11 @@ class OperatorCheckStep(_Step):
     ``remount_yaw_deg`` the fixture's turn about the vertical after placing it
     (:mod:`imucalib.plan.fixture_poses`); a twin station puts its fixture in that pose once the
     check is confirmed, a real station relies on the operator having done it.
+
+    A unit swap names, in ``swap_units``, the two units the operator exchanges on the fixture
+    (each takes the other's place and orientation; P3's reversal of the references), and
+    ``centrifuge_load_kg`` the test load on the centrifuge arm after the check (it sets the
+    dynamic unbalance). A twin station applies both once the check is confirmed, like a remount.
     """
 
     kind: Literal["operator-check"]
@@ -352,12 +360,24 @@ class OperatorCheckStep(_Step):
         None, description="fixture axis placed pointing up (along the table's spin axis)")
     remount_yaw_deg: float = Field(0.0, ge=-360.0, le=360.0,
                                    description="fixture's turn about the vertical [°]")
+    swap_units: tuple[str, str] | None = Field(
+        None, description="the two units the operator exchanges on the fixture (each takes the "
+                          "other's place and orientation)")
+    centrifuge_load_kg: float | None = Field(
+        None, ge=0.0, le=1000.0, description="the test load on the centrifuge arm after this "
+                                             "check [kg]")
 
     @model_validator(mode="after")
     def _remount(self) -> OperatorCheckStep:
         if self.remount is None and self.remount_yaw_deg != 0.0:
             raise ValueError(f"`remount_yaw_deg` ({self.remount_yaw_deg:g}) needs `remount` (the "
                              "fixture axis placed pointing up)")
+        if self.swap_units is not None:
+            a, b = self.swap_units
+            if not a.strip() or not b.strip():
+                raise ValueError("`swap_units` names two units; got an empty name")
+            if a == b:
+                raise ValueError(f"`swap_units` exchanges two different units; got {a!r} twice")
         return self
 
 
@@ -400,6 +420,11 @@ class Plan(_Model):
                 raise ValueError(
                     f"{where}: temperature_degc {step.temperature_degc:g} is outside limits "
                     f"[{lim.min_temperature_degc:g}, {lim.max_temperature_degc:g}] °C")
+        if self.twin is not None:
+            problems = operator_check_problems(
+                self.steps, [imu.name for imu in self.twin.imus], self.twin.centrifuge.enabled)
+            if problems:
+                raise ValueError(f"{problems[0]} (the plan's twin)")
         total = plan_min_duration_s(self)
         if total > MAX_TOTAL_S:
             raise ValueError(f"the steps take at least {total:.6g} s ({total / 86400:.3g} days); "
@@ -410,6 +435,41 @@ class Plan(_Model):
         """Return the label of step `index`, or ``"<kind> <index>"`` when it has none."""
         step = self.steps[index]
         return step.label or f"{step.kind} {index}"
+
+
+def operator_check_problems(steps: Sequence[PlanStep], unit_names: Sequence[str],
+                            has_centrifuge: bool) -> list[str]:
+    """Return what a station with these units cannot do of the steps' swaps and load changes.
+
+    Parameters
+    ----------
+    steps : sequence of PlanStep
+        The steps (only operator checks are looked at).
+    unit_names : sequence of str
+        The station's units.
+    has_centrifuge : bool
+        Whether the station has a centrifuge.
+
+    Returns
+    -------
+    list of str
+        One sentence per problem: a ``swap_units`` naming a unit the station lacks, a
+        ``centrifuge_load_kg`` without a centrifuge; empty when all is well.
+    """
+    problems = []
+    for i, step in enumerate(steps):
+        if not isinstance(step, OperatorCheckStep):
+            continue
+        where = f"steps.{i} (operator-check{' ' + repr(step.label) if step.label else ''})"
+        if step.swap_units is not None:
+            unknown = [n for n in step.swap_units if n not in unit_names]
+            if unknown:
+                problems.append(f"{where}: swap_units names unit(s) {unknown} the station does "
+                                f"not have; its units are {list(unit_names)}")
+        if step.centrifuge_load_kg is not None and not has_centrifuge:
+            problems.append(f"{where}: centrifuge_load_kg {step.centrifuge_load_kg:g} kg needs a "
+                            "centrifuge; the station has none")
+    return problems
 
 
 def step_min_duration_s(step: PlanStep) -> float:

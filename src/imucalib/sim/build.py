@@ -26,6 +26,14 @@ Choices
   (:func:`~imucalib.plan.equipment.hexahedral_grid_offsets_m`); up to six IMUs sit at the face
   centres. A mount with ``lever_arm_m`` keeps its face's orientation and sits where it says.
 - An array fixture spaces its IMUs ``spacing_m`` apart along x_m, centred on the rotation centre.
+- An arm fixture (P3 on a centrifuge) places IMU i at (r_i, 0, 0) in m, r_i =
+  ``fixture.arm_radii_m[i]`` signed along the arm (+ on the test side), its x axis pointing
+  inward (towards the spin axis): rot_mb is 180° about z for r_i > 0, the identity for r_i < 0,
+  so that every unit's x accelerometer reads +ω²·|r_i| (plus the unbalance shift, +c·ω² on the
+  test side, −c·ω² on the far side).
+- ``ImuConfig.gyro_range_dps`` / ``accel_range_g`` replace the full scale ±range of the drawn
+  model's output stage (:class:`~imucalib.models.sensor.SensorSpec`; with a word length its LSB
+  scales with the range); None keeps the grade's.
 """
 
 from __future__ import annotations
@@ -41,10 +49,16 @@ from imucalib import units
 from imucalib.models.earth import Site
 from imucalib.models.imu import ImuModel, sample_imu_model
 from imucalib.models.noise import NoiseModel
-from imucalib.plan.equipment import TwinEquipment, hexahedral_grid_offsets_m
+from imucalib.plan.equipment import ImuConfig, TwinEquipment, hexahedral_grid_offsets_m
 from imucalib.sim.centrifuge import CentrifugeSpec, SimCentrifuge
 from imucalib.sim.chamber import ChamberSpec, ImuThermalSpec, SimChamber
-from imucalib.sim.fixture import Fixture, array_fixture, hexahedral_fixture, single_imu_fixture
+from imucalib.sim.fixture import (
+    Fixture,
+    MountedImu,
+    array_fixture,
+    hexahedral_fixture,
+    single_imu_fixture,
+)
 from imucalib.sim.rig import TwinRig
 from imucalib.sim.synth import ClockSpec, SimImu
 from imucalib.sim.table import RateTableSpec, SimRateTable
@@ -121,9 +135,23 @@ def _centrifuge(sc: TwinEquipment) -> SimCentrifuge | None:
     spec = CentrifugeSpec(static_radius_m=cfg.static_radius_m,
                           unbalance_c0_m_per_rps_sq=cfg.unbalance_c0_m_per_rps_sq,
                           unbalance_c_m_per_rps_sq_per_kg=cfg.unbalance_c_m_per_rps_sq_per_kg,
-                          max_rate_rps=cfg.max_rate_dps * units.DEG)
+                          max_rate_rps=cfg.max_rate_dps * units.DEG,
+                          arm_stretch_s2=cfg.arm_stretch_s2,
+                          spin_axis_tilt_rad=cfg.spin_axis_tilt_deg * units.DEG)
     return SimCentrifuge(spec, cfg.load_kg,
                          rng=np.random.default_rng(scenario_seed(sc.seed, "centrifuge")))
+
+
+def _with_ranges(model: ImuModel, cfg: ImuConfig) -> ImuModel:
+    """Return `model` with the full scales `cfg` overrides (the grade's otherwise)."""
+    changes: dict[str, Any] = {}
+    if cfg.gyro_range_dps is not None:
+        changes["gyro_output"] = dataclasses.replace(
+            model.gyro_output, range=cfg.gyro_range_dps * units.DEG_PER_S)
+    if cfg.accel_range_g is not None:
+        changes["accel_output"] = dataclasses.replace(
+            model.accel_output, range=cfg.accel_range_g * units.G0_MPS2)
+    return dataclasses.replace(model, **changes) if changes else model
 
 
 def _fixture(sc: TwinEquipment) -> Fixture:
@@ -148,6 +176,11 @@ def _fixture(sc: TwinEquipment) -> Fixture:
             mounts.append(mount if given is None else dataclasses.replace(
                 mount, lever_arm_m_m=np.asarray(given, dtype=float)))
         return Fixture(tuple(mounts))
+    if cfg.kind == "arm":
+        inward = Rotation.from_euler("z", 180.0, degrees=True)
+        return Fixture(tuple(
+            MountedImu(name, inward if r > 0.0 else Rotation.identity(), np.array([r, 0.0, 0.0]))
+            for name, r in zip(names, cfg.arm_radii_m, strict=True)))
     if cfg.kind == "array":
         n = len(names)
         offsets = np.zeros((n, 3))
@@ -181,6 +214,7 @@ def build_rig(sc: TwinEquipment) -> BuiltRig:
                                  temperature_dependence=cfg.temperature_dependence,
                                  hysteresis_fraction=cfg.hysteresis_fraction,
                                  reference_temperature_degc=cfg.reference_temperature_degc)
+        model = _with_ranges(model, cfg)
         if cfg.noise == "white":
             model = dataclasses.replace(
                 model, gyro_noise=NoiseModel(white_density=model.gyro_noise.white_density),

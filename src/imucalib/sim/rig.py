@@ -29,6 +29,7 @@ Streams
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from collections.abc import Sequence
@@ -202,6 +203,38 @@ class TwinRig:
         with self.lock:
             self.fixture = self.fixture.remounted(rot_pm)
             self._still.clear()  # cached still inputs belong to the old pose
+
+    def swap_mounts(self, first: str, second: str) -> None:
+        """Exchange the places of IMUs `first` and `second` on the fixture (a unit swap).
+
+        Each IMU takes the other's position (``lever_arm_m_m``) and orientation (``rot_mb``)
+        from the rig's current time :attr:`now_s` on, and keeps its own sensor errors, clock and
+        noise; samples already generated keep the old places (the operator swaps the units
+        between steps, with nothing being recorded).
+
+        Raises
+        ------
+        InvalidInputError
+            If a name is not an IMU of the rig, or both names are the same.
+        """
+        with self.lock:
+            a, b = self._imu(first), self._imu(second)
+            if first == second:
+                raise InvalidInputError(f"a swap exchanges two different IMUs; got {first!r} "
+                                        "twice")
+            mount_a, mount_b = self.fixture.mount(first), self.fixture.mount(second)
+            new_a = dataclasses.replace(mount_a, rot_mb=mount_b.rot_mb,
+                                        lever_arm_m_m=mount_b.lever_arm_m_m.copy())
+            new_b = dataclasses.replace(mount_b, rot_mb=mount_a.rot_mb,
+                                        lever_arm_m_m=mount_a.lever_arm_m_m.copy())
+            placed = {first: new_a, second: new_b}
+            self.fixture = dataclasses.replace(
+                self.fixture, mounts=tuple(placed.get(m.name, m) for m in self.fixture.mounts))
+            for imu, mount in ((a, new_a), (b, new_b)):
+                moved = dataclasses.replace(imu, mount=mount)
+                self.imus[imu.name] = moved
+                self._synth[imu.name].imu = moved  # the synthesizer keeps its state
+            self._still.clear()  # cached still inputs belong to the old places
 
     # --- physics ------------------------------------------------------------------------------
     def imu_kinematics(self, name: str, true_time_s: _F64) -> ImuKinematics:

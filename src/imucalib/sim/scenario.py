@@ -62,6 +62,7 @@ from imucalib.plan.schema import (
     RateStep,
     SoakStep,
     StaticStep,
+    operator_check_problems,
     step_min_duration_s,
 )
 
@@ -117,6 +118,10 @@ class Scenario(TwinEquipment):
                     abs(step.rate_dps) > self.centrifuge.max_rate_dps:
                 raise ValueError(f"{where}: rate_dps {step.rate_dps:g} exceeds "
                                  f"centrifuge.max_rate_dps {self.centrifuge.max_rate_dps:g}")
+        problems = operator_check_problems(self.steps, [imu.name for imu in self.imus],
+                                           self.centrifuge.enabled)
+        if problems:
+            raise ValueError(problems[0])
         total = sum(step_min_duration_s(step) for step in self.steps)
         if total > MAX_TOTAL_S:
             raise ValueError(f"the steps take at least {total:.6g} s ({total / 86400:.3g} days); "

@@ -9,7 +9,7 @@ Contents
 --------
 :func:`wrap_angle_rad`, :func:`check_position_hold`, :func:`check_rate_hold`,
 :func:`check_saturation`, :func:`check_jumps`, :func:`check_counter`, :func:`check_chamber_band`,
-:func:`accel_fluctuation_g`, :class:`RollingWindow`.
+:func:`check_overspeed`, :func:`accel_fluctuation_g`, :class:`RollingWindow`.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ __all__ = [
     "check_chamber_band",
     "check_counter",
     "check_jumps",
+    "check_overspeed",
     "check_position_hold",
     "check_rate_hold",
     "check_saturation",
@@ -66,6 +67,28 @@ def check_rate_hold(rate_rps: _F64, commanded_rps: float, axis: int, axis_name: 
     if worst > tolerance_rps:
         return (f"table axis {axis_name!r} rate is {worst / units.DEG:.4g} °/s off the commanded "
                 f"{commanded_rps / units.DEG:.6g} °/s (limit {tolerance_rps / units.DEG:.4g} °/s)")
+    return None
+
+
+def check_overspeed(rate_rps: _F64, limit_rps: float, name: str) -> str | None:
+    """No measured centrifuge rate (any row, any axis) beyond ±`limit_rps`.
+
+    Parameters
+    ----------
+    rate_rps : ndarray
+        Measured spin rates, any shape. [rad/s]
+    limit_rps : float
+        The plan's limit (``limits.max_centrifuge_rate_dps``). [rad/s]
+    name : str
+        The centrifuge's name.
+    """
+    rates = np.abs(np.asarray(rate_rps, dtype=np.float64))
+    if rates.size == 0:
+        return None
+    worst = float(rates.max())
+    if worst > limit_rps:
+        return (f"centrifuge {name!r} over-speed: {worst / units.DEG:.1f} °/s measured, limit "
+                f"{limit_rps / units.DEG:g} °/s")
     return None
 
 

@@ -41,7 +41,10 @@ original is kept as ``<stem>.crashed.h5``), marks the interrupted step ``aborted
 with the first plan step not done, appending to the same file on a time base that continues
 after its last sample. Completed steps keep their data; nothing is repeated or lost. A station
 with a ``remount`` method (the twin) is put back in the pose of the last completed remount
-operator check (:attr:`ResumePoint.remount`), since a rebuilt twin starts in the ``+z`` pose.
+operator check (:attr:`ResumePoint.remount`), since a rebuilt twin starts in the ``+z`` pose;
+likewise a station with ``swap_units`` / ``set_centrifuge_load`` gets the completed unit swaps
+again, in order (:attr:`ResumePoint.swaps`), and the last completed centrifuge load
+(:attr:`ResumePoint.centrifuge_load_kg`).
 """
 
 from __future__ import annotations
@@ -60,7 +63,7 @@ from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io import StreamSpec
 from imucalib.io.coverage import uncovered_done_steps
-from imucalib.io.inspect import REMOUNT_EVENT_PREFIX
+from imucalib.io.inspect import LOAD_EVENT_PREFIX, REMOUNT_EVENT_PREFIX, SWAP_EVENT_PREFIX
 from imucalib.io.reader import open_recording
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.recover import recover_recording
@@ -79,6 +82,7 @@ from imucalib.plan.schema import (
     PositionStep,
     RateStep,
     SoakStep,
+    operator_check_problems,
 )
 from imucalib.station.devices import ImuIdentity, Station
 from imucalib.station.session import RunOptions, RunSession, RunStatus, StepStop
@@ -146,9 +150,16 @@ def check_plan_against_station(plan: Plan, station: Station) -> None:
     Raises
     ------
     ConfigurationError
-        A step needing a device the station lacks, or table angles for a different axis count.
+        A step needing a device the station lacks, table angles for a different axis count,
+        or an operator check swapping units the station lacks
+        (:func:`~imucalib.plan.schema.operator_check_problems`).
     """
     from imucalib.errors import ConfigurationError
+
+    problems = operator_check_problems(plan.steps, [src.name for src in station.imus],
+                                       station.centrifuge is not None)
+    if problems:
+        raise ConfigurationError(problems[0])
 
     for i, step in enumerate(plan.steps):
         where = f"steps.{i} ({step.kind} {plan.step_label(i)!r})"
@@ -379,6 +390,12 @@ class ResumePoint:
         The pose of the last completed remount operator check, as (axis up, yaw [°], plan
         step), in the order the steps ran; None when no remount step was completed. A resumed
         twin is put back in this pose.
+    swaps : tuple of (str, str)
+        The unit pairs of every completed swap operator check (``swap_units``), in the order
+        the steps ran; a resumed twin swaps them again, in that order.
+    centrifuge_load_kg : float, optional
+        The load of the last completed operator check with ``centrifuge_load_kg``; None when
+        there was none. A resumed twin's centrifuge is given it. [kg]
     """
 
     plan: Plan
@@ -387,6 +404,8 @@ class ResumePoint:
     interrupted: tuple[int, ...]
     uncovered: Mapping[int, str] = field(default_factory=dict)
     remount: tuple[str, float, int] | None = None
+    swaps: tuple[tuple[str, str], ...] = ()
+    centrifuge_load_kg: float | None = None
 
 
 def find_resume_point(path: str | Path) -> ResumePoint:
@@ -410,13 +429,23 @@ def find_resume_point(path: str | Path) -> ResumePoint:
         done: set[int] = set()
         interrupted = []
         remount: tuple[str, float, int] | None = None
+        swaps: list[tuple[str, str]] = []
+        load_kg: float | None = None
         for s in rec.steps:
             idx = s.commanded.get("plan_step") if isinstance(s.commanded, dict) else None
             if s.status == "done" and idx is not None and s.index not in uncovered:
                 done.add(int(idx))
+                if s.kind != "operator-check":
+                    continue
                 up = s.commanded.get("remount")
-                if s.kind == "operator-check" and isinstance(up, str):
+                if isinstance(up, str):
                     remount = (up, float(s.commanded.get("remount_yaw_deg") or 0.0), int(idx))
+                pair = s.commanded.get("swap_units")
+                if isinstance(pair, list | tuple) and len(pair) == 2:
+                    swaps.append((str(pair[0]), str(pair[1])))
+                load = s.commanded.get("centrifuge_load_kg")
+                if load is not None:
+                    load_kg = float(load)
             if s.status in ("running", "pending"):
                 interrupted.append(s.index)
         first = 0
@@ -425,7 +454,8 @@ def find_resume_point(path: str | Path) -> ResumePoint:
         last = max((info.t_last_s for info in rec.streams if info.n_samples), default=0.0)
         last = max([last, *(s.t_end_s for s in rec.steps if math.isfinite(s.t_end_s)),
                     *(e.time_s for e in rec.log)])
-    return ResumePoint(plan, first, float(last), tuple(interrupted), uncovered, remount)
+    return ResumePoint(plan, first, float(last), tuple(interrupted), uncovered, remount,
+                       tuple(swaps), load_kg)
 
 
 def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station], *,
@@ -497,10 +527,35 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
             writer.log_event(station.clock.now_s(), "info", "runner",
                              f"{REMOUNT_EVENT_PREFIX}: {up} up, yaw {yaw:g}° (the pose of "
                              f"completed step {k}, restored on resume)")
+        _restore_swaps_and_load(station, writer, point)
         run = RunSession(point.plan, station, writer, opt, identities)
         summary = _drive(run, point.first_step)
     _disconnect(station)
     return _with_storage_note(summary, writer)
+
+
+def _restore_swaps_and_load(station: Station, writer: RecordingWriter,
+                            point: ResumePoint) -> None:
+    """Re-apply a resumed run's completed unit swaps and its last centrifuge load on a twin.
+
+    The rebuilt twin starts with every unit in its first place and the configured load; a
+    station without ``swap_units`` / ``set_centrifuge_load`` (a real one) kept them as they
+    were.
+    """
+    swap = getattr(station, "swap_units", None)
+    if point.swaps and callable(swap):
+        for first, second in point.swaps:
+            swap(first, second)
+        writer.log_event(station.clock.now_s(), "info", "runner",
+                         f"{SWAP_EVENT_PREFIX}: "
+                         + ", ".join(f"{a} ↔ {b}" for a, b in point.swaps)
+                         + " (the completed swaps, restored on resume)")
+    load = getattr(station, "set_centrifuge_load", None)
+    if point.centrifuge_load_kg is not None and callable(load):
+        load(point.centrifuge_load_kg)
+        writer.log_event(station.clock.now_s(), "info", "runner",
+                         f"{LOAD_EVENT_PREFIX}: {point.centrifuge_load_kg:g} kg (the last "
+                         "completed load, restored on resume)")
 
 
 def _finished_summary(path: Path, point: ResumePoint) -> RunSummary:

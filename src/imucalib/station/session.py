@@ -20,7 +20,7 @@ import numpy as np
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import DeviceError, RecordingError, StorageFullError
-from imucalib.io.inspect import REMOUNT_EVENT_PREFIX
+from imucalib.io.inspect import LOAD_EVENT_PREFIX, REMOUNT_EVENT_PREFIX, SWAP_EVENT_PREFIX
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.storage import format_bytes
 from imucalib.io.streams import (
@@ -47,6 +47,7 @@ from imucalib.station.guards import (
     check_chamber_band,
     check_counter,
     check_jumps,
+    check_overspeed,
     check_position_hold,
     check_rate_hold,
     check_saturation,
@@ -205,6 +206,12 @@ class RunSession:
                     window.push(fb.time_s, np.column_stack([fb.angle_rad, fb.rate_rps]))
                     self.status.table_angle_deg = tuple(np.degrees(fb.angle_rad[-1]))
                     self.status.table_rate_dps = tuple(np.degrees(fb.rate_rps[-1]))
+                    if dev is st.centrifuge:
+                        over = check_overspeed(
+                            fb.rate_rps, self.plan.limits.max_centrifuge_rate_dps * units.DEG,
+                            dev.name)
+                        if over is not None:
+                            raise StepTrip(over)
                 status = dev.status()
                 if status.fault is not None:
                     raise StepTrip(f"{kind} {dev.name} fault: {status.fault}")
@@ -599,6 +606,32 @@ class RunSession:
         self.writer.log_event(self.now(), "info", "runner", message)
         self.status.last_event = message
 
+    def swap_units(self, first: str, second: str, why: str = "") -> None:
+        """Exchange units `first` and `second` on a twin's fixture; log the swap in any case.
+
+        A station with a ``swap_units`` method (the twin) moves its units; on a real station
+        the operator has done it.
+        """
+        swap = getattr(self.station, "swap_units", None)
+        if callable(swap):
+            swap(first, second)
+        self._log_info(f"{SWAP_EVENT_PREFIX}: {first} ↔ {second}{why}")
+
+    def set_centrifuge_load(self, load_kg: float, why: str = "") -> None:
+        """Set the test load on a twin's centrifuge arm; log the load in any case. [kg]
+
+        A station with a ``set_centrifuge_load`` method (the twin) changes its unbalance; on a
+        real station the operator has loaded the arm.
+        """
+        load = getattr(self.station, "set_centrifuge_load", None)
+        if callable(load):
+            load(load_kg)
+        self._log_info(f"{LOAD_EVENT_PREFIX}: {load_kg:g} kg{why}")
+
+    def _log_info(self, message: str) -> None:
+        self.writer.log_event(self.now(), "info", "runner", message)
+        self.status.last_event = message
+
     # --- the step loop ----------------------------------------------------------------------
     def execute(self, index: int, attempt: int) -> str:
         """Run plan step `index` once; return "done" (raises StepTrip, StepStop)."""
@@ -624,6 +657,10 @@ class RunSession:
                     raise StepStop(f"operator {answer.who} did not confirm: {step.item}")
                 if step.remount is not None:
                     self.remount(step.remount, step.remount_yaw_deg)
+                if step.swap_units is not None:
+                    self.swap_units(*step.swap_units)
+                if step.centrifuge_load_kg is not None:
+                    self.set_centrifuge_load(step.centrifuge_load_kg)
             elif isinstance(step, PositionStep | RateStep | CentrifugeStep):
                 window = self.run_motion(step)
             elif isinstance(step, StaticStep):

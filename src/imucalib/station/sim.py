@@ -22,6 +22,15 @@ Remounts
 :meth:`SimStation.remount` places the fixture in another pose (an axis up, a yaw): the runner
 calls it when a remount operator check is confirmed, and a resumed run calls it with the pose of
 the recording's last completed remount (the rebuilt twin starts in the ``+z`` pose otherwise).
+:meth:`SimStation.swap_units` (two units exchange their places on the fixture) and
+:meth:`SimStation.set_centrifuge_load` (the test load on the centrifuge arm) are the twin's side
+of the other operator checks; a resumed run re-applies the recording's completed swaps, in order,
+and its last load.
+
+Centrifuge controller
+---------------------
+The centrifuge's :class:`SimMotionDevice` latches an imbalance alarm (a device fault; the spin
+stops) when the rotor's excursion |c|·ω² exceeds ``CentrifugeConfig.imbalance_alarm_um``.
 
 Fault hooks
 -----------
@@ -49,6 +58,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib import units
+from imucalib._checks import check_nonnegative
 from imucalib.errors import DeviceError, InvalidInputError, LimitExceededError
 from imucalib.io import StreamSpec
 from imucalib.io.streams import imu_truth_stream_spec
@@ -62,6 +72,7 @@ from imucalib.plan.equipment import TwinEquipment
 from imucalib.plan.fixture_poses import rot_pm_for_pose
 from imucalib.plan.schema import CentrifugeStep, PlanLimits, PlanStep, RateStep, SoakStep
 from imucalib.sim.build import build_rig
+from imucalib.sim.centrifuge import SimCentrifuge
 from imucalib.sim.rig import RigChunk
 from imucalib.sim.synth import ImuSamples
 from imucalib.sim.table import SimRateTable, TableFeedback
@@ -112,11 +123,21 @@ class SimClock:
 
 
 class SimMotionDevice:
-    """A rate table or centrifuge of the twin behind the :class:`MotionDevice` protocol."""
+    """A rate table or centrifuge of the twin behind the :class:`MotionDevice` protocol.
 
-    def __init__(self, station: SimStation, table: SimRateTable, name: str) -> None:
+    For a centrifuge (`centrifuge` given) the controller watches the rotor's excursion
+    |c|·ω² (c with the current load, ω the true spin rate) in every feedback block: above
+    `imbalance_alarm_m` it latches the fault "imbalance alarm: …" and stops the spin (a real
+    centrifuge controller's own alarm).
+    """
+
+    def __init__(self, station: SimStation, table: SimRateTable, name: str, *,
+                 centrifuge: SimCentrifuge | None = None,
+                 imbalance_alarm_m: float | None = None) -> None:
         self._station = station
         self._table = table
+        self._centrifuge = centrifuge
+        self._imbalance_alarm_m = imbalance_alarm_m
         self.name = name
         self.axis_names = table.spec.names
         self._buffer: list[TableFeedback] = []
@@ -263,6 +284,19 @@ class SimMotionDevice:
     def _push(self, fb: TableFeedback | None) -> None:
         if fb is not None and fb.time_s.size:
             self._buffer.append(fb)
+            self._watch_imbalance(fb.time_s)
+
+    def _watch_imbalance(self, time_s: _F64) -> None:
+        """Latch the imbalance alarm when the rotor's excursion |c|·ω² passes its threshold."""
+        fuge, alarm = self._centrifuge, self._imbalance_alarm_m
+        if fuge is None or alarm is None or self._fault is not None:
+            return
+        rate = self._table.axis_motion(0, time_s)[1]
+        excursion_m = abs(fuge.unbalance_m_per_rps_sq) * rate * rate
+        over = np.flatnonzero(excursion_m > alarm)
+        if over.size:  # the excursion where it first passed the threshold
+            self.latch_fault(f"imbalance alarm: the rotor is {excursion_m[over[0]] / 1e-6:.4g} "
+                             f"µm off centre (alarm at {alarm / 1e-6:.4g} µm)")
 
     def _axis(self, axis: int) -> int:
         if not 0 <= int(axis) < len(self.axis_names):
@@ -518,8 +552,10 @@ class SimStation:
         self.fault_rng = np.random.default_rng(equipment.seed + 7919)
         self.table = (SimMotionDevice(self, self.rig.table, "main")
                       if self.rig.table is not None else None)
-        self.centrifuge = (SimMotionDevice(self, self.rig.centrifuge.table, "main")
-                           if self.rig.centrifuge is not None else None)
+        self.centrifuge = (
+            SimMotionDevice(self, self.rig.centrifuge.table, "main", centrifuge=self.rig.centrifuge,
+                            imbalance_alarm_m=equipment.centrifuge.imbalance_alarm_um * 1e-6)
+            if self.rig.centrifuge is not None else None)
         self.chamber = SimChamberDevice(self, "main") if self.rig.chamber is not None else None
         self.imus = [SimImuSource(self, name) for name in self.rig.imu_names]
         self._schedule: list[_Scheduled] = []
@@ -528,6 +564,9 @@ class SimStation:
         #: The fixture's pose (axis up, yaw [°]) and every remount as (station time, up, yaw).
         self.pose: tuple[str, float] = ("+z", 0.0)
         self.remounts: list[tuple[float, str, float]] = []
+        #: Every unit swap as (station time, first, second) and load change as (time, kg).
+        self.swaps: list[tuple[float, str, str]] = []
+        self.load_changes: list[tuple[float, float]] = []
 
     # --- what the twin can do, before anything moves ------------------------------------------
     def plan_limits(self) -> PlanLimits:
@@ -638,6 +677,40 @@ class SimStation:
         self.rig.remount(rot_pm)
         self.pose = (up, float(yaw_deg))
         self.remounts.append((self.clock.now_s(), up, float(yaw_deg)))
+
+    def swap_units(self, first: str, second: str) -> None:
+        """Exchange units `first` and `second` on the fixture (each takes the other's place).
+
+        The twin's side of a swap operator check (``OperatorCheckStep.swap_units``): from the
+        current station time on, each unit sits where the other sat, in its orientation, and
+        keeps its own sensor errors (:meth:`imucalib.sim.rig.TwinRig.swap_mounts`). A real
+        station has no such method; there the operator exchanged the units.
+
+        Raises
+        ------
+        InvalidInputError
+            If a name is not a unit of the twin, or both are the same.
+        """
+        self.rig.swap_mounts(first, second)
+        self.swaps.append((self.clock.now_s(), first, second))
+
+    def set_centrifuge_load(self, load_kg: float) -> None:
+        """Put a test load of `load_kg` on the centrifuge arm; it sets the unbalance c. [kg]
+
+        The twin's side of an operator check with ``centrifuge_load_kg``: everything generated
+        from the current station time on sees c = c0 + c_per_kg·load.
+
+        Raises
+        ------
+        InvalidInputError
+            If the twin has no centrifuge, or `load_kg` is negative or not finite.
+        """
+        fuge = self.rig.centrifuge
+        if fuge is None:
+            raise InvalidInputError(f"centrifuge load {load_kg!r} kg: the twin has no centrifuge")
+        with self.rig.lock:  # c is read from load_kg at every evaluation; nothing caches it
+            fuge.load_kg = check_nonnegative(load_kg, "load_kg")
+        self.load_changes.append((self.clock.now_s(), fuge.load_kg))
 
     def imu(self, name: str) -> SimImuSource:
         """Return the IMU source called `name`."""
