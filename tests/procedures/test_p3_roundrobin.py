@@ -10,6 +10,7 @@ from imucalib.procedures.p3.roundrobin import (
     PARAMETERS,
     SERIES_NAMES,
     fit_series,
+    scale_for_misfit,
     series_covariance,
     solve_round_robin,
 )
@@ -116,16 +117,35 @@ def test_k1_uncertainty_correlates_the_series_of_one_accelerometer():
     assert series["A1"].m_std > series["A1"].m_fit_std
 
 
-def test_a_misfit_series_reports_birge_scaled_sigma():
+def test_a_misfit_series_and_a_misfit_pool_get_birge_scaled_sigma():
+    """One series 50 µg off at one rate: its own Birge ratio; means scattering 1.8 times their
+    σ in every series (correlated noise): the pooled one."""
+    series = _series(np.random.default_rng(5), noise_ug=2.0)
     w = np.concatenate([[0.0, 0.0], RATES])
     x = w**2
     y = K1 * (x * R_R + 1e-9 * x**2)
     y[3] += K1 * 5e-5 * G0  # one rate 50 µg off: a step, not noise
     sd = np.full(w.size, K1 * 1e-6 * G0)
-    s = fit_series(w, y, sd, k1=K1, name="A1")
-    assert s.quality.misfit
-    clean = fit_series(w, K1 * (x * R_R + 1e-9 * x**2), sd, k1=K1, name="A1")
-    assert s.m_fit_std == pytest.approx(clean.m_fit_std * s.quality.birge_ratio, rel=1e-9)
+    bad = fit_series(w, y, sd, k1=K1, name="A1")
+    assert bad.quality.misfit and bad.m_fit_std == bad.m_noise_std  # fitting scales nothing
+    scaled, pooled = scale_for_misfit({**series, "A1": bad})
+    assert scaled["A1"].m_fit_std == pytest.approx(bad.m_noise_std * bad.quality.birge_ratio)
+    assert scaled["A1"].sigma_scale == pytest.approx(bad.quality.birge_ratio)
+    assert pooled.misfit and scaled["B1"].sigma_scale == pytest.approx(pooled.birge_ratio)
+    # white means: nothing scaled; means 1.8 × noisier than their σ: every series scaled
+    same, pooled = scale_for_misfit(series)
+    assert not pooled.misfit and all(s.sigma_scale == 1.0 for s in same.values())
+    rng = np.random.default_rng(6)
+    noisy = {}
+    for name, (k2, r, side, c) in LAYOUT.items():
+        x = (w + EARTH_UP) ** 2 - EARTH_UP**2
+        a = x * (r + side * TRUTH[c] * w**2)
+        sd = np.full(w.size, K1 * 2e-6 * G0)
+        y = K0 + K1 * (a + TRUTH[k2] * a**2) + rng.normal(0.0, 1.8 * sd)
+        noisy[name] = fit_series(w, y, sd, k1=K1, earth_rate_up_rps=EARTH_UP, name=name)
+    scaled, pooled = scale_for_misfit(noisy)
+    assert pooled.misfit and 1.3 < pooled.birge_ratio < 2.4
+    assert all(s.sigma_scale >= pooled.birge_ratio for s in scaled.values())
 
 
 def test_bad_inputs_are_named():
@@ -140,6 +160,6 @@ def test_bad_inputs_are_named():
         fit_series(RATES, np.ones(5), np.ones(5), k1=K1, name="A1")
     with pytest.raises(InvalidInputError, match="K1"):
         fit_series(np.r_[0.0, RATES], np.ones(6), np.ones(6), k1=-1.0)
-    with pytest.raises(InvalidInputError, match="T3.*positive"):
+    with pytest.raises(InvalidInputError, match=r"T3.*positive"):
         solve_round_robin(series, radii_m={"T3": 0.0})
     assert set(series) == set(SERIES_NAMES)

@@ -146,28 +146,28 @@ def render_p2(console: Console, batch: Any, written: Sequence[Path]) -> None:
 def render_p3(console: Console, result: Any, written: Sequence[Path]) -> None:
     """Print a P3 result: K2 of the three accelerometers, c and c′, the naive K2, the decision."""
     est = result.estimate
-    g = units.G0_MPS2
+    g = units.G0_MPS2 * 1e6  # K2 [1/(m/s²)] → µg/g²
     table = Table("quantity", Column("value", justify="right"),
                   Column("std. uncertainty", justify="right"), "unit",
                   title=f"P3 {result.unit}: K2 on the centrifuge, dynamic unbalance compensated")
-    rows = [(f"K2 of {result.roles['test']} (test)", est.value("K2_T") * g / units.UG,
-             est.std("K2_T") * g / units.UG, "µg/g²"),
-            (f"K2 of {result.roles['ref-a']} (reference A)", est.value("K2_A") * g / units.UG,
-             est.std("K2_A") * g / units.UG, "µg/g²"),
-            (f"K2 of {result.roles['ref-b']} (reference B)", est.value("K2_B") * g / units.UG,
-             est.std("K2_B") * g / units.UG, "µg/g²"),
+    rows = [(f"K2 of {result.roles['test']} (test)", est.value("K2_T") * g,
+             est.std("K2_T") * g, "µg/g²"),
+            (f"K2 of {result.roles['ref-a']} (reference A)", est.value("K2_A") * g,
+             est.std("K2_A") * g, "µg/g²"),
+            (f"K2 of {result.roles['ref-b']} (reference B)", est.value("K2_B") * g,
+             est.std("K2_B") * g, "µg/g²"),
             ("c (unbalance, no test load)", est.value("c") * 1e9, est.std("c") * 1e9,
              "nm/(rad/s)²"),
             ("c′ (with the test load)", est.value("c_loaded") * 1e9,
              est.std("c_loaded") * 1e9, "nm/(rad/s)²"),
-            ("K2 of the test, unbalance ignored", est.naive_k2_t * g / units.UG,
-             est.naive_k2_t_std * g / units.UG, "µg/g²")]
+            ("K2 of the test, unbalance ignored", est.naive_k2_t * g, est.naive_k2_t_std * g,
+             "µg/g²")]
     for name, value, sigma, unit in rows:
         cells = round_pair(value, sigma, sign=True)
         table.add_row(escape(name), cells.value_text, cells.uncertainty_text, unit)
     console.print(table)
     console.print(est.quality.summary(), highlight=False)
-    k2_std = est.std("K2_T") * g
+    k2_std = est.std("K2_T") * units.G0_MPS2
     verdict = "[green]PASS[/]" if result.passed else "[red]FAIL[/]"
     console.print(f"decision: {verdict} (U(K2) = 2σ = {2 * k2_std:.2g} g/g², target "
                   f"{result.k2_target_g_per_g2:.2g} g/g²)")

@@ -36,6 +36,7 @@ from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingErr
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.models.earth import Site
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.p3.observations import (
     P3Processing,
     P3Window,
@@ -48,6 +49,7 @@ from imucalib.procedures.p3.roundrobin import (
     RoundRobinEstimate,
     Series,
     fit_series,
+    scale_for_misfit,
     solve_round_robin,
 )
 
@@ -102,6 +104,7 @@ class P3Options:
     radii: str = "fitted"
     nominal_radii_m: tuple[float, float] | None = None
     k2_target_g_per_g2: float = 1e-7
+    drift: bool = False
     processing: P3Processing = field(default_factory=P3Processing)
 
     def __post_init__(self) -> None:
@@ -176,33 +179,44 @@ def tumble_scale(unit: str, windows: Sequence[P3Window], gravity_mps2: float,
                               k0_std=math.hypot(sp, sm) / 2.0, source="tumble")
 
 
-def _rest_points(unit: str, config: int, rests: list[P3Window]
-                 ) -> tuple[list[float], list[float]]:
-    """One rest point per complete phase: the mean over the arm positions (module docstring)."""
-    arms = sorted({w.arm_deg for w in rests})
-    means, stds = [], []
+def _rest_points(unit: str, config: int, rests: list[P3Window], arms: Sequence[float]
+                 ) -> tuple[list[float], list[float], list[float]]:
+    """One rest point per complete phase: the mean over the arm positions (module docstring).
+
+    `arms` are the unit's arm positions (every rest record's, all configurations): a phase must
+    hold each of them, and they must cancel a once-per-revolution term (mean of e^{iφ} zero:
+    0°, 90°, 180°, 270° or any evenly spread set), else a tilted spin axis' gravity leaks in.
+    """
+    phasor = abs(np.mean(np.exp(1j * np.radians(np.asarray(arms, dtype=float)))))
+    if phasor > 1e-3:
+        raise MissingSegmentError(
+            f"unit {unit}: the arm positions at rest {sorted(arms)} do not cancel a tilted "
+            f"spin axis' gravity leak (|mean e^(iφ)| = {phasor:.3g}); they must be spread "
+            "evenly around the circle (0°, 90°, 180°, 270°)")
+    means, stds, times = [], [], []
     incomplete = []
     for phase in sorted({w.phase for w in rests}):
         mine = [w for w in rests if w.phase == phase]
         got = sorted({w.arm_deg for w in mine})
-        if got != arms:
-            incomplete.append(f"{phase or 'rest'}: arm positions {got} of {arms}")
+        if got != sorted(arms):
+            incomplete.append(f"{phase or 'rest'}: arm positions {got} of {sorted(arms)}")
             continue
         by_arm = [np.mean([w.mean for w in mine if w.arm_deg == a]) for a in arms]
         se = [math.sqrt(np.mean([w.se**2 for w in mine if w.arm_deg == a])) for a in arms]
         means.append(float(np.mean(by_arm)))
         stds.append(float(np.sqrt(np.sum(np.square(se)))) / len(arms))
+        times.append(float(np.mean([w.time_s for w in mine])))
     if not means:
         raise MissingSegmentError(
             f"unit {unit}, configuration {config}: no complete set of rest records at the arm "
             f"positions ({'; '.join(incomplete) or 'none recorded'}); their mean over the "
             "positions is what the spinning outputs are measured from")
-    return means, stds
+    return means, stds, times
 
 
 def build_series(windows: Mapping[str, Sequence[P3Window]], roles: Mapping[str, str],
-                 scales: Mapping[str, AccelerometerScale], earth_rate_up_rps: float
-                 ) -> dict[str, Series]:
+                 scales: Mapping[str, AccelerometerScale], earth_rate_up_rps: float, *,
+                 drift: bool = False) -> dict[str, Series]:
     """Fit the seven series of (P3.3) from the reduced records (module docstring, step 3).
 
     Raises
@@ -224,13 +238,15 @@ def build_series(windows: Mapping[str, Sequence[P3Window]], roles: Mapping[str, 
             raise MissingSegmentError(
                 f"series {name}: unit {unit} has no records in configuration {config} ({what})"
                 "; the round-robin needs all three configurations")
-        rest_v, rest_s = _rest_points(unit, config, rests)
+        arms = sorted({w.arm_deg for w in windows[unit] if w.role == P3_REST})
+        rest_v, rest_s, rest_t = _rest_points(unit, config, rests, arms)
         w = np.array([0.0] * len(rest_v) + [r.rate_rps for r in rates])
         v = np.array(rest_v + [r.mean for r in rates])
         s = np.array(rest_s + [r.se for r in rates])
         sc = scales[unit]
+        t = np.array(rest_t + [r.time_s for r in rates])
         out[name] = fit_series(w, v, s, k1=sc.k1, k1_std=sc.k1_std,
-                               earth_rate_up_rps=earth_rate_up_rps,
+                               earth_rate_up_rps=earth_rate_up_rps, time_s=t if drift else None,
                                name=f"{name} ({unit}, configuration {config})")
     return out
 
@@ -251,6 +267,9 @@ class P3Result:
     scales : mapping of str to AccelerometerScale
     windows : tuple of P3Window
     k2_target_g_per_g2 : float
+    series_fit : FitQuality or None
+        The χ² pooled over the seven series (:func:`~imucalib.procedures.p3.roundrobin.
+        scale_for_misfit`).
     notes : tuple of str
     """
 
@@ -261,6 +280,7 @@ class P3Result:
     scales: Mapping[str, AccelerometerScale]
     windows: tuple[P3Window, ...]
     k2_target_g_per_g2: float
+    series_fit: FitQuality | None = None
     notes: tuple[str, ...] = ()
     procedure: str = "p3"
 
@@ -305,7 +325,11 @@ class P3Result:
             "round_robin_fit": {"chi2": est.quality.chi2, "dof": est.quality.dof,
                                 "misfit": est.quality.misfit,
                                 "summary": est.quality.summary()},
-            "series": {k: {"m": s.m, "m_std": s.m_std, "radius_m": s.radius_m,
+            "series_fit": None if self.series_fit is None else {
+                "chi2": self.series_fit.chi2, "dof": self.series_fit.dof,
+                "misfit": self.series_fit.misfit, "summary": self.series_fit.summary()},
+            "series": {k: {"m": s.m, "m_std": s.m_std, "m_noise_std": s.m_noise_std,
+                           "sigma_scale": s.sigma_scale, "radius_m": s.radius_m,
                            "radius_std_m": s.radius_std_m, "rest_output": s.rest_output,
                            "chi2": s.quality.chi2, "dof": s.quality.dof,
                            "misfit": s.quality.misfit, "radius_used_m": float(r)}
@@ -402,7 +426,7 @@ def _analyze(rec: Recording, opt: P3Options,
     notes.append(f"local gravity {g:.7g} m/s² ({'given' if opt.gravity_mps2 else 'normal'}"
                  f" gravity, relative σ {g_rel:.1g}); vertical Earth rate "
                  f"{earth_up / units.DEG_PER_H:.4g} °/h")
-    series = build_series(windows, roles, scales, earth_up)
+    series = build_series(windows, roles, scales, earth_up, drift=opt.drift)
     radii = None
     if opt.radii == "nominal":
         assert opt.nominal_radii_m is not None
@@ -411,9 +435,10 @@ def _analyze(rec: Recording, opt: P3Options,
         notes.append(f"nominal radii in (P3.3): references {r_ref:g} m, test {r_t:g} m")
     else:
         notes.append("each series' own effective radius (its ω² coefficient) in (P3.3)")
+    series, pooled = scale_for_misfit(series)
     estimate = solve_round_robin(series, radii_m=radii)
-    misfits = [s.quality.summary() for s in series.values() if s.quality.misfit]
-    notes += misfits
+    notes += [s.quality.summary() for s in series.values() if s.quality.misfit]
+    notes.append(pooled.summary())
     if estimate.quality.misfit:
         notes.append(estimate.quality.summary())
     if progress is not None:
@@ -421,4 +446,5 @@ def _analyze(rec: Recording, opt: P3Options,
     return P3Result(unit=roles["test"], roles=roles, estimate=estimate, series=series,
                     scales=scales,
                     windows=tuple(w for unit in windows for w in windows[unit]),
-                    k2_target_g_per_g2=opt.k2_target_g_per_g2, notes=tuple(notes))
+                    k2_target_g_per_g2=opt.k2_target_g_per_g2, series_fit=pooled,
+                    notes=tuple(notes))

@@ -11,13 +11,19 @@ One step's valid window of one unit at a time (memory bounded by the longest ste
 3. a spinning record (``p3.rate``) over the longest span of whole revolutions of the arm,
    each sample's arm angle interpolated from the centrifuge's encoder feedback on the
    counter's time base (:func:`~imucalib.processing.statistics.compute_integer_revolution_window`);
-   the span must hold the commanded revolutions, and its mean rate is the encoder's angle
+   the span must hold the commanded revolutions (one fewer when a sample at each edge falls
+   outside the station's window), and its mean rate is the encoder's angle
    over the span's time (what the record's x = (ω + Ω_U)² − Ω_U² uses: IEEE Std 836 wants
    the rate counted over whole revolutions);
-4. the standard error of each mean from a noise model of the unit: the median of the Allan
-   fits (white, flicker, random walk) of its first :attr:`P3Processing.noise_windows` windows
-   (a spinning one's taken about its once-per-revolution harmonic), evaluated at each window's
-   duration (docs/p2.md, "Standard errors": one window's own fit is heavy-tailed).
+4. the standard error of each mean, N/√T: T the record's length, N the unit's white-noise
+   density from the scatter of its 1 s block means (:attr:`P3Processing.noise_block_s`),
+   pooled over all its records (a spinning one's about its once-per-revolution harmonic):
+   N² = Σ (K_i − 1)·s_i²·τ / Σ (K_i − 1), s_i² the variance of record i's K_i block means of
+   length τ. Blocks much longer than the output filter's memory keep N free of its bias (an
+   Allan fit over the short τ of a one-minute record saw the filtered noise and came out 5 %
+   low; its flicker and random-walk terms were biased up — σ of K2 1.5 times the spread on
+   the twin). Noise correlated over longer times (bias instability, random walk) is not in N:
+   it shows in the series' χ², whose Birge ratios scale the σ (docs/p3.md).
 
 Contents
 --------
@@ -44,12 +50,9 @@ from imucalib.errors import (
 from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
-from imucalib.models.noise import NoiseModel, compute_theoretical_adev
-from imucalib.procedures.common.noise import FLICKER_FACTOR
 from imucalib.procedures.common.windows import table_angle_at
 from imucalib.processing import (
     compute_integer_revolution_window,
-    compute_window_statistics,
     reconstruct_time_base,
 )
 
@@ -74,16 +77,19 @@ class P3Processing:
         Samples lost to dropouts a window may miss (fraction of those expected).
     max_gap_s : float
         Longest single dropout in a window. [s]
-    noise_windows : int
-        Windows of each unit whose Allan variance is fitted for its noise model.
+    noise_block_s : float
+        Length of the blocks whose means' scatter gives the white-noise density. [s]
     """
 
     input_axis: str = "x"
     max_lost_fraction: float = 0.01
     max_gap_s: float = 0.5
-    noise_windows: int = 8
+    noise_block_s: float = 1.0
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.noise_block_s) and self.noise_block_s > 0):
+            raise InvalidInputError(f"`noise_block_s` must be positive; got "
+                                    f"{self.noise_block_s!r}")
         if self.input_axis not in _AXES:
             raise InvalidInputError(f"`input_axis` must be 'x', 'y' or 'z'; got "
                                     f"{self.input_axis!r}")
@@ -117,6 +123,11 @@ class P3Window:
         Span averaged. [s]
     n_samples, n_lost : int
         Samples averaged; samples lost to dropouts in the window.
+    time_s : float
+        Middle of the span averaged (station time). [s]
+    block_variance : (int, float)
+        Degrees of freedom K − 1 and the estimate s²·τ of N² from the record's block means.
+        [(m/s²)²·s]
     """
 
     step_index: int
@@ -134,7 +145,8 @@ class P3Window:
     duration_s: float
     n_samples: int
     n_lost: int
-    allan_fit: _F64 | None = None
+    time_s: float = math.nan
+    block_variance: tuple[int, float] = (0, math.nan)
 
 
 def p3_unit_names(rec: Recording, steps: Sequence[StepRecord] | None = None
@@ -178,7 +190,6 @@ class _Reducer:
     def __init__(self, unit: str, opt: P3Processing, angle_col: str) -> None:
         self.unit, self.opt, self.angle_col = unit, opt, angle_col
         self.column = ACCEL_COLUMNS[_AXES[opt.input_axis]]
-        self.fitted = 0
 
     def reduce(self, step: StepRecord, data: StreamData, fb: StreamData | None) -> P3Window:
         where = _where(self.unit, step)
@@ -214,8 +225,6 @@ class _Reducer:
                 f"{longest:.3g} s; at most {self.opt.max_lost_fraction:.0%} and "
                 f"{self.opt.max_gap_s:g} s are accepted)")
         rate, n_rev = 0.0, 0
-        fit_noise = self.fitted < self.opt.noise_windows
-        self.fitted += int(fit_noise)
         residual = values
         if spinning:
             assert fb is not None
@@ -230,50 +239,53 @@ class _Reducer:
             n_rev = int(win.n_revolutions)
             wanted = step.commanded.get("revolutions") if isinstance(step.commanded,
                                                                       dict) else None
-            if isinstance(wanted, int | float) and n_rev < int(wanted):
+            # the station ends the window on the N-th revolution's crossing: the unit's samples
+            # inside it may fall a sample short of N at each edge, so N − 1 whole revolutions
+            # are a complete record, fewer a record cut short
+            if isinstance(wanted, int | float) and n_rev < int(wanted) - 1:
                 raise MissingSegmentError(
                     f"{where}: the record holds {n_rev} whole revolution(s) of the "
-                    f"{int(wanted)} commanded (the arm did not turn whole revolutions)")
+                    f"{int(wanted)} commanded (cut short: the arm did not turn the whole "
+                    "revolutions asked for)")
             sl = slice(win.start_index, win.stop_index)
             t, a = t[sl], angle[sl]
             rate = float((a[-1] - a[0]) / (t[-1] - t[0]))
             mean = float(np.asarray(win.mean).ravel()[0])
-            if fit_noise:  # the noise about the once-per-revolution harmonic
-                design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
-                coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
-                residual = values[sl] - design @ coef
+            # the noise about the once-per-revolution harmonic
+            design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
+            coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
+            residual = values[sl] - design @ coef
             n = t.size
         else:
             mean = float(values.mean())
             n = values.size
-        fit = None
-        if fit_noise:
-            stats = compute_window_statistics(residual, 1.0 / period)
-            fit = np.array([float(np.ravel(stats.white_density)[0]),
-                            float(np.ravel(stats.flicker_variance)[0]),
-                            float(np.ravel(stats.random_walk)[0])])
+        per_block = round(self.opt.noise_block_s / period)
+        k = residual.size // max(per_block, 1)
+        blocks: tuple[int, float] = (0, math.nan)
+        if per_block >= 1 and k >= 3:
+            means = residual[: k * per_block].reshape(k, per_block).mean(axis=1)
+            blocks = (k - 1, float(np.var(means, ddof=1)) * per_block * period)
         return P3Window(
             step_index=step.index, label=step.label, role=step.role, unit=self.unit,
             config=_tag_int(step, "config"), pose=step.tag_value("pose") or "",
             arm_deg=_tag_float(step, "arm"), phase=step.tag_value("phase") or "",
             rate_rps=rate, n_revolutions=n_rev, mean=mean, se=math.nan,
-            duration_s=float(t[-1] - t[0]), n_samples=int(n), n_lost=lost, allan_fit=fit)
+            duration_s=float(t[-1] - t[0]), n_samples=int(n), n_lost=lost,
+            time_s=float(0.5 * (t[0] + t[-1])), block_variance=blocks)
 
 
 def _pooled(windows: list[P3Window]) -> list[P3Window]:
-    """Give each window the standard error of the unit's pooled noise model (module docstring)."""
-    fits = [np.nan_to_num(w.allan_fit, nan=0.0) for w in windows if w.allan_fit is not None]
-    if not fits:
-        return windows
-    white, flicker, walk = np.maximum(np.median(np.array(fits), axis=0), 0.0)
-    noise = NoiseModel(white_density=white,
-                       bias_instability=math.sqrt(flicker / FLICKER_FACTOR),
-                       random_walk=walk)
-    out = []
-    for w in windows:
-        se = float(compute_theoretical_adev(noise, np.array([max(w.duration_s, 1e-3)]))[0])
-        out.append(dataclasses.replace(w, se=max(se, 1e-300)))
-    return out
+    """Give each window the white-noise standard error N/√T of the unit (module docstring)."""
+    dof = np.array([w.block_variance[0] for w in windows], dtype=float)
+    var = np.array([w.block_variance[1] for w in windows], dtype=float)
+    ok = (dof > 0) & np.isfinite(var)
+    if not ok.any():
+        raise MissingSegmentError(
+            f"unit {windows[0].unit if windows else '?'}: no record is long enough for the "
+            "noise estimate (three blocks of noise_block_s)")
+    n2 = float(np.sum(dof[ok] * var[ok]) / np.sum(dof[ok]))
+    return [dataclasses.replace(w, se=math.sqrt(max(n2, 1e-300) / max(w.duration_s, 1e-3)))
+            for w in windows]
 
 
 def extract_p3_windows(rec: Recording, unit: str, *, processing: P3Processing | None = None,

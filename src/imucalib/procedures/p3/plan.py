@@ -271,7 +271,8 @@ def generate_p3_plan(
                      "round-robin (swapped, then with the test load)."),
         procedure="p3",
         imu=ImuSpecConfig(grade=grade),
-        limits=PlanLimits(max_centrifuge_rate_dps=min(1.1 * top, 10_000.0)),
+        # the twin centrifuge accelerates at up to 90 °/s²
+        limits=PlanLimits(max_centrifuge_rate_dps=min(1.1 * top, 10_000.0), max_accel_dps2=90.0),
         guards=GuardConfig(rate_tolerance_dps=max(0.5, 1e-3 * top)),
         twin=equipment,
         steps=tuple(steps),

@@ -57,7 +57,7 @@ class P3Procedure:
         from imucalib.procedures.p3.analysis import P3Options, analyze_p3
         from imucalib.procedures.p3.observations import P3Processing
 
-        opts = dict(options or {})
+        opts: dict[str, Any] = dict(options or {})
         unknown = sorted(set(opts) - self.analysis_options)
         if unknown:
             raise InvalidInputError(f"procedure p3 takes the option(s) "
@@ -67,9 +67,10 @@ class P3Procedure:
             raise InvalidInputError(f"unit {unit!r} and test {opts['test']!r} disagree")
         if unit is not None:
             opts["test"] = unit
+        if axis:
+            opts["processing"] = P3Processing(input_axis=axis)
         try:
-            p3_options = P3Options(**opts, **({"processing": P3Processing(input_axis=axis)}
-                                              if axis else {}))
+            p3_options = P3Options(**opts)
         except TypeError as exc:
             raise InvalidInputError(f"procedure p3: {exc}") from None
         return analyze_p3(recording, options=p3_options, progress=progress)

@@ -48,8 +48,9 @@ give x and x² with two degrees of freedom to test the fit, the rest points p0).
 below the method's claim, while fitting it would multiply the σ of m by about ten (its column
 is nearly collinear with x²).
 
-Misfit: a series whose χ² exceeds its 99 % quantile has the σ of its m scaled by its Birge
-ratio, and a round-robin misfit (the seven equations inconsistent beyond their σ, ν = 2)
+Misfit (:func:`scale_for_misfit`): a series whose χ² exceeds its 99 % quantile has the σ of
+its m scaled by its Birge ratio, every series by the Birge ratio of the pooled χ² when the pool
+is a misfit; a round-robin misfit (the seven equations inconsistent beyond their σ, ν = 2)
 scales the covariance of the five unknowns by its own (docs/processing-estimation.md).
 
 Contents
@@ -60,6 +61,7 @@ Contents
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Final
@@ -72,7 +74,7 @@ from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["MIN_RATES", "PARAMETERS", "SERIES_NAMES", "RoundRobinEstimate", "Series",
-           "fit_series", "series_covariance", "solve_round_robin"]
+           "fit_series", "scale_for_misfit", "series_covariance", "solve_round_robin"]
 
 _F64 = NDArray[np.float64]
 
@@ -96,7 +98,7 @@ class Series:
         Its standard uncertainty: the fit's (Birge-scaled on a misfit) and the Type B σ of K1.
         [m/(rad/s)²]
     m_fit_std : float
-        The fit's part alone (Birge-scaled on a misfit). [m/(rad/s)²]
+        The fit's part alone (× `sigma_scale`). [m/(rad/s)²]
     k1_rel_std : float
         σ(K1)/K1, common to every series of the accelerometer.
     radius_m, radius_std_m : float
@@ -105,6 +107,10 @@ class Series:
         p0·K1, the fitted output at rest. [output unit]
     quality : FitQuality
         χ²/ν of the series' fit.
+    m_noise_std, radius_noise_std_m : float
+        The fit's σ of m and of the radius from the means' standard errors alone.
+    sigma_scale : float
+        The factor on the noise-only σ (:func:`scale_for_misfit`; 1 from :func:`fit_series`).
     """
 
     m: float
@@ -115,11 +121,23 @@ class Series:
     radius_std_m: float
     rest_output: float
     quality: FitQuality
+    m_noise_std: float = float("nan")
+    radius_noise_std_m: float = float("nan")
+    sigma_scale: float = 1.0
+
+    def scaled(self, factor: float) -> Series:
+        """Return the series with its noise-only σ multiplied by `factor` (≥ 1)."""
+        fit = self.m_noise_std * factor
+        return dataclasses.replace(
+            self, m_fit_std=fit, m_std=float(np.hypot(fit, self.m * self.k1_rel_std)),
+            radius_std_m=float(np.hypot(self.radius_noise_std_m * factor,
+                                        self.radius_m * self.k1_rel_std)),
+            sigma_scale=factor)
 
 
 def fit_series(rate_rps: ArrayLike, output: ArrayLike, output_std: ArrayLike, *,
                k1: float, k1_std: float = 0.0, earth_rate_up_rps: float = 0.0,
-               name: str = "series") -> Series:
+               time_s: ArrayLike | None = None, name: str = "series") -> Series:
     """Fit V/K1 = p0 + p1·x + p2·x² over a series' rest and rate points, Eq. (P3.2).
 
     Parameters
@@ -133,6 +151,9 @@ def fit_series(rate_rps: ArrayLike, output: ArrayLike, output_std: ArrayLike, *,
         Scale factor (output unit per m/s²) and its standard uncertainty.
     earth_rate_up_rps : float
         The vertical Earth rate Ω_U (x = (ω + Ω_U)² − Ω_U²). [rad/s]
+    time_s : array_like, shape (n,), optional
+        When each record was made: a drift linear in time is fitted too (p0 + d·(t − t̄)),
+        which needs rest records before and after the rates. [s]
     name : str
         For messages and the FitQuality.
 
@@ -167,7 +188,17 @@ def fit_series(rate_rps: ArrayLike, output: ArrayLike, output_std: ArrayLike, *,
     x = (w + earth_rate_up_rps) ** 2 - earth_rate_up_rps**2
     y = v / k1
     sy = s / k1
-    h = np.column_stack([np.ones(n), x, x**2])
+    cols = [np.ones(n), x, x**2]
+    if time_s is not None:
+        t = as_array(time_s, "time_s", shape=(n,))
+        rest_t = t[~spinning]
+        if rest_t.size < 2 or not (rest_t.min() < t[spinning].min()
+                                   and rest_t.max() > t[spinning].max()):
+            raise InsufficientExcitationError(
+                [f"{name}: drift"], f"{name}: a drift needs rest records before and after "
+                "the rates")
+        cols.append(t - t.mean())
+    h = np.column_stack(cols)
     scale = np.abs(h).max(axis=0)
     hw = h / scale / sy[:, None]
     coef_s, *_ = np.linalg.lstsq(hw, y / sy, rcond=None)
@@ -175,15 +206,33 @@ def fit_series(rate_rps: ArrayLike, output: ArrayLike, output_std: ArrayLike, *,
     coef = coef_s / scale
     cov = cov_s / np.outer(scale, scale)
     resid = (y - h @ coef) / sy
-    quality = assess_fit(name, float(resid @ resid), n - 3)
-    birge = quality.sigma_scale
-    fit_std = float(np.sqrt(cov[2, 2])) * birge
+    quality = assess_fit(name, float(resid @ resid), n - h.shape[1])
+    fit_std = float(np.sqrt(cov[2, 2]))
+    radius_std = float(np.sqrt(cov[1, 1]))
     rel = float(k1_std / k1)
     # a relative K1 error scales every coefficient alike (Type B): δm = −m·δK1/K1
     return Series(m=float(coef[2]), m_std=float(np.hypot(fit_std, coef[2] * rel)),
                   m_fit_std=fit_std, k1_rel_std=rel, radius_m=float(coef[1]),
-                  radius_std_m=float(np.hypot(np.sqrt(cov[1, 1]) * birge, coef[1] * rel)),
-                  rest_output=float(coef[0] * k1), quality=quality)
+                  radius_std_m=float(np.hypot(radius_std, coef[1] * rel)),
+                  rest_output=float(coef[0] * k1), quality=quality, m_noise_std=fit_std,
+                  radius_noise_std_m=radius_std)
+
+
+def scale_for_misfit(series: Mapping[str, Series]) -> tuple[dict[str, Series], FitQuality]:
+    """Scale the σ of misfit series by their Birge ratio; return them and the pooled test.
+
+    A series is scaled by the larger of its own Birge ratio (when its own χ² is a misfit) and
+    the Birge ratio of the χ² pooled over every series (when the pool is a misfit): one series
+    with ν = 4 detects only gross misfit, while noise correlated from record to record (bias
+    instability, random walk: means that scatter beyond their white-noise σ) raises every
+    series' χ² a little, which the pool (ν = 28 for the round-robin) detects
+    (docs/p3.md, "Uncertainty when the model does not fit").
+    """
+    pooled = assess_fit("series (pooled)", float(sum(s.quality.chi2 for s in series.values())),
+                        int(sum(s.quality.dof for s in series.values())))
+    out = {k: s.scaled(max(s.quality.sigma_scale, pooled.sigma_scale))
+           for k, s in series.items()}
+    return out, pooled
 
 
 @dataclass(frozen=True)
