@@ -107,3 +107,11 @@ def test_cli_writes_a_p3_plan_and_refuses_p3_options_elsewhere(tmp_path):
     res = CliRunner().invoke(app, ["plan", "new", "p1", "-o", str(tmp_path / "y.toml"),
                                    "--test-load-kg", "3"])
     assert res.exit_code == 2 and "plan new p3 --test-load-kg" in res.output
+
+
+def test_arm_positions_must_cancel_a_once_per_revolution_leak():
+    with pytest.raises(ConfigurationError, match="spread evenly"):
+        generate_p3_plan(arm_positions_deg=[0.0, 180.0, 270.0])
+    plan = generate_p3_plan(arm_positions_deg=[0.0, 120.0, 240.0])
+    assert {s.arm_position_deg for s in plan.steps if s.role == "p3.rest"} == {0.0, 120.0,
+                                                                               240.0}

@@ -198,9 +198,12 @@ def generate_p3_plan(
         raise ConfigurationError(f"the top rate {top:.6g} °/s exceeds a centrifuge's 10 000 °/s "
                                  "(a smaller test range or a larger radius)")
     arm = [float(a) for a in arm_positions_deg]
-    if len(arm) < 2 or len(set(arm)) != len(arm):
-        raise ConfigurationError(f"`arm_positions_deg` must hold at least 2 distinct positions; "
-                                 f"got {arm}")
+    spread = abs(sum(complex(math.cos(math.radians(a)), math.sin(math.radians(a)))
+                     for a in arm) / max(len(arm), 1))
+    if len(arm) < 2 or len(set(arm)) != len(arm) or spread > 0.01:
+        raise ConfigurationError(f"`arm_positions_deg` must hold distinct positions spread "
+                                 f"evenly around the circle (their mean cancels a tilted spin "
+                                 f"axis' gravity leak: |mean e^(iφ)| ≤ 0.01); got {arm}")
     if min(rate_record_s, rest_record_s, tumble_record_s) <= 0 or settle_s < 0:
         raise ConfigurationError("record lengths must be positive and `settle_s` ≥ 0")
     if not 0 <= test_load_kg <= 1000:
