@@ -147,7 +147,7 @@ def test_nominal_radii_and_a_drift_term_are_options(p3_runs):
     """The patent's nominal radii (r_t/3, r_t) give the same K2_T here (the references sit
     where planned); a linear drift per series costs σ but no bias."""
     plan = p3_plan(1)
-    truth, z, fitted = errors_and_z(p3_runs[1], plan)
+    _, _, fitted = errors_and_z(p3_runs[1], plan)
     _, z_nominal, nominal = errors_and_z(p3_runs[1], plan, radii="nominal",
                                          nominal_radii_m=(1.0 / 3.0, 1.0))
     _, z_drift, drift = errors_and_z(p3_runs[1], plan, drift=True)

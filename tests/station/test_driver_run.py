@@ -113,3 +113,35 @@ def test_a_dropped_table_connection_trips_stops_and_retries_over_tcp(tmp_path):
         assert invalid and invalid[0].commanded["plan_step"] == 4
         done = [s.commanded["plan_step"] for s in rec.steps if s.status == "done"]
         assert done == list(range(len(plan.steps)))
+
+
+@pytest.mark.slow
+def test_a_p3_plan_runs_on_an_acl_centrifuge_over_tcp(tmp_path):
+    """P3 through the drivers: the ACUTROL (ACL) centrifuge served on 127.0.0.1, arm positions
+    at rest, rates over whole revolutions, the swap and load checks (an operator's on a real
+    station: logged, nothing to command), the over-speed guard watching every feedback block."""
+    from imucalib.procedures.p3.plan import generate_p3_plan
+
+    plan = generate_p3_plan(static_radius_m=0.5, test_range_g=1.0, n_rates=4,
+                            rate_record_s=1.0, rest_record_s=0.5, settle_s=6.0,
+                            tumble=False, sample_rate_hz=100.0, seed=3)
+    assert plan.twin is not None
+    rig = build_rig(plan.twin).rig
+    with LoopbackStation(rig, speed=SPEED, centrifuge="acutrol", imu="packet") as served:
+        station_file = served.write_station_file(tmp_path / "station.toml")
+        station = load_driver_station(station_file, clock=served.time_base)
+        assert station.centrifuge is not None and not hasattr(station, "swap_units")
+        summary = run_plan(plan, station, tmp_path / "p3.h5", options=RunOptions(tick_s=0.5))
+    assert summary.status == "done", summary.reason
+    with open_recording(tmp_path / "p3.h5") as rec:
+        done = [s for s in rec.steps if s.status == "done"]
+        assert [s.commanded["plan_step"] for s in done] == list(range(len(plan.steps)))
+        events = [e.message for e in rec.log]
+        assert any("units swapped: REF-A ↔ REF-B" in m for m in events)
+        assert any("centrifuge load set: 2 kg" in m for m in events)
+        rates = [s for s in done if s.role == "p3.rate"]
+        assert len(rates) == 12
+        for s in rates:  # each rate record's centrifuge feedback turns at the commanded rate
+            fb = rec.read_step(s.index, "centrifuge", "main")
+            rate = fb.columns[axis_columns("spin")[1]]
+            assert abs(np.median(rate) / units.DEG - s.commanded["rate_dps"]) < 0.5
