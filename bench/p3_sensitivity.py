@@ -6,7 +6,8 @@ several seeds, analysed as `imucalib calibrate` does (each series' effective rad
 the patent's nominal radii (r_t/3, r_t):
 
 - reference misplacement: the mounting holes of the references at r_t/3 ± δ (A's hole δ
-  further out, B's δ further in; the swap puts each reference in the other's hole);
+  further out, B's δ further in; the swap puts each reference in the other's hole), or both
+  further out;
 - spin-axis tilt θ_s (gravity leaks into the radial input once per revolution);
 - arm-position error: one of the four rest positions off by ε, with a 0.05° tilt (the rest
   average then keeps part of the leak);
@@ -43,8 +44,8 @@ from imucalib.station.sim import SimStation
 R_T = 1.0
 
 
-def make_plan(seed: int, *, noise: str = "white", delta_m: float = 0.0, tilt_deg: float = 0.0,
-              arm_error_deg: float = 0.0) -> Plan:
+def make_plan(seed: int, *, noise: str = "white", delta_m: float = 0.0, out_m: float = 0.0,
+              tilt_deg: float = 0.0, arm_error_deg: float = 0.0) -> Plan:
     """The default P3 plan with one imperfection of the twin (module docstring)."""
     arms = (0.0, 90.0 + arm_error_deg, 180.0, 270.0)
     plan = generate_p3_plan(seed=seed, arm_positions_deg=arms)
@@ -53,7 +54,7 @@ def make_plan(seed: int, *, noise: str = "white", delta_m: float = 0.0, tilt_deg
         "imus": tuple(i.model_copy(update={"noise": noise}) for i in plan.twin.imus),
         "centrifuge": plan.twin.centrifuge.model_copy(update={"spin_axis_tilt_deg": tilt_deg}),
         "fixture": plan.twin.fixture.model_copy(update={"arm_radii_m": (
-            R_T / 3 + delta_m, -(R_T / 3 - delta_m), R_T)})})
+            R_T / 3 + delta_m + out_m, -(R_T / 3 - delta_m + out_m), R_T)})})
     return plan.model_copy(update={"twin": twin})
 
 
@@ -101,6 +102,7 @@ SETTINGS: list[tuple[str, dict[str, Any]]] = [
     ("references' holes ±1 mm", {"delta_m": 1e-3}),
     ("references' holes ±5 mm", {"delta_m": 5e-3}),
     ("references' holes ±20 mm", {"delta_m": 20e-3}),
+    ("both references 20 mm further out", {"out_m": 20e-3}),
     ("spin-axis tilt 0.01°", {"tilt_deg": 0.01}),
     ("spin-axis tilt 0.05°", {"tilt_deg": 0.05}),
     ("spin-axis tilt 0.2°", {"tilt_deg": 0.2}),
@@ -114,6 +116,8 @@ SETTINGS: list[tuple[str, dict[str, Any]]] = [
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=4)
+    parser.add_argument("--only", default="", help="settings whose name contains this "
+                                                   "(the baseline always runs)")
     args = parser.parse_args()
     print("| setting | radii | K2_T shift from baseline [g/g²] | K2_T RMS error | mean σ | "
           "c′ shift [nm/(rad/s)²] | worst |z| |")
@@ -122,6 +126,8 @@ def main() -> None:
     base: dict[str, np.ndarray] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, opts in SETTINGS:
+            if opts and args.only not in name:
+                continue
             rows: dict[str, list[list[float]]] = {"fitted": [], "nominal": []}
             for seed in range(args.seeds):
                 res = one(make_plan(100 + seed, **opts), Path(tmp))
