@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from imucalib import units
 from imucalib.errors import InvalidInputError
-from imucalib.plan.equipment import TwinEquipment
+from imucalib.plan.equipment import ImuConfig, TwinEquipment
 from imucalib.sim.build import build_rig
 from imucalib.sim.rig import TwinRig
 from imucalib.station.sim import SimStation
@@ -175,3 +175,17 @@ def test_centrifuge_tilt_and_stretch_reach_the_spec():
     with pytest.raises(ValidationError, match="less than or equal to 5"):
         TwinEquipment.model_validate({"centrifuge": {"spin_axis_tilt_deg": 6.0},
                                       "imus": [{"name": "U"}]})
+
+
+def test_imu_errors_replace_the_drawn_truth():
+    """ImuConfig.errors: a known nonlinearity injected into the twin's truth, shape-checked."""
+    cfg = ImuConfig(name="U", grade="navigation",
+              errors={"gyro.scale_asymmetry": (1e-4, 0.0, -2e-4), "accel.k3": (1e-7, 0.0, 0.0),
+                      "gyro.g_sensitivity": ((1e-5, 0, 0), (0, 0, 0), (0, 0, 0))})
+    model = build_rig(TwinEquipment(imus=(cfg,))).imu_models["U"]
+    assert list(model.gyro.scale_asymmetry) == [1e-4, 0.0, -2e-4]
+    assert model.accel.k3[0] == 1e-7 and model.gyro.g_sensitivity[0, 0] == 1e-5
+    assert model.accel.k2.any()  # what is not replaced stays drawn
+    for bad in ({"gyro.k9": (1, 2, 3)}, {"accel.k2": (1.0, 2.0)}, {"mag.k2": (0, 0, 0)}):
+        with pytest.raises(ValidationError, match="errors"):
+            ImuConfig(name="U", errors=bad)

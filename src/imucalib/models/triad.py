@@ -44,7 +44,8 @@ from imucalib._checks import as_array, check_positive
 from imucalib.errors import ConfigurationError, InvalidInputError
 from imucalib.models.temperature import TemperatureDependence, evaluate_parameter
 
-__all__ = ["PARAMETER_NAMES", "TriadKind", "TriadModel", "apply_triad", "correct_triad"]
+__all__ = ["PARAMETER_NAMES", "PARAMETER_SHAPES", "TriadKind", "TriadModel", "apply_triad",
+           "correct_triad"]
 
 TriadKind = Literal["gyro", "accel"]
 
@@ -55,6 +56,8 @@ _SHAPES: dict[str, tuple[int, ...]] = {
 }
 #: Parameter names of :class:`TriadModel`, in canonical order.
 PARAMETER_NAMES: tuple[str, ...] = tuple(_SHAPES)
+#: The shape of each parameter of :class:`TriadModel`.
+PARAMETER_SHAPES: dict[str, tuple[int, ...]] = dict(_SHAPES)
 
 _PER_AXIS_NONLINEAR = ("k2", "k3", "koq", "scale_asymmetry")
 _NOT_FOR = {"accel": ("g_sensitivity", "g2_sensitivity"), "gyro": ("lever_arms_b_m",)}

@@ -16,8 +16,10 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from imucalib.models.triad import PARAMETER_SHAPES
 from imucalib.plan.bounds import (
     MAX_CENTRIFUGE_RATE_DPS,
     MAX_IMUS,
@@ -228,6 +230,12 @@ class ImuConfig(_Model):
     ``gyro_range_dps`` and ``accel_range_g`` replace the grade's full scale (None keeps it): a
     navigation-grade gyro (±400 °/s) on a centrifuge spinning faster, or a reference whose
     accelerometer saturates on purpose. With a converter word length the LSB scales with it.
+
+    ``errors`` replaces parameters of the drawn truth by given values, keyed
+    ``"<triad>.<parameter>"`` (``"gyro.scale_asymmetry"``, ``"accel.k3"``; the parameters of
+    :class:`~imucalib.models.triad.TriadModel`, SI), each a list of its shape (3 values for a
+    per-axis term, 3 lists of 3 for a matrix): a known nonlinearity, asymmetry or cross-term
+    injected for a test (docs/twin.md).
     """
 
     name: str = Field(min_length=1, max_length=64)
@@ -261,11 +269,27 @@ class ImuConfig(_Model):
     reference_temperature_degc: float = Field(
         25.0, ge=MIN_TEMPERATURE_DEGC, le=MAX_TEMPERATURE_DEGC,
         description="T0, where the drawn parameters hold (with 'typical') [°C]")
+    errors: dict[str, tuple[float, ...] | tuple[tuple[float, ...], ...]] = Field(
+        default_factory=dict, description="truth parameters replaced: '<triad>.<parameter>' → "
+                                          "values (SI, the parameter's shape)")
 
     @model_validator(mode="after")
     def _thermal(self) -> ImuConfig:
         if self.hysteresis_fraction > 0.0 and self.temperature_dependence == "none":
             raise ValueError("hysteresis_fraction > 0 needs temperature_dependence = 'typical'")
+        return self
+
+    @model_validator(mode="after")
+    def _errors(self) -> ImuConfig:
+        for key, values in self.errors.items():
+            triad, _, name = key.partition(".")
+            if triad not in ("gyro", "accel") or name not in PARAMETER_SHAPES:
+                raise ValueError(f"errors: {key!r} is not '<gyro|accel>.<parameter>' with a "
+                                 f"parameter of {sorted(PARAMETER_SHAPES)}")
+            arr = np.asarray(values, dtype=float)
+            if arr.shape != PARAMETER_SHAPES[name] or not np.all(np.isfinite(arr)):
+                raise ValueError(f"errors: {key} must be finite values of shape "
+                                 f"{PARAMETER_SHAPES[name]}; got shape {arr.shape}")
         return self
 
 

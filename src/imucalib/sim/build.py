@@ -154,6 +154,19 @@ def _with_ranges(model: ImuModel, cfg: ImuConfig) -> ImuModel:
     return dataclasses.replace(model, **changes) if changes else model
 
 
+def _with_errors(model: ImuModel, cfg: ImuConfig) -> ImuModel:
+    """Return `model` with the truth parameters `cfg.errors` replaces (SI)."""
+    if not cfg.errors:
+        return model
+    triads: dict[str, dict[str, Any]] = {"gyro": {}, "accel": {}}
+    for key, values in cfg.errors.items():
+        triad, _, name = key.partition(".")
+        triads[triad][name] = np.asarray(values, dtype=float)
+    return dataclasses.replace(model, **{
+        t: dataclasses.replace(getattr(model, t), **changes)
+        for t, changes in triads.items() if changes})
+
+
 def _fixture(sc: TwinEquipment) -> Fixture:
     cfg = sc.fixture
     names = [imu.name for imu in sc.imus]
@@ -214,7 +227,7 @@ def build_rig(sc: TwinEquipment) -> BuiltRig:
                                  temperature_dependence=cfg.temperature_dependence,
                                  hysteresis_fraction=cfg.hysteresis_fraction,
                                  reference_temperature_degc=cfg.reference_temperature_degc)
-        model = _with_ranges(model, cfg)
+        model = _with_errors(_with_ranges(model, cfg), cfg)
         if cfg.noise == "white":
             model = dataclasses.replace(
                 model, gyro_noise=NoiseModel(white_density=model.gyro_noise.white_density),
