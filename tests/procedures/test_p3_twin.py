@@ -156,3 +156,22 @@ def test_nominal_radii_and_a_drift_term_are_options(p3_runs):
     assert fitted.estimate.radii_m == pytest.approx(nominal.estimate.radii_m, abs=2e-3)
     assert drift.estimate.std("K2_T") > fitted.estimate.std("K2_T")
     assert all(s.quality.dof == 3 for s in drift.series.values())
+
+
+def test_the_test_accelerometer_k2_joins_a_combined_model(p3_runs):
+    """P3's K2 of the test unit's x accelerometer, in the triad's name, fused with another
+    (less precise) estimate of the same K2 and the rest of a triad by combine_triad_parameters."""
+    from imucalib.models.combine import TriadPart, combine_triad_parameters
+    from imucalib.models.result import triad_parameter_names
+
+    _, _, result = errors_and_z(p3_runs[1], p3_plan(1))
+    names, values, cov = result.triad_parameters()
+    assert names == ["accel_K2_x"] and cov[0, 0] == pytest.approx(result.estimate.std("K2_T")
+                                                                   ** 2)
+    full = triad_parameter_names("accel", "triad", k2=True)
+    rest = [n for n in full if n != "accel_K2_x"]
+    others = TriadPart("tumble", tuple(rest), np.zeros(len(rest)), np.eye(len(rest)) * 1e-10)
+    k2_other = TriadPart("tumble-k2", ("accel_K2_x",), values + 1e-7, cov * 100.0)
+    combined = combine_triad_parameters([result, others, k2_other], sensor_id="TEST")
+    # weights 1 : 1/100 → the combined K2 moves 1/101 of the way to the other estimate
+    assert combined.value("accel_K2_x") == pytest.approx(values[0] + 1e-7 / 101, rel=1e-9)

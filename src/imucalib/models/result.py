@@ -90,6 +90,7 @@ __all__ = [
     "Provenance",
     "ResidualStats",
     "triad_parameter_names",
+    "triad_parameter_unit",
 ]
 
 RESULT_FORMAT: Final = "imucalib-calibration-result"
@@ -114,6 +115,14 @@ def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False
     if k2:
         names += [f"{triad}_K2_{a}" for a in AXES]
     return tuple(names)
+
+
+def triad_parameter_unit(name: str) -> str:
+    """Return the SI unit of a parameter name (``gyro_bias_x`` → ``rad/s``; module docstring)."""
+    triad, _, rest = name.partition("_")
+    symbol = rest.split("_")[0]
+    si = "m/s^2" if triad == "accel" else "rad/s"
+    return {"bias": si, "b": si, "G": "rad/s/(m/s^2)", "K2": "1/(m/s^2)"}.get(symbol, "1")
 
 
 @dataclass(frozen=True)

@@ -50,7 +50,12 @@ from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import open_recording
 from imucalib.models.fit_quality import FitQuality, assess_fit
-from imucalib.models.result import CalibrationResult, Provenance, ResidualStats
+from imucalib.models.result import (
+    CalibrationResult,
+    Provenance,
+    ResidualStats,
+    triad_parameter_unit,
+)
 from imucalib.models.triad import correct_triad
 from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.p1.fit import (
@@ -182,13 +187,6 @@ class P1Analysis:
         }
 
 
-def _units(name: str) -> str:
-    triad, symbol = name.split("_")[0], name.split("_")[1]
-    si = "m/s^2" if triad == "accel" else "rad/s"
-    return {"bias": si, "b": si, "M": "1", "K": "1",
-            "G": "rad/s/(m/s^2)"}.get(symbol, "1")
-
-
 def _residual_groups(fit: P1Fit, windows: list[WindowObservation], triad: str
                      ) -> list[tuple[str, np.ndarray, np.ndarray]]:
     out = []
@@ -235,7 +233,7 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
     return CalibrationResult(
         sensor_id=obs.sensor_id, procedure="p1", model=fit.model,
         param_names=fit.param_names, values=fit.estimate, covariance=cov,
-        units={n: _units(n) for n in fit.param_names}, residuals=residuals,
+        units={n: triad_parameter_unit(n) for n in fit.param_names}, residuals=residuals,
         provenance=provenance, notes=tuple(notes), fit_quality=fit_quality)
 
 

@@ -52,7 +52,7 @@ from imucalib.estimation.temperature_model import (
     to_parameter_record,
 )
 from imucalib.models.fit_quality import FitQuality
-from imucalib.models.result import CalibrationResult, Provenance
+from imucalib.models.result import CalibrationResult, Provenance, triad_parameter_unit
 from imucalib.procedures.p2.observations import (
     P2Processing,
     P2Window,
@@ -316,18 +316,6 @@ def _leg_value(leg: str) -> float:
     return 1.0 if leg == "heating" else -1.0
 
 
-def _units_of(name: str) -> str:
-    if name.startswith("gyro_bias"):
-        return "rad/s"
-    if name.startswith("accel_bias"):
-        return "m/s^2"
-    if name.startswith("gyro_G"):
-        return "rad/s/(m/s^2)"
-    if name.startswith("accel_K2"):
-        return "1/(m/s^2)"
-    return "1"
-
-
 def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
                  source: str = "", recording_sha256: str = "") -> P2UnitResult:
     """Analyse one unit's P2 windows (module docstring).
@@ -432,7 +420,7 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     result = CalibrationResult(
         sensor_id=obs.unit, procedure="p2", model="triad", param_names=PARAM_NAMES,
         values=values0, covariance=0.5 * (cov0 + cov0.T),
-        units={n: _units_of(n) for n in PARAM_NAMES},
+        units={n: triad_parameter_unit(n) for n in PARAM_NAMES},
         provenance=Provenance(recording=Path(source).name if source else "",
                               recording_sha256=recording_sha256, software_version=__version__,
                               created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),

@@ -283,6 +283,7 @@ class P3Result:
     k2_target_g_per_g2: float
     series_fit: FitQuality | None = None
     notes: tuple[str, ...] = ()
+    input_axis: str = "x"
     procedure: str = "p3"
 
     @property
@@ -308,6 +309,16 @@ class P3Result:
             rows += [(f"K1_{role}", sc.k1, sc.k1_std, "1"), (f"K0_{role}", sc.k0, sc.k0_std,
                                                               "m/s^2")]
         return rows
+
+    def triad_parameters(self) -> tuple[list[str], np.ndarray, np.ndarray]:
+        """Return K2 of the test accelerometer's input axis as a triad parameter, with its variance.
+
+        Named as :mod:`imucalib.models.result` names it (``accel_K2_x``), for
+        :func:`~imucalib.models.combine.combine_triad_parameters`.
+        """
+        std = self.estimate.std("K2_T")
+        return ([f"accel_K2_{self.input_axis}"], np.array([self.estimate.value("K2_T")]),
+                np.array([[std * std]]))
 
     def to_dict(self) -> dict[str, Any]:
         """Return the whole result as JSON-able data."""
@@ -448,4 +459,4 @@ def _analyze(rec: Recording, opt: P3Options,
                     scales=scales,
                     windows=tuple(w for unit in windows for w in windows[unit]),
                     k2_target_g_per_g2=opt.k2_target_g_per_g2, series_fit=pooled,
-                    notes=tuple(notes))
+                    notes=tuple(notes), input_axis=opt.processing.input_axis)
