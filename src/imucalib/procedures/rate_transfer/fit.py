@@ -51,12 +51,12 @@ def weighted_lsq(design: _F64, y: _F64, se: _F64, group: str
         raise InsufficientExcitationError([group], f"{group}: the rates cannot separate the "
                                           f"{design.shape[1]} terms of the model "
                                           f"({design.shape[0]} means)")
-    p, *_ = np.linalg.lstsq(a, y * w, rcond=None)
+    sol, *_ = np.linalg.lstsq(a, y * w, rcond=None)
     cov = np.asarray(np.linalg.inv(a.T @ a), dtype=np.float64)
-    p = np.asarray(p, dtype=np.float64)
+    p: _F64 = np.asarray(sol, dtype=np.float64)
     r = y - design @ p
     q = assess_fit(group, float(np.sum((r * w) ** 2)), design.shape[0] - design.shape[1])
-    return p, cov * q.sigma_scale ** 2, r, q
+    return p, np.asarray(cov * q.sigma_scale ** 2, dtype=np.float64), r, q
 
 
 @dataclass(frozen=True)
