@@ -110,3 +110,25 @@ def test_missing_turn_and_short_revolutions(tmp_path: Path) -> None:
         mp.setattr(reader.Recording, "steps", property(lambda self: cut))
         with pytest.raises(MissingSegmentError, match=r"2 whole revolution.* of the 4 commanded"):
             analyze_installation(rec)
+
+
+@pytest.mark.slow
+def test_twin_sigma_matches_the_spread(tmp_path: Path) -> None:
+    """RMS of the z-scores of E′, asymmetry, E2 and E0′ over 12 seeds × 3 axes: 1 ± 15 %."""
+    zs = []
+    for seed in range(300, 312):
+        path = run(rt_plan(seed), tmp_path / f"mc{seed}.h5")
+        result = registry.get("rate-transfer").analyze(path)
+        truth = gyro_truth(path)
+        g, _ = site_vectors(float(truth["latitude_deg"]), 0.0, None)
+        for k, axis in enumerate("xyz"):
+            t = result.axis(axis).transfer
+            assert t is not None
+            e = 1.0 + truth["scale_misalignment"][k, k]
+            zs += [(t.params[1] - e) / t.std(1),
+                   (t.asymmetry[0] - truth["scale_asymmetry"][k]) / t.asymmetry[1],
+                   (t.params[3] - truth["k2"][k] * e ** 2) / t.std(3),
+                   (t.params[0] - truth["bias"][k] - truth["g_sensitivity"][k, k] * g)
+                   / t.std(0)]
+    rms = float(np.sqrt(np.mean(np.square(zs))))
+    assert 0.85 < rms < 1.15, rms

@@ -177,14 +177,14 @@ class RateTransferResult:
             k, line = a.axis, a.line
             rows += [(f"gyro_scale_factor_{k}", line.scale_factor,
                       float(np.sqrt(line.cov[1, 1])), "1"),
-                     (f"gyro_bias_up_{k}", line.bias_rps, float(np.sqrt(line.cov[0, 0])),
+                     (f"gyro_bias_line_{k}", line.bias_rps, float(np.sqrt(line.cov[0, 0])),
                       "rad/s"),
                      (f"gyro_nonlinearity_{k}", line.nonlinearity_ppm * 1e-6, float("nan"), "1")]
             t = a.transfer
             if t is not None:
                 asym, asym_s = t.asymmetry
                 rows += [(f"gyro_M_{k}{k}", float(t.params[1]) - 1.0, t.std(1), "1"),
-                         (f"gyro_bias_up2_{k}", float(t.params[0]), t.std(0), "rad/s"),
+                         (f"gyro_bias_up_{k}", float(t.params[0]), t.std(0), "rad/s"),
                          (f"gyro_asymmetry_{k}", asym, asym_s, "1"),
                          (f"gyro_E2_{k}", float(t.params[3]), t.std(3), "s/rad")]
         return rows
