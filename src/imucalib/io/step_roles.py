@@ -55,6 +55,15 @@ mounting check names the units with ``ref-a=<unit>``, ``ref-b=<unit>`` and ``tes
     The operator puts A and B back and mounts the test accelerometer and its load
     (``swap_units`` and ``centrifuge_load_kg``).
 
+Rate transfer (gyro scale factor, docs/rate-transfer.md) and installation errors (the
+triad's misalignment angles, docs/installation.md), on a single-axis rate table; every step
+after a remount carries the tag ``axis=<x|y|z>`` (the body axis up):
+
+:data:`RATE_TRANSFER_REMOUNT`, :data:`INSTALLATION_REMOUNT` ``"<procedure>.remount"``
+    The operator places the unit with another axis up (``remount``).
+:data:`RATE_TRANSFER_RATE`, :data:`INSTALLATION_RATE` ``"<procedure>.rate"``
+    A turn over whole revolutions (``commanded`` gives ``rate_dps`` and ``revolutions``).
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -69,6 +78,8 @@ from typing import Final
 
 __all__ = [
     "ALLAN_STATIC",
+    "INSTALLATION_RATE",
+    "INSTALLATION_REMOUNT",
     "P1_ACCEL_POSITION",
     "P1_GYRO_BIAS",
     "P1_GYRO_RATE",
@@ -87,6 +98,8 @@ __all__ = [
     "P3_ROLES",
     "P3_SWAP",
     "P3_TUMBLE",
+    "RATE_TRANSFER_RATE",
+    "RATE_TRANSFER_REMOUNT",
     "role_from_tags",
 ]
 
@@ -154,3 +167,11 @@ def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:
     if kind == "rate" and "calibration" in tagset:
         return P1_GYRO_RATE
     return ""
+
+# Rate transfer and installation errors (docs/rate-transfer.md, docs/installation.md): every
+# step after a remount carries the tag ``axis=<x|y|z>`` (the body axis up, along the table's
+# spin axis); the turns also ``rate=<°/s>``.
+RATE_TRANSFER_REMOUNT: Final = "rate-transfer.remount"
+RATE_TRANSFER_RATE: Final = "rate-transfer.rate"
+INSTALLATION_REMOUNT: Final = "installation.remount"
+INSTALLATION_RATE: Final = "installation.rate"

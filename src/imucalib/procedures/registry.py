@@ -35,6 +35,8 @@ BUILTIN: dict[str, str] = {
     "allan": "imucalib.procedures.allan.procedure",
     "p2": "imucalib.procedures.p2.procedure",
     "p3": "imucalib.procedures.p3.procedure",
+    "rate-transfer": "imucalib.procedures.rate_transfer.procedure",
+    "installation": "imucalib.procedures.installation.procedure",
 }
 
 _registered: dict[str, Procedure] = {}

@@ -1,0 +1,101 @@
+"""The plan of the installation-error test (docs/installation.md, "The plan").
+
+:func:`generate_installation_plan`: an operator check of the mounting, then for each axis
+(``x``, ``y``, ``z``) a remount with that body axis up on a single-axis table and a +ω and a −ω
+turn over `revolutions` whole revolutions each (the P4 source chapter's one revolution, 360°,
+per direction; two by default, the analysis accepting one fewer at the window edges), at each
+rate of `rate_dps`. Roles ``installation.remount`` and ``installation.rate``, tags
+``axis=<k>`` and ``rate=<°/s>``. The twin is that of the rate-transfer test
+(:func:`~imucalib.procedures.rate_transfer.plan.rate_table_twin`).
+
+Contents
+--------
+:func:`generate_installation_plan`
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from imucalib.errors import ConfigurationError
+from imucalib.io.step_roles import INSTALLATION_RATE, INSTALLATION_REMOUNT
+from imucalib.plan.equipment import TwinEquipment
+from imucalib.plan.schema import (
+    ImuSpecConfig,
+    OperatorCheckStep,
+    Plan,
+    PlanLimits,
+    PlanStep,
+    RateStep,
+)
+from imucalib.procedures.rate_transfer.plan import (
+    AXES,
+    check_rates_in_range,
+    rate_table_twin,
+    remount_step,
+    signed_rates,
+)
+
+__all__ = ["generate_installation_plan"]
+
+
+def generate_installation_plan(
+    *,
+    rate_dps: float | Sequence[float] = 30.0,
+    axes: Sequence[str] = AXES,
+    revolutions: int = 2,
+    settle_s: float = 5.0,
+    grade: str = "tactical",
+    sample_rate_hz: float = 100.0,
+    seed: int = 0,
+    twin: TwinEquipment | None = None,
+    name: str = "installation",
+) -> Plan:
+    """Return the installation-error plan (module docstring).
+
+    Parameters
+    ----------
+    rate_dps : float or sequence of float
+        |ω| of the turns (several: each turned both ways). [°/s]
+    axes : sequence of {"x", "y", "z"}
+        Body axes up in turn (each gives the column of M of that input axis).
+    revolutions : int
+        Whole revolutions per turn (≥ 2).
+    settle_s, grade, sample_rate_hz, seed, twin, name :
+        As :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`.
+
+    Raises
+    ------
+    ConfigurationError
+        Bad rates, axes or revolutions; a rate at or beyond the gyro's full scale.
+    """
+    if revolutions < 2:
+        raise ConfigurationError(f"`revolutions` must be ≥ 2 (one may be lost at the window "
+                                 f"edges); got {revolutions}")
+    mags = [rate_dps] if isinstance(rate_dps, int | float) else list(rate_dps)
+    rates = signed_rates(mags, None)
+    equipment = twin if twin is not None else rate_table_twin(grade, sample_rate_hz, seed)
+    check_rates_in_range(rates, equipment, grade)
+    if not axes or len(set(axes)) != len(axes):
+        raise ConfigurationError(f"`axes` must be distinct axes among {AXES}; got {tuple(axes)}")
+    steps: list[PlanStep] = [OperatorCheckStep(
+        kind="operator-check",
+        item="the unit on the cube's +z face, square to it; cables strain-relieved")]
+    for axis in axes:
+        steps.append(remount_step(axis, INSTALLATION_REMOUNT))
+        steps += [RateStep(kind="rate", axis=0, rate_dps=r, settle_s=settle_s,
+                           revolutions=revolutions, role=INSTALLATION_RATE,
+                           tags=(f"axis={axis}", f"rate={r:g}"),
+                           label=f"{axis} up, {r:+g} °/s") for r in rates]
+    top = max(abs(r) for r in rates)
+    return Plan(
+        name=name,
+        description=("Installation errors (docs/installation.md): each axis up in turn on a "
+                     "single-axis table, a +ω and a −ω turn over whole revolutions; the "
+                     "misalignment angles of the gyro triad."),
+        procedure="installation",
+        imu=ImuSpecConfig(grade=grade),
+        limits=PlanLimits(max_rate_dps=max(1.5 * top, 100.0)),
+        twin=equipment,
+        steps=tuple(steps),
+    )

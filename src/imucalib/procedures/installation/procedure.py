@@ -1,0 +1,72 @@
+"""The installation-error test as a Procedure (registered as ``"installation"``).
+
+It implements :class:`~imucalib.procedures.common.procedure.Procedure`.
+
+The plan is :func:`~imucalib.procedures.installation.plan.generate_installation_plan`; the
+analysis :func:`~imucalib.procedures.installation.analysis.analyze_installation`, imported when
+first used.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.installation.analysis import InstallationResult
+
+__all__ = ["PROCEDURE", "InstallationProcedure"]
+
+
+class InstallationProcedure:
+    """Installation errors: the gyro triad's misalignment angles from ±ω turns."""
+
+    name = "installation"
+    description = ("installation (misalignment) errors of the gyro triad on a single-axis "
+                   "table: each axis up in turn, a +ω and a −ω turn over whole revolutions; "
+                   "the chapter's closed form and the least-squares triad model")
+    plan_options = frozenset({"rate_dps", "axes", "revolutions", "settle_s", "grade",
+                              "sample_rate_hz", "seed"})
+    analysis_options = frozenset({"max_lost_fraction", "max_gap_s", "noise_block_s",
+                                  "common_bias"})
+    outputs = ("report-json", "parameters-csv")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.installation.plan.generate_installation_plan`."""
+        from imucalib.procedures.installation.plan import generate_installation_plan
+
+        return generate_installation_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> InstallationResult:
+        """Run :func:`~imucalib.procedures.installation.analysis.analyze_installation`.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
+        from imucalib.procedures.installation.analysis import analyze_installation
+        from imucalib.procedures.rate_transfer.observations import RateProcessing
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure installation takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        common = bool(opts.pop("common_bias", False))
+        result = analyze_installation(recording, unit=unit, processing=RateProcessing(**opts),
+                                      common_bias=common)
+        if progress is not None:
+            progress(1.0)
+        return result
+
+
+#: The registered installation procedure.
+PROCEDURE = InstallationProcedure()

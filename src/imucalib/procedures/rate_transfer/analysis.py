@@ -1,0 +1,246 @@
+"""The rate-transfer analysis of one unit (docs/rate-transfer.md, "Analysis").
+
+For each body axis tested (the turns tagged ``axis=<k>``, the unit with that axis up): the
+input rates x_j = ω_table,j + Ω_U (RT-1), the gyro k means y_j and their σ_j
+(:mod:`~imucalib.procedures.rate_transfer.observations`), the straight line and the
+nonlinearity (RT-5)–(RT-6), and the second fit with the asymmetry and the quadratic term
+(RT-7)–(RT-8) (:mod:`~imucalib.procedures.rate_transfer.fit`).
+
+In the triad model's terms (docs/rate-transfer.md, (RT-9)): E′ = 1 + M_kk, A = (1 + M_kk)·a_k/2
+(so the asymmetry is a_k), E2 = K2_k·(1 + M_kk)², and E0′ = b_k + G_kk·g (the bias with axis k up
+holds the g-sensitivity along it). :meth:`RateTransferResult.triad_parameters` gives
+``gyro_M_kk`` (the quadratic term E2 stays in the report: the triad model has no gyro K2).
+
+Contents
+--------
+:class:`AxisTransfer`, :class:`RateTransferResult`, :func:`analyze_rate_transfer`,
+:func:`transfer_of_axis`
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.errors import InsufficientExcitationError
+from imucalib.io.reader import Recording, open_recording
+from imucalib.io.step_roles import RATE_TRANSFER_RATE
+from imucalib.procedures.rate_transfer.fit import (
+    LineFit,
+    TransferFit,
+    fit_line,
+    fit_rate_transfer,
+)
+from imucalib.procedures.rate_transfer.observations import (
+    RateProcessing,
+    RateWindow,
+    extract_rate_windows,
+)
+
+__all__ = ["AxisTransfer", "RateTransferResult", "analyze_rate_transfer", "transfer_of_axis"]
+
+_F64 = NDArray[np.float64]
+_INDEX = {"x": 0, "y": 1, "z": 2}
+
+
+@dataclass(frozen=True)
+class AxisTransfer:
+    """The rate transfer of one gyro axis.
+
+    Attributes
+    ----------
+    axis : {"x", "y", "z"}
+    input_rps, output_rps, se_rps : ndarray
+        x_j (RT-1), y_j and σ_j of each turn. [rad/s]
+    line : LineFit
+        (RT-5)–(RT-6).
+    transfer : TransferFit or None
+        (RT-7)–(RT-8); None when the rates cannot separate its terms.
+    """
+
+    axis: str
+    input_rps: _F64
+    output_rps: _F64
+    se_rps: _F64
+    line: LineFit
+    transfer: TransferFit | None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able summary."""
+        out: dict[str, Any] = {
+            "axis": self.axis,
+            "input_rps": self.input_rps.tolist(), "output_rps": self.output_rps.tolist(),
+            "se_rps": self.se_rps.tolist(),
+            "scale_factor": self.line.scale_factor,
+            "scale_factor_std": float(np.sqrt(self.line.cov[1, 1])),
+            "bias_rps": self.line.bias_rps, "bias_std_rps": float(np.sqrt(self.line.cov[0, 0])),
+            "nonlinearity_ppm_fs": self.line.nonlinearity_ppm,
+            "line_residuals_rps": self.line.residuals_rps.tolist(),
+            "line_chi2_per_dof": self.line.quality.reduced_chi2,
+            "line_birge_ratio": self.line.quality.birge_ratio,
+            "line_fit": self.line.quality.summary(),
+        }
+        t = self.transfer
+        if t is not None:
+            asym, asym_s = t.asymmetry
+            k_plus, k_minus = t.slopes
+            out.update({
+                "second_fit": {
+                    "bias_rps": float(t.params[0]), "bias_std_rps": t.std(0),
+                    "scale_factor": float(t.params[1]), "scale_factor_std": t.std(1),
+                    "abs_term": float(t.params[2]), "abs_term_std": t.std(2),
+                    "e2_s_per_rad": float(t.params[3]), "e2_std_s_per_rad": t.std(3),
+                    "k_plus": k_plus, "k_minus": k_minus,
+                    "asymmetry_ppm": asym * 1e6, "asymmetry_std_ppm": asym_s * 1e6,
+                    "residuals_rps": t.residuals_rps.tolist(),
+                    "chi2_per_dof": t.quality.reduced_chi2,
+                    "birge_ratio": t.quality.birge_ratio, "fit": t.quality.summary()}})
+        return out
+
+
+def transfer_of_axis(axis: str, windows: Sequence[RateWindow], earth_rate_up_rps: float
+                     ) -> AxisTransfer:
+    """Fit the turns of one axis (module docstring).
+
+    Raises
+    ------
+    InsufficientExcitationError
+        Fewer than two distinct rates for the axis.
+    """
+    k = _INDEX[axis]
+    mine = [w for w in windows if w.axis == axis]
+    x = np.array([w.table_rate_rps + earth_rate_up_rps for w in mine])
+    if np.unique(np.round(x, 9)).size < 2:
+        raise InsufficientExcitationError([f"gyro_M_{axis}{axis}"], (
+            f"axis {axis}: {len(mine)} turn(s) at {np.unique(np.round(x, 9)).size} distinct "
+            "rate(s); the scale factor needs at least two rates"))
+    y = np.array([w.gyro_mean_rps[k] for w in mine])
+    se = np.array([w.gyro_se_rps[k] for w in mine])
+    line = fit_line(x, y, se, group=f"gyro {axis}")
+    try:
+        transfer: TransferFit | None = fit_rate_transfer(x, y, se, group=f"gyro {axis}")
+    except InsufficientExcitationError:
+        transfer = None
+    return AxisTransfer(axis=axis, input_rps=x, output_rps=y, se_rps=se, line=line,
+                        transfer=transfer)
+
+
+@dataclass(frozen=True)
+class RateTransferResult:
+    """The rate transfer of one unit (module docstring).
+
+    Attributes
+    ----------
+    unit : str
+    axes : tuple of AxisTransfer
+    earth_rate_up_rps : float
+        Ω_U added to the table rates. [rad/s]
+    n_turns : int
+    procedure : str
+        ``"rate-transfer"``.
+    """
+
+    unit: str
+    axes: tuple[AxisTransfer, ...]
+    earth_rate_up_rps: float
+    n_turns: int
+    procedure: str = "rate-transfer"
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def passed(self) -> bool | None:
+        """No acceptance limits: None."""
+        return None
+
+    def axis(self, name: str) -> AxisTransfer:
+        """Return the result of body axis `name`."""
+        for a in self.axes:
+            if a.axis == name:
+                return a
+        raise KeyError(f"axis {name!r} was not tested; tested: {[a.axis for a in self.axes]}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able, everything."""
+        return {"procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+                "earth_rate_up_rps": self.earth_rate_up_rps, "n_turns": self.n_turns,
+                "axes": [a.to_dict() for a in self.axes], "notes": list(self.notes)}
+
+    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
+        """(name, value, standard uncertainty, SI unit) of every estimate."""
+        rows: list[tuple[str, float, float, str]] = []
+        for a in self.axes:
+            k, line = a.axis, a.line
+            rows += [(f"gyro_scale_factor_{k}", line.scale_factor,
+                      float(np.sqrt(line.cov[1, 1])), "1"),
+                     (f"gyro_bias_line_{k}", line.bias_rps, float(np.sqrt(line.cov[0, 0])),
+                      "rad/s"),
+                     (f"gyro_nonlinearity_{k}", line.nonlinearity_ppm * 1e-6, float("nan"), "1")]
+            t = a.transfer
+            if t is not None:
+                asym, asym_s = t.asymmetry
+                rows += [(f"gyro_M_{k}{k}", float(t.params[1]) - 1.0, t.std(1), "1"),
+                         (f"gyro_bias_up_{k}", float(t.params[0]), t.std(0), "rad/s"),
+                         (f"gyro_asymmetry_{k}", asym, asym_s, "1"),
+                         (f"gyro_E2_{k}", float(t.params[3]), t.std(3), "s/rad")]
+        return rows
+
+    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
+        """``gyro_M_kk`` = E′ − 1 with its variance, for the combined model (RT-9).
+
+        An axis whose rates cannot separate the second fit gives ``gyro_M_kk`` from the line.
+        """
+        names: list[str] = []
+        blocks: list[tuple[_F64, _F64]] = []
+        for a in self.axes:
+            k, t = a.axis, a.transfer
+            if t is None:
+                names.append(f"gyro_M_{k}{k}")
+                blocks.append((np.array([a.line.scale_factor - 1.0]),
+                               a.line.cov[1:2, 1:2].copy()))
+                continue
+            # the triad model has no gyro K2 (models/result.py): the quadratic term stays in the
+            # CSV and the report; the scale factor from the fit that models it
+            names.append(f"gyro_M_{k}{k}")
+            blocks.append((np.array([float(t.params[1]) - 1.0]), t.cov[1:2, 1:2].copy()))
+        n = len(names)
+        values = np.concatenate([b[0] for b in blocks]) if blocks else np.zeros(0)
+        cov = np.zeros((n, n))
+        i = 0
+        for v, c in blocks:
+            cov[i:i + v.size, i:i + v.size] = c
+            i += v.size
+        return names, values, cov
+
+
+def analyze_rate_transfer(recording: Recording | str | os.PathLike[str], *,
+                          unit: str | None = None,
+                          processing: RateProcessing | None = None) -> RateTransferResult:
+    """Analyse a rate-transfer recording (module docstring).
+
+    Raises
+    ------
+    RecordingError
+        Not a rate-transfer recording, no such unit, no table or latitude.
+    MissingSegmentError, SaturationError, InvalidInputError
+        A turn that cannot be used (:func:`~imucalib.procedures.rate_transfer.observations.
+        extract_rate_windows`).
+    InsufficientExcitationError
+        An axis with fewer than two distinct rates.
+    """
+    if not isinstance(recording, Recording):
+        with open_recording(recording) as rec:
+            return analyze_rate_transfer(rec, unit=unit, processing=processing)
+    name, windows, earth_up = extract_rate_windows(recording, unit, (RATE_TRANSFER_RATE,),
+                                                   processing=processing)
+    axes = tuple(transfer_of_axis(a, windows, earth_up)
+                 for a in sorted({w.axis for w in windows}))
+    return RateTransferResult(
+        unit=name, axes=axes, earth_rate_up_rps=earth_up, n_turns=len(windows),
+        notes=("means over whole table revolutions (encoder angle); σ from the pooled white "
+               "noise of 1 s block means; input = table rate + vertical Earth rate "
+               "(docs/rate-transfer.md)",))

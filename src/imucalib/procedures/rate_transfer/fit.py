@@ -1,0 +1,164 @@
+"""The rate-transfer fits of one gyro axis (docs/rate-transfer.md, eqs. (RT-5)–(RT-9)).
+
+Pure maths on whole-revolution means: x_j the input rate about the vertical (the table rate plus
+the vertical Earth rate Ω_U, eq. (RT-1)), y_j the gyro's mean output, σ_j its standard error.
+
+1. the IEEE straight line (RT-5) y = E0 + E·x, weighted least squares; the scale-factor
+   nonlinearity (RT-6) is the largest deviation of a mean from that line, in ppm of the
+   full-scale output |E|·max|x| of the rates tested (IEEE Std 952-2020, "scale factor
+   nonlinearity");
+2. the second fit (RT-7) y = E0′ + E′·x + A·|x| + E2·x²: separate slopes K± = E′ ± A for
+   positive and negative rates, the asymmetry (RT-8) (K₊ − K₋)/((K₊ + K₋)/2) = 2A/E′ and the
+   quadratic coefficient E2.
+
+Each fit's χ²/ν is assessed (:func:`~imucalib.models.fit_quality.assess_fit`); on a misfit its
+σ are scaled by the Birge ratio.
+
+Contents
+--------
+:class:`LineFit`, :func:`fit_line`, :func:`fit_rate_transfer`, :class:`TransferFit`
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.models.fit_quality import FitQuality, assess_fit
+
+__all__ = ["LineFit", "TransferFit", "fit_line", "fit_rate_transfer", "weighted_lsq"]
+
+_F64 = NDArray[np.float64]
+
+
+def weighted_lsq(design: _F64, y: _F64, se: _F64, group: str
+                 ) -> tuple[_F64, _F64, _F64, FitQuality]:
+    """Solve y = design·p weighted by 1/σ²; return (p, covariance, residuals, fit quality).
+
+    The covariance is (AᵀWA)⁻¹ scaled by the fit's σ scale (Birge ratio on a misfit).
+
+    Raises
+    ------
+    InsufficientExcitationError
+        The design is rank deficient.
+    """
+    w = 1.0 / se
+    a = design * w[:, None]
+    if np.linalg.matrix_rank(a) < design.shape[1]:
+        raise InsufficientExcitationError([group], f"{group}: the rates cannot separate the "
+                                          f"{design.shape[1]} terms of the model "
+                                          f"({design.shape[0]} means)")
+    sol, *_ = np.linalg.lstsq(a, y * w, rcond=None)
+    cov = np.asarray(np.linalg.inv(a.T @ a), dtype=np.float64)
+    p: _F64 = np.asarray(sol, dtype=np.float64)
+    r = y - design @ p
+    q = assess_fit(group, float(np.sum((r * w) ** 2)), design.shape[0] - design.shape[1])
+    return p, np.asarray(cov * q.sigma_scale ** 2, dtype=np.float64), r, q
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """The straight line (RT-5) and the nonlinearity (RT-6).
+
+    Attributes
+    ----------
+    bias_rps, scale_factor : float
+        E0 [rad/s] and E [1].
+    cov : ndarray (2, 2)
+        Their covariance (Birge-scaled on a misfit).
+    residuals_rps : ndarray
+        y − (E0 + E·x) of each mean. [rad/s]
+    nonlinearity_ppm : float
+        max |residual| / (|E|·max|x|) · 10⁶. [ppm of full scale]
+    quality : FitQuality
+        χ²/ν of the line.
+    """
+
+    bias_rps: float
+    scale_factor: float
+    cov: _F64
+    residuals_rps: _F64
+    nonlinearity_ppm: float
+    quality: FitQuality
+
+
+@dataclass(frozen=True)
+class TransferFit:
+    """The second fit (RT-7)–(RT-8): y = E0′ + E′·x + A·|x| + E2·x².
+
+    Attributes
+    ----------
+    params : ndarray (4,)
+        E0′ [rad/s], E′ [1], A [1], E2 [s/rad].
+    cov : ndarray (4, 4)
+        Their covariance (Birge-scaled on a misfit).
+    residuals_rps : ndarray
+        Residuals of the means. [rad/s]
+    quality : FitQuality
+        χ²/ν of the fit.
+    """
+
+    params: _F64
+    cov: _F64
+    residuals_rps: _F64
+    quality: FitQuality
+
+    @property
+    def asymmetry(self) -> tuple[float, float]:
+        """(K₊ − K₋)/mean K = 2A/E′ and its σ (RT-8, first-order propagation). [1]"""
+        e, a = float(self.params[1]), float(self.params[2])
+        jac = np.array([0.0, -2.0 * a / e ** 2, 2.0 / e, 0.0])
+        return 2.0 * a / e, float(np.sqrt(jac @ self.cov @ jac))
+
+    @property
+    def slopes(self) -> tuple[float, float]:
+        """K₊ = E′ + A and K₋ = E′ − A, the scale factors of positive and negative rates."""
+        return float(self.params[1] + self.params[2]), float(self.params[1] - self.params[2])
+
+    def std(self, i: int) -> float:
+        """Return the standard uncertainty of parameter `i`."""
+        return float(np.sqrt(self.cov[i, i]))
+
+
+def _inputs(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike) -> tuple[_F64, _F64, _F64]:
+    x, y, se = (np.asarray(v, dtype=np.float64).ravel() for v in (x_rps, y_rps, se_rps))
+    if not (x.size == y.size == se.size) or x.size < 2:
+        raise InvalidInputError(f"x, y and σ must be equal-length with ≥ 2 means; got sizes "
+                                f"{x.size}, {y.size}, {se.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y)) and np.all(se > 0)):
+        raise InvalidInputError("rates and means must be finite and σ > 0")
+    return x, y, se
+
+
+def fit_line(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
+             group: str = "gyro") -> LineFit:
+    """Fit the straight line (RT-5) and return it with the nonlinearity (RT-6)."""
+    x, y, se = _inputs(x_rps, y_rps, se_rps)
+    p, cov, r, q = weighted_lsq(np.column_stack([np.ones_like(x), x]), y, se, group)
+    full = abs(float(p[1])) * float(np.max(np.abs(x)))
+    return LineFit(bias_rps=float(p[0]), scale_factor=float(p[1]), cov=cov, residuals_rps=r,
+                   nonlinearity_ppm=float(np.max(np.abs(r)) / full * 1e6), quality=q)
+
+
+def fit_rate_transfer(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
+                      group: str = "gyro") -> TransferFit:
+    """Fit (RT-7): y = E0′ + E′·x + A·|x| + E2·x², weighted.
+
+    Raises
+    ------
+    InsufficientExcitationError
+        Fewer than three distinct rate magnitudes, or rates of one sign only.
+    """
+    x, y, se = _inputs(x_rps, y_rps, se_rps)
+    mags = np.unique(np.round(np.abs(x), 9))
+    if mags.size < 3 or not (np.any(x > 0) and np.any(x < 0)):
+        raise InsufficientExcitationError(
+            [f"{group} asymmetry", f"{group} E2"],
+            f"{group}: the asymmetry and quadratic terms need rates of both signs at ≥ 3 "
+            f"magnitudes; got {mags.size} magnitude(s)")
+    design = np.column_stack([np.ones_like(x), x, np.abs(x), x * x])
+    p, cov, r, q = weighted_lsq(design, y, se, group)
+    return TransferFit(params=p, cov=cov, residuals_rps=r, quality=q)

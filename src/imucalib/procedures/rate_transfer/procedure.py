@@ -1,0 +1,70 @@
+"""The gyro rate transfer as a Procedure (registered as ``"rate-transfer"``).
+
+It implements :class:`~imucalib.procedures.common.procedure.Procedure`.
+
+The plan is :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`; the
+analysis :func:`~imucalib.procedures.rate_transfer.analysis.analyze_rate_transfer`, imported
+when first used.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.rate_transfer.analysis import RateTransferResult
+
+__all__ = ["PROCEDURE", "RateTransferProcedure"]
+
+
+class RateTransferProcedure:
+    """Gyro rate transfer: scale factor, bias, nonlinearity and asymmetry per axis."""
+
+    name = "rate-transfer"
+    description = ("gyro rate transfer on a single-axis table: each axis up in turn, turns at "
+                   "±ω over whole revolutions; scale factor, bias, nonlinearity (ppm of full "
+                   "scale), asymmetry and quadratic term per axis")
+    plan_options = frozenset({"rates_dps", "log_spaced", "axes", "revolutions", "settle_s",
+                              "grade", "sample_rate_hz", "seed"})
+    analysis_options = frozenset({"max_lost_fraction", "max_gap_s", "noise_block_s"})
+    outputs = ("report-json", "parameters-csv")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`."""
+        from imucalib.procedures.rate_transfer.plan import generate_rate_transfer_plan
+
+        return generate_rate_transfer_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> RateTransferResult:
+        """Run :func:`~imucalib.procedures.rate_transfer.analysis.analyze_rate_transfer`.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
+        from imucalib.procedures.rate_transfer.analysis import analyze_rate_transfer
+        from imucalib.procedures.rate_transfer.observations import RateProcessing
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure rate-transfer takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        result = analyze_rate_transfer(recording, unit=unit,
+                                       processing=RateProcessing(**opts))
+        if progress is not None:
+            progress(1.0)
+        return result
+
+
+#: The registered rate-transfer procedure.
+PROCEDURE = RateTransferProcedure()
