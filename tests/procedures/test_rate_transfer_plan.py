@@ -69,3 +69,21 @@ def test_bad_options_are_refused(options: dict[str, object], match: str) -> None
 def test_installation_refuses_a_rate_beyond_the_range() -> None:
     with pytest.raises(ConfigurationError, match="2500 °/s reaches the gyro range ±2000"):
         generate_installation_plan(rate_dps=2500.0, grade="consumer")
+
+
+def test_cli_writes_a_rate_transfer_plan_with_its_rates(tmp_path):
+    from typer.testing import CliRunner
+
+    from imucalib.cli import app
+    from imucalib.plan.io import load_plan
+
+    path = tmp_path / "rt.toml"
+    res = CliRunner().invoke(app, ["plan", "new", "rate-transfer", "-o", str(path),
+                                   "--rates", "5,10,20,40"])
+    assert res.exit_code == 0, res.output
+    plan = load_plan(path)
+    rates = {abs(s.rate_dps) for s in plan.steps if s.role == "rate-transfer.rate"}
+    assert rates == {5.0, 10.0, 20.0, 40.0}
+    res = CliRunner().invoke(app, ["plan", "new", "p1", "-o", str(tmp_path / "x.toml"),
+                                   "--rates", "5,6"])
+    assert res.exit_code == 2 and "plan new rate-transfer --rates" in res.output

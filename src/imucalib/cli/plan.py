@@ -95,7 +95,8 @@ _PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "st
                  "pose_order": "pose_order", "radius_m": "static_radius_m",
                  "test_range_g": "test_range_g", "n_rates": "n_rates",
                  "test_load_kg": "test_load_kg", "unbalance_um": "unbalance_um",
-                 "tumble": "tumble", "both_directions": "both_directions"}
+                 "tumble": "tumble", "both_directions": "both_directions",
+                 "rates": "rates_dps"}
 
 
 def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
@@ -134,7 +135,7 @@ def _numbers(text: str | None, flag: str) -> list[float] | None:
 def new(
     ctx: typer.Context,
     procedure: Annotated[str, typer.Argument(
-        help="Procedure: p1, allan, p2 or p3 (the registry's).")],
+        help="Procedure: p1, allan, p2, p3, rate-transfer, installation, … (the registry's).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
     grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
     "tactical",
@@ -185,6 +186,8 @@ def new(
         help="P3: record the 1 g tumble (K1, K0 of each accelerometer).")] = True,
     both_directions: Annotated[bool, typer.Option(
         help="P3: run every rate at +ω and −ω.")] = False,
+    rates: Annotated[str | None, typer.Option(
+        help="P3, rate-transfer: the rates, e.g. '5,12.5,18,27' [°/s].")] = None,
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
@@ -202,7 +205,7 @@ def new(
                  "pose_order": pose_order, "static_radius_m": radius_m,
                  "test_range_g": test_range_g, "n_rates": n_rates,
                  "test_load_kg": test_load_kg, "unbalance_um": unbalance_um, "tumble": tumble,
-                 "both_directions": both_directions}
+                 "both_directions": both_directions, "rates_dps": _numbers(rates, "--rates")}
         # only what the command line gave: each generator keeps its own defaults
         explicit = {keyword for param, keyword in _PLAN_OPTIONS.items()
                     if (src := ctx.get_parameter_source(param)) is not None
