@@ -55,6 +55,17 @@ mounting check names the units with ``ref-a=<unit>``, ``ref-b=<unit>`` and ``tes
     The operator puts A and B back and mounts the test accelerometer and its load
     (``swap_units`` and ``centrifuge_load_kg``).
 
+P4 static tests (docs/g-sensitivity.md, docs/earth-rate-bias.md, docs/random-drift.md):
+
+:data:`G_SENSITIVITY_POSITION` ``"g-sensitivity.position"``
+    A long static record at one dual-axis table position (gravity along ±x, ±y, ±z or between).
+:data:`EARTH_RATE_BIAS_REMOUNT` ``"earth-rate-bias.remount"``
+    The operator places the fixture with another axis up (tag ``pose=<axis>``).
+:data:`EARTH_RATE_BIAS_POSITION` ``"earth-rate-bias.position"``
+    A static record at one azimuth of a single-axis table (tags ``pose=<axis>``, ``azimuth=<deg>``).
+:data:`RANDOM_DRIFT_POSITION` ``"random-drift.position"``
+    A static record of one repetition of the multi-position sequence (tag ``rep=<k>``).
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -69,6 +80,9 @@ from typing import Final
 
 __all__ = [
     "ALLAN_STATIC",
+    "EARTH_RATE_BIAS_POSITION",
+    "EARTH_RATE_BIAS_REMOUNT",
+    "G_SENSITIVITY_POSITION",
     "P1_ACCEL_POSITION",
     "P1_GYRO_BIAS",
     "P1_GYRO_RATE",
@@ -87,6 +101,7 @@ __all__ = [
     "P3_ROLES",
     "P3_SWAP",
     "P3_TUMBLE",
+    "RANDOM_DRIFT_POSITION",
     "role_from_tags",
 ]
 
@@ -116,6 +131,11 @@ P3_LOAD: Final = "p3.load"
 #: Every P3 role.
 P3_ROLES: Final = (P3_MOUNT, P3_TUMBLE, P3_REST, P3_RATE, P3_SWAP, P3_LOAD)
 
+
+G_SENSITIVITY_POSITION: Final = "g-sensitivity.position"
+EARTH_RATE_BIAS_REMOUNT: Final = "earth-rate-bias.remount"
+EARTH_RATE_BIAS_POSITION: Final = "earth-rate-bias.position"
+RANDOM_DRIFT_POSITION: Final = "random-drift.position"
 
 def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:
     """Return the role a step of `kind` with `tags` has under the generators' rules, or ``""``.

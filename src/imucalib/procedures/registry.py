@@ -35,6 +35,9 @@ BUILTIN: dict[str, str] = {
     "allan": "imucalib.procedures.allan.procedure",
     "p2": "imucalib.procedures.p2.procedure",
     "p3": "imucalib.procedures.p3.procedure",
+    "g-sensitivity": "imucalib.procedures.g_sensitivity.procedure",
+    "earth-rate-bias": "imucalib.procedures.earth_rate_bias.procedure",
+    "random-drift": "imucalib.procedures.random_drift.procedure",
 }
 
 _registered: dict[str, Procedure] = {}
