@@ -17,7 +17,8 @@ One step's valid window of one unit at a time (memory bounded by the longest ste
 
 Contents
 --------
-:class:`StaticWindow`, :class:`StaticSite`, :func:`extract_static_windows`
+:class:`StaticWindow`, :class:`StaticSite`, :func:`extract_static_windows`, :func:`read_site`,
+:func:`require_recorded`, :func:`json_safe`
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE
 from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
 from imucalib.procedures.common.reference import site_vectors, static_inputs_b
 
-__all__ = ["StaticSite", "StaticWindow", "extract_static_windows"]
+__all__ = ["StaticSite", "StaticWindow", "extract_static_windows", "json_safe", "read_site",
+           "require_recorded"]
 
 _F64 = NDArray[np.float64]
 
@@ -251,3 +253,12 @@ def extract_static_windows(rec: Recording, unit: str | None, roles: Sequence[str
 def json_safe(value: object) -> object:
     """Return `value` with numpy arrays and scalars turned into lists and floats (for to_dict)."""
     return json.loads(json.dumps(value, default=lambda o: np.asarray(o).tolist()))
+
+
+def require_recorded(rec: Recording, roles: Sequence[str]) -> None:
+    """Raise MissingSegmentError naming every step of `roles` not done with a valid window."""
+    missing = [f"step {s.index} ({s.label}): {s.status}" for s in rec.steps
+               if s.role in roles and not (s.status == "done" and s.has_valid_window)]
+    if missing:
+        raise MissingSegmentError(f"every planned position must be recorded; missing: "
+                                  f"{'; '.join(missing)}")

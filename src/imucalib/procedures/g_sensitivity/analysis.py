@@ -23,13 +23,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.errors import InvalidInputError, MissingSegmentError
+from imucalib.errors import InvalidInputError
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import G_SENSITIVITY_POSITION
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
     json_safe,
+    require_recorded,
 )
 from imucalib.procedures.g_sensitivity.fit import DriftFit, fit_drift_model
 
@@ -177,12 +178,7 @@ def analyze_g_sensitivity(recording: Recording | str | os.PathLike[str], *,
         with open_recording(recording) as rec:
             return analyze_g_sensitivity(rec, unit=unit, options=opt)
     rec = recording
-    missing = [f"step {s.index} ({s.label}): {s.status}" for s in rec.steps
-               if s.role == G_SENSITIVITY_POSITION
-               and not (s.status == "done" and s.has_valid_window)]
-    if missing:
-        raise MissingSegmentError(f"every planned position must be recorded; missing: "
-                                  f"{'; '.join(missing)}")
+    require_recorded(rec, [G_SENSITIVITY_POSITION])
     name, site, windows = extract_static_windows(rec, unit, [G_SENSITIVITY_POSITION],
                                                  gravity_mps2=opt.gravity_mps2,
                                                  noise_block_s=opt.noise_block_s)
