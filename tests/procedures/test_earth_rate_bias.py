@@ -101,7 +101,7 @@ def test_recording_of_another_procedure_is_refused(tmp_path):
     plan = generate_g_sensitivity_plan(record_s=3.0, settle_s=1.0, warm_up_s=1.0,
                                        sample_rate_hz=20.0, noise="white")
     path = run_twin(plan, tmp_path / "g.h5")
-    with pytest.raises(RecordingError, match="earth-rate-bias.position"):
+    with pytest.raises(RecordingError, match=r"earth-rate-bias\.position"):
         analyze_earth_rate_bias(path)
 
 

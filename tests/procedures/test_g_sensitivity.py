@@ -120,7 +120,7 @@ def test_recording_without_roles_is_refused(tmp_path):
 
     plan = generate_allan_plan(record_s=600.0, warm_up_s=1.0, sample_rate_hz=20.0)
     path = run_twin(plan, tmp_path / "a.h5")
-    with pytest.raises(RecordingError, match="g-sensitivity.position"):
+    with pytest.raises(RecordingError, match=r"g-sensitivity\.position"):
         analyze_g_sensitivity(path)
 
 

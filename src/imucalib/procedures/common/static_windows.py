@@ -1,5 +1,6 @@
-"""Static window means of all six IMU channels with their reference inputs (g-sensitivity,
-Earth-rate bias, random drift; docs/g-sensitivity.md, "Processing").
+"""Static window means of all six IMU channels with their reference inputs.
+
+Used by g-sensitivity, Earth-rate bias and random drift (docs/g-sensitivity.md, "Processing").
 
 One step's valid window of one unit at a time (memory bounded by the longest step):
 
@@ -172,7 +173,7 @@ def _reduce(unit: str, step: StepRecord, values: _F64, counter: NDArray[np.int64
         raise RecordingError(f"{where}: tag pose={pose!r} is not one of {FIXTURE_AXES}")
     omega_p, force_p = static_inputs_b(site.axis_names, angles, site.gravity_mps2,
                                        site.earth_rate_t_rps)
-    rot_pm = rot_pm_for_pose(pose, 0.0)  # type: ignore[arg-type]
+    rot_pm = rot_pm_for_pose(pose, 0.0)
     per_block = max(round(noise_block_s / period), 1)
     k = values.shape[0] // per_block
     dof, var = 0, np.full(6, math.nan)

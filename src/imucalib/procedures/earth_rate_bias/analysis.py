@@ -1,5 +1,6 @@
-"""Analysis of an Earth-rate bias recording: each gyro's bias by the 4-position and the up/down
-methods, compared (docs/earth-rate-bias.md, equations (1)–(5)).
+"""Analysis of an Earth-rate bias recording: each gyro's bias by two methods, compared.
+
+The 4-position and the up/down methods (docs/earth-rate-bias.md, equations (1)–(5)).
 
 Static window means of every ``earth-rate-bias.position`` step
 (:func:`~imucalib.procedures.common.static_windows.extract_static_windows`); for gyro axis i a

@@ -83,7 +83,7 @@ def generate_earth_rate_bias_plan(*, name: str = "earth-rate-bias", grade: str =
     for pose in poses:
         steps.append(OperatorCheckStep(kind="operator-check", label=f"remount {pose} up",
                                        item=f"place the fixture with its {pose} axis up",
-                                       remount=pose,  # type: ignore[arg-type]
+                                       remount=pose,
                                        role=EARTH_RATE_BIAS_REMOUNT, tags=(f"pose={pose}",)))
         steps += [PositionStep(kind="position", angles_deg=(az,), settle_s=settle_s,
                                record_s=record_s, role=EARTH_RATE_BIAS_POSITION,

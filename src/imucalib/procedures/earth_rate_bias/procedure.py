@@ -1,5 +1,7 @@
-"""The Earth-rate gyro bias test as a :class:`~imucalib.procedures.common.procedure.Procedure`
-(registered as ``"earth-rate-bias"``; docs/earth-rate-bias.md).
+"""The Earth-rate gyro bias test as a registered procedure.
+
+A :class:`~imucalib.procedures.common.procedure.Procedure` named ``"earth-rate-bias"``
+(docs/earth-rate-bias.md).
 """
 
 from __future__ import annotations

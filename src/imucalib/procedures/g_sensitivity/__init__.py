@@ -1,1 +1,1 @@
-"""Gyro g-sensitivity from static multi-position data on a dual-axis table (docs/g-sensitivity.md)."""
+"""Gyro g-sensitivity from static positions on a dual-axis table (docs/g-sensitivity.md)."""

@@ -42,7 +42,7 @@ _AXES = "xyz"
 
 
 def drift_parameter_names() -> list[str]:
-    """The triad names of the 12 coefficients, row-major: gyro_bias_i, gyro_G_ix, _iy, _iz."""
+    """Return the 12 triad names, row-major: gyro_bias_i, gyro_G_ix, gyro_G_iy, gyro_G_iz."""
     return [n for i in _AXES for n in (f"gyro_bias_{i}", *(f"gyro_G_{i}{j}" for j in _AXES))]
 
 

@@ -128,8 +128,9 @@ def fit_drift_model(omega_ref_rps: _F64, force_mps2: _F64, gyro_mean_rps: _F64,
 
 def six_position_closed_form(gyro_mean_rps: _F64, omega_ref_rps: _F64, gravity_mps2: float
                              ) -> _F64:
-    """Return (3, 4) coefficients from the six axis-up positions in the order +z, −z, +x, −x,
-    +y, −y (module docstring; M taken as zero).
+    """Return (3, 4) coefficients from the six axis-up positions.
+
+    In the order +z, −z, +x, −x, +y, −y (module docstring; M taken as zero).
     """
     d = np.asarray(gyro_mean_rps, float) - np.asarray(omega_ref_rps, float)
     if d.shape != (6, 3):

@@ -1,5 +1,7 @@
-"""The g-sensitivity test as a :class:`~imucalib.procedures.common.procedure.Procedure`
-(registered as ``"g-sensitivity"``; docs/g-sensitivity.md).
+"""The g-sensitivity test as a registered procedure.
+
+A :class:`~imucalib.procedures.common.procedure.Procedure` named ``"g-sensitivity"``
+(docs/g-sensitivity.md).
 """
 
 from __future__ import annotations
