@@ -53,7 +53,7 @@ def test_sigma_matches_monte_carlo_spread():
     rng = np.random.default_rng(1)
     bias, gs, sigma = np.array([1e-5, -2e-5, 3e-6]), np.array(G_TRUE), 2e-6
     est = []
-    for _ in range(2000):
+    for _ in range(1000):
         w, f, y = _synthetic(rng, G_SENSITIVITY_POSITIONS_DEG, sigma, bias, gs)
         fit = fit_drift_model(w, f, y, np.full((14, 3), sigma))
         est.append(fit.coefficients.ravel())
@@ -61,7 +61,7 @@ def test_sigma_matches_monte_carlo_spread():
     ratio = spread / fit.std.ravel()
     assert np.all(np.abs(ratio - 1) < 0.15), ratio
     truth = np.column_stack([bias, gs]).ravel()
-    assert np.all(np.abs(np.mean(est, axis=0) - truth) < 4 * spread / np.sqrt(2000))
+    assert np.all(np.abs(np.mean(est, axis=0) - truth) < 4 * spread / np.sqrt(1000))
 
 
 def test_type_b_scale_uncertainty_widens_sigma():
