@@ -35,3 +35,13 @@ def accel_truth(path: Path, unit: str = "IMU-0001") -> dict[str, Any]:
     with open_recording(path) as rec:
         model = rec.truth["imu_models"][unit]["accel"]
     return {k: np.asarray(model[k], dtype=float) for k in ("bias", "scale_misalignment")}
+
+
+def fail_step(path: Path, role: str, nth: int = 0) -> None:
+    """Mark the `nth` recorded step with `role` as failed (a position not recorded)."""
+    import h5py
+
+    with h5py.File(path, "r+") as f:
+        roles = [r.decode() if isinstance(r, bytes) else r for r in f["steps"]["role"][()]]
+        k = [i for i, r in enumerate(roles) if r == role][nth]
+        f["steps"]["status"][k] = b"failed"

@@ -9,7 +9,13 @@ import math
 import numpy as np
 import pytest
 
-from imucalib.errors import ConfigurationError, InsufficientExcitationError, RecordingError
+from imucalib.errors import (
+    ConfigurationError,
+    InsufficientExcitationError,
+    MissingSegmentError,
+    RecordingError,
+)
+from imucalib.io.step_roles import EARTH_RATE_BIAS_POSITION
 from imucalib.procedures.earth_rate_bias.analysis import analyze_earth_rate_bias
 from imucalib.procedures.earth_rate_bias.methods import (
     AxisWindow,
@@ -20,7 +26,7 @@ from imucalib.procedures.earth_rate_bias.plan import generate_earth_rate_bias_pl
 from imucalib.procedures.registry import get
 from imucalib.units import EARTH_RATE_RPS
 
-from ._p4_twin import gyro_truth, run_twin
+from ._p4_twin import fail_step, gyro_truth, run_twin
 
 LAT = math.radians(45.0)
 OMEGA_N, OMEGA_U = EARTH_RATE_RPS * math.cos(LAT), EARTH_RATE_RPS * math.sin(LAT)
@@ -74,7 +80,8 @@ def _plan(seed, **kw):
 def test_twin_closed_loop_within_4_sigma(tmp_path, seed):
     path = run_twin(_plan(seed), tmp_path / "e.h5")
     result = get("earth-rate-bias").analyze(path)
-    bias = gyro_truth(path)["bias"]
+    truth = gyro_truth(path)
+    bias = truth["bias"]
     for i, axis in enumerate(result.axes):
         for est in (axis.four_position, axis.up_down):
             assert abs(est.value_rps - bias[i]) < 4 * est.std_rps, (i, est, bias[i])
@@ -82,11 +89,15 @@ def test_twin_closed_loop_within_4_sigma(tmp_path, seed):
         assert axis.up_down.std_rps < 0.01 / 3600 * math.pi / 180
         assert abs(axis.latitude_deg.value_rps - 45.0) < 0.5
         assert abs(axis.z) < 4
+        # (3): the half-difference also holds G_ii·g
+        expected = (truth["scale_misalignment"][i, i]
+                    + truth["g_sensitivity"][i, i] * 9.806 / OMEGA_U)
+        assert abs(axis.scale.value_rps - expected) < 4 * axis.scale.std_rps
     names, values, cov = result.triad_parameters()
     assert names == ["gyro_bias_x", "gyro_bias_y", "gyro_bias_z"]
     assert np.all(np.abs(values - bias) < 4 * np.sqrt(np.diag(cov)))
     json.dumps(result.to_dict())
-    assert len(result.parameter_rows()) == 12
+    assert len(result.parameter_rows()) == 15
 
 
 def test_without_down_poses_the_up_down_method_is_unobservable(tmp_path):
@@ -110,3 +121,10 @@ def test_plan_refuses_bad_poses():
         generate_earth_rate_bias_plan(poses=("+z", "+z"))
     with pytest.raises(ConfigurationError, match="poses"):
         generate_earth_rate_bias_plan(poses=("up",))
+
+
+def test_missing_position_is_named(tmp_path):
+    path = run_twin(_plan(6, poses=("+z", "-z")), tmp_path / "e.h5")
+    fail_step(path, EARTH_RATE_BIAS_POSITION, nth=5)
+    with pytest.raises(MissingSegmentError, match=r"-z up, azimuth 90°"):
+        analyze_earth_rate_bias(path)

@@ -22,7 +22,7 @@ from imucalib.procedures.g_sensitivity.plan import (
 )
 from imucalib.procedures.registry import get
 
-from ._p4_twin import gyro_truth, run_twin
+from ._p4_twin import fail_step, gyro_truth, run_twin
 
 G_TRUE = ((2e-5, 1e-5, -1e-5), (0.0, 3e-5, 2e-5), (-1e-5, 0.0, 1e-5))  # rad/s per m/s²
 G, EARTH = site_vectors(45.0, 0.0, None)
@@ -103,14 +103,7 @@ def test_twin_closed_loop_within_4_sigma(tmp_path, seed):
 def test_missing_position_is_named(tmp_path):
     plan = _plan(5)
     path = run_twin(plan, tmp_path / "g.h5")
-    import h5py
-
-    with h5py.File(path, "r+") as f:
-        steps = f["steps"]
-        roles = [r.decode() if isinstance(r, bytes) else r for r in steps["role"][()]]
-        k = roles.index(G_SENSITIVITY_POSITION)
-        status = steps["status"]
-        status[k] = b"failed" if status.dtype.kind == "S" else "failed"
+    fail_step(path, G_SENSITIVITY_POSITION)
     with pytest.raises(MissingSegmentError, match="position 0"):
         analyze_g_sensitivity(path)
 

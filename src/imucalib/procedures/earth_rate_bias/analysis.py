@@ -38,6 +38,7 @@ from imucalib.procedures.earth_rate_bias.methods import (
     AxisWindow,
     compare_methods,
     four_position_bias,
+    scale_at,
     up_down_bias,
 )
 
@@ -63,6 +64,8 @@ class EarthRateBiasAxis:
         (4), in degrees.
     difference_rps, z : float
         (5).
+    scale : AxisBias
+        (6): the scale error s at the recorded latitude (G_ii taken as zero), dimensionless.
     """
 
     four_position: AxisBias
@@ -71,6 +74,7 @@ class EarthRateBiasAxis:
     latitude_deg: AxisBias
     difference_rps: float
     z: float
+    scale: AxisBias
 
 
 @dataclass(frozen=True)
@@ -101,7 +105,9 @@ class EarthRateBiasResult:
                      (f"gyro_half_difference_{i}", a.half_difference.value_rps,
                       a.half_difference.std_rps, "rad/s"),
                      (f"latitude_from_gyro_{i}", a.latitude_deg.value_rps,
-                      a.latitude_deg.std_rps, "deg")]
+                      a.latitude_deg.std_rps, "deg"),
+                     (f"gyro_scale_from_earth_rate_{i}", a.scale.value_rps, a.scale.std_rps,
+                      "1")]
         return rows
 
     def to_dict(self) -> dict[str, Any]:
@@ -118,7 +124,8 @@ class EarthRateBiasResult:
                          "half_difference_rps": a.half_difference.value_rps,
                          "latitude_deg": a.latitude_deg.value_rps,
                          "latitude_std_deg": a.latitude_deg.std_rps,
-                         "difference_rps": a.difference_rps, "z": a.z}
+                         "difference_rps": a.difference_rps, "z": a.z,
+                         "scale": a.scale.value_rps, "scale_std": a.scale.std_rps}
                      for i, a in zip(_AXES, self.axes, strict=True)},
             "windows": [{"step": w.step_index, "label": w.label, "pose": w.pose,
                          "gyro_mean_rps": w.mean[:3], "gyro_se_rps": w.se[:3],
@@ -128,7 +135,8 @@ class EarthRateBiasResult:
         return dict(json_safe(out))  # type: ignore[call-overload]
 
 
-def _axis(windows: list[StaticWindow], i: int, g: float) -> EarthRateBiasAxis:
+def _axis(windows: list[StaticWindow], i: int, g: float, latitude_deg: float
+          ) -> EarthRateBiasAxis:
     by_pose: dict[str, list[StaticWindow]] = {}
     for w in windows:
         by_pose.setdefault(w.pose, []).append(w)
@@ -154,7 +162,7 @@ def _axis(windows: list[StaticWindow], i: int, g: float) -> EarthRateBiasAxis:
     four = four_position_bias(horizontal)
     updown, half, lat = up_down_bias(up, down)
     diff, z = compare_methods(four, updown)
-    return EarthRateBiasAxis(four, updown, half, lat, diff, z)
+    return EarthRateBiasAxis(four, updown, half, lat, diff, z, scale_at(half, latitude_deg))
 
 
 def analyze_earth_rate_bias(recording: Recording | str | os.PathLike[str], *,
@@ -179,7 +187,7 @@ def analyze_earth_rate_bias(recording: Recording | str | os.PathLike[str], *,
     name, site, windows = extract_static_windows(recording, unit, [EARTH_RATE_BIAS_POSITION],
                                                  gravity_mps2=gravity_mps2,
                                                  noise_block_s=noise_block_s)
-    axes = tuple(_axis(windows, i, site.gravity_mps2) for i in range(3))
+    axes = tuple(_axis(windows, i, site.gravity_mps2, site.latitude_deg) for i in range(3))
     notes = ["the up/down bias (2) is handed on as the gyro bias: it is free of g-sensitivity "
              "and of the Earth rate through the scale factor; the latitude (4) takes s and "
              "G_ii as zero"]

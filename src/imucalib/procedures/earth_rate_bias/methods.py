@@ -17,11 +17,14 @@ it (IEEE Std 1431-2004 and 952-2020 static tests; the P4 source chapter):
       L̂ = asin(((ȳ_up − ȳ_dn)/2)/Ω_e)   (with s and G_ii taken as zero)                      (4)
 
 - the two compared: Δ = b̂_4 − b̂_ud, z = Δ/√(σ_4² + σ_ud²)                                  (5)
+- at the known latitude, the scale error (G_ii taken as zero):
+
+      ŝ = ((ȳ_up − ȳ_dn)/2)/(Ω_e·sin L) − 1,  σ = σ_half/(Ω_e·sin L)                         (6)
 
 Contents
 --------
 :class:`AxisWindow`, :class:`AxisBias`, :func:`four_position_bias`, :func:`up_down_bias`,
-:func:`compare_methods`
+:func:`compare_methods`, :func:`scale_at`
 """
 
 from __future__ import annotations
@@ -35,7 +38,8 @@ import numpy as np
 from imucalib.errors import InvalidInputError
 from imucalib.units import EARTH_RATE_RPS
 
-__all__ = ["AxisBias", "AxisWindow", "compare_methods", "four_position_bias", "up_down_bias"]
+__all__ = ["AxisBias", "AxisWindow", "compare_methods", "four_position_bias", "scale_at",
+           "up_down_bias"]
 
 
 @dataclass(frozen=True)
@@ -102,3 +106,11 @@ def compare_methods(four: AxisBias, updown: AxisBias) -> tuple[float, float]:
     """Return (5): Δ [rad/s] and z."""
     diff = four.value_rps - updown.value_rps
     return diff, diff / math.hypot(four.std_rps, updown.std_rps)
+
+
+def scale_at(half_difference: AxisBias, latitude_deg: float) -> AxisBias:
+    """Return (6): the scale error from the half-difference at a known latitude (NaN at L = 0)."""
+    up = EARTH_RATE_RPS * math.sin(math.radians(latitude_deg))
+    if abs(up) < 1e-12:
+        return AxisBias(math.nan, math.nan)
+    return AxisBias(half_difference.value_rps / up - 1.0, half_difference.std_rps / abs(up))
