@@ -8,13 +8,18 @@ import math
 import numpy as np
 import pytest
 
-from imucalib.errors import ConfigurationError, InsufficientExcitationError
+from imucalib.errors import (
+    ConfigurationError,
+    InsufficientExcitationError,
+    MissingSegmentError,
+)
+from imucalib.io.step_roles import RANDOM_DRIFT_POSITION
 from imucalib.procedures.random_drift.analysis import analyze_random_drift
 from imucalib.procedures.random_drift.plan import generate_random_drift_plan
 from imucalib.procedures.random_drift.scatter import allan_at_interval, random_drift, scatter
 from imucalib.procedures.registry import get
 
-from ._p4_twin import run_twin
+from ._p4_twin import fail_step, run_twin
 
 
 @pytest.mark.slow
@@ -93,3 +98,10 @@ def test_too_few_repetitions_is_refused(tmp_path):
 def test_plan_refuses_two_repetitions():
     with pytest.raises(ConfigurationError, match="repetitions"):
         generate_random_drift_plan(repetitions=2)
+
+
+def test_missing_position_is_named(tmp_path):
+    path = run_twin(_plan(7, repetitions=3, span_s=600.0), tmp_path / "r.h5")
+    fail_step(path, RANDOM_DRIFT_POSITION, nth=8)
+    with pytest.raises(MissingSegmentError, match=r"rep 2, position 2"):
+        analyze_random_drift(path)
