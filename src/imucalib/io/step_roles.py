@@ -64,6 +64,17 @@ after a remount carries the tag ``axis=<x|y|z>`` (the body axis up):
 :data:`RATE_TRANSFER_RATE`, :data:`INSTALLATION_RATE` ``"<procedure>.rate"``
     A turn over whole revolutions (``commanded`` gives ``rate_dps`` and ``revolutions``).
 
+P4 static tests (docs/g-sensitivity.md, docs/earth-rate-bias.md, docs/random-drift.md):
+
+:data:`G_SENSITIVITY_POSITION` ``"g-sensitivity.position"``
+    A long static record at one dual-axis table position (gravity along ±x, ±y, ±z or between).
+:data:`EARTH_RATE_BIAS_REMOUNT` ``"earth-rate-bias.remount"``
+    The operator places the fixture with another axis up (tag ``pose=<axis>``).
+:data:`EARTH_RATE_BIAS_POSITION` ``"earth-rate-bias.position"``
+    A static record at one azimuth of a single-axis table (tags ``pose=<axis>``, ``azimuth=<deg>``).
+:data:`RANDOM_DRIFT_POSITION` ``"random-drift.position"``
+    A static record of one repetition of the multi-position sequence (tag ``rep=<k>``).
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -78,6 +89,9 @@ from typing import Final
 
 __all__ = [
     "ALLAN_STATIC",
+    "EARTH_RATE_BIAS_POSITION",
+    "EARTH_RATE_BIAS_REMOUNT",
+    "G_SENSITIVITY_POSITION",
     "INSTALLATION_RATE",
     "INSTALLATION_REMOUNT",
     "P1_ACCEL_POSITION",
@@ -98,6 +112,7 @@ __all__ = [
     "P3_ROLES",
     "P3_SWAP",
     "P3_TUMBLE",
+    "RANDOM_DRIFT_POSITION",
     "RATE_TRANSFER_RATE",
     "RATE_TRANSFER_REMOUNT",
     "role_from_tags",
@@ -128,6 +143,12 @@ P3_SWAP: Final = "p3.swap"
 P3_LOAD: Final = "p3.load"
 #: Every P3 role.
 P3_ROLES: Final = (P3_MOUNT, P3_TUMBLE, P3_REST, P3_RATE, P3_SWAP, P3_LOAD)
+
+
+G_SENSITIVITY_POSITION: Final = "g-sensitivity.position"
+EARTH_RATE_BIAS_REMOUNT: Final = "earth-rate-bias.remount"
+EARTH_RATE_BIAS_POSITION: Final = "earth-rate-bias.position"
+RANDOM_DRIFT_POSITION: Final = "random-drift.position"
 
 
 def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:

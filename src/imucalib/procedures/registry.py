@@ -37,6 +37,9 @@ BUILTIN: dict[str, str] = {
     "p3": "imucalib.procedures.p3.procedure",
     "rate-transfer": "imucalib.procedures.rate_transfer.procedure",
     "installation": "imucalib.procedures.installation.procedure",
+    "g-sensitivity": "imucalib.procedures.g_sensitivity.procedure",
+    "earth-rate-bias": "imucalib.procedures.earth_rate_bias.procedure",
+    "random-drift": "imucalib.procedures.random_drift.procedure",
 }
 
 _registered: dict[str, Procedure] = {}

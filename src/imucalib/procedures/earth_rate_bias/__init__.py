@@ -1,0 +1,1 @@
+"""Earth-rate gyro bias: 4-position and up/down methods (docs/earth-rate-bias.md)."""

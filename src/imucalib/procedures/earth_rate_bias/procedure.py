@@ -1,0 +1,64 @@
+"""The Earth-rate gyro bias test as a registered procedure.
+
+A :class:`~imucalib.procedures.common.procedure.Procedure` named ``"earth-rate-bias"``
+(docs/earth-rate-bias.md).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.earth_rate_bias.analysis import EarthRateBiasResult
+
+__all__ = ["PROCEDURE", "EarthRateBiasProcedure"]
+
+
+class EarthRateBiasProcedure:
+    """Navigation-grade gyro bias against Earth rate: 4-position and up/down methods."""
+
+    name = "earth-rate-bias"
+    description = ("gyro bias against Earth rate (navigation grade): 4-position (N, E, S, W) and "
+                   "up/down methods on a single-axis table with remounts, compared")
+    plan_options = frozenset({"grade", "poses", "record_s", "settle_s", "warm_up_s",
+                              "sample_rate_hz", "latitude_deg", "noise", "errors", "seed"})
+    analysis_options = frozenset({"gravity_mps2", "noise_block_s"})
+    outputs = ("report-json", "parameters-csv")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~.plan.generate_earth_rate_bias_plan` (its keywords)."""
+        from imucalib.procedures.earth_rate_bias.plan import generate_earth_rate_bias_plan
+
+        return generate_earth_rate_bias_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> EarthRateBiasResult:
+        """Run :func:`~.analysis.analyze_earth_rate_bias`.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
+        from imucalib.procedures.earth_rate_bias.analysis import analyze_earth_rate_bias
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure earth-rate-bias takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        result = analyze_earth_rate_bias(recording, unit=unit, **opts)
+        if progress is not None:
+            progress(1.0)
+        return result
+
+
+#: The registered Earth-rate bias procedure.
+PROCEDURE = EarthRateBiasProcedure()

@@ -1,0 +1,193 @@
+"""Analysis of a g-sensitivity recording: the 12 drift coefficients of the gyro triad.
+
+Static window means of every ``g-sensitivity.position`` step
+(:func:`~imucalib.procedures.common.static_windows.extract_static_windows`), then the drift
+model fitted by :func:`~imucalib.procedures.g_sensitivity.fit.fit_drift_model`
+(docs/g-sensitivity.md, equations (1)–(4)). The gyro scale-misalignment acting on the Earth rate
+is taken as known (:attr:`GSensitivityOptions.scale_misalignment`, nominal zero) with a Type B
+standard uncertainty per element (:attr:`GSensitivityOptions.scale_misalignment_std`, 1e-3 by
+default, a rate test's worst case), propagated through the full covariance (2).
+
+Contents
+--------
+:class:`GSensitivityOptions`, :class:`GSensitivityResult`, :func:`analyze_g_sensitivity`
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.errors import InvalidInputError
+from imucalib.io.reader import Recording, open_recording
+from imucalib.io.step_roles import G_SENSITIVITY_POSITION
+from imucalib.procedures.common.static_windows import (
+    StaticWindow,
+    extract_static_windows,
+    json_safe,
+    require_recorded,
+)
+from imucalib.procedures.g_sensitivity.fit import DriftFit, fit_drift_model
+
+__all__ = ["GSensitivityOptions", "GSensitivityResult", "analyze_g_sensitivity",
+           "drift_parameter_names"]
+
+_F64 = NDArray[np.float64]
+_AXES = "xyz"
+
+
+def drift_parameter_names() -> list[str]:
+    """Return the 12 triad names, row-major: gyro_bias_i, gyro_G_ix, gyro_G_iy, gyro_G_iz."""
+    return [n for i in _AXES for n in (f"gyro_bias_{i}", *(f"gyro_G_{i}{j}" for j in _AXES))]
+
+
+@dataclass(frozen=True)
+class GSensitivityOptions:
+    """Analysis options (module docstring).
+
+    Attributes
+    ----------
+    gravity_mps2 : float, optional
+        Local g; normal gravity at the recorded latitude when omitted. [m/s²]
+    scale_misalignment : 3×3 nested sequence, optional
+        The gyro M (y = (I + M)·ω, rows sensor axes) taken as known; zero when omitted.
+    scale_misalignment_std : float
+        Type B standard uncertainty of each element of M. [1]
+    noise_block_s : float
+        Block length of the white-noise estimate. [s]
+    """
+
+    gravity_mps2: float | None = None
+    scale_misalignment: Any = None
+    scale_misalignment_std: float = 1e-3
+    noise_block_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.scale_misalignment_std) and self.scale_misalignment_std >= 0):
+            raise InvalidInputError(f"`scale_misalignment_std` must be ≥ 0; got "
+                                    f"{self.scale_misalignment_std!r}")
+        if self.scale_misalignment is not None and np.shape(self.scale_misalignment) != (3, 3):
+            raise InvalidInputError(f"`scale_misalignment` must be 3×3; got shape "
+                                    f"{np.shape(self.scale_misalignment)}")
+
+
+@dataclass(frozen=True)
+class GSensitivityResult:
+    """The g-sensitivity test's result (the results contract of docs/procedures.md).
+
+    Attributes
+    ----------
+    unit : str
+        The IMU.
+    fit : DriftFit
+        Coefficients (3, 4): D0 [rad/s] and D1..D3 [rad/s per m/s²] per gyro axis, covariance.
+    windows : list of StaticWindow
+        The reduced positions.
+    gravity_mps2, latitude_deg : float
+        The site used. [m/s²], [°]
+    notes : list of str
+        What was assumed.
+    """
+
+    unit: str
+    fit: DriftFit
+    windows: list[StaticWindow]
+    gravity_mps2: float
+    latitude_deg: float
+    notes: list[str] = field(default_factory=list)
+    procedure: str = "g-sensitivity"
+    passed: bool | None = None
+
+    @property
+    def bias_rps(self) -> _F64:
+        """D0 per axis. [rad/s]"""
+        return np.asarray(self.fit.coefficients[:, 0], dtype=np.float64)
+
+    @property
+    def g_sensitivity(self) -> _F64:
+        """G (3, 3): row gyro axis, column specific-force axis. [rad/s per m/s²]"""
+        return np.asarray(self.fit.coefficients[:, 1:], dtype=np.float64)
+
+    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
+        """(names, values, covariance) in the names of :mod:`imucalib.models.result`."""
+        return drift_parameter_names(), self.fit.coefficients.ravel().copy(), \
+            self.fit.covariance.copy()
+
+    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
+        """(name, value, standard uncertainty, unit) of every estimate, SI."""
+        names, values, cov = self.triad_parameters()
+        return [(n, float(v), float(math.sqrt(cov[k, k])),
+                 "rad/s" if "bias" in n else "(rad/s)/(m/s^2)")
+                for k, (n, v) in enumerate(zip(names, values, strict=True))]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the whole result as JSON-able data."""
+        names, values, cov = self.triad_parameters()
+        out = {
+            "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+            "parameters": {n: {"value": float(v), "std": float(math.sqrt(cov[k, k]))}
+                           for k, (n, v) in enumerate(zip(names, values, strict=True))},
+            "covariance": cov,
+            "fit_quality": [{"group": f.group, "chi2": f.chi2, "dof": f.dof,
+                             "reduced_chi2": f.reduced_chi2, "misfit": f.misfit,
+                             "sigma_scale": f.sigma_scale} for f in self.fit.fits],
+            "gravity_mps2": self.gravity_mps2, "latitude_deg": self.latitude_deg,
+            "windows": [{"step": w.step_index, "label": w.label,
+                         "angles_rad": w.angles_rad, "gyro_mean_rps": w.mean[:3],
+                         "gyro_se_rps": w.se[:3], "force_ref_b_mps2": w.force_ref_b_mps2,
+                         "omega_ref_b_rps": w.omega_ref_b_rps,
+                         "residual_rps": self.fit.residuals[k]}
+                        for k, w in enumerate(self.windows)],
+            "notes": list(self.notes),
+        }
+        return dict(json_safe(out))  # type: ignore[call-overload]
+
+
+def fit_windows(windows: list[StaticWindow], opt: GSensitivityOptions) -> DriftFit:
+    """Fit the drift model (1)–(4) to static windows."""
+    return fit_drift_model(np.array([w.omega_ref_b_rps for w in windows]),
+                           np.array([w.force_ref_b_mps2 for w in windows]),
+                           np.array([w.mean[:3] for w in windows]),
+                           np.array([w.se[:3] for w in windows]),
+                           scale_misalignment=None if opt.scale_misalignment is None
+                           else np.asarray(opt.scale_misalignment, dtype=np.float64),
+                           scale_misalignment_std=opt.scale_misalignment_std)
+
+
+def analyze_g_sensitivity(recording: Recording | str | os.PathLike[str], *,
+                          unit: str | None = None, options: GSensitivityOptions | None = None
+                          ) -> GSensitivityResult:
+    """Estimate the gyro triad's D0 and g-sensitivity from a recording (module docstring).
+
+    Raises
+    ------
+    RecordingError
+        No step with role ``g-sensitivity.position``, no table stream, no latitude.
+    MissingSegmentError
+        A planned position not recorded (named), a window too short.
+    InsufficientExcitationError
+        Positions that do not span the gravity directions.
+    """
+    opt = options or GSensitivityOptions()
+    if not isinstance(recording, Recording):
+        with open_recording(recording) as rec:
+            return analyze_g_sensitivity(rec, unit=unit, options=opt)
+    rec = recording
+    require_recorded(rec, [G_SENSITIVITY_POSITION])
+    name, site, windows = extract_static_windows(rec, unit, [G_SENSITIVITY_POSITION],
+                                                 gravity_mps2=opt.gravity_mps2,
+                                                 noise_block_s=opt.noise_block_s)
+    fit = fit_windows(windows, opt)
+    notes = [f"Earth rate at latitude {site.latitude_deg:g}° subtracted through the gyro "
+             f"scale-misalignment taken as "
+             f"{'nominal (zero)' if opt.scale_misalignment is None else 'given'}, each element "
+             f"with a Type B standard uncertainty of {opt.scale_misalignment_std:g}"]
+    notes += [f.summary() for f in fit.fits if f.misfit]
+    return GSensitivityResult(unit=name, fit=fit, windows=windows,
+                              gravity_mps2=site.gravity_mps2, latitude_deg=site.latitude_deg,
+                              notes=notes)

@@ -1,0 +1,68 @@
+"""The g-sensitivity test as a registered procedure.
+
+A :class:`~imucalib.procedures.common.procedure.Procedure` named ``"g-sensitivity"``
+(docs/g-sensitivity.md).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.g_sensitivity.analysis import GSensitivityResult
+
+__all__ = ["PROCEDURE", "GSensitivityProcedure"]
+
+
+class GSensitivityProcedure:
+    """Gyro g-sensitivity (D0 + D1·a_x + D2·a_y + D3·a_z per axis) on a dual-axis table."""
+
+    name = "g-sensitivity"
+    description = ("gyro g-sensitivity: drift D0 + D1·a_x + D2·a_y + D3·a_z of each gyro axis "
+                   "from static positions on a dual-axis table, Earth rate subtracted")
+    plan_options = frozenset({"grade", "positions_deg", "record_s", "settle_s", "warm_up_s",
+                              "sample_rate_hz", "latitude_deg", "noise", "errors", "seed"})
+    analysis_options = frozenset({"gravity_mps2", "scale_misalignment",
+                                  "scale_misalignment_std", "noise_block_s"})
+    outputs = ("report-json", "parameters-csv")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.g_sensitivity.plan.generate_g_sensitivity_plan`."""
+        from imucalib.procedures.g_sensitivity.plan import generate_g_sensitivity_plan
+
+        return generate_g_sensitivity_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> GSensitivityResult:
+        """Run :func:`~imucalib.procedures.g_sensitivity.analysis.analyze_g_sensitivity`.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
+        from imucalib.procedures.g_sensitivity.analysis import (
+            GSensitivityOptions,
+            analyze_g_sensitivity,
+        )
+
+        opts = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure g-sensitivity takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        result = analyze_g_sensitivity(recording, unit=unit, options=GSensitivityOptions(**opts))
+        if progress is not None:
+            progress(1.0)
+        return result
+
+
+#: The registered g-sensitivity procedure.
+PROCEDURE = GSensitivityProcedure()

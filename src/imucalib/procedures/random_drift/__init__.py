@@ -1,0 +1,1 @@
+"""Gyro random drift and accelerometer zero stability (docs/random-drift.md)."""
