@@ -55,6 +55,19 @@ mounting check names the units with ``ref-a=<unit>``, ``ref-b=<unit>`` and ``tes
     The operator puts A and B back and mounts the test accelerometer and its load
     (``swap_units`` and ``centrifuge_load_kg``).
 
+Tumble (the accelerometer multi-position tumble of IEEE Std 1293 on a dividing head, the
+dual-axis table's pitch axis; docs/tumble.md); every tumble record carries the tags
+``axis=<x|y|z>`` (the body axis along the head axis), ``angle=<deg>`` (the head angle),
+``positions=<N>``, ``mount=<pose>`` and ``yaw=<deg>`` (the fixture's remount), and ``pass=cw|ccw``
+when both directions are run:
+
+:data:`TUMBLE_MOUNT` ``"tumble.mount"``
+    The operator places the IMU so that the body axis under test lies along the head axis.
+:data:`TUMBLE_POSITION` ``"tumble.position"``
+    A static record at head angle θ_k.
+:data:`TUMBLE_DRIFT` ``"tumble.drift"``
+    The 0° record repeated at the end of a sequence (the drift check).
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -87,6 +100,10 @@ __all__ = [
     "P3_ROLES",
     "P3_SWAP",
     "P3_TUMBLE",
+    "TUMBLE_DRIFT",
+    "TUMBLE_MOUNT",
+    "TUMBLE_POSITION",
+    "TUMBLE_ROLES",
     "role_from_tags",
 ]
 
@@ -115,6 +132,12 @@ P3_SWAP: Final = "p3.swap"
 P3_LOAD: Final = "p3.load"
 #: Every P3 role.
 P3_ROLES: Final = (P3_MOUNT, P3_TUMBLE, P3_REST, P3_RATE, P3_SWAP, P3_LOAD)
+
+TUMBLE_MOUNT: Final = "tumble.mount"
+TUMBLE_POSITION: Final = "tumble.position"
+TUMBLE_DRIFT: Final = "tumble.drift"
+#: Every tumble role.
+TUMBLE_ROLES: Final = (TUMBLE_MOUNT, TUMBLE_POSITION, TUMBLE_DRIFT)
 
 
 def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:

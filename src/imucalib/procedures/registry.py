@@ -35,6 +35,7 @@ BUILTIN: dict[str, str] = {
     "allan": "imucalib.procedures.allan.procedure",
     "p2": "imucalib.procedures.p2.procedure",
     "p3": "imucalib.procedures.p3.procedure",
+    "tumble": "imucalib.procedures.tumble.procedure",
 }
 
 _registered: dict[str, Procedure] = {}
