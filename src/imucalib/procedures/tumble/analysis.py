@@ -19,7 +19,7 @@
 Contents
 --------
 :class:`TumbleOptions`, :class:`AccelerometerTumble`, :class:`TumbleResult`,
-:func:`analyze_tumble`, :func:`tumble_sequences`.
+:func:`analyze_tumble`, :func:`tumble_sequences`, :func:`head_angle_covariance`.
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ from imucalib.procedures.tumble.observations import (
 )
 
 __all__ = ["AccelerometerTumble", "TumbleOptions", "TumbleResult", "analyze_tumble",
-           "tumble_sequences"]
+           "head_angle_covariance", "tumble_sequences"]
 
 _F64 = NDArray[np.float64]
 #: SI unit of each coefficient.
@@ -91,9 +91,10 @@ class TumbleOptions:
         Its relative standard uncertainty (Type B on K1); default 2e-5 for normal gravity, 0 for
         a given value.
     angle_std_arcsec : float
-        Type B standard uncertainty of each head angle (encoder error and wobble of the table:
-        1″ for a high-grade one), added to each position mean's σ as g·σ_θ·|sin θ_k|, (T.13).
-        [″]
+        Type B: the RMS over a revolution of the head's angle error (a dividing head's or
+        encoder's once- and twice-per-revolution error: 1″ for a high-grade table), modelled as
+        ε(φ) = Σ_{n=1,2} a_n cos nφ + b_n sin nφ with a_n, b_n of σ_θ/√2 each and added to the
+        means' covariance, Eq. (T.13). [″]
     processing : TumbleProcessing
     """
 
@@ -237,23 +238,13 @@ class TumbleResult:
         """Return the triad's b_i, M_ii, M_ip, K2_i with covariance, (T.12), head axes combined.
 
         Each (head axis, accelerometer) gives its own; a parameter given by two head axes is
-        their GLS mean (independent records). The gravity's Type B σ is added to M_ii.
+        their GLS mean (independent records), its covariance scaled by the Birge ratio² of
+        :attr:`triad_fit` when the head axes disagree beyond their σ (a misfit). The gravity's
+        Type B σ is added to M_ii.
         """
-        parts = [a.triad() for a in self.accelerometers]
-        names = sorted({n for p in parts for n in p[0]}, key=_triad_order)
-        if not names:
-            return [], np.zeros(0), np.zeros((0, 0))
-        t = np.concatenate([p[1] for p in parts])
-        C = _block_diag([p[2] for p in parts])
-        A = np.zeros((t.size, len(names)))
-        row = 0
-        for p in parts:
-            for n in p[0]:
-                A[row, names.index(n)] = 1.0
-                row += 1
-        Ci = np.linalg.inv(C)
-        cov = np.asarray(np.linalg.inv(A.T @ Ci @ A), dtype=np.float64)
-        values = np.asarray(cov @ A.T @ Ci @ t, dtype=np.float64)
+        names, values, cov = _combine([a.triad() for a in self.accelerometers])
+        if self.triad_fit is not None:
+            cov = cov * self.triad_fit.sigma_scale**2
         for k, n in enumerate(names):
             if n.startswith("accel_M_") and n[-1] == n[-2]:
                 cov[k, k] += ((1.0 + values[k]) * self.gravity_rel_std) ** 2
@@ -297,6 +288,20 @@ class TumbleResult:
 def _triad_order(name: str) -> tuple[int, str]:
     kind = name.split("_")[1]
     return ({"bias": 0, "M": 1, "K2": 2}.get(kind, 3), name)
+
+
+def _combine(parts: Sequence[tuple[list[str], _F64, _F64]]
+             ) -> tuple[list[str], _F64, _F64]:
+    """GLS of the parameters several head axes give: names, values, covariance."""
+    names = sorted({n for p in parts for n in p[0]}, key=_triad_order)
+    if not names:
+        return [], np.zeros(0), np.zeros((0, 0))
+    t = np.concatenate([p[1] for p in parts])
+    Ci = np.linalg.inv(_block_diag([p[2] for p in parts]))
+    A = np.zeros((t.size, len(names)))
+    A[np.arange(t.size), [names.index(n) for p in parts for n in p[0]]] = 1.0
+    cov = np.asarray(np.linalg.inv(A.T @ Ci @ A), dtype=np.float64)
+    return names, np.asarray(cov @ A.T @ Ci @ t, dtype=np.float64), cov
 
 
 def _block_diag(blocks: Sequence[_F64]) -> _F64:
@@ -353,13 +358,36 @@ def _drift(ws_all: Sequence[TumbleWindow], axis: str, k: int) -> list[tuple[str,
     return out
 
 
+def head_angle_covariance(head_angle_rad: _F64, slope_mps2: _F64, angle_std_rad: float
+                          ) -> _F64:
+    """Return the means' covariance from the head's angle error, Eq. (T.13).
+
+    ε(φ) = Σ_{n=1,2} a_n cos nφ + b_n sin nφ, a_n, b_n ~ N(0, σ_θ²/2) (RMS σ_θ over a
+    revolution); mean k moves by s_k·ε(φ_k), s_k = ∂y/∂θ = −g sin θ_k (its sign cancels):
+    C_kl = s_k s_l (σ_θ²/2) Σ_n cos n(φ_k − φ_l).
+
+    Parameters
+    ----------
+    head_angle_rad : ndarray, shape (M,)
+        The head (table) angle φ_k of each mean. [rad]
+    slope_mps2 : ndarray, shape (M,)
+        s_k. [m/s² per rad]
+    angle_std_rad : float
+        σ_θ. [rad]
+    """
+    d = head_angle_rad[:, None] - head_angle_rad[None, :]
+    kernel = 0.5 * angle_std_rad**2 * (np.cos(d) + np.cos(2 * d))
+    return np.asarray(slope_mps2[:, None] * kernel * slope_mps2[None, :], dtype=np.float64)
+
+
 def _fit_one(ws: list[TumbleWindow], i: int, p: int, g: float, opt: TumbleOptions
              ) -> TumbleFit:
     """Fit (steps 2–3 of the module docstring) accelerometer i (PA = p) of one head axis."""
     y = np.array([w.mean[i] for w in ws])
     theta = np.array([math.atan2(w.force_b[p], w.force_b[i]) for w in ws])  # (T.11)
-    angle_std = opt.angle_std_arcsec * units.ARCSEC
-    s = np.hypot([w.se[i] for w in ws], g * angle_std * np.sin(theta))  # (T.13)
+    C = head_angle_covariance(np.array([w.table_angles_rad[0] for w in ws]),
+                              g * np.sin(theta), opt.angle_std_arcsec * units.ARCSEC)
+    C += np.diag(np.array([w.se[i] for w in ws]) ** 2)
     distinct = sorted({round(w.angle_deg, 6) for w in ws})
     n_spaced = len(distinct) if equally_spaced(np.radians(distinct), tol_rad=1e-6) else None
     if opt.coefficients is not None:
@@ -372,15 +400,14 @@ def _fit_one(ws: list[TumbleWindow], i: int, p: int, g: float, opt: TumbleOption
         nominal = np.array([math.atan2(w.force_nominal_b[p], w.force_nominal_b[i]) for w in ws])
         keys = np.round(np.degrees(np.mod(nominal, 2 * math.pi)), 6)
         uniq = sorted(set(keys.tolist()))
-        sel = [keys == u for u in uniq]
-        fourier = fourier_dft(np.array([nominal[m][0] for m in sel]),
-                              np.array([y[m].mean() for m in sel]),
-                              np.array([math.sqrt(np.sum(s[m] ** 2)) / np.sum(m) for m in sel]),
-                              tol_rad=1e-6)
+        # the passes' mean at each angle: an averaging operator on the means
+        avg = np.array([(keys == u) / np.sum(keys == u) for u in uniq])
+        first = [int(np.argmax(keys == u)) for u in uniq]
+        fourier = fourier_dft(nominal[first], avg @ y, avg @ C @ avg.T, tol_rad=1e-6)
     else:
         top = (n_spaced // 2 if n_spaced is not None
                else max(SIGNATURE_HARMONICS[c][0] for c in wanted))
-        fourier = fit_fourier(theta, y, s, top, n_positions=n_spaced)
+        fourier = fit_fourier(theta, y, C, top, n_positions=n_spaced)
     return invert_coefficients(fourier, g, wanted, group=f"accel {AXES[i]}")
 
 
@@ -444,10 +471,7 @@ def _analyze(rec: Recording, opt: TumbleOptions,
                     notes.append(f"accel {AXES[i]}, head axis {head} ({direction}): the closing "
                                  f"0° record differs from the first by {d:.3g} m/s² "
                                  f"({d / s:+.1f}σ): the output drifted during the sequence")
-    result = TumbleResult(unit=unit, gravity_mps2=g, gravity_rel_std=g_rel,
-                          accelerometers=tuple(accels), method=opt.method,
-                          windows=tuple(windows), notes=tuple(notes))
-    triad_fit = _combination_quality(result)
+    triad_fit = _combination_quality(accels)
     if triad_fit is not None and triad_fit.dof > 0:
         notes.append(triad_fit.summary())
     if progress is not None:
@@ -457,12 +481,12 @@ def _analyze(rec: Recording, opt: TumbleOptions,
                         triad_fit=triad_fit, notes=tuple(notes))
 
 
-def _combination_quality(result: TumbleResult) -> FitQuality | None:
+def _combination_quality(accels: Sequence[AccelerometerTumble]) -> FitQuality | None:
     """χ² of the GLS that combines the head axes' triad parameters (their agreement)."""
-    parts = [a.triad() for a in result.accelerometers]
+    parts = [a.triad() for a in accels]
     if not parts:
         return None
-    names, values, _ = result.triad_parameters()
+    names, values, _ = _combine(parts)
     chi2, n = 0.0, 0
     for pn, pv, pc in parts:
         r = pv - np.array([values[names.index(x)] for x in pn])

@@ -143,12 +143,21 @@ class FourierFit:
 
 
 def _inputs(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike) -> tuple[_F64, _F64, _F64]:
+    """(θ, y, C): `sigma` is a σ (scalar or per mean) or the means' covariance (M, M)."""
     th = as_array(theta_rad, "theta_rad", shape=(None,))
     yy = as_array(y, "y", shape=(th.size,))
-    s = np.broadcast_to(np.asarray(sigma, dtype=np.float64), th.shape).copy()
+    sig = np.asarray(sigma, dtype=np.float64)
+    if sig.ndim == 2:
+        C = as_array(sig, "sigma", shape=(th.size, th.size))
+        ok = np.allclose(C, C.T) and bool(np.all(np.linalg.eigvalsh(C) > 0))
+        if not ok:
+            raise InvalidInputError("`sigma` given as a covariance must be symmetric positive "
+                                    "definite")
+        return th, yy, C
+    s = np.broadcast_to(sig, th.shape).copy()
     if not (np.all(np.isfinite(s)) and np.all(s > 0)):
         raise InvalidInputError(f"`sigma` must be positive and finite; got {s.tolist()}")
-    return th, yy, s
+    return th, yy, np.diag(s**2)
 
 
 def fit_fourier(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, max_harmonic: int, *,
@@ -161,8 +170,8 @@ def fit_fourier(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, max_harmon
         Gravity angle of each mean in the IA–PA plane. [rad]
     y : array_like, shape (M,)
         Mean outputs. [m/s²]
-    sigma : float or array_like, shape (M,)
-        Their standard errors. [m/s²]
+    sigma : float or array_like, shape (M,) or (M, M)
+        Their standard errors, or their covariance (GLS). [m/s²], [(m/s²)²]
     max_harmonic : int
         Highest harmonic n fitted (cos and sin; a sine that vanishes at every position, the
         Nyquist term of equally spaced positions, is left out).
@@ -175,7 +184,7 @@ def fit_fourier(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, max_harmon
     InsufficientExcitationError
         Fewer positions than terms, or terms the angles cannot separate (named).
     """
-    th, yy, s = _inputs(theta_rad, y, sigma)
+    th, yy, C = _inputs(theta_rad, y, sigma)
     if max_harmonic < 1:
         raise InvalidInputError(f"`max_harmonic` must be ≥ 1; got {max_harmonic!r}")
     names = list(harmonic_names(max_harmonic, n_positions))
@@ -183,16 +192,17 @@ def fit_fourier(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, max_harmon
     keep = np.linalg.norm(H, axis=0) > 1e-9 * math.sqrt(th.size)
     names = [n for n, k in zip(names, keep, strict=True) if k]
     H = H[:, keep]
-    Hw = H / s[:, None]
+    L = np.linalg.cholesky(C)
+    Hw = np.linalg.solve(L, H)
     sv = np.linalg.svd(Hw, compute_uv=False)
     if H.shape[1] > th.size or sv[-1] < 1e-9 * sv[0]:
         raise InsufficientExcitationError(
-            names, f"{th.size} positions cannot separate the Fourier terms {names} (up to harmonic "
-            f"{max_harmonic}); fit fewer harmonics or add positions")
+            names, f"{th.size} positions cannot separate the Fourier terms {names} (up to "
+            f"harmonic {max_harmonic}); fit fewer harmonics or add positions")
     info_inv = np.asarray(np.linalg.inv(Hw.T @ Hw), dtype=np.float64)
-    P = info_inv @ Hw.T / s[None, :]
+    P = info_inv @ Hw.T @ np.linalg.inv(L)
     values = P @ yy
-    r = (yy - H @ values) / s
+    r = np.linalg.solve(L, yy - H @ values)
     return FourierFit(names=tuple(names), values=values, covariance=info_inv, operator=P,
                       theta_rad=th, chi2=float(r @ r), dof=th.size - len(names), method="lsq")
 
@@ -212,7 +222,8 @@ def fourier_dft(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, *,
     """Fit (T.3) in closed form for N equally spaced positions: the DFT, (T.4).
 
     A0 = (1/N)Σ y_k, A_n = (2/N)Σ y_k cos nθ_k, B_n = (2/N)Σ y_k sin nθ_k for 0 < n < N/2,
-    A_{N/2} = (1/N)Σ y_k cos(N/2·θ_k): all N terms, ν = 0. The covariance is P·diag(σ²)·Pᵀ
+    A_{N/2} = (1/N)Σ y_k cos(N/2·θ_k): all N terms, ν = 0. The covariance is P·C·Pᵀ, C the
+    means' (`sigma`: σ per mean or C itself)
     (var A0 = σ²/N, var A_n = var B_n = 2σ²/N for equal σ, (T.9)).
 
     Raises
@@ -221,7 +232,7 @@ def fourier_dft(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, *,
         The angles are not N distinct positions 2π/N apart (within `tol_rad`) — use
         :func:`fit_fourier`.
     """
-    th, yy, s = _inputs(theta_rad, y, sigma)
+    th, yy, C = _inputs(theta_rad, y, sigma)
     if not equally_spaced(th, tol_rad=tol_rad):
         got = np.round(np.degrees(np.mod(th, 2 * math.pi)), 6).tolist()
         raise InvalidInputError(
@@ -235,7 +246,7 @@ def fourier_dft(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, *,
         w = 1.0 if n == 0 or 2 * n == n_pos else 2.0
         rows.append(w / n_pos * (np.cos(n * th) if name[0] == "A" else np.sin(n * th)))
     P = np.array(rows)
-    cov = (P * s[None, :] ** 2) @ P.T
+    cov = P @ C @ P.T
     return FourierFit(names=tuple(names), values=P @ yy, covariance=cov, operator=P,
                       theta_rad=th, chi2=0.0, dof=0, method="dft")
 
