@@ -123,18 +123,24 @@ class TumbleWindow:
     block_variance: tuple[int, _F64]
 
 
-def _tag(step: StepRecord, key: str, kind: type, default: object = None) -> object:
+def _tag(step: StepRecord, key: str, default: str | None = None) -> str:
+    """Return tag `key`'s value, or `default`; a required tag missing is a RecordingError."""
     value = step.tag_value(key)
-    if value is None:
-        if default is not None:
-            return default
+    if value is not None:
+        return value
+    if default is None:
         raise RecordingError(f"step {step.index} ({step.label}): a tumble record needs the tag "
                              f"{key}=; its tags are {list(step.tags)}")
+    return default
+
+
+def _number(step: StepRecord, key: str, default: str | None = None) -> float:
+    value = _tag(step, key, default)
     try:
-        return kind(value)
+        return float(value)
     except ValueError:
-        raise RecordingError(f"step {step.index} ({step.label}): tag {key}={value!r} is not "
-                             f"{'a number' if kind is not str else 'valid'}") from None
+        raise RecordingError(f"step {step.index} ({step.label}): tag {key}={value!r} is not a "
+                             "number") from None
 
 
 class _Reducer:
@@ -168,11 +174,11 @@ class _Reducer:
                                       f"dropouts (at most {self.opt.max_lost_fraction:.0%})")
         angles = np.array([float(np.mean(fb.columns[axis_columns(a)[0]]))
                            for a in self.axis_names])
-        pose = str(_tag(step, "mount", str, "+z"))
+        pose = _tag(step, "mount", "+z")
         if pose not in FIXTURE_AXES:
             raise RecordingError(f"{where}: tag mount={pose!r} is not a pose of "
                                  f"{list(FIXTURE_AXES)}")
-        yaw = float(_tag(step, "yaw", float, 0.0))  # type: ignore[arg-type]
+        yaw = _number(step, "yaw", "0")
         rot_pm = rot_pm_for_pose(pose, yaw)
         _, force_p = static_inputs_b(self.axis_names, angles, self.g, self.earth_t)
         cmd = step.commanded.get("angles_deg") if isinstance(step.commanded, dict) else None
@@ -187,9 +193,8 @@ class _Reducer:
             blocks = (k - 1, np.var(means, axis=0, ddof=1) * per_block * period)
         return TumbleWindow(
             step_index=step.index, label=step.label, role=step.role,
-            axis=str(_tag(step, "axis", str)), angle_deg=float(_tag(step, "angle", float)),  # type: ignore[arg-type]
-            n_positions=int(_tag(step, "positions", int, 0)),  # type: ignore[call-overload]
-            direction=str(_tag(step, "pass", str, "")) if step.tag_value("pass") else "",
+            axis=_tag(step, "axis"), angle_deg=_number(step, "angle"),
+            n_positions=int(_number(step, "positions", "0")), direction=_tag(step, "pass", ""),
             table_angles_rad=angles, force_b=np.asarray(rot_pm.T @ force_p, dtype=np.float64),
             force_nominal_b=np.asarray(rot_pm.T @ nominal_p, dtype=np.float64),
             mean=values.mean(axis=0), se=np.full(3, math.nan), duration_s=float(t[-1] - t[0]),
