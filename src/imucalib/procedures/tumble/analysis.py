@@ -408,7 +408,8 @@ def _fit_one(ws: list[TumbleWindow], i: int, p: int, g: float, opt: TumbleOption
         top = (n_spaced // 2 if n_spaced is not None
                else max(SIGNATURE_HARMONICS[c][0] for c in wanted))
         fourier = fit_fourier(theta, y, C, top, n_positions=n_spaced)
-    return invert_coefficients(fourier, g, wanted, group=f"accel {AXES[i]}")
+    return invert_coefficients(fourier, g, wanted, n_positions=n_spaced,
+                               group=f"accel {AXES[i]}")
 
 
 def analyze_tumble(recording: Recording | str | os.PathLike[str], *,

@@ -302,7 +302,8 @@ def _dependent(requested: Sequence[str], theta_rad: _F64, gravity_mps2: float) -
         col = D[:, COEFFICIENTS.index(name)]
         col = col / max(float(np.linalg.norm(col)), 1e-300)
         trial = np.column_stack([*kept, col])
-        if np.linalg.matrix_rank(trial, tol=1e-8) < trial.shape[1]:
+        # singular values of unit columns below 1e-4: dependent up to angle errors of ~10 µrad
+        if np.linalg.matrix_rank(trial, tol=1e-4) < trial.shape[1]:
             bad.append(name)
         else:
             kept.append(col)
@@ -427,7 +428,8 @@ def _p_of_q(names: Sequence[str], q: _F64) -> tuple[_F64, _F64]:
 
 
 def invert_coefficients(fourier: FourierFit, gravity_mps2: float,
-                        coefficients: Sequence[str], *, group: str = "tumble") -> TumbleFit:
+                        coefficients: Sequence[str], *, n_positions: int | None = None,
+                        group: str = "tumble") -> TumbleFit:
     """Invert the Fourier coefficients to the accelerometer's coefficients, (T.6)–(T.7).
 
     The Fourier fit's coefficients ĥ (covariance C_h) are ĥ = G·q, G = P·D: q̂ by GLS,
@@ -443,6 +445,9 @@ def invert_coefficients(fourier: FourierFit, gravity_mps2: float,
         Local gravity. [m/s²]
     coefficients : sequence of str
         Names of :data:`COEFFICIENTS` to estimate; those left out are taken as zero.
+    n_positions : int, optional
+        N when the positions are nominally equally spaced (measured angles a little off): the
+        aliasing rule of (T.8) applies; inferred from the angles (within 1 µrad) when omitted.
 
     Raises
     ------
@@ -451,7 +456,7 @@ def invert_coefficients(fourier: FourierFit, gravity_mps2: float,
     """
     names = tuple(sorted(coefficients, key=COEFFICIENTS.index))
     th = fourier.theta_rad
-    n_pos = th.size if equally_spaced(th, tol_rad=1e-6) else None
+    n_pos = n_positions or (th.size if equally_spaced(th, tol_rad=1e-6) else None)
     check_identifiable(names, n_positions=n_pos, theta_rad=th, gravity_mps2=gravity_mps2)
     cols = [COEFFICIENTS.index(c) for c in names]
     G = fourier.operator @ physical_design(th, gravity_mps2)[:, cols]
