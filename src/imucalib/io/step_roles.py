@@ -74,6 +74,18 @@ P4 static tests (docs/g-sensitivity.md, docs/earth-rate-bias.md, docs/random-dri
     A static record at one azimuth of a single-axis table (tags ``pose=<axis>``, ``azimuth=<deg>``).
 :data:`RANDOM_DRIFT_POSITION` ``"random-drift.position"``
     A static record of one repetition of the multi-position sequence (tag ``rep=<k>``).
+Tumble (the accelerometer multi-position tumble of IEEE Std 1293 on a dividing head, the
+dual-axis table's pitch axis; docs/tumble.md); every tumble record carries the tags
+``axis=<x|y|z>`` (the body axis along the head axis), ``angle=<deg>`` (the head angle),
+``positions=<N>``, ``mount=<pose>`` and ``yaw=<deg>`` (the fixture's remount), and ``pass=cw|ccw``
+when both directions are run:
+
+:data:`TUMBLE_MOUNT` ``"tumble.mount"``
+    The operator places the IMU so that the body axis under test lies along the head axis.
+:data:`TUMBLE_POSITION` ``"tumble.position"``
+    A static record at head angle θ_k.
+:data:`TUMBLE_DRIFT` ``"tumble.drift"``
+    The 0° record repeated at the end of a sequence (the drift check).
 
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
@@ -115,6 +127,10 @@ __all__ = [
     "RANDOM_DRIFT_POSITION",
     "RATE_TRANSFER_RATE",
     "RATE_TRANSFER_REMOUNT",
+    "TUMBLE_DRIFT",
+    "TUMBLE_MOUNT",
+    "TUMBLE_POSITION",
+    "TUMBLE_ROLES",
     "role_from_tags",
 ]
 
@@ -143,6 +159,12 @@ P3_SWAP: Final = "p3.swap"
 P3_LOAD: Final = "p3.load"
 #: Every P3 role.
 P3_ROLES: Final = (P3_MOUNT, P3_TUMBLE, P3_REST, P3_RATE, P3_SWAP, P3_LOAD)
+
+TUMBLE_MOUNT: Final = "tumble.mount"
+TUMBLE_POSITION: Final = "tumble.position"
+TUMBLE_DRIFT: Final = "tumble.drift"
+#: Every tumble role.
+TUMBLE_ROLES: Final = (TUMBLE_MOUNT, TUMBLE_POSITION, TUMBLE_DRIFT)
 
 
 G_SENSITIVITY_POSITION: Final = "g-sensitivity.position"

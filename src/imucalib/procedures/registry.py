@@ -40,6 +40,7 @@ BUILTIN: dict[str, str] = {
     "g-sensitivity": "imucalib.procedures.g_sensitivity.procedure",
     "earth-rate-bias": "imucalib.procedures.earth_rate_bias.procedure",
     "random-drift": "imucalib.procedures.random_drift.procedure",
+    "tumble": "imucalib.procedures.tumble.procedure",
 }
 
 _registered: dict[str, Procedure] = {}

@@ -1,0 +1,66 @@
+"""The tumble as a :class:`~imucalib.procedures.common.procedure.Procedure` (``"tumble"``).
+
+The plan is :func:`~imucalib.procedures.tumble.plan.generate_tumble_plan`; the analysis
+:func:`~imucalib.procedures.tumble.analysis.analyze_tumble`, imported when first used.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib.procedures.tumble.analysis import TumbleResult
+
+__all__ = ["PROCEDURE", "TumbleProcedure"]
+
+
+class TumbleProcedure:
+    """The accelerometer multi-position tumble on a dividing head (IEEE Std 1293)."""
+
+    name = "tumble"
+    description = ("accelerometer multi-position tumble on a dividing head (IEEE Std 1293): "
+                   "K0, K1, misalignment, K2 − Kpp, Kip, K3 and Koq from the Fourier "
+                   "coefficients of N equally spaced positions")
+    plan_options = frozenset({"n_positions", "axes", "record_s", "settle_s", "both_directions",
+                              "grade", "sample_rate_hz", "seed"})
+    analysis_options = frozenset({"coefficients", "method", "gravity_mps2", "gravity_rel_std",
+                                  "angle_std_arcsec"})
+    outputs = ("report-json", "parameters-csv")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib.procedures.tumble.plan.generate_tumble_plan` (its keywords)."""
+        from imucalib.procedures.tumble.plan import generate_tumble_plan
+
+        return generate_tumble_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> TumbleResult:
+        """Run :func:`~imucalib.procedures.tumble.analysis.analyze_tumble` on a recording.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
+        from imucalib.procedures.tumble.analysis import TumbleOptions, analyze_tumble
+
+        opts: dict[str, Any] = dict(options or {})
+        unknown = sorted(set(opts) - self.analysis_options)
+        if unknown:
+            raise InvalidInputError(f"procedure tumble takes the option(s) "
+                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        if isinstance(opts.get("coefficients"), str):
+            opts["coefficients"] = [c.strip() for c in opts["coefficients"].split(",") if c]
+        return analyze_tumble(recording, options=TumbleOptions(unit=unit, **opts),
+                              progress=progress)
+
+
+#: The registered tumble procedure.
+PROCEDURE = TumbleProcedure()
