@@ -29,6 +29,9 @@ def test_plan_new_run_and_calibrate(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     result = runner.invoke(app, ["calibrate", str(tmp_path / "t.h5"), "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
+    # the console shows every estimate with its uncertainty, then the (absent) decision
+    assert "delta_x_head_z" in result.output and "std. uncertainty" in result.output
+    assert "no decision" in result.output
     report = json.loads((tmp_path / "t.IMU-0001.tumble.report.json").read_text())
     assert report["procedure"] == "tumble"
     assert [a["head_axis"] for a in report["accelerometers"]] == ["z", "z"]

@@ -110,6 +110,17 @@ def render_noise_characterization(console: Console, result: Any, written: Sequen
 
 
 def _render_other(console: Console, result: Any, written: Sequence[Path]) -> None:
+    """Print a result with ``parameter_rows()`` (the classical tests): one row per estimate."""
+    rows = getattr(result, "parameter_rows", None)
+    if callable(rows):
+        table = Table("parameter", Column("value", justify="right"),
+                      Column("std. uncertainty", justify="right"), "unit (SI)",
+                      title=f"{result.procedure} {result.unit}")
+        for name, value, sigma, unit in rows():
+            cells = round_pair(float(value), float(sigma), sign=True)
+            table.add_row(escape(str(name)), cells.value_text, cells.uncertainty_text,
+                          escape(str(unit)))
+        console.print(table)
     verdict = {None: "no decision", True: "PASS", False: "FAIL"}[result.passed]
     console.print(f"{result.procedure} result for {result.unit}: {verdict}", highlight=False)
     _wrote(console, written)
