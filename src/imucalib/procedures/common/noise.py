@@ -7,9 +7,18 @@ duration T is then the model's Allan deviation at τ = T (:func:`window_mean_se`
 covariance of several windows' means
 :func:`~imucalib.estimation.compute_window_mean_covariance` (docs/processing-estimation.md).
 
+The procedures of long records (P3, the classical tests) use instead the white-noise density
+from the scatter of block means, pooled over a unit's records (:func:`block_variance`,
+:func:`pooled_white_density`): N² = Σ (K_i − 1)·s_i²·τ / Σ (K_i − 1), s_i² the variance of
+record i's K_i block means of length τ (1 s). Blocks much longer than the output filter's memory
+keep N free of its bias, and the Allan fit's flicker and random-walk terms of one-minute records
+(poorly determined, clipped at zero, so biased upwards) stay out; noise correlated over longer
+times shows in the fits' χ² instead (docs/p3.md, "On the twin").
+
 Contents
 --------
-:func:`estimate_noise`, :func:`window_mean_se`, :class:`StaticWindow`
+:func:`estimate_noise`, :func:`window_mean_se`, :class:`StaticWindow`, :func:`block_variance`,
+:func:`pooled_white_density`
 """
 
 from __future__ import annotations
@@ -23,7 +32,8 @@ from numpy.typing import NDArray
 
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 
-__all__ = ["FLICKER_FACTOR", "StaticWindow", "estimate_noise", "window_mean_se"]
+__all__ = ["FLICKER_FACTOR", "StaticWindow", "block_variance", "estimate_noise",
+           "pooled_white_density", "window_mean_se"]
 
 _F64 = NDArray[np.float64]
 
@@ -84,3 +94,34 @@ def window_mean_se(noise: Mapping[str, NoiseModel], duration_s: float) -> tuple[
     gyro = compute_theoretical_adev(noise["gyro"], tau)[0]
     accel = compute_theoretical_adev(noise["accel"], tau)[0]
     return np.maximum(gyro, 1e-300), np.maximum(accel, 1e-300)
+
+
+def block_variance(values: NDArray[np.float64], period_s: float, block_s: float
+                   ) -> tuple[int, _F64]:
+    """Return (K − 1, s²·τ) of the K block means of length τ of each column (module docstring).
+
+    τ is `block_s` rounded to whole sample periods `period_s`; fewer than three blocks give
+    (0, NaN). s²·τ estimates N², the white-noise density squared, per column.
+    """
+    per_block = max(round(block_s / period_s), 1)
+    cols = values.reshape(values.shape[0], -1)
+    k = cols.shape[0] // per_block
+    if k < 3:
+        return 0, np.full(cols.shape[1], math.nan)
+    means = cols[: k * per_block].reshape(k, per_block, cols.shape[1]).mean(axis=1)
+    return k - 1, np.asarray(np.var(means, axis=0, ddof=1) * per_block * period_s,
+                             dtype=np.float64)
+
+
+def pooled_white_density(blocks: Sequence[tuple[int, _F64]]) -> _F64 | None:
+    """Return N per column pooled over records' :func:`block_variance`, or None if none counts.
+
+    N² = Σ (K_i − 1)·s_i²·τ / Σ (K_i − 1) over the records with blocks (module docstring).
+    """
+    dof = np.array([b[0] for b in blocks], dtype=float)
+    ok = dof > 0
+    if not ok.any():
+        return None
+    var = np.array([np.nan_to_num(np.asarray(b[1], dtype=float)) for b in blocks])
+    return np.asarray(np.sqrt(np.maximum(dof[ok] @ var[ok] / dof[ok].sum(), 1e-300)),
+                      dtype=np.float64)

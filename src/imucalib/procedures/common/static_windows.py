@@ -38,6 +38,7 @@ from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingErr
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE
 from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
+from imucalib.procedures.common.noise import block_variance, pooled_white_density
 from imucalib.procedures.common.reference import site_vectors, static_inputs_b
 
 __all__ = ["StaticSite", "StaticWindow", "extract_static_windows", "json_safe", "read_site",
@@ -174,12 +175,7 @@ def _reduce(unit: str, step: StepRecord, values: _F64, counter: NDArray[np.int64
     omega_p, force_p = static_inputs_b(site.axis_names, angles, site.gravity_mps2,
                                        site.earth_rate_t_rps)
     rot_pm = rot_pm_for_pose(pose, 0.0)
-    per_block = max(round(noise_block_s / period), 1)
-    k = values.shape[0] // per_block
-    dof, var = 0, np.full(6, math.nan)
-    if k >= 3:
-        means = values[: k * per_block].reshape(k, per_block, 6).mean(axis=1)
-        dof, var = k - 1, np.var(means, axis=0, ddof=1) * per_block * period
+    dof, var = block_variance(values, period, noise_block_s)
     return StaticWindow(
         step_index=step.index, label=step.label, role=step.role, tags=tuple(step.tags),
         pose=pose, angles_rad=angles, mean=values.mean(axis=0), se=np.full(6, math.nan),
@@ -189,13 +185,11 @@ def _reduce(unit: str, step: StepRecord, values: _F64, counter: NDArray[np.int64
 
 
 def _pooled(windows: list[StaticWindow], unit: str) -> list[StaticWindow]:
-    dof = np.array([w.block_dof for w in windows], dtype=float)
-    if not np.any(dof > 0):
+    white = pooled_white_density([(w.block_dof, w.block_var) for w in windows])
+    if white is None:
         raise MissingSegmentError(f"unit {unit}: no window is long enough for the noise "
                                   "estimate (three blocks of noise_block_s)")
-    var = np.array([np.nan_to_num(w.block_var) for w in windows])
-    n2 = (dof @ var) / dof.sum()
-    return [dataclasses.replace(w, se=np.sqrt(np.maximum(n2, 1e-300) / max(w.duration_s, 1e-3)))
+    return [dataclasses.replace(w, se=white / math.sqrt(max(w.duration_s, 1e-3)))
             for w in windows]
 
 

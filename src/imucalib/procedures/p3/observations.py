@@ -50,6 +50,7 @@ from imucalib.errors import (
 from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
+from imucalib.procedures.common.noise import block_variance, pooled_white_density
 from imucalib.procedures.common.windows import table_angle_at
 from imucalib.processing import (
     compute_integer_revolution_window,
@@ -259,12 +260,8 @@ class _Reducer:
         else:
             mean = float(values.mean())
             n = values.size
-        per_block = round(self.opt.noise_block_s / period)
-        k = residual.size // max(per_block, 1)
-        blocks: tuple[int, float] = (0, math.nan)
-        if per_block >= 1 and k >= 3:
-            means = residual[: k * per_block].reshape(k, per_block).mean(axis=1)
-            blocks = (k - 1, float(np.var(means, ddof=1)) * per_block * period)
+        dof, var = block_variance(residual, period, self.opt.noise_block_s)
+        blocks = (dof, float(var[0]))
         return P3Window(
             step_index=step.index, label=step.label, role=step.role, unit=self.unit,
             config=_tag_int(step, "config"), pose=step.tag_value("pose") or "",
@@ -276,15 +273,13 @@ class _Reducer:
 
 def _pooled(windows: list[P3Window]) -> list[P3Window]:
     """Give each window the white-noise standard error N/√T of the unit (module docstring)."""
-    dof = np.array([w.block_variance[0] for w in windows], dtype=float)
-    var = np.array([w.block_variance[1] for w in windows], dtype=float)
-    ok = (dof > 0) & np.isfinite(var)
-    if not ok.any():
+    white = pooled_white_density([(w.block_variance[0], np.array([w.block_variance[1]]))
+                                  for w in windows])
+    if white is None:
         raise MissingSegmentError(
             f"unit {windows[0].unit if windows else '?'}: no record is long enough for the "
             "noise estimate (three blocks of noise_block_s)")
-    n2 = float(np.sum(dof[ok] * var[ok]) / np.sum(dof[ok]))
-    return [dataclasses.replace(w, se=math.sqrt(max(n2, 1e-300) / max(w.duration_s, 1e-3)))
+    return [dataclasses.replace(w, se=float(white[0]) / math.sqrt(max(w.duration_s, 1e-3)))
             for w in windows]
 
 

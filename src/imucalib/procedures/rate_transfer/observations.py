@@ -42,6 +42,7 @@ from imucalib.errors import (
 )
 from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
+from imucalib.procedures.common.noise import block_variance, pooled_white_density
 from imucalib.procedures.common.reference import site_vectors
 from imucalib.procedures.common.windows import table_angle_at
 from imucalib.processing import compute_integer_revolution_window, reconstruct_time_base
@@ -174,12 +175,7 @@ def _reduce(unit: str, step: StepRecord, data: StreamData, fb: StreamData, angle
     design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
     coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
     residual = values[sl] - design @ coef
-    per_block = round(opt.noise_block_s / period)
-    k = residual.shape[0] // max(per_block, 1)
-    blocks: tuple[int, _F64] = (0, np.full(3, np.nan))
-    if per_block >= 1 and k >= 3:
-        means = residual[: k * per_block].reshape(k, per_block, 3).mean(axis=1)
-        blocks = (k - 1, np.var(means, axis=0, ddof=1) * per_block * period)
+    blocks = block_variance(residual, period, opt.noise_block_s)
     commanded = step.commanded.get("rate_dps") if isinstance(step.commanded, dict) else None
     return RateWindow(
         step_index=step.index, label=step.label, axis=str(axis),
@@ -199,15 +195,11 @@ def pooled_se(windows: Sequence[RateWindow], unit: str = "?") -> list[RateWindow
     MissingSegmentError
         No window is long enough for three noise blocks.
     """
-    dof = np.array([w.block_variance[0] for w in windows], dtype=float)
-    var = np.array([w.block_variance[1] for w in windows], dtype=float).reshape(-1, 3)
-    ok = (dof > 0) & np.all(np.isfinite(var), axis=1)
-    if not ok.any():
+    white = pooled_white_density([w.block_variance for w in windows])
+    if white is None:
         raise MissingSegmentError(f"unit {unit}: no turn is long enough for the noise estimate "
                                   "(three blocks of noise_block_s)")
-    n2 = (dof[ok] @ var[ok]) / np.sum(dof[ok])
-    return [dataclasses.replace(w, gyro_se_rps=np.sqrt(np.maximum(n2, 1e-300)
-                                                       / max(w.duration_s, 1e-3)))
+    return [dataclasses.replace(w, gyro_se_rps=white / math.sqrt(max(w.duration_s, 1e-3)))
             for w in windows]
 
 

@@ -42,6 +42,7 @@ from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_POSITION
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
+from imucalib.procedures.common.noise import block_variance, pooled_white_density
 from imucalib.procedures.common.reference import static_inputs_b
 
 __all__ = ["TumbleProcessing", "TumbleWindow", "extract_tumble_windows"]
@@ -185,12 +186,7 @@ class _Reducer:
         nominal = (np.radians(np.asarray(cmd, dtype=np.float64))
                    if isinstance(cmd, list) and len(cmd) == len(angles) else angles)
         _, nominal_p = static_inputs_b(self.axis_names, nominal, self.g, self.earth_t)
-        per_block = round(self.opt.noise_block_s / period)
-        k = values.shape[0] // max(per_block, 1)
-        blocks: tuple[int, _F64] = (0, np.full(3, math.nan))
-        if per_block >= 1 and k >= 3:
-            means = values[: k * per_block].reshape(k, per_block, 3).mean(axis=1)
-            blocks = (k - 1, np.var(means, axis=0, ddof=1) * per_block * period)
+        blocks = block_variance(values, period, self.opt.noise_block_s)
         return TumbleWindow(
             step_index=step.index, label=step.label, role=step.role,
             axis=_tag(step, "axis"), angle_deg=_number(step, "angle"),
@@ -203,14 +199,11 @@ class _Reducer:
 
 def _pooled(unit: str, windows: list[TumbleWindow]) -> list[TumbleWindow]:
     """Give each window the white-noise standard errors N/√T of the unit (module docstring)."""
-    dof = np.array([w.block_variance[0] for w in windows], dtype=float)
-    var = np.array([w.block_variance[1] for w in windows], dtype=float)
-    ok = (dof > 0) & np.all(np.isfinite(var), axis=1)
-    if not ok.any():
+    white = pooled_white_density([w.block_variance for w in windows])
+    if white is None:
         raise MissingSegmentError(f"unit {unit}: no record is long enough for the noise "
                                   "estimate (three blocks of noise_block_s)")
-    n2 = np.sum(dof[ok, None] * var[ok], axis=0) / np.sum(dof[ok])
-    return [dataclasses.replace(w, se=np.sqrt(np.maximum(n2, 1e-300) / max(w.duration_s, 1e-3)))
+    return [dataclasses.replace(w, se=white / math.sqrt(max(w.duration_s, 1e-3)))
             for w in windows]
 
 
