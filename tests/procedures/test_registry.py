@@ -114,3 +114,12 @@ def test_the_demo_imports_no_cli_module():
     imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
     assert not any(m and m.startswith("imucalib.cli") for m in imported)
     assert "imucalib.procedures" in imported and "imucalib.exports.outputs" in imported
+
+
+def test_every_procedure_refuses_an_option_it_does_not_take():
+    """One rule for all (procedures/common/procedure.accepted_options): the message lists what
+    the procedure takes."""
+    for name in registry.names():
+        proc = registry.get(name)
+        with pytest.raises(InvalidInputError, match=rf"procedure {name} takes"):
+            proc.analyze("/nonexistent.h5", options={"no_such_option": 1})

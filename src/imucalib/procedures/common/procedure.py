@@ -9,7 +9,7 @@ one.
 
 Contents
 --------
-:class:`Procedure`, :class:`ProcedureResult`
+:class:`Procedure`, :class:`ProcedureResult`, :func:`accepted_options`
 """
 
 from __future__ import annotations
@@ -18,11 +18,13 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from imucalib.errors import InvalidInputError
+
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
 
-__all__ = ["Procedure", "ProcedureResult"]
+__all__ = ["Procedure", "ProcedureResult", "accepted_options"]
 
 
 @runtime_checkable
@@ -119,3 +121,20 @@ class Procedure(Protocol):
         work done (increasing, ending at 1.0), for a progress bar; it must not raise.
         """
         ...
+
+
+def accepted_options(procedure: str, options: Mapping[str, Any] | None,
+                     allowed: frozenset[str]) -> dict[str, Any]:
+    """Return `options` as a dict, refusing a key `procedure`'s analysis does not take.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown option (the message lists those the procedure takes).
+    """
+    opts = dict(options or {})
+    unknown = sorted(set(opts) - allowed)
+    if unknown:
+        raise InvalidInputError(f"procedure {procedure} takes the option(s) {sorted(allowed)}; "
+                                f"got {unknown}")
+    return opts

@@ -10,7 +10,7 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -49,11 +49,7 @@ class EarthRateBiasProcedure:
         """
         from imucalib.procedures.earth_rate_bias.analysis import analyze_earth_rate_bias
 
-        opts = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure earth-rate-bias takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         result = analyze_earth_rate_bias(recording, unit=unit, **opts)
         if progress is not None:
             progress(1.0)

@@ -13,7 +13,7 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -55,11 +55,7 @@ class InstallationProcedure:
         from imucalib.procedures.installation.analysis import analyze_installation
         from imucalib.procedures.rate_transfer.observations import RateProcessing
 
-        opts = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure installation takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         common = bool(opts.pop("common_bias", False))
         result = analyze_installation(recording, unit=unit, processing=RateProcessing(**opts),
                                       common_bias=common)

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -59,11 +60,7 @@ class P1Procedure:
         """
         from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 
-        opts = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure p1 takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         model = opts.get("model", "triad")
         if model not in MODELS:
             raise InvalidInputError(f"--model must be 'triad' or 'per-axis'; got {model!r}")

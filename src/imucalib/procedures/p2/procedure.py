@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -59,11 +60,7 @@ class P2Procedure:
         from imucalib.procedures.p2.analysis import P2Options
         from imucalib.procedures.p2.batch import analyze_p2
 
-        opts = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure p2 takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         workers = int(opts.pop("workers", 1))
         scheduler = opts.pop("scheduler", None)
         try:

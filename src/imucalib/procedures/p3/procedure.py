@@ -12,6 +12,7 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -57,11 +58,7 @@ class P3Procedure:
         from imucalib.procedures.p3.analysis import P3Options, analyze_p3
         from imucalib.procedures.p3.observations import P3Processing
 
-        opts: dict[str, Any] = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure p3 takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         axis = opts.pop("input_axis", None)
         if unit is not None and opts.get("test") not in (None, unit):
             raise InvalidInputError(f"unit {unit!r} and test {opts['test']!r} disagree")

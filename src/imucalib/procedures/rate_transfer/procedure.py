@@ -13,7 +13,7 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -54,11 +54,7 @@ class RateTransferProcedure:
         from imucalib.procedures.rate_transfer.analysis import analyze_rate_transfer
         from imucalib.procedures.rate_transfer.observations import RateProcessing
 
-        opts = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure rate-transfer takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         result = analyze_rate_transfer(recording, unit=unit,
                                        processing=RateProcessing(**opts))
         if progress is not None:

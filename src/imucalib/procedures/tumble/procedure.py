@@ -10,7 +10,7 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -51,11 +51,7 @@ class TumbleProcedure:
         """
         from imucalib.procedures.tumble.analysis import TumbleOptions, analyze_tumble
 
-        opts: dict[str, Any] = dict(options or {})
-        unknown = sorted(set(opts) - self.analysis_options)
-        if unknown:
-            raise InvalidInputError(f"procedure tumble takes the option(s) "
-                                    f"{sorted(self.analysis_options)}; got {unknown}")
+        opts = accepted_options(self.name, options, self.analysis_options)
         if isinstance(opts.get("coefficients"), str):
             opts["coefficients"] = [c.strip() for c in opts["coefficients"].split(",") if c]
         return analyze_tumble(recording, options=TumbleOptions(unit=unit, **opts),
