@@ -64,8 +64,10 @@ def write(tmp_path: Path, content: str | bytes, name: str = "data.csv") -> Path:
     ("time_s,gyro_x_rps,\n0,1,2\n", InvalidInputError,
      "{p}: header field 3 is empty; expected `name` or `name [unit]` (a trailing comma?)"),
     (f"{GYRO}\n0,0,0\n", InvalidInputError,
-     "{p}: no 'time_s' column; columns are ['gyro_x_rps', 'gyro_y_rps', 'gyro_z_rps'] (use "
-     "`column_map` to name the time column)"),
+     "{p}: no time column among the columns found ['gyro_x_rps', 'gyro_y_rps', 'gyro_z_rps']; "
+     "name it with `--time-column NAME` (or `column_map` to 'time_s'), or give "
+     "`--sample-rate-hz`; map the others with `--column-map gx=NAME,...` or an `--import` file "
+     "(docs/import.md)"),
     ("time_s,a,b\n0,1,2\n1,2\n2,3,4\n", InvalidInputError,
      "{p}: line 3 has 2 fields; the header has 3 (a ragged row)"),
     ("time_s,a,b\n0,1,2\n1,2,3,4\n", InvalidInputError,

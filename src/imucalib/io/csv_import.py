@@ -63,7 +63,10 @@ from imucalib.units import parse_unit
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["MAX_ABS_TIME_S", "MAX_TIME_SPAN_S", "read_imu_csv"]
+__all__ = ["MAX_ABS_TIME_S", "MAX_TIME_SPAN_S", "WHITESPACE", "read_imu_csv"]
+
+#: The `delimiter` of files whose fields are separated by runs of blanks (imu_tk's files).
+WHITESPACE: Final = "whitespace"
 
 #: Largest accepted |time_s|: about 317 years, so Unix-epoch times fit and float64 still resolves
 #: 2 µs. [s]
@@ -71,7 +74,7 @@ MAX_ABS_TIME_S: Final = 1e10
 #: Largest accepted last − first time of one file: 366 days. [s]
 MAX_TIME_SPAN_S: Final = 366 * 86400.0
 
-_HEADER = re.compile(r"^\s*([A-Za-z][A-Za-z0-9_.]*)\s*(?:\[(.+)\])?\s*$")
+_HEADER = re.compile(r"^\s*(%?[A-Za-z][A-Za-z0-9_.]*)\s*(?:\[(.+)\])?\s*$")
 _SI_SUFFIXES = {"_rps": "rad/s", "_mps2": "m/s^2", "_s": "s"}
 _SUFFIX_UNITS = {"_rps": "rad/s", "_mps2": "m/s^2", "_s": "s", "_degc": "degC", "_dps": "deg/s",
                  "_g": "g"}
@@ -109,8 +112,15 @@ def _short(text: str, limit: int = 60) -> str:
     return repr(text) if len(text) <= limit else repr(text[:limit]) + "…"
 
 
-def _read_header(p: Path) -> list[str]:
-    """Return the fields of the first line, refusing files that are not CSV text."""
+def _split(line: str, delimiter: str) -> list[str]:
+    """The fields of one line: `delimiter` is one character, or ``"whitespace"``."""
+    if delimiter == WHITESPACE:
+        return line.split()
+    return next(csv.reader([line], delimiter=delimiter), [])
+
+
+def _read_header(p: Path, skip_rows: int = 0, delimiter: str = ",") -> list[str]:
+    """Return the fields of the header line (after `skip_rows` lines), refusing non-CSV text."""
     try:
         with open(p, "rb") as fh:
             head = fh.read(_MAX_HEADER_BYTES + 1)
@@ -123,6 +133,14 @@ def _read_header(p: Path) -> list[str]:
     if nul >= 0:
         raise InvalidInputError(f"{p} is not CSV text: it holds NUL bytes (the first at offset "
                                 f"{nul}), as a binary file does")
+    begin = 0
+    for k in range(skip_rows):
+        nl = head.find(b"\n", begin)
+        if nl < 0:
+            raise InvalidInputError(f"{p}: the file has {k + 1} line(s); the header was expected "
+                                    f"after the {skip_rows} skipped row(s) (`skip_rows`)")
+        begin = nl + 1
+    head = head[begin:]
     end = head.find(b"\n")
     if end < 0 and len(head) > _MAX_HEADER_BYTES:
         raise InvalidInputError(f"{p}: the first line is longer than {_MAX_HEADER_BYTES} bytes; "
@@ -135,9 +153,9 @@ def _read_header(p: Path) -> list[str]:
                                 f"{exc.start} cannot be decoded (a binary file, or text in "
                                 "another encoding: save it as UTF-8)") from exc
     if not line.strip():
-        raise InvalidInputError(f"{p}: line 1 is blank; expected the header (e.g. "
+        raise InvalidInputError(f"{p}: line {skip_rows + 1} is blank; expected the header (e.g. "
                                 "`time_s,gyro_x_rps,gyro_y_rps,gyro_z_rps`)")
-    return next(csv.reader([line.rstrip("\r")]))
+    return _split(line.rstrip("\r"), delimiter)
 
 
 def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
@@ -154,6 +172,9 @@ def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
             given_names.append("")
             continue
         m = _HEADER.match(header)
+        if m is None and column_map and header.strip() in column_map:
+            m = _HEADER.match(column_map[header.strip()])  # a vendor name such as "Gyro X (°/s)"
+            header = header.strip()
         if not header.strip():
             raise InvalidInputError(f"{p}: header field {i + 1} is empty; expected `name` or "
                                     "`name [unit]` (a trailing comma?)")
@@ -161,7 +182,7 @@ def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
             hint = " (fields are separated by commas)" if ";" in header or "\t" in header else ""
             raise InvalidInputError(f"{p}: header field {i + 1} {_short(header)} is not `name` or "
                                     f"`name [unit]` (a name starts with a letter){hint}")
-        given = m.group(1)
+        given = header if column_map and header in column_map else m.group(1)
         name = (column_map or {}).get(given, given)
         unit = (m.group(2) or (units or {}).get(name) or _unit_of(name)).strip()
         _check_unit(p, header, name, unit)
@@ -200,12 +221,12 @@ def _check_unit(p: Path, header: str, name: str, unit: str) -> None:
                         "(imucalib.units.parse_unit lists them all)")
 
 
-def _locate(p: Path, row: int) -> tuple[int, str]:
+def _locate(p: Path, row: int, header_line: int = 1) -> tuple[int, str]:
     """Return the file line number (1-based) and text of data row `row` (0-based). Slow path."""
     seen = -1
     with open(p, encoding="utf-8-sig", errors="replace", newline="") as fh:
         for number, line in enumerate(fh, start=1):
-            if number == 1 or not line.strip():
+            if number <= header_line or not line.strip():
                 continue  # the header; blank lines are skipped, as pandas does
             seen += 1
             if seen == row:
@@ -213,26 +234,33 @@ def _locate(p: Path, row: int) -> tuple[int, str]:
     return -1, ""
 
 
-def _where(p: Path, row: int) -> str:
-    line, _ = _locate(p, row)
+def _where(p: Path, row: int, header_line: int = 1) -> str:
+    line, _ = _locate(p, row, header_line)
     return f"data row {row + 1}" + (f" (line {line})" if line > 0 else "")
 
 
-def _parse(p: Path, n_fields: int) -> pd.DataFrame:
+def _parse(p: Path, n_fields: int, header_line: int = 1, delimiter: str = ",",
+           has_header: bool = True) -> pd.DataFrame:
     """Parse the rows with pandas' C reader; refuse ragged rows and undecodable bytes."""
     import pandas as pd
 
-    first, text = _locate(p, 0)
+    first, text = _locate(p, 0, header_line)
     if first < 0:
         raise InvalidInputError(f"{p}: no data rows after the header; expected at least one row "
                                 "of numbers")
-    n_first = len(next(csv.reader([text])))
+    n_first = len(_split(text, delimiter))
     if n_first > n_fields:  # pandas would silently take the extra field for an index
         raise InvalidInputError(f"{p}: line {first} has {n_first} fields; the header has "
                                 f"{n_fields} (a ragged row)")
     try:
+        sep = {"sep": r"\s+"} if delimiter == WHITESPACE else {"sep": delimiter}
+        if not has_header:  # header_line: the lines skipped
+            return pd.read_csv(p, header=None, names=list(range(n_fields)),
+                               keep_default_na=False, na_values=["NaN", "nan"],
+                               encoding="utf-8-sig", skiprows=header_line, **sep)
         return pd.read_csv(p, header=0, names=list(range(n_fields)), keep_default_na=False,
-                           na_values=["NaN", "nan"], encoding="utf-8-sig")
+                           na_values=["NaN", "nan"], encoding="utf-8-sig",
+                           skiprows=header_line - 1, **sep)
     except UnicodeDecodeError as exc:
         raise InvalidInputError(f"{p} is not UTF-8 text: byte 0x{exc.object[exc.start]:02x} "
                                 "after the header cannot be decoded (a binary file, or text in "
@@ -247,7 +275,8 @@ def _parse(p: Path, n_fields: int) -> pd.DataFrame:
         raise InvalidInputError(f"cannot read CSV {p}: {exc}") from exc
 
 
-def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int) -> Any:
+def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int,
+             header_line: int = 1, delimiter: str = ",") -> Any:
     """Return column `pos` as numbers, or raise naming its first non-numeric cell."""
     import pandas as pd
 
@@ -260,10 +289,10 @@ def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int) -> A
         return num
     row = int(np.argmax(bad))
     value = col.iloc[row]
-    line, text = _locate(p, row)
+    line, text = _locate(p, row, header_line)
     where = f"data row {row + 1}" + (f" (line {line})" if line > 0 else "")
     if isinstance(value, str) and not value.strip():
-        n_here = len(next(csv.reader([text]))) if text else n_fields
+        n_here = len(_split(text, delimiter)) if text else n_fields
         if n_here < n_fields:
             raise InvalidInputError(f"{p}: line {line} has {n_here} fields; the header has "
                                     f"{n_fields} (a ragged row)")
@@ -273,7 +302,8 @@ def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int) -> A
                             f"{where} (numbers expected; a missing value is written NaN)")
 
 
-def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any]) -> None:
+def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any], header_line: int = 1
+                  ) -> None:
     if values.dtype.kind != "f":
         return
     finite = np.isfinite(values)
@@ -285,22 +315,23 @@ def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any]) -> None:
     row = int(np.argmax(bad))
     rule = ("time_s and the gyro and accelerometer columns must be finite"
             if name in _MUST_BE_FINITE else "values must be finite numbers or NaN (missing)")
-    raise InvalidInputError(f"{p}: column {name!r} holds {_num(values[row])} at {_where(p, row)}; "
+    raise InvalidInputError(f"{p}: column {name!r} holds {_num(values[row])} at "
+                            f"{_where(p, row, header_line)}; "
                             f"{rule} ({int(bad.sum())} such cell(s))")
 
 
-def _check_time(p: Path, t: np.ndarray[Any, Any]) -> None:
+def _check_time(p: Path, t: np.ndarray[Any, Any], header_line: int = 1) -> None:
     step = np.diff(t)
     if np.any(step < 0):
         i = int(np.argmax(step < 0)) + 1
         raise InvalidInputError(
-            f"{p}: {TIME_COLUMN} decreases at {_where(p, i)}: {_num(t[i])} s after "
+            f"{p}: {TIME_COLUMN} decreases at {_where(p, i, header_line)}: {_num(t[i])} s after "
             f"{_num(t[i - 1])} s; times must not decrease ({int(np.sum(step < 0))} such step(s))")
     big = np.abs(t) > MAX_ABS_TIME_S
     if big.any():
         i = int(np.argmax(big))
         raise InvalidInputError(
-            f"{p}: {TIME_COLUMN} {_num(t[i])} s at {_where(p, i)} is beyond ±{MAX_ABS_TIME_S:g} s; "
+            f"{p}: {TIME_COLUMN} {_num(t[i])} s at {_where(p, i, header_line)} is beyond ±{MAX_ABS_TIME_S:g} s; "
             "expected seconds (give another unit in the header, e.g. `time_s [ms]`)")
     if t.size and t[-1] - t[0] > MAX_TIME_SPAN_S:
         raise InvalidInputError(
@@ -310,7 +341,11 @@ def _check_time(p: Path, t: np.ndarray[Any, Any]) -> None:
 
 def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] | None = None,
                  units: Mapping[str, str] | None = None, to_si: bool = True,
-                 only: Collection[str] | None = None) -> pd.DataFrame:
+                 only: Collection[str] | None = None, delimiter: str = ",",
+                 skip_rows: int = 0, sample_rate_hz: float | None = None,
+                 scales: Mapping[str, float] | None = None,
+                 offsets: Mapping[str, float] | None = None,
+                 names: Collection[str] | None = None) -> pd.DataFrame:
     """Read a CSV file of IMU samples.
 
     Parameters
@@ -327,6 +362,18 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
     only : collection of str, optional
         Header fields (as written in the file) to read; the others are skipped unchecked (the
         text and bookkeeping fields of a ``rostopic echo -p`` export, :mod:`.csv_layouts`).
+    delimiter : str
+        The field separator: one character, or :data:`WHITESPACE` (runs of blanks).
+    skip_rows : int
+        Lines before the header (a vendor's preamble); they are not read.
+    sample_rate_hz : float, optional
+        With no time column: the sample rate, and the time of row k is k / `sample_rate_hz`.
+    scales, offsets : mapping, optional
+        Canonical column name → counts per unit and offset [counts]: the column's values become
+        (raw − offset) / scale, in the column's unit, before the conversion to SI.
+    names : sequence of str, optional
+        For a file without a header line (imu_tk's): the name of each field; every line after
+        the `skip_rows` is a data row.
 
     Returns
     -------
@@ -342,20 +389,42 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
         An unknown unit in a header, or one of another dimension than the column's name.
     """
     p = Path(path)
-    headers = _read_header(p)
-    names, col_units = _columns(p, headers, column_map, units, only)
-    if TIME_COLUMN not in names:
-        raise InvalidInputError(f"{p}: no {TIME_COLUMN!r} column; columns are {names}"
-                                " (use `column_map` to name the time column)")
-    raw = _parse(p, len(names))
+    if not (isinstance(skip_rows, int) and skip_rows >= 0):
+        raise InvalidInputError(f"`skip_rows` must be an integer ≥ 0; got {skip_rows!r}")
+    if delimiter != WHITESPACE and len(delimiter) != 1:
+        raise InvalidInputError(f"`delimiter` must be one character or {WHITESPACE!r}; got "
+                                f"{delimiter!r}")
+    if sample_rate_hz is not None and not (np.isfinite(sample_rate_hz) and sample_rate_hz > 0):
+        raise InvalidInputError(f"the sample rate must be a finite number > 0 Hz; got "
+                                f"{sample_rate_hz}")
+    if names is None:
+        hdr = skip_rows + 1
+        headers = _read_header(p, skip_rows, delimiter)
+    else:
+        hdr = skip_rows
+        _read_header(p, skip_rows, delimiter)  # the file checks (empty, binary, UTF-8)
+        headers = list(names)
+    canon, col_units = _columns(p, headers, column_map, units, only)
+    if TIME_COLUMN not in canon and sample_rate_hz is None:
+        found = [h.strip() for h in headers]
+        raise InvalidInputError(
+            f"{p}: no time column among the columns found {found}; name it with "
+            f"`--time-column NAME` (or `column_map` to {TIME_COLUMN!r}), or give "
+            "`--sample-rate-hz`; map the others with `--column-map gx=NAME,...` or an "
+            "`--import` file (docs/import.md)")
+    raw = _parse(p, len(canon), hdr, delimiter, names is None)
     if len(raw) == 0:
         raise InvalidInputError(f"{p}: no data rows after the header; expected at least one row "
                                 "of numbers")
     data: dict[str, Any] = {}
-    for pos, col in enumerate(names):
+    for pos, col in enumerate(canon):
         if col is None:
             continue
-        values = _numeric(p, raw, pos, col, len(names)).to_numpy()
+        values = _numeric(p, raw, pos, col, len(canon), hdr, delimiter).to_numpy()
+        scale = (scales or {}).get(col)
+        offset = (offsets or {}).get(col)
+        if scale is not None or offset is not None:
+            values = (values.astype(np.float64) - (offset or 0.0)) / (scale or 1.0)
         unit = col_units[col]
         factor = 1.0 if _key(unit) in _NO_FACTOR else parse_unit(unit)
         if to_si and factor != 1.0:
@@ -368,10 +437,13 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
             with np.errstate(over="ignore"):
                 values = values.astype(np.float64) * factor
             col_units[col] = si_unit
-        _check_finite(p, col, values)
+        _check_finite(p, col, values, hdr)
         data[col] = values
-    t = np.asarray(data.pop(TIME_COLUMN), dtype=np.float64)
-    _check_time(p, t)
+    if TIME_COLUMN in data:
+        t = np.asarray(data.pop(TIME_COLUMN), dtype=np.float64)
+    else:
+        t = np.arange(len(raw), dtype=np.float64) / float(sample_rate_hz or 1.0)
+    _check_time(p, t, hdr)
     import pandas as pd
 
     df = pd.DataFrame(data, index=pd.Index(t, name=TIME_COLUMN))
