@@ -96,7 +96,8 @@ def test_ros_csv_is_detected_and_equals_the_canonical(tmp_path: Path) -> None:
     ("time_s,gyro_x_rps", ["0,1", "0.01,2"], ["--gyro-unit", "furlong/s"], "furlong/s"),
     ("time_s,gyro_x_rps", ["0,1", "0.02,2", "0.01,3"], [], "decreases"),
     ("time_s,gyro_x_rps", ["0,1", "0.01,2"], [], "need at least 3"),
-    ("GyrX", ["1", "2"], ["--column-map", "GyrX=gyro_x_rps"], "no time column among the columns found"),
+    ("GyrX", ["1", "2"], ["--column-map", "GyrX=gyro_x_rps"],
+     "no time column among the columns found"),
 ])
 def test_errors_are_one_line_exit_2(tmp_path: Path, header: str, rows: list[str],
                                     args: list[str], expected: str) -> None:

@@ -60,7 +60,7 @@ def write(tmp_path: Path, content: str | bytes, name: str = "data.csv") -> Path:
      "them all)"),
     ("time_s;gyro_x_rps\n0;1\n", InvalidInputError,
      "{p}: header field 1 'time_s;gyro_x_rps' is not `name` or `name [unit]` (a name starts "
-     "with a letter) (fields are separated by commas)"),
+     "with a letter) (fields are separated by commas: give `--delimiter`)"),
     ("time_s,gyro_x_rps,\n0,1,2\n", InvalidInputError,
      "{p}: header field 3 is empty; expected `name` or `name [unit]` (a trailing comma?)"),
     (f"{GYRO}\n0,0,0\n", InvalidInputError,

@@ -8,6 +8,24 @@ from typing import Annotated, Any
 import typer
 
 from imucalib.cli._app import app, console, fail
+from imucalib.cli._import_options import (
+    AccelFile,
+    AccelOffset,
+    AccelScale,
+    AccelUnit,
+    ColumnMap,
+    Delimiter,
+    GyroOffset,
+    GyroScale,
+    GyroUnit,
+    ImportFile,
+    SampleRate,
+    SkipRows,
+    TimeColumn,
+    TimeUnit,
+    Units,
+    import_spec_from_options,
+)
 from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 
@@ -104,26 +122,47 @@ def import_csv(
     unit: Annotated[str | None, typer.Option(help="The IMU's name (default: the step file's "
                                                   "`unit`, else the CSV's stem).")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing --out.")] = False,
+    import_file: ImportFile = None,
+    column_map: ColumnMap = None,
+    units: Units = None,
+    gyro_unit: GyroUnit = None,
+    accel_unit: AccelUnit = None,
+    gyro_scale: GyroScale = None,
+    accel_scale: AccelScale = None,
+    gyro_offset: GyroOffset = None,
+    accel_offset: AccelOffset = None,
+    time_column: TimeColumn = None,
+    time_unit: TimeUnit = None,
+    sample_rate_hz: SampleRate = None,
+    delimiter: Delimiter = None,
+    skip_rows: SkipRows = None,
+    accel_file: AccelFile = None,
 ) -> None:
     """Make a Recording from a CSV and its step file, to calibrate like a planned run."""
     from imucalib.io.csv_recording import recording_from_csv
     from imucalib.io.step_file import load_step_file
 
     try:
+        spec = import_spec_from_options(
+        import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
+        accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
+        gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
+        time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
+        skip_rows=skip_rows, accel_file=accel_file)
         step_file = load_step_file(steps)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise InvalidInputError(f"cannot create {out.parent}: {exc.strerror or exc}") from exc
         recording_from_csv(data, step_file, out, unit=unit, overwrite=overwrite,
-                           step_file_text=steps.read_text(encoding="utf-8"))
+                           step_file_text=steps.read_text(encoding="utf-8"), spec=spec)
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(f"wrote {out}: {len(step_file.used_steps)} steps from {steps}; the table "
                   "stream is reconstructed from the commanded states", highlight=False)
 
 
-def _imu_arrays(path: Path, unit: str | None) -> tuple[str, Any, Any, Any]:
+def _imu_arrays(path: Path, unit: str | None, spec: Any = None) -> tuple[str, Any, Any, Any]:
     """(source label, time [s], gyro [rad/s], accel [m/s²] or None) of a CSV file or Recording."""
     import numpy as np
 
@@ -151,13 +190,15 @@ def _imu_arrays(path: Path, unit: str | None) -> tuple[str, Any, Any, Any]:
 
                 time_s = reconstruct_time_base(data.columns["counter"], time_s).time_s
             return f"{path} IMU {chosen}", time_s, gyro, accel
-    from imucalib.io.csv_import import read_imu_csv
+    from imucalib.io.import_spec import read_imu_table
 
-    df = read_imu_csv(path)
+    df = read_imu_table(path, spec)
     missing = [c for c in GYRO_COLUMNS if c not in df.columns]
     if missing:
-        raise InvalidInputError(f"{path}: segmentation needs the gyro columns {list(GYRO_COLUMNS)};"
-                                f" missing {missing} (found {list(df.columns)})")
+        raise InvalidInputError(
+            f"{path}: segmentation needs the gyro columns {list(GYRO_COLUMNS)}; missing "
+            f"{missing} (found {list(df.columns)}); map the file's columns with `--column-map "
+            "gx=NAME,gy=NAME,gz=NAME,ax=NAME,…` and give `--gyro-unit` (docs/import.md)")
     accel_cols = [c for c in ACCEL_COLUMNS if c in df.columns]
     if 0 < len(accel_cols) < 3:
         raise InvalidInputError(f"{path}: the accelerometer columns must all be present "

@@ -113,7 +113,7 @@ def _short(text: str, limit: int = 60) -> str:
 
 
 def _split(line: str, delimiter: str) -> list[str]:
-    """The fields of one line: `delimiter` is one character, or ``"whitespace"``."""
+    """Split one line: `delimiter` is one character, or ``"whitespace"``."""
     if delimiter == WHITESPACE:
         return line.split()
     return next(csv.reader([line], delimiter=delimiter), [])
@@ -179,7 +179,10 @@ def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
             raise InvalidInputError(f"{p}: header field {i + 1} is empty; expected `name` or "
                                     "`name [unit]` (a trailing comma?)")
         if m is None:
-            hint = " (fields are separated by commas)" if ";" in header or "\t" in header else ""
+            hint = (" (fields are separated by commas: give `--delimiter`)"
+                    if ";" in header or "\t" in header else
+                    " (a preamble before the header? give `--skip-rows`; a vendor name? map it "
+                    "with `--column-map`)")
             raise InvalidInputError(f"{p}: header field {i + 1} {_short(header)} is not `name` or "
                                     f"`name [unit]` (a name starts with a letter){hint}")
         given = header if column_map and header in column_map else m.group(1)
@@ -253,14 +256,14 @@ def _parse(p: Path, n_fields: int, header_line: int = 1, delimiter: str = ",",
         raise InvalidInputError(f"{p}: line {first} has {n_first} fields; the header has "
                                 f"{n_fields} (a ragged row)")
     try:
-        sep = {"sep": r"\s+"} if delimiter == WHITESPACE else {"sep": delimiter}
+        sep = r"\s+" if delimiter == WHITESPACE else delimiter
         if not has_header:  # header_line: the lines skipped
             return pd.read_csv(p, header=None, names=list(range(n_fields)),
                                keep_default_na=False, na_values=["NaN", "nan"],
-                               encoding="utf-8-sig", skiprows=header_line, **sep)
+                               encoding="utf-8-sig", skiprows=header_line, sep=sep)
         return pd.read_csv(p, header=0, names=list(range(n_fields)), keep_default_na=False,
                            na_values=["NaN", "nan"], encoding="utf-8-sig",
-                           skiprows=header_line - 1, **sep)
+                           skiprows=header_line - 1, sep=sep)
     except UnicodeDecodeError as exc:
         raise InvalidInputError(f"{p} is not UTF-8 text: byte 0x{exc.object[exc.start]:02x} "
                                 "after the header cannot be decoded (a binary file, or text in "
@@ -331,7 +334,8 @@ def _check_time(p: Path, t: np.ndarray[Any, Any], header_line: int = 1) -> None:
     if big.any():
         i = int(np.argmax(big))
         raise InvalidInputError(
-            f"{p}: {TIME_COLUMN} {_num(t[i])} s at {_where(p, i, header_line)} is beyond ±{MAX_ABS_TIME_S:g} s; "
+            f"{p}: {TIME_COLUMN} {_num(t[i])} s at {_where(p, i, header_line)} is beyond "
+            f"±{MAX_ABS_TIME_S:g} s; "
             "expected seconds (give another unit in the header, e.g. `time_s [ms]`)")
     if t.size and t[-1] - t[0] > MAX_TIME_SPAN_S:
         raise InvalidInputError(

@@ -82,8 +82,10 @@ class CsvMapping:
 
 
 def detect_layout(headers: Sequence[str]) -> str:
-    """Return the layout of a header (module docstring): ``"ros-imu"``, ``"imucal"``,
-    ``"plain"`` or ``"canonical"`` (anything else)."""
+    """Return the layout of a header (module docstring).
+
+    One of ``"ros-imu"``, ``"imucal"``, ``"plain"`` or ``"canonical"`` (anything else).
+    """
     fields = {h.strip() for h in headers}
     imu = any(f in fields for f in ROS_IMU_FIELDS if f != _ROS_TIME)
     if imu and (_ROS_TIME in fields or _ROS_BAG_TIME in fields):

@@ -50,6 +50,7 @@ from imucalib.errors import InvalidInputError
 from imucalib.io._schema import ColumnSpec, StreamSpec
 from imucalib.io.csv_import import read_imu_csv
 from imucalib.io.hashing import file_sha256
+from imucalib.io.import_spec import ImportSpec, read_imu_table
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.step_file import StepEntry, StepFile, step_file_to_toml
 from imucalib.io.streams import DEVICE_TABLE, axis_columns, imu_stream_spec
@@ -134,6 +135,7 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
                        out_path: str | os.PathLike[str], *, unit: str | None = None,
                        column_map: Mapping[str, str] | None = None,
                        units: Mapping[str, str] | None = None, overwrite: bool = False,
+                       spec: ImportSpec | None = None,
                        step_file_text: str | None = None) -> Path:
     """Write a Recording from a CSV of IMU samples and its step file (module docstring).
 
@@ -150,6 +152,9 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
         The IMU's name; default: the step file's ``unit``, else the CSV's stem.
     overwrite : bool
         Replace an existing `out_path`.
+    spec : ImportSpec, optional
+        How to read the log (:func:`~imucalib.io.import_spec.read_imu_table`: column map,
+        units, counts scale and offset, sample rate …); replaces `column_map` and `units`.
     step_file_text : str, optional
         The step file as the user wrote it, stored in the metadata (default: its TOML).
 
@@ -168,7 +173,10 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
         `out_path` exists and `overwrite` is false, or it cannot be written.
     """
     src = Path(csv_path)
-    df = read_imu_csv(src, column_map=column_map, units=units)
+    if spec is not None:
+        df = read_imu_table(src, spec)
+    else:
+        df = read_imu_csv(src, column_map=column_map, units=units)
     missing = [c for c in IMU_COLUMNS if c not in df.columns]
     if missing:
         raise InvalidInputError(f"{src}: a calibration needs the gyro and accelerometer columns "
@@ -203,12 +211,12 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
     equipment = {k: v for k, v in (
         ("table_position_accuracy_arcsec", steps.table_position_accuracy_arcsec),
         ("table_orthogonality_arcsec", steps.table_orthogonality_arcsec)) if v is not None}
-    spec = {k: v for k, v in (("accel_accuracy_g", steps.accel_accuracy_g),
+    imu_spec = {k: v for k, v in (("accel_accuracy_g", steps.accel_accuracy_g),
                               ("gyro_accuracy_dps", steps.gyro_accuracy_dps)) if v is not None}
     if equipment:
         meta["equipment_json"] = json.dumps(equipment)
-    if spec:
-        meta["imu_spec_json"] = json.dumps(spec)
+    if imu_spec:
+        meta["imu_spec_json"] = json.dumps(imu_spec)
 
     counter = _counter(t, df, rate_hz)
     n = t.size

@@ -1,0 +1,308 @@
+"""How to read a real IMU log: the import specification and the one reader behind every command.
+
+Contents
+--------
+:class:`ImportSpec`
+    Which column is what, the units or counts-per-unit scale and offset, the time column or the
+    sample rate, the delimiter and the rows before the header (docs/import.md, "Import
+    specification").
+:func:`load_import_spec`
+    An :class:`ImportSpec` from a small TOML file (``--import spec.toml``).
+:func:`read_imu_table`
+    A log (one CSV/text file, or imu_tk's gyro and accelerometer files) → a DataFrame in SI
+    indexed by ``time_s``, through :func:`~imucalib.io.csv_import.read_imu_csv` (every check of
+    that reader applies: the errors name the file, the column and the row).
+
+Raw counts
+----------
+A ``gyro_unit`` (``accel_unit``) of ``counts`` says the columns hold raw counts; ``gyro_scale``
+(``accel_scale``) is then required, in counts per °/s (per g), and the value is
+(raw − offset) / scale. With a physical unit, a scale and offset may still be given: the value
+is (raw − offset) / scale in that unit (e.g. ``gyro_unit = "rad/s"``, ``gyro_scale`` in counts
+per rad/s).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TIME_COLUMN
+from imucalib.errors import InvalidInputError
+from imucalib.io.csv_import import WHITESPACE, _read_header, read_imu_csv
+from imucalib.io.csv_layouts import SHORT_NAMES, build_csv_mapping, normalize_column_map
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["COUNTS", "ImportSpec", "load_import_spec", "read_imu_table"]
+
+#: The unit of raw-count columns.
+COUNTS = "counts"
+#: The unit a counts-per-unit scale refers to when the column is in counts.
+_COUNTS_BASE = {"gyro": "deg/s", "accel": "g"}
+
+
+@dataclass(frozen=True)
+class ImportSpec:
+    r"""How to read one IMU log (module docstring; every field optional).
+
+    Attributes
+    ----------
+    column_map : dict of str to str
+        ``vendor=canonical`` or ``short=vendor`` items
+        (:func:`~imucalib.io.csv_layouts.normalize_column_map`), e.g. ``{"gx": "GyroX"}``.
+    units : dict of str to str
+        Unit of single columns (canonical or short name → unit).
+    gyro_unit, accel_unit : str, optional
+        Unit of every gyro / accelerometer column: a unit (``deg/s``, ``rad/s``, ``g``,
+        ``m/s^2`` …) or ``counts``.
+    gyro_scale, accel_scale : float, optional
+        Counts per unit (per °/s, per g for ``counts``).
+    gyro_offset, accel_offset : float, optional
+        Offset subtracted before the scale. [counts]
+    time_column : str, optional
+        The file's time column.
+    time_unit : str, optional
+        Its unit (``s``, ``ms``, ``us``, ``ns``).
+    sample_rate_hz : float, optional
+        The sample rate: the time of row k is k / rate when there is no time column; a time
+        column present is then read as a sample counter.
+    delimiter : str
+        ``","``, ``";"``, ``"\t"``, ``"whitespace"`` … (default ``","``).
+    skip_rows : int
+        Lines before the header (a vendor's preamble).
+    accel_file : Path, optional
+        imu_tk's accelerometer file; the log given is then imu_tk's gyro file.
+    """
+
+    column_map: dict[str, str] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+    gyro_unit: str | None = None
+    accel_unit: str | None = None
+    gyro_scale: float | None = None
+    accel_scale: float | None = None
+    gyro_offset: float | None = None
+    accel_offset: float | None = None
+    time_column: str | None = None
+    time_unit: str | None = None
+    sample_rate_hz: float | None = None
+    delimiter: str = ","
+    skip_rows: int = 0
+    accel_file: Path | None = None
+
+    def merged(self, **overrides: Any) -> ImportSpec:
+        """Return a copy with every override that is not None (the command line over a file).
+
+        The column maps and units are merged item by item.
+        """
+        given = {k: v for k, v in overrides.items() if v is not None}
+        for key in ("column_map", "units"):
+            if key in given:
+                given[key] = {**getattr(self, key), **given[key]}
+        return replace(self, **given)
+
+
+_FIELDS = {f.name for f in fields(ImportSpec)}
+_FLOATS = ("gyro_scale", "accel_scale", "gyro_offset", "accel_offset", "sample_rate_hz")
+_STRINGS = ("gyro_unit", "accel_unit", "time_column", "time_unit", "delimiter")
+
+
+def load_import_spec(path: str | os.PathLike[str]) -> ImportSpec:
+    """Read an import specification (TOML; docs/import.md, "Import specification").
+
+    The keys are the fields of :class:`ImportSpec`; the column map may be written as a table
+    ``[columns]`` (or ``column_map``) and the units as ``[units]``. A relative ``accel_file``
+    is taken relative to the TOML file.
+
+    Raises
+    ------
+    InvalidInputError
+        The file cannot be read or parsed, a key is unknown, or a value has the wrong type.
+    """
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InvalidInputError(f"cannot read the import file {p}: {exc.strerror or exc}") from exc
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInputError(f"{p}: not a TOML import file: {exc}") from exc
+    if "columns" in doc:
+        doc["column_map"] = {**doc.pop("columns"), **doc.get("column_map", {})}
+    unknown = sorted(set(doc) - _FIELDS)
+    if unknown:
+        raise InvalidInputError(f"{p}: unknown key(s) {unknown}; expected {sorted(_FIELDS)} "
+                                "(and [columns])")
+    out: dict[str, Any] = {}
+    for key, value in doc.items():
+        if key in ("column_map", "units"):
+            if not (isinstance(value, dict) and all(isinstance(v, str) for v in value.values())):
+                raise InvalidInputError(f"{p}: `{key}` must be a table of names to strings; got "
+                                        f"{value!r}")
+            out[key] = dict(value)
+        elif key in _FLOATS:
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise InvalidInputError(f"{p}: `{key}` must be a number; got {value!r}")
+            out[key] = float(value)
+        elif key in _STRINGS:
+            if not isinstance(value, str):
+                raise InvalidInputError(f"{p}: `{key}` must be a string; got {value!r}")
+            out[key] = value
+        elif key == "skip_rows":
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise InvalidInputError(f"{p}: `skip_rows` must be an integer ≥ 0; got {value!r}")
+            out[key] = value
+        elif key == "accel_file":
+            if not isinstance(value, str):
+                raise InvalidInputError(f"{p}: `accel_file` must be a path; got {value!r}")
+            out[key] = p.parent / value
+    return ImportSpec(**out)
+
+
+def _check_spec(spec: ImportSpec) -> None:
+    for key in _FLOATS:
+        value = getattr(spec, key)
+        if value is not None and not math.isfinite(value):
+            raise InvalidInputError(f"`{key}` must be finite; got {value}")
+    for key in ("gyro_scale", "accel_scale", "sample_rate_hz"):
+        value = getattr(spec, key)
+        if value is not None and not value > 0:
+            raise InvalidInputError(f"`{key}` must be > 0; got {value}")
+    for kind in ("gyro", "accel"):
+        if getattr(spec, f"{kind}_unit") == COUNTS and getattr(spec, f"{kind}_scale") is None:
+            raise InvalidInputError(
+                f"`{kind}_unit` is counts: give `--{kind}-scale`, the counts per "
+                f"{_COUNTS_BASE[kind]} (the datasheet's sensitivity)")
+
+
+def _unit(spec: ImportSpec, kind: str) -> str | None:
+    unit: str | None = getattr(spec, f"{kind}_unit")
+    return _COUNTS_BASE[kind] if unit == COUNTS else unit
+
+
+def _scaling(spec: ImportSpec) -> tuple[dict[str, float], dict[str, float]]:
+    scales: dict[str, float] = {}
+    offsets: dict[str, float] = {}
+    for kind, cols in (("gyro", GYRO_COLUMNS), ("accel", ACCEL_COLUMNS)):
+        scale, offset = getattr(spec, f"{kind}_scale"), getattr(spec, f"{kind}_offset")
+        for c in cols:
+            if scale is not None:
+                scales[c] = scale
+            if offset is not None:
+                offsets[c] = offset
+    return scales, offsets
+
+
+def _headerless(headers: list[str]) -> bool:
+    try:
+        [float(h) for h in headers]
+    except ValueError:
+        return False
+    return True
+
+
+def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None
+                   ) -> pd.DataFrame:
+    """Read an IMU log into SI through its layout and `spec`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The log: a CSV or text file with a header (its layout detected:
+        :func:`~imucalib.io.csv_layouts.detect_layout`), or, with ``spec.accel_file`` or a
+        first line of four numbers, imu_tk's gyro file (``time x y z`` rows).
+    spec : ImportSpec, optional
+        How to read it (default: the layout's own names and units).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Indexed by ``time_s`` [s], the columns in SI with canonical names;
+        ``df.attrs["units"]`` and ``df.attrs["layout"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        Any defect of the file (naming the column and row), of the spec, or an unknown unit
+        (:class:`~imucalib.errors.UnitError`).
+    """
+    spec = spec or ImportSpec()
+    _check_spec(spec)
+    p = Path(path)
+    delimiter = spec.delimiter
+    if delimiter in ("\\t", "tab"):
+        delimiter = "\t"
+    headers = _read_header(p, spec.skip_rows, delimiter)
+    if spec.accel_file is not None or (_headerless(headers) and len(headers) == 4
+                                       and not spec.column_map):
+        return _read_imu_tk(p, spec)
+    units = {SHORT_NAMES.get(k, k): v for k, v in spec.units.items()}
+    mapping = build_csv_mapping(headers, column_map=normalize_column_map(spec.column_map),
+                                units=units, gyro_unit=_unit(spec, "gyro"),
+                                accel_unit=_unit(spec, "accel"), time_column=spec.time_column,
+                                time_unit=spec.time_unit)
+    only = mapping.only
+    if only is None and mapping.column_map:  # read the mapped columns and the canonical ones
+        canonical = {TIME_COLUMN, *GYRO_COLUMNS, *ACCEL_COLUMNS}
+        only = tuple(h.strip() for h in headers
+                     if h.strip() in mapping.column_map or h.strip() in canonical)
+    scales, offsets = _scaling(spec)
+    names = {mapping.column_map.get(h.strip(), h.strip()) for h in headers}
+    has_time = TIME_COLUMN in names
+    df = read_imu_csv(p, column_map=mapping.column_map, units=mapping.units, only=only,
+                      delimiter=delimiter, skip_rows=spec.skip_rows,
+                      sample_rate_hz=spec.sample_rate_hz, scales=scales, offsets=offsets)
+    if has_time and spec.sample_rate_hz is not None:  # the time column is a sample counter
+        import pandas as pd
+
+        t = np.asarray(df.index, dtype=np.float64)
+        df.index = pd.Index((t - t[0]) / spec.sample_rate_hz, name=TIME_COLUMN)
+    df.attrs["layout"] = mapping.layout
+    return df
+
+
+def _read_imu_tk(gyro_path: Path, spec: ImportSpec) -> pd.DataFrame:
+    """imu_tk's two files: ``time x y z`` rows, blank-separated, no header."""
+    import pandas as pd
+
+    delimiter = WHITESPACE if spec.delimiter == "," else spec.delimiter
+    scales, offsets = _scaling(spec)
+    time_unit = spec.time_unit or "s"
+
+    def one(path: Path, cols: tuple[str, ...], unit: str) -> pd.DataFrame:
+        return read_imu_csv(path, names=(TIME_COLUMN, *cols),
+                            units={TIME_COLUMN: time_unit, **dict.fromkeys(cols, unit)},
+                            delimiter=delimiter, skip_rows=spec.skip_rows,
+                            scales=scales, offsets=offsets)
+
+    gyro = one(gyro_path, GYRO_COLUMNS, _unit(spec, "gyro") or "rad/s")
+    if spec.accel_file is not None:
+        accel = one(Path(spec.accel_file), ACCEL_COLUMNS, _unit(spec, "accel") or "m/s^2")
+        tg = np.asarray(gyro.index, dtype=np.float64)
+        ta = np.asarray(accel.index, dtype=np.float64)
+        if ta.size == tg.size and np.allclose(ta, tg, rtol=0.0, atol=1e-9 * max(1.0, abs(tg[0]))):
+            for c in ACCEL_COLUMNS:
+                gyro[c] = accel[c].to_numpy()
+        else:  # different time bases: the accelerometer interpolated at the gyro's times
+            inside = (tg >= ta[0]) & (tg <= ta[-1])
+            if inside.sum() < 2:
+                raise InvalidInputError(
+                    f"{gyro_path} and {spec.accel_file}: the gyro times ({tg[0]:.6g} … "
+                    f"{tg[-1]:.6g} s) and the accelerometer times ({ta[0]:.6g} … {ta[-1]:.6g} s) "
+                    "do not overlap")
+            gyro = gyro.loc[inside].copy()
+            for c in ACCEL_COLUMNS:
+                gyro[c] = np.interp(tg[inside], ta, accel[c].to_numpy())
+        gyro.attrs["units"] = {**gyro.attrs.get("units", {}), **accel.attrs.get("units", {})}
+    if spec.sample_rate_hz is not None:
+        t = np.asarray(gyro.index, dtype=np.float64)
+        gyro.index = pd.Index((t - t[0]) / spec.sample_rate_hz, name=TIME_COLUMN)
+    gyro.attrs["layout"] = "imu_tk"
+    return gyro
+
