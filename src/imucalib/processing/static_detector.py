@@ -1,0 +1,252 @@
+"""Static intervals and hand rotations of a hand-held IMU log, whatever the gyro bias.
+
+Contents
+--------
+:func:`detect_static_and_rotations` → :class:`StaticDetection`
+    The static intervals (:class:`~imucalib.processing.segmentation.Segment`, kind
+    ``"static"``) and the rotations between them (:class:`Rotation`, with the integrated angle
+    vector).
+
+Method
+------
+The static detector of Tedaldi, Pretto & Menegatti (ICRA 2014) [1]_, as imu_tk implements it,
+with the gyro added:
+
+1. Over a centred moving window of w samples (`window_s`), the variance of each accelerometer
+   axis; ς_a(t) = ‖(var_x, var_y, var_z)‖. Likewise ς_g(t) for the gyro. A variance does not see
+   a constant offset, so neither the gyro bias (3.7 °/s of a raw-count consumer gyro) nor the
+   accelerometer bias matters.
+2. The *initial static interval*: the first `init_static_s` seconds of the record, during which
+   the IMU must lie still (Tedaldi: T_init, 50 s in their experiments; a few seconds suffice for
+   a consumer MEMS IMU). ς_a,init = ‖var_init‖ over that interval (ς_g,init likewise).
+3. A sample is static when ς_a(t) < k·ς_a,init and ς_g(t) < k·ς_g,init, k the
+   `threshold_factor` (Tedaldi's multiple of the initial variance; default 6, settable: the
+   command line's ``--static-threshold``). The gyro test catches a rotation about the vertical,
+   which leaves the accelerometer almost unchanged.
+4. Runs of static samples shorter than `min_static_s` are dropped. Because every window lies
+   inside the interval, an interval starts and ends about w/2 inside the true still period.
+5. Between two consecutive static intervals, the gyro bias is taken as the mean of the two
+   intervals' mean rates; the bias-free rate is integrated over the gap (from the last sample of
+   the first interval to the first of the next), giving the angle vector θ = ∫(ω − b) dt. A
+   gap whose ‖θ‖ reaches `min_rotation_deg` is a :class:`Rotation`, whatever its rate profile
+   (a hand's rise and fall, a pause mid-way). θ is the rotation vector for a rotation about one
+   fixed axis of the body (as a hand rotation about a face normal is); for other motions it is
+   the integral of the body rate, not an attitude change.
+
+References
+----------
+.. [1] D. Tedaldi, A. Pretto and E. Menegatti, "A robust and easy to implement method for IMU
+   calibration without external equipments", Proc. IEEE ICRA 2014, pp. 3042–3049.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imucalib._checks import as_array, check_positive
+from imucalib.errors import InvalidInputError
+from imucalib.processing._common import as_time
+from imucalib.processing.segmentation import (
+    Segment,
+    _moving_mean_and_unsteadiness,
+    _runs,
+)
+
+__all__ = ["Rotation", "StaticDetection", "detect_static_and_rotations"]
+
+_MIN_WINDOW = 5
+
+
+@dataclass(frozen=True, eq=False)
+class Rotation:
+    """A motion between two static intervals whose bias-free rate integrates to an angle.
+
+    Attributes
+    ----------
+    start_index, stop_index : int
+        Samples ``start_index … stop_index − 1`` (from the last sample of the static interval
+        before to the first of the one after).
+    start_time_s, end_time_s : float
+        Times of the first and last sample. [s]
+    angle_rad : ndarray, shape (3,)
+        θ = ∫(ω − b) dt per gyro axis, b the mean of the neighbouring static means. [rad]
+    bias_rps : ndarray, shape (3,)
+        b. [rad/s]
+    """
+
+    start_index: int
+    stop_index: int
+    start_time_s: float
+    end_time_s: float
+    angle_rad: NDArray[np.float64]
+    bias_rps: NDArray[np.float64]
+
+    @property
+    def angle_norm_rad(self) -> float:
+        """‖θ‖. [rad]"""
+        return float(np.linalg.norm(self.angle_rad))
+
+    @property
+    def duration_s(self) -> float:
+        """Time from the first to the last sample. [s]"""
+        return self.end_time_s - self.start_time_s
+
+
+@dataclass(frozen=True, eq=False)
+class StaticDetection:
+    """Result of :func:`detect_static_and_rotations`.
+
+    Attributes
+    ----------
+    static : tuple of Segment
+        The static intervals, in time order (kind ``"static"``).
+    rotations : tuple of Rotation
+        The rotations found between consecutive static intervals.
+    is_static : ndarray of bool, shape (n,)
+        Per sample, whether it lies in a static interval.
+    accel_variance : ndarray, shape (n,)
+        ς_a(t) (module docstring). [(m/s²)²]
+    gyro_variance : ndarray, shape (n,)
+        ς_g(t). [(rad/s)²]
+    accel_threshold, gyro_threshold : float
+        k·ς_a,init and k·ς_g,init.
+    threshold_factor : float
+        k.
+    window_samples : int
+        w.
+    """
+
+    static: tuple[Segment, ...]
+    rotations: tuple[Rotation, ...]
+    is_static: NDArray[np.bool_]
+    accel_variance: NDArray[np.float64]
+    gyro_variance: NDArray[np.float64]
+    accel_threshold: float
+    gyro_threshold: float
+    threshold_factor: float
+    window_samples: int
+
+
+def _variance_norm(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
+    """‖(var_w of each column)‖ over centred windows of w samples."""
+    per_axis = [_moving_mean_and_unsteadiness(x[:, [i]], w)[1] for i in range(x.shape[1])]
+    return np.asarray(np.sqrt(np.sum(np.square(per_axis), axis=0)), dtype=np.float64)
+
+
+def detect_static_and_rotations(
+    time_s: ArrayLike,
+    gyro_rps: ArrayLike,
+    accel_mps2: ArrayLike,
+    *,
+    window_s: float = 0.5,
+    init_static_s: float = 2.0,
+    threshold_factor: float = 6.0,
+    min_static_s: float = 1.0,
+    min_rotation_deg: float = 5.0,
+) -> StaticDetection:
+    """Find the static intervals and the rotations between them (module docstring).
+
+    Parameters
+    ----------
+    time_s : array_like, shape (n,)
+        Increasing sample times (uniform sampling assumed). [s]
+    gyro_rps : array_like, shape (n, 3)
+        Gyro output, bias included. [rad/s]
+    accel_mps2 : array_like, shape (n, 3)
+        Accelerometer output. [m/s²]
+    window_s : float
+        Moving-window length (at least 5 samples). [s]
+    init_static_s : float
+        The initial static interval from which the variance reference is taken. [s]
+    threshold_factor : float
+        k: static below k times the initial variance (> 1).
+    min_static_s : float
+        Shortest static interval kept. [s]
+    min_rotation_deg : float
+        Smallest ‖θ‖ reported as a rotation. [°]
+
+    Returns
+    -------
+    StaticDetection
+        Static intervals, rotations, the variance curves and thresholds.
+
+    Raises
+    ------
+    InvalidInputError
+        Bad shapes or values, a record shorter than the initial interval plus two windows, or an
+        initial interval of zero variance (a constant, clipped or synthetic noiseless signal).
+    """
+    t = as_time(time_s, "time_s")
+    gyro = as_array(gyro_rps, "gyro_rps", shape=(t.size, 3))
+    accel = as_array(accel_mps2, "accel_mps2", shape=(t.size, 3))
+    win = check_positive(window_s, "window_s")
+    t_init = check_positive(init_static_s, "init_static_s")
+    k = check_positive(threshold_factor, "threshold_factor")
+    if k <= 1.0:
+        raise InvalidInputError(f"`threshold_factor` (--static-threshold) must be > 1; got {k}")
+    min_static = check_positive(min_static_s, "min_static_s")
+    min_rot = np.deg2rad(check_positive(min_rotation_deg, "min_rotation_deg"))
+    if t.size < 2:
+        raise InvalidInputError(f"`time_s` must have at least 2 samples; got {t.size}")
+    dt = float(np.median(np.diff(t)))
+    if not win / dt < 1e9:
+        raise InvalidInputError(f"`window_s` = {win:g} s is longer than the record")
+    w = round(win / dt)
+    if w < _MIN_WINDOW:
+        raise InvalidInputError(f"`window_s` must span at least {_MIN_WINDOW} samples; got {w} "
+                                f"({win:g} s at {1.0 / dt:.6g} Hz)")
+    n_init = int(np.searchsorted(t, t[0] + t_init, side="right"))
+    if n_init < w or t.size < n_init + 2 * w:
+        raise InvalidInputError(
+            f"the record ({t.size} samples, {t[-1] - t[0]:.6g} s) must hold the initial static "
+            f"interval ({t_init:g} s, {n_init} samples, at least one window of {w}) and two "
+            "windows more")
+    var_a = _variance_norm(accel, w)
+    var_g = _variance_norm(gyro, w)
+    init_a = float(np.linalg.norm(accel[:n_init].var(axis=0)))
+    init_g = float(np.linalg.norm(gyro[:n_init].var(axis=0)))
+    if not (init_a > 0.0 and init_g > 0.0):
+        raise InvalidInputError(
+            f"the initial static interval (first {t_init:g} s) has zero variance (accelerometer "
+            f"{init_a:.3g}, gyro {init_g:.3g}): a constant or clipped signal; the detector needs "
+            "the sensor noise")
+    thr_a, thr_g = k * init_a, k * init_g
+    still = (var_a < thr_a) & (var_g < thr_g)
+    edge = np.zeros(t.size, dtype=bool)
+    edge[: w // 2] = edge[t.size - (w - 1 - w // 2):] = True
+    still &= ~edge
+    static: list[Segment] = []
+    for start, stop, lab in _runs(still.astype(np.int8)):
+        if lab == 0:
+            continue
+        if t[stop - 1] - t[start] < min_static:
+            still[start:stop] = False
+            continue
+        rate = gyro[start:stop].mean(axis=0)
+        force = accel[start:stop].mean(axis=0)
+        rate.setflags(write=False)
+        force.setflags(write=False)
+        static.append(Segment(kind="static", start_index=start, stop_index=stop,
+                              start_time_s=float(t[start]), end_time_s=float(t[stop - 1]),
+                              mean_rate_rps=rate, mean_specific_force_mps2=force))
+    rotations: list[Rotation] = []
+    for before, after in zip(static[:-1], static[1:], strict=True):
+        a, b = before.stop_index - 1, after.start_index + 1
+        bias = 0.5 * (before.mean_rate_rps + after.mean_rate_rps)
+        rate = gyro[a:b] - bias
+        step = np.diff(t[a:b])
+        theta = np.sum(0.5 * (rate[1:] + rate[:-1]) * step[:, None], axis=0)  # trapezoid
+        if np.linalg.norm(theta) >= min_rot:
+            theta.setflags(write=False)
+            bias.setflags(write=False)
+            rotations.append(Rotation(start_index=a, stop_index=b, start_time_s=float(t[a]),
+                                      end_time_s=float(t[b - 1]), angle_rad=theta,
+                                      bias_rps=bias))
+    for arr in (still, var_a, var_g):
+        arr.setflags(write=False)
+    return StaticDetection(static=tuple(static), rotations=tuple(rotations), is_static=still,
+                           accel_variance=var_a, gyro_variance=var_g, accel_threshold=thr_a,
+                           gyro_threshold=thr_g, threshold_factor=k, window_samples=w)
