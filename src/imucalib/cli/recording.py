@@ -209,40 +209,135 @@ def _imu_arrays(path: Path, unit: str | None, spec: Any = None) -> tuple[str, An
 
 @app.command()
 def segments(
-    path: Annotated[Path, typer.Argument(help="IMU data: a CSV file or a Recording (.h5).")],
+    path: Annotated[Path, typer.Argument(help="IMU data: a CSV/text file or a Recording (.h5).")],
     unit: Annotated[str | None, typer.Option(help="IMU unit of a Recording (default: the "
                                                   "first).")] = None,
-    window_s: Annotated[float, typer.Option(help="Moving-window length [s].")] = 1.0,
-    min_static_s: Annotated[float, typer.Option(help="Shortest static segment kept [s].")] = 2.0,
+    detector: Annotated[str, typer.Option(
+        help="'table': static and constant-rate intervals of a planned run (a rate threshold); "
+             "'variance': static intervals by the accelerometer and gyro variance (Tedaldi et "
+             "al. 2014), independent of the gyro bias, and the hand rotations between them "
+             "with their integrated angles (docs/import.md).")] = "table",
+    window_s: Annotated[float | None, typer.Option(
+        help="Moving-window length [s] (default 1 for table, 0.5 for variance).")] = None,
+    min_static_s: Annotated[float | None, typer.Option(
+        help="Shortest static segment kept [s] (default 2 for table, 1 for variance).")] = None,
     min_rotating_s: Annotated[float, typer.Option(
-        help="Shortest rotating segment kept [s].")] = 2.0,
+        help="Shortest rotating segment kept [s] (table).")] = 2.0,
+    static_threshold: Annotated[float, typer.Option(
+        help="Variance: static below this multiple of the initial static interval's "
+             "variance.")] = 6.0,
+    init_static_s: Annotated[float, typer.Option(
+        help="Variance: length of the initial static interval at the start of the log [s].")]
+    = 2.0,
+    min_rotation_deg: Annotated[float, typer.Option(
+        help="Variance: smallest integrated angle reported as a rotation [°].")] = 5.0,
+    figure: Annotated[Path | None, typer.Option(
+        "--figure", help="Also draw the signals with the intervals shaded here (PNG).")] = None,
     json_out: Annotated[Path | None, typer.Option("--json", help="Also write the segments "
                                                                  "as JSON here.")] = None,
     step_file: Annotated[Path | None, typer.Option(
         "--step-file", help="Also write a step file skeleton here (TOML, every interval "
                             "'skip'): label the intervals, then `imucalib calibrate DATA "
                             "--steps FILE` (docs/import.md).")] = None,
+    import_file: ImportFile = None,
+    column_map: ColumnMap = None,
+    units: Units = None,
+    gyro_unit: GyroUnit = None,
+    accel_unit: AccelUnit = None,
+    gyro_scale: GyroScale = None,
+    accel_scale: AccelScale = None,
+    gyro_offset: GyroOffset = None,
+    accel_offset: AccelOffset = None,
+    time_column: TimeColumn = None,
+    time_unit: TimeUnit = None,
+    sample_rate_hz: SampleRate = None,
+    delimiter: Delimiter = None,
+    skip_rows: SkipRows = None,
+    accel_file: AccelFile = None,
 ) -> None:
-    """Find the static and constant-rate intervals of IMU data that has no step records."""
+    """Find the static and rotating intervals of IMU data that has no step records."""
+    from imucalib.processing import detect_segments
+
+    try:
+        if detector not in ("table", "variance"):
+            raise InvalidInputError(f"--detector must be 'table' or 'variance'; got {detector!r}")
+        spec = import_spec_from_options(
+            import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
+            accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
+            gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
+            time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
+            skip_rows=skip_rows, accel_file=accel_file)
+        label, t, gyro, accel = _imu_arrays(path, unit, spec)
+        if detector == "variance":
+            if accel is None:
+                raise InvalidInputError(f"{path}: --detector variance needs the accelerometer "
+                                        "columns (map them with --column-map ax=…,ay=…,az=…)")
+            from imucalib.processing.static_detector import detect_static_and_rotations
+
+            found = detect_static_and_rotations(
+                t, gyro, accel, window_s=0.5 if window_s is None else window_s,
+                init_static_s=init_static_s, threshold_factor=static_threshold,
+                min_static_s=1.0 if min_static_s is None else min_static_s,
+                min_rotation_deg=min_rotation_deg)
+            _report_variance(found, label, json_out, step_file, unit, figure, t, gyro, accel)
+            return
+        win = 1.0 if window_s is None else window_s
+        result = detect_segments(t, gyro, accel_mps2=accel, window_s=win,
+                                 min_static_s=2.0 if min_static_s is None else min_static_s,
+                                 min_rotating_s=min_rotating_s)
+        _report_table(result, label, win, json_out, step_file, unit, figure, t, gyro, accel)
+    except (CalibrationError, OSError) as exc:
+        raise fail(exc) from exc
+
+
+def _segment_row(seg: Any) -> dict[str, Any]:
+    return {"kind": seg.kind, "start_index": seg.start_index, "stop_index": seg.stop_index,
+            "start_time_s": seg.start_time_s, "end_time_s": seg.end_time_s,
+            "mean_rate_rps": [float(v) for v in seg.mean_rate_rps],
+            "mean_specific_force_mps2": None if seg.mean_specific_force_mps2 is None
+            else [float(v) for v in seg.mean_specific_force_mps2]}
+
+
+def _write_outputs(doc: dict[str, Any], intervals: list[tuple[str, float, float]],
+                   json_out: Path | None, step_file: Path | None, unit: str | None) -> None:
     import json
 
+    if json_out is not None:
+        try:
+            json_out.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise InvalidInputError(f"cannot write --json {json_out}: "
+                                    f"{exc.strerror or exc}") from exc
+        console.print(f"wrote {json_out}", highlight=False)
+    if step_file is not None:
+        from imucalib.io.step_file import step_file_skeleton
+
+        _write_text(step_file, step_file_skeleton(intervals, unit=unit), "--step-file")
+        console.print(f"wrote {step_file}", highlight=False)
+
+
+def _save_figure(figure: Path, **kwargs: Any) -> None:
+    from imucalib.report.segments_figure import save_segments_figure
+
+    try:
+        save_segments_figure(figure, **kwargs)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot write --figure {figure}: {exc.strerror or exc}") from exc
+    console.print(f"wrote {figure}", highlight=False)
+
+
+def _report_table(result: Any, label: str, window_s: float, json_out: Path | None,
+                  step_file: Path | None, unit: str | None, figure: Path | None,
+                  t: Any, gyro: Any, accel: Any) -> None:
     import numpy as np
     from rich.table import Table
 
     from imucalib import units
-    from imucalib.processing import detect_segments
 
-    try:
-        label, t, gyro, accel = _imu_arrays(path, unit)
-        result = detect_segments(t, gyro, accel_mps2=accel, window_s=window_s,
-                                 min_static_s=min_static_s, min_rotating_s=min_rotating_s)
-    except (CalibrationError, OSError) as exc:
-        raise fail(exc) from exc
     table = Table(title=f"{len(result.segments)} segments in {label}")
     for col in ("#", "kind", "start [s]", "end [s]", "duration [s]", "samples",
                 "mean rate [°/s]", "mean force [g]"):
         table.add_column(col, justify="left" if col == "kind" else "right")
-    rows = []
     for i, seg in enumerate(result.segments):
         rate_dps = np.asarray(seg.mean_rate_rps) / units.DEG_PER_S
         force_g = (None if seg.mean_specific_force_mps2 is None
@@ -251,35 +346,75 @@ def segments(
                       f"{seg.duration_s:.3f}", str(seg.n_samples),
                       " ".join(f"{v:+.4f}" for v in rate_dps),
                       "" if force_g is None else " ".join(f"{v:+.5f}" for v in force_g))
-        rows.append({"kind": seg.kind, "start_index": seg.start_index,
-                     "stop_index": seg.stop_index, "start_time_s": seg.start_time_s,
-                     "end_time_s": seg.end_time_s,
-                     "mean_rate_rps": [float(v) for v in seg.mean_rate_rps],
-                     "mean_specific_force_mps2": None if seg.mean_specific_force_mps2 is None
-                     else [float(v) for v in seg.mean_specific_force_mps2]})
     console.print(table)
     console.print(f"gyro noise floor {result.gyro_noise_floor_rps / units.DEG_PER_S:.3g} °/s per "
                   f"{window_s:g} s window; steady below "
                   f"{result.steady_threshold_rps / units.DEG_PER_S:.3g} °/s; static below "
                   f"{result.static_rate_threshold_rps / units.DEG_PER_S:.3g} °/s", highlight=False)
-    if json_out is not None:
-        doc = {"source": label, "window_samples": result.window_samples,
-               "gyro_noise_floor_rps": result.gyro_noise_floor_rps,
-               "steady_threshold_rps": result.steady_threshold_rps,
-               "static_rate_threshold_rps": result.static_rate_threshold_rps, "segments": rows}
-        try:
-            json_out.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
-        except OSError as exc:
-            raise fail(InvalidInputError(f"cannot write --json {json_out}: "
-                                         f"{exc.strerror or exc}")) from exc
-        console.print(f"wrote {json_out}", highlight=False)
-    if step_file is not None:
-        from imucalib.io.step_file import step_file_skeleton
+    doc = {"source": label, "detector": "table", "window_samples": result.window_samples,
+           "gyro_noise_floor_rps": result.gyro_noise_floor_rps,
+           "steady_threshold_rps": result.steady_threshold_rps,
+           "static_rate_threshold_rps": result.static_rate_threshold_rps,
+           "segments": [_segment_row(seg) for seg in result.segments]}
+    _write_outputs(doc, [(seg.kind, float(seg.start_time_s), float(seg.end_time_s))
+                         for seg in result.segments], json_out, step_file, unit)
+    if figure is not None:
+        _save_figure(figure, time_s=t, gyro_rps=gyro, accel_mps2=accel,
+                     static=[(s.start_time_s, s.end_time_s) for s in result.static],
+                     rotating=[(s.start_time_s, s.end_time_s) for s in result.rotating],
+                     title=f"{label}: table detector")
 
-        text = step_file_skeleton([(seg.kind, float(seg.start_time_s), float(seg.end_time_s))
-                                   for seg in result.segments], unit=unit)
-        try:
-            _write_text(step_file, text, "--step-file")
-        except CalibrationError as exc:
-            raise fail(exc) from exc
-        console.print(f"wrote {step_file}", highlight=False)
+
+def _report_variance(found: Any, label: str, json_out: Path | None, step_file: Path | None,
+                     unit: str | None, figure: Path | None, t: Any, gyro: Any,
+                     accel: Any) -> None:
+    import numpy as np
+    from rich.table import Table
+
+    from imucalib import units
+
+    table = Table(title=f"{len(found.static)} static intervals and {len(found.rotations)} "
+                        f"rotations in {label}")
+    for col in ("#", "kind", "start [s]", "end [s]", "duration [s]", "mean rate [°/s]",
+                "mean force [g] / angle [°]"):
+        table.add_column(col, justify="left" if col == "kind" else "right")
+    items = sorted([(s.start_time_s, "static", s) for s in found.static]
+                   + [(r.start_time_s, "rotating", r) for r in found.rotations],
+                   key=lambda item: (item[0], item[1] == "static"))
+    rows = []
+    for i, (_, kind, x) in enumerate(items):
+        if kind == "static":
+            rate = " ".join(f"{v:+.4f}" for v in np.asarray(x.mean_rate_rps) / units.DEG_PER_S)
+            last = " ".join(f"{v:+.5f}" for v in
+                            np.asarray(x.mean_specific_force_mps2) / units.G0_MPS2)
+            rows.append(_segment_row(x))
+        else:
+            rate = ""
+            last = " ".join(f"{v:+.2f}" for v in np.rad2deg(x.angle_rad)) + \
+                f" (‖θ‖ {np.rad2deg(x.angle_norm_rad):.2f})"
+            rows.append({"kind": "rotating", "start_index": x.start_index,
+                         "stop_index": x.stop_index, "start_time_s": x.start_time_s,
+                         "end_time_s": x.end_time_s,
+                         "angle_rad": [float(v) for v in x.angle_rad],
+                         "angle_deg": float(np.rad2deg(x.angle_norm_rad)),
+                         "bias_rps": [float(v) for v in x.bias_rps]})
+        table.add_row(str(i), kind, f"{x.start_time_s:.3f}", f"{x.end_time_s:.3f}",
+                      f"{x.duration_s:.3f}", rate, last)
+    console.print(table)
+    console.print(f"static where the accelerometer variance is below {found.threshold_factor:g} × "
+                  f"that of the initial static interval ({found.accel_threshold:.3g} (m/s²)²; "
+                  f"gyro {found.gyro_threshold:.3g} (rad/s)²), window {found.window_samples} "
+                  "samples", highlight=False)
+    doc = {"source": label, "detector": "variance", "window_samples": found.window_samples,
+           "threshold_factor": found.threshold_factor,
+           "accel_variance_threshold": found.accel_threshold,
+           "gyro_variance_threshold": found.gyro_threshold, "segments": rows}
+    _write_outputs(doc, [(r["kind"], float(r["start_time_s"]), float(r["end_time_s"]))
+                         for r in rows], json_out, step_file, unit)
+    if figure is not None:
+        _save_figure(figure, time_s=t, gyro_rps=gyro, accel_mps2=accel,
+                     static=[(s.start_time_s, s.end_time_s) for s in found.static],
+                     rotating=[(r.start_time_s, r.end_time_s) for r in found.rotations],
+                     rotation_angles_deg=[np.rad2deg(r.angle_norm_rad) for r in found.rotations],
+                     statistic=found.accel_variance, threshold=found.accel_threshold,
+                     title=f"{label}: variance detector (Tedaldi et al. 2014)")

@@ -41,6 +41,7 @@ References
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -233,7 +234,7 @@ def detect_static_and_rotations(
                               start_time_s=float(t[start]), end_time_s=float(t[stop - 1]),
                               mean_rate_rps=rate, mean_specific_force_mps2=force))
     rotations: list[Rotation] = []
-    for before, after in zip(static[:-1], static[1:], strict=True):
+    for before, after in itertools.pairwise(static):
         a, b = before.stop_index - 1, after.start_index + 1
         bias = 0.5 * (before.mean_rate_rps + after.mean_rate_rps)
         rate = gyro[a:b] - bias
