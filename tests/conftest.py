@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from imucalib.plan import Plan
@@ -83,3 +84,68 @@ def p1_tools() -> SimpleNamespace:
     """The helpers above, for test modules (which cannot import conftest by name)."""
     return SimpleNamespace(p1_plan=p1_plan, run_twin=run_twin,
                            write_planless_recording=write_planless_recording)
+
+
+# --- a hand-held log (tests/processing/test_static_detector.py, tests/cli/test_field_import_cli.py)
+
+HAND_RATE_HZ = 200.0
+HAND_BIAS_DPS = np.array([3.7, -3.7, 3.7])
+_G = np.array([0.0, 0.0, 9.80665])
+
+
+def _rot(axis: np.ndarray, angle: float) -> np.ndarray:
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
+
+
+def hand_log(seed: int = 1):
+    """A synthetic hand-held log at 200 Hz with a 3.7 °/s gyro bias per axis.
+
+    Static 3 s, 90° about x (raised-cosine rate with a 7 Hz tremor, 2 s), static 3 s, 360°
+    about z (3 s), static 3 s, −90° about y (1.5 s), static 3 s. Returns t [s], gyro [rad/s],
+    accel [m/s²], the still intervals [(start, end)] and the rotations [(start, end, angle
+    vector [rad])].
+    """
+    rng = np.random.default_rng(seed)
+    plan = [("still", 3.0), ((0, np.pi / 2), 2.0), ("still", 3.0), ((2, 2 * np.pi), 3.0),
+            ("still", 3.0), ((1, -np.pi / 2), 1.5), ("still", 3.0)]
+    dt = 1.0 / HAND_RATE_HZ
+    r_bn = np.eye(3)  # body → navigation
+    ts, gs, accs = [], [], []
+    still, rots = [], []
+    t0 = 0.0
+    for what, dur in plan:
+        n = round(dur * HAND_RATE_HZ)
+        t = t0 + np.arange(n) * dt
+        if what == "still":
+            still.append((t0, t0 + dur))
+            w = np.zeros((n, 3))
+            f = np.tile(r_bn.T @ _G, (n, 1))
+        else:
+            ax, ang = what
+            u = np.eye(3)[ax]
+            s = (t - t0) / dur
+            rate = ang / dur * (1 - np.cos(2 * np.pi * s))  # raised cosine, integral = ang
+            rate += 0.02 * np.sin(2 * np.pi * 7 * (t - t0)) * (np.abs(ang) / dur)  # tremor
+            w = rate[:, None] * u
+            phi = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * dt)])
+            f = np.array([(r_bn @ _rot(u, p)).T @ _G for p in phi])
+            total = float(np.sum(0.5 * (rate[1:] + rate[:-1]) * dt)) + rate[-1] * dt
+            r_bn = r_bn @ _rot(u, total)
+            rots.append((t0, t0 + dur, total * u))
+        ts.append(t)
+        gs.append(w)
+        accs.append(f)
+        t0 += dur
+    t = np.concatenate(ts)
+    gyro = (np.concatenate(gs) + np.deg2rad(HAND_BIAS_DPS)
+            + rng.normal(0, np.deg2rad(0.1), (t.size, 3)))
+    accel = (np.concatenate(accs) + np.array([0.05, -0.03, 0.08])
+             + rng.normal(0, 0.02, (t.size, 3)))
+    return t, gyro, accel, still, rots
+
+
+@pytest.fixture(scope="session")
+def hand_held_log():
+    """:func:`hand_log` with seed 1."""
+    return hand_log()

@@ -12,60 +12,11 @@ from imucalib.processing.static_detector import detect_static_and_rotations
 
 RATE_HZ = 200.0
 BIAS_DPS = np.array([3.7, -3.7, 3.7])
-G = np.array([0.0, 0.0, 9.80665])
-
-
-def _rot(axis: np.ndarray, angle: float) -> np.ndarray:
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
-
-
-def hand_log(seed: int = 1):
-    """Static 3 s, 90° about x (raised-cosine rate, 2 s), static 3 s, 360° about z (3 s), static
-    3 s, −90° about y (1.5 s), static 3 s. Returns t, gyro, accel, the truth (still intervals and
-    rotations: (start, end, angle vector))."""
-    rng = np.random.default_rng(seed)
-    plan = [("still", 3.0), ((0, np.pi / 2), 2.0), ("still", 3.0), ((2, 2 * np.pi), 3.0),
-            ("still", 3.0), ((1, -np.pi / 2), 1.5), ("still", 3.0)]
-    dt = 1.0 / RATE_HZ
-    r_bn = np.eye(3)  # body → navigation
-    ts, gs, accs = [], [], []
-    still, rots = [], []
-    t0 = 0.0
-    for what, dur in plan:
-        n = round(dur * RATE_HZ)
-        t = t0 + np.arange(n) * dt
-        if what == "still":
-            still.append((t0, t0 + dur))
-            w = np.zeros((n, 3))
-            f = np.tile(r_bn.T @ G, (n, 1))
-        else:
-            ax, ang = what
-            u = np.eye(3)[ax]
-            s = (t - t0) / dur
-            rate = ang / dur * (1 - np.cos(2 * np.pi * s))  # raised cosine, integral = ang
-            rate += 0.02 * np.sin(2 * np.pi * 7 * (t - t0)) * (np.abs(ang) / dur)  # tremor
-            w = rate[:, None] * u
-            f = np.empty((n, 3))
-            phi = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * dt)])
-            for i in range(n):
-                f[i] = (r_bn @ _rot(u, phi[i])).T @ G
-            total = float(np.sum(0.5 * (rate[1:] + rate[:-1]) * dt)) + rate[-1] * dt
-            r_bn = r_bn @ _rot(u, total)
-            rots.append((t0, t0 + dur, total * u))
-        ts.append(t)
-        gs.append(w)
-        accs.append(f)
-        t0 += dur
-    t = np.concatenate(ts)
-    gyro = np.concatenate(gs) + np.deg2rad(BIAS_DPS) + rng.normal(0, np.deg2rad(0.1), (t.size, 3))
-    accel = np.concatenate(accs) + np.array([0.05, -0.03, 0.08]) + rng.normal(0, 0.02, (t.size, 3))
-    return t, gyro, accel, still, rots
 
 
 @pytest.fixture(scope="module")
-def log():
-    return hand_log()
+def log(hand_held_log):
+    return hand_held_log
 
 
 def test_the_rate_threshold_detector_sees_no_static_interval_with_a_3_7_dps_bias(log):
