@@ -126,3 +126,11 @@ def test_import_reads_a_vendor_log_through_the_same_options(vendor, tmp_path):
         data = rec.read_stream("imu", unit)
     assert np.allclose(np.diff(data.time_s[:3]), 0.005)
     assert np.rad2deg(np.mean(data.columns["gyro_x_rps"][:400])) == pytest.approx(3.7, abs=0.05)
+
+
+def test_the_table_detector_points_to_the_variance_detector_on_a_biased_hand_log(vendor):
+    path, _, _ = vendor
+    res = runner.invoke(app, ["segments", str(path), "--column-map", MAP, "--sample-rate-hz",
+                              "200", "--gyro-unit", "deg/s", "--accel-unit", "g"])
+    assert res.exit_code == 0, res.output
+    assert "--detector variance" in " ".join(res.output.split())

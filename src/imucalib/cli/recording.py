@@ -351,6 +351,10 @@ def _report_table(result: Any, label: str, window_s: float, json_out: Path | Non
                   f"{window_s:g} s window; steady below "
                   f"{result.steady_threshold_rps / units.DEG_PER_S:.3g} °/s; static below "
                   f"{result.static_rate_threshold_rps / units.DEG_PER_S:.3g} °/s", highlight=False)
+    if not result.static and accel is not None:
+        console.print("no static interval below the rate threshold: for a hand-held log, or a "
+                      "gyro bias above it, try `--detector variance` (independent of the bias)",
+                      highlight=False)
     doc = {"source": label, "detector": "table", "window_samples": result.window_samples,
            "gyro_noise_floor_rps": result.gyro_noise_floor_rps,
            "steady_threshold_rps": result.steady_threshold_rps,

@@ -21,6 +21,9 @@ Contents
     :func:`compute_integer_revolution_window` (→ :class:`RevolutionWindow`).
 :mod:`imucalib.processing.segmentation`
     :func:`detect_segments` (→ :class:`SegmentationResult` of :class:`Segment`).
+:mod:`imucalib.processing.static_detector`
+    :func:`detect_static_and_rotations` (→ :class:`StaticDetection`, with :class:`Rotation`):
+    the variance detector of hand-held logs.
 """
 
 from __future__ import annotations
@@ -45,6 +48,11 @@ from imucalib.processing.segmentation import (
     SegmentationResult,
     detect_segments,
 )
+from imucalib.processing.static_detector import (
+    Rotation,
+    StaticDetection,
+    detect_static_and_rotations,
+)
 from imucalib.processing.statistics import (
     RevolutionWindow,
     WindowStatistics,
@@ -67,8 +75,10 @@ __all__ = [
     "LowpassResult",
     "OutlierResult",
     "RevolutionWindow",
+    "Rotation",
     "Segment",
     "SegmentationResult",
+    "StaticDetection",
     "SyncResult",
     "TimeBase",
     "WindowStatistics",
@@ -76,6 +86,7 @@ __all__ = [
     "compute_integer_revolution_window",
     "compute_window_statistics",
     "detect_segments",
+    "detect_static_and_rotations",
     "estimate_timestamp_jitter_s",
     "grubbs_critical_value",
     "lowpass_zero_phase",
