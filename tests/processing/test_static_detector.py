@@ -67,3 +67,10 @@ def test_bad_parameters_are_named(log, kwargs, message):
     t, gyro, accel, _, _ = log
     with pytest.raises(InvalidInputError, match=message):
         detect_static_and_rotations(t, gyro, accel, **kwargs)
+
+
+def test_a_log_that_does_not_begin_at_rest_is_refused(log):
+    t, gyro, accel, _, _ = log
+    start = np.searchsorted(t, 3.2)  # inside the first rotation
+    with pytest.raises(InvalidInputError, match="are not at rest"):
+        detect_static_and_rotations(t[start:], gyro[start:], accel[start:], init_static_s=1.0)

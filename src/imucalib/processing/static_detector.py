@@ -17,7 +17,8 @@ with the gyro added:
    a constant offset, so neither the gyro bias (3.7 °/s of a raw-count consumer gyro) nor the
    accelerometer bias matters.
 2. The *initial static interval*: the first `init_static_s` seconds of the record, during which
-   the IMU must lie still (Tedaldi: T_init, 50 s in their experiments; a few seconds suffice for
+   the IMU must lie still (refused when its variance exceeds 25 times the 10th percentile of
+   ς_a: it was moving) (Tedaldi: T_init, 50 s in their experiments; a few seconds suffice for
    a consumer MEMS IMU). ς_a,init = ‖var_init‖ over that interval (ς_g,init likewise).
 3. A sample is static when ς_a(t) < k·ς_a,init and ς_g(t) < k·ς_g,init, k the
    `threshold_factor` (Tedaldi's multiple of the initial variance; default 6, settable: the
@@ -59,6 +60,10 @@ from imucalib.processing.segmentation import (
 __all__ = ["Rotation", "StaticDetection", "detect_static_and_rotations"]
 
 _MIN_WINDOW = 5
+#: The initial interval is refused when its accelerometer variance exceeds this multiple of the
+#: _QUIET_PERCENTILE-th percentile of the windowed variance (it was not at rest).
+_NOT_AT_REST = 25.0
+_QUIET_PERCENTILE = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,6 +136,13 @@ class StaticDetection:
     window_samples: int
 
 
+def _edges(n: int, w: int) -> NDArray[np.bool_]:
+    """Mark the samples whose centred window of w samples does not lie inside the record."""
+    edge = np.zeros(n, dtype=bool)
+    edge[: w // 2] = edge[n - (w - 1 - w // 2):] = True
+    return edge
+
+
 def _variance_norm(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
     """‖(var_w of each column)‖ over centred windows of w samples."""
     per_axis = [_moving_mean_and_unsteadiness(x[:, [i]], w)[1] for i in range(x.shape[1])]
@@ -177,8 +189,10 @@ def detect_static_and_rotations(
     Raises
     ------
     InvalidInputError
-        Bad shapes or values, a record shorter than the initial interval plus two windows, or an
-        initial interval of zero variance (a constant, clipped or synthetic noiseless signal).
+        Bad shapes or values, a record shorter than the initial interval plus two windows, an
+        initial interval of zero variance (a constant, clipped or synthetic noiseless signal),
+        or one not at rest (its accelerometer variance over 25 times the 10th percentile of the
+        windowed variance).
     """
     t = as_time(time_s, "time_s")
     gyro = as_array(gyro_rps, "gyro_rps", shape=(t.size, 3))
@@ -214,11 +228,16 @@ def detect_static_and_rotations(
             f"the initial static interval (first {t_init:g} s) has zero variance (accelerometer "
             f"{init_a:.3g}, gyro {init_g:.3g}): a constant or clipped signal; the detector needs "
             "the sensor noise")
+    quiet = float(np.percentile(var_a[~_edges(t.size, w)], _QUIET_PERCENTILE))
+    if init_a > _NOT_AT_REST * quiet:
+        raise InvalidInputError(
+            f"the first {t_init:g} s are not at rest: their accelerometer variance "
+            f"{init_a:.3g} (m/s²)² is {init_a / quiet:.3g} times that of the quietest windows; "
+            "the detector needs the log to begin with the IMU still (Tedaldi's initial static "
+            "interval): shorten `init_static_s` (--init-static-s) or trim the log")
     thr_a, thr_g = k * init_a, k * init_g
     still = (var_a < thr_a) & (var_g < thr_g)
-    edge = np.zeros(t.size, dtype=bool)
-    edge[: w // 2] = edge[t.size - (w - 1 - w // 2):] = True
-    still &= ~edge
+    still &= ~_edges(t.size, w)
     static: list[Segment] = []
     for start, stop, lab in _runs(still.astype(np.int8)):
         if lab == 0:
