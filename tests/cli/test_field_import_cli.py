@@ -134,3 +134,26 @@ def test_the_table_detector_points_to_the_variance_detector_on_a_biased_hand_log
                               "200", "--gyro-unit", "deg/s", "--accel-unit", "g"])
     assert res.exit_code == 0, res.output
     assert "--detector variance" in " ".join(res.output.split())
+
+
+def test_a_raw_count_log_with_preamble_ms_time_and_semicolons(hand_held_log, tmp_path):
+    t, gyro, accel, _, rots = hand_held_log
+    counts = np.column_stack([np.round(t * 1000), np.round(np.rad2deg(gyro) * 131 + 12),
+                              np.round(accel / G0 * 16384 + 20)]).astype(int)
+    path = tmp_path / "raw.txt"
+    path.write_text("MPU-6050 logger\nfirmware 1.2\nms;gx;gy;gz;ax;ay;az\n"
+                    + "\n".join(";".join(map(str, r)) for r in counts) + "\n", encoding="utf-8")
+    doc = tmp_path / "s.json"
+    res = runner.invoke(app, ["segments", str(path), "--skip-rows", "2", "--delimiter", ";",
+                              "--time-column", "ms", "--time-unit", "ms", "--gyro-unit",
+                              "counts", "--gyro-scale", "131", "--gyro-offset", "12",
+                              "--accel-unit", "counts", "--accel-scale", "16384",
+                              "--accel-offset", "20", "--detector", "variance", "--json",
+                              str(doc)])
+    assert res.exit_code == 0, res.output
+    segs = json.loads(doc.read_text())["segments"]
+    static = [s for s in segs if s["kind"] == "static"]
+    assert np.rad2deg(static[0]["mean_rate_rps"]) == pytest.approx([3.7, -3.7, 3.7], abs=0.05)
+    assert np.linalg.norm(static[0]["mean_specific_force_mps2"]) == pytest.approx(G0, rel=0.01)
+    angles = [s["angle_deg"] for s in segs if s["kind"] == "rotating"]
+    assert angles == pytest.approx([np.rad2deg(np.linalg.norm(r[2])) for r in rots], rel=0.02)
