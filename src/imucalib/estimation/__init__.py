@@ -28,6 +28,9 @@ Contents
 :mod:`imucalib.estimation.designs`
     :func:`build_triad_design` → :class:`LinearDesign`, :data:`SIX_POSITION_UP_B`,
     :data:`TRIAD_PARAMETER_NAMES`.
+:mod:`imucalib.estimation.gravity_norm` (imported on its own)
+    :func:`~imucalib.estimation.gravity_norm.fit_gravity_norm` (the accelerometer triad from
+    static poses of unknown orientation), :func:`~imucalib.estimation.gravity_norm.pose_coverage`.
 """
 
 from __future__ import annotations

@@ -1,0 +1,239 @@
+"""Accelerometer calibration from static poses of unknown orientation: the gravity-norm fit.
+
+Without a fixture the orientation of each static pose is unknown, but the specific force at
+rest has the magnitude of local gravity g whatever the orientation (Tedaldi, Pretto &
+Menegatti, "A robust and easy to implement method for IMU calibration without external
+equipments", ICRA 2014; docs/processing-estimation.md, "Field calibration"). With the
+correction model of the accelerometer triad
+
+    a = T·(I + diag(s))·(y − b),   T = [[1, −α_yz, α_zy], [0, 1, −α_zx], [0, 0, 1]]       (F.1)
+
+(b the bias [m/s²], s the scale-factor errors, α the three non-orthogonality angles of the
+sensor axes to an orthogonal frame whose x is sensor x and y in the sensors' x–y plane, y the
+mean output of a pose), the nine unknowns θ = (b, s, α) minimise
+
+    χ²(θ) = Σ_k (‖a_k(θ)‖ − g)² / σ_k²,   σ_k² = û_kᵀ·diag(σ_y,k²)·û_k                  (F.2)
+
+(û_k = a_k/‖a_k‖: only the noise along gravity moves the norm). :func:`fit_gravity_norm`
+solves (F.2) by Gauss–Newton with the analytic Jacobian, returns the covariance
+(JᵀW J)⁻¹ (the Cramér–Rao bound of the design for white noise), χ²/ν and its Birge-scaled
+covariance on a misfit (the project's rule, docs/processing-estimation.md), and refuses a
+rank-deficient design naming the parameters it cannot see (:class:`InsufficientExcitationError`:
+all poses about one axis leave a scale or an angle free). A rotation of the whole triad is not
+observable from norms (three angles): (F.1) fixes it by construction.
+
+:func:`pose_coverage` says which of the six directions ±x, ±y, ±z no pose's gravity comes
+within 45° of, and how many more poses in each missing direction would bring every parameter's
+σ under a target (from the bound of the design with those poses added).
+
+Contents
+--------
+:class:`GravityNormFit`, :func:`fit_gravity_norm`, :func:`correct_accel`, :func:`pose_coverage`,
+:data:`PARAMETERS`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imucalib._checks import as_array
+from imucalib.errors import ConvergenceError, InsufficientExcitationError, InvalidInputError
+from imucalib.models.fit_quality import FitQuality, assess_fit
+
+__all__ = ["PARAMETERS", "GravityNormFit", "correct_accel", "fit_gravity_norm", "pose_coverage"]
+
+_F64 = NDArray[np.float64]
+#: The unknowns of (F.1), in order.
+PARAMETERS: Final = ("bias_x", "bias_y", "bias_z", "scale_x", "scale_y", "scale_z",
+                     "alpha_yz", "alpha_zy", "alpha_zx")
+_DIRECTIONS: Final = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
+                      "+z": (0, 0, 1), "-z": (0, 0, -1)}
+#: Where added poses go once no axis direction is missing: the 12 directions halfway between
+#: two axes (poses along the axes alone leave the non-orthogonality angles unseen).
+_BETWEEN: Final = tuple(tuple(v) for v in (
+    np.array([[a, b, 0], [a, 0, b], [0, a, b]], dtype=float) / np.sqrt(2.0)
+    for a in (1, -1) for b in (1, -1)) for v in v)
+
+
+def correct_accel(theta: ArrayLike, y: ArrayLike) -> _F64:
+    """Apply (F.1): the corrected specific force of outputs `y` (n, 3) under θ. [m/s²]"""
+    p = as_array(theta, "theta", shape=(9,))
+    yy = np.atleast_2d(as_array(y, "y"))
+    t = np.array([[1.0, -p[6], p[7]], [0.0, 1.0, -p[8]], [0.0, 0.0, 1.0]])
+    return np.asarray(((yy - p[:3]) * (1.0 + p[3:6])) @ t.T, dtype=np.float64)
+
+
+def _jacobian(p: _F64, y: _F64) -> tuple[_F64, _F64]:
+    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9) of (F.1)."""
+    d = y - p[:3]                                   # y − b
+    k = 1.0 + p[3:6]
+    v = d * k                                       # (I + diag s)(y − b)
+    t = np.array([[1.0, -p[6], p[7]], [0.0, 1.0, -p[8]], [0.0, 0.0, 1.0]])
+    a = v @ t.T
+    u = a / np.linalg.norm(a, axis=1, keepdims=True)
+    # ∂a/∂b = −T·diag(k); ∂a/∂s_j = T[:, j]·d_j; ∂a/∂α: a_x −= α_yz v_y, a_x += α_zy v_z,
+    # a_y −= α_zx v_z
+    jb = -(u @ t) * k
+    js = (u @ t) * d
+    ja = np.column_stack([-u[:, 0] * v[:, 1], u[:, 0] * v[:, 2], -u[:, 1] * v[:, 2]])
+    return a, np.column_stack([jb, js, ja])
+
+
+@dataclass(frozen=True)
+class GravityNormFit:
+    """The solution of (F.2).
+
+    Attributes
+    ----------
+    values : ndarray, shape (9,)
+        θ = (b [m/s²], s [–], α [rad]) of :data:`PARAMETERS`.
+    covariance : ndarray, shape (9, 9)
+        Birge-scaled on a misfit.
+    covariance_noise : ndarray, shape (9, 9)
+        (JᵀW J)⁻¹: the Cramér–Rao bound of the design for the means' σ.
+    quality : FitQuality
+        χ²/ν of (F.2).
+    residuals : ndarray, shape (n,)
+        ‖a_k‖ − g. [m/s²]
+    iterations : int
+    """
+
+    values: _F64
+    covariance: _F64
+    covariance_noise: _F64
+    quality: FitQuality
+    residuals: _F64
+    iterations: int
+
+    def std(self) -> _F64:
+        """Return the standard uncertainties of :data:`PARAMETERS` (Birge-scaled on a misfit)."""
+        return np.sqrt(np.diag(self.covariance))
+
+
+def _check_rank(j: _F64, sw: _F64) -> None:
+    jw = j * sw[:, None]
+    scale = np.linalg.norm(jw, axis=0)
+    if np.any(scale == 0):
+        names = [PARAMETERS[i] for i in np.flatnonzero(scale == 0)]
+        raise InsufficientExcitationError(
+            names, f"the poses do not excite {names} at all (add poses with gravity along "
+                   "other axes; pose_coverage says which)")
+    _, s, vt = np.linalg.svd(jw / scale, full_matrices=False)
+    weak = s < 1e-6 * s[0]
+    if weak.any():
+        names = sorted({PARAMETERS[int(np.argmax(np.abs(row)))] for row in vt[weak]})
+        raise InsufficientExcitationError(
+            names, f"the poses cannot separate {names} (the design is rank-deficient: add "
+                   "poses with gravity along other axes; pose_coverage says which)")
+
+
+def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
+                     max_iter: int = 50, tol: float = 1e-12) -> GravityNormFit:
+    """Solve (F.2) by Gauss–Newton from b = 0, s = 0, α = 0 (module docstring).
+
+    Parameters
+    ----------
+    y : array_like, shape (n, 3)
+        Mean accelerometer output of each static pose, n ≥ 10. [m/s²]
+    y_std : array_like, shape (n, 3)
+        Their standard errors. [m/s²]
+    gravity_mps2 : float
+        Local gravity. [m/s²]
+
+    Raises
+    ------
+    InvalidInputError
+        Mis-shaped or non-finite input, fewer than 10 poses, σ ≤ 0.
+    InsufficientExcitationError
+        A rank-deficient design (the parameters named).
+    ConvergenceError
+        No convergence in `max_iter` steps.
+    """
+    yy = as_array(y, "y", shape=(None, 3))
+    sy = as_array(y_std, "y_std", shape=yy.shape)
+    n = yy.shape[0]
+    if n < len(PARAMETERS) + 1:
+        raise InvalidInputError(f"the gravity-norm fit needs at least {len(PARAMETERS) + 1} "
+                                f"static poses (9 unknowns and a degree of freedom); got {n}")
+    if np.any(sy <= 0):
+        raise InvalidInputError("`y_std` must be positive")
+    if not (np.isfinite(gravity_mps2) and gravity_mps2 > 0):
+        raise InvalidInputError(f"`gravity_mps2` must be positive; got {gravity_mps2!r}")
+    p = np.zeros(9)
+    for it in range(1, max_iter + 1):
+        a, j = _jacobian(p, yy)
+        u = a / np.linalg.norm(a, axis=1, keepdims=True)
+        sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
+        r = np.linalg.norm(a, axis=1) - gravity_mps2
+        if it == 1:
+            _check_rank(j, 1.0 / sr)
+        jw, rw = j / sr[:, None], r / sr
+        step, *_ = np.linalg.lstsq(jw, -rw, rcond=None)
+        p = p + step
+        if np.max(np.abs(step)) < tol:
+            break
+    else:
+        raise ConvergenceError(f"the gravity-norm fit did not converge in {max_iter} "
+                               "iterations")
+    a, j = _jacobian(p, yy)
+    u = a / np.linalg.norm(a, axis=1, keepdims=True)
+    sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
+    r = np.linalg.norm(a, axis=1) - gravity_mps2
+    jw = j / sr[:, None]
+    cov = np.linalg.inv(jw.T @ jw)
+    cov = 0.5 * (cov + cov.T)
+    quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - 9)
+    return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
+                          covariance_noise=cov, quality=quality, residuals=r, iterations=it)
+
+
+def pose_coverage(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
+                  target_std: ArrayLike | None = None, max_added: int = 50
+                  ) -> tuple[list[str], dict[str, int]]:
+    """Return the missing directions and, per parameter, the poses to add for `target_std`.
+
+    A direction of ±x, ±y, ±z is missing when no pose's gravity (its mean output) lies within
+    45° of it. With `target_std` (9 values, in the units of :data:`PARAMETERS`), poses are
+    added one at a time in the missing directions, then in the twelve directions halfway
+    between two axes in turn (poses along the axes alone do not see the non-orthogonality),
+    each with the median σ of the given poses, until each parameter's bound from
+    the design drops under its target: the count per parameter (``max_added + 1`` when not
+    reached, 0 when already there).
+    """
+    yy = as_array(y, "y", shape=(None, 3))
+    sy = as_array(y_std, "y_std", shape=yy.shape)
+    unit = yy / np.linalg.norm(yy, axis=1, keepdims=True)
+    missing = [name for name, d in _DIRECTIONS.items()
+               if not np.any(unit @ np.asarray(d, dtype=float) > np.cos(np.radians(45.0)))]
+    if target_std is None:
+        return missing, {}
+    target = as_array(target_std, "target_std", shape=(9,))
+    order = [np.asarray(_DIRECTIONS[m], dtype=float) for m in missing]
+    order += [np.asarray(v, dtype=float) for v in _BETWEEN]
+    typical = np.median(sy, axis=0)
+    need: dict[str, int] = {}
+    rows, sigmas = [*yy], [*sy]
+    for added in range(0, max_added + 1):
+        ys, ss = np.array(rows), np.array(sigmas)
+        try:
+            a, j = _jacobian(np.zeros(9), ys)
+            u = a / np.linalg.norm(a, axis=1, keepdims=True)
+            sr = np.sqrt(np.sum((u * ss) ** 2, axis=1))
+            jw = j / sr[:, None]
+            std = np.sqrt(np.diag(np.linalg.inv(jw.T @ jw)))
+        except np.linalg.LinAlgError:
+            std = np.full(9, np.inf)
+        for i, name in enumerate(PARAMETERS):
+            if name not in need and std[i] <= target[i]:
+                need[name] = added
+        if len(need) == len(PARAMETERS):
+            break
+        direction = order[added] if added < len(missing) else \
+            order[len(missing) + (added - len(missing)) % len(_BETWEEN)]
+        rows.append(direction * gravity_mps2)
+        sigmas.append(typical)
+    return missing, {name: need.get(name, max_added + 1) for name in PARAMETERS}
