@@ -86,9 +86,9 @@ def test_a_richer_truth_is_flagged_and_the_birge_scaled_sigma_shrink_the_worst_z
     """Data with a K2 of 1000 µg/g² (consumer grade) fitted without it.
 
     Measured: χ²/ν ≈ 760, the worst error 187σ of the noise-only σ and 6.8σ of the
-    Birge-scaled ones: a structured misfit (K2 moves the biases) is flagged, and the scaled σ are honest
-    within a factor of about 1.5, not fully — the remedy is the richer model, not the scaling
-    (docs/processing-estimation.md, "Field calibration").
+    Birge-scaled ones: a structured misfit (K2 moves the biases) is flagged, and the scaled σ
+    are honest within a factor of about 2, not fully — the remedy is the richer model, not the
+    scaling (docs/processing-estimation.md, "Field calibration").
     """
     rng = np.random.default_rng(3)
     y, sy = _poses(rng, n=30, k2=1e-3 / G)
