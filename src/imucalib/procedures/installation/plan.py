@@ -20,19 +20,11 @@ from collections.abc import Sequence
 from imucalib.errors import ConfigurationError
 from imucalib.io.step_roles import INSTALLATION_RATE, INSTALLATION_REMOUNT
 from imucalib.plan.equipment import TwinEquipment
-from imucalib.plan.schema import (
-    ImuSpecConfig,
-    OperatorCheckStep,
-    Plan,
-    PlanLimits,
-    PlanStep,
-    RateStep,
-)
+from imucalib.plan.schema import Plan
 from imucalib.procedures.rate_transfer.plan import (
     AXES,
-    check_rates_in_range,
     rate_table_twin,
-    remount_step,
+    remounted_turns_plan,
     signed_rates,
 )
 
@@ -75,27 +67,10 @@ def generate_installation_plan(
     mags = [rate_dps] if isinstance(rate_dps, int | float) else list(rate_dps)
     rates = signed_rates(mags, None)
     equipment = twin if twin is not None else rate_table_twin(grade, sample_rate_hz, seed)
-    check_rates_in_range(rates, equipment, grade)
-    if not axes or len(set(axes)) != len(axes):
-        raise ConfigurationError(f"`axes` must be distinct axes among {AXES}; got {tuple(axes)}")
-    steps: list[PlanStep] = [OperatorCheckStep(
-        kind="operator-check",
-        item="the unit on the cube's +z face, square to it; cables strain-relieved")]
-    for axis in axes:
-        steps.append(remount_step(axis, INSTALLATION_REMOUNT))
-        steps += [RateStep(kind="rate", axis=0, rate_dps=r, settle_s=settle_s,
-                           revolutions=revolutions, role=INSTALLATION_RATE,
-                           tags=(f"axis={axis}", f"rate={r:g}"),
-                           label=f"{axis} up, {r:+g} °/s") for r in rates]
-    top = max(abs(r) for r in rates)
-    return Plan(
-        name=name,
+    return remounted_turns_plan(
+        name=name, procedure="installation",
         description=("Installation errors (docs/installation.md): each axis up in turn on a "
                      "single-axis table, a +ω and a −ω turn over whole revolutions; the "
                      "misalignment angles of the gyro triad."),
-        procedure="installation",
-        imu=ImuSpecConfig(grade=grade),
-        limits=PlanLimits(max_rate_dps=max(1.5 * top, 100.0)),
-        twin=equipment,
-        steps=tuple(steps),
-    )
+        axes=axes, rates=rates, revolutions=revolutions, settle_s=settle_s, grade=grade,
+        equipment=equipment, roles=(INSTALLATION_REMOUNT, INSTALLATION_RATE))

@@ -59,6 +59,7 @@ __all__ = [
     "check_rates_in_range",
     "generate_rate_transfer_plan",
     "rate_table_twin",
+    "remounted_turns_plan",
     "signed_rates",
 ]
 
@@ -185,25 +186,44 @@ def generate_rate_transfer_plan(
                                  f"edges); got {revolutions}")
     rates = signed_rates(rates_dps, log_spaced)
     equipment = twin if twin is not None else rate_table_twin(grade, sample_rate_hz, seed)
+    return remounted_turns_plan(
+        name=name, procedure="rate-transfer",
+        description=("Gyro rate transfer (docs/rate-transfer.md): each axis up in turn on a "
+                     "single-axis table, turns at ±ω over whole revolutions; scale factor, "
+                     "bias, nonlinearity and asymmetry per axis."),
+        axes=axes, rates=rates, revolutions=revolutions, settle_s=settle_s, grade=grade,
+        equipment=equipment, roles=(RATE_TRANSFER_REMOUNT, RATE_TRANSFER_RATE))
+
+
+def remounted_turns_plan(*, name: str, procedure: str, description: str, axes: Sequence[str],
+                         rates: Sequence[float], revolutions: int, settle_s: float, grade: str,
+                         equipment: TwinEquipment, roles: tuple[str, str]) -> Plan:
+    """Return a plan of turns at `rates` with each of `axes` up in turn (remount checks).
+
+    Shared by the rate transfer and the installation test: a mounting check, then per axis a
+    remount (role ``roles[0]``) and a turn over whole revolutions at each rate (role
+    ``roles[1]``, tags ``axis=`` and ``rate=``).
+
+    Raises
+    ------
+    ConfigurationError
+        Axes not distinct, or a rate beyond the twin's gyro range.
+    """
     check_rates_in_range(rates, equipment, grade)
+    if not axes or len(set(axes)) != len(axes):
+        raise ConfigurationError(f"`axes` must be distinct axes among {AXES}; got {tuple(axes)}")
     steps: list[PlanStep] = [OperatorCheckStep(
         kind="operator-check",
         item="the unit on the cube's +z face, square to it; cables strain-relieved")]
-    if not axes or len(set(axes)) != len(axes):
-        raise ConfigurationError(f"`axes` must be distinct axes among {AXES}; got {tuple(axes)}")
     for axis in axes:
-        steps.append(remount_step(axis, RATE_TRANSFER_REMOUNT))
+        steps.append(remount_step(axis, roles[0]))
         steps += [RateStep(kind="rate", axis=0, rate_dps=r, settle_s=settle_s,
-                           revolutions=revolutions, role=RATE_TRANSFER_RATE,
+                           revolutions=revolutions, role=roles[1],
                            tags=(f"axis={axis}", f"rate={r:g}"),
                            label=f"{axis} up, {r:+g} °/s") for r in rates]
     top = max(abs(r) for r in rates)
     return Plan(
-        name=name,
-        description=("Gyro rate transfer (docs/rate-transfer.md): each axis up in turn on a "
-                     "single-axis table, turns at ±ω over whole revolutions; scale factor, "
-                     "bias, nonlinearity and asymmetry per axis."),
-        procedure="rate-transfer",
+        name=name, description=description, procedure=procedure,
         imu=ImuSpecConfig(grade=grade),
         limits=PlanLimits(max_rate_dps=max(1.5 * top, 100.0)),
         twin=equipment,
