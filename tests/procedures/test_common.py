@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from imucalib.conventions import AXES
-from imucalib.errors import InvalidInputError
+from imucalib.errors import InvalidInputError, MissingSegmentError
 from imucalib.estimation import build_triad_design
 from imucalib.procedures.common.design import TRIAD_TERMS, build_design
 from imucalib.procedures.common.noise import estimate_noise, window_mean_se
@@ -19,7 +19,12 @@ from imucalib.procedures.common.reference import (
     static_inputs_b,
     table_rotation,
 )
-from imucalib.procedures.common.windows import RunningMoments, harmonic_residual_std
+from imucalib.procedures.common.windows import (
+    RunningMoments,
+    counter_times,
+    harmonic_residual_std,
+    whole_revolutions,
+)
 
 
 def _p1_design_before(x: np.ndarray, f: np.ndarray | None) -> np.ndarray:
@@ -139,3 +144,30 @@ def test_noise_model_of_window_means_from_the_longest_static_record():
     np.testing.assert_allclose(gyro, 2e-5, rtol=1e-12)
     np.testing.assert_allclose(accel, 2e-5, rtol=1e-12)
     assert estimate_noise(windows[:1], min_duration_s=600.0) == {}
+
+
+def test_counter_times_and_whole_revolutions():
+    """The shared window checks: dropouts, a backwards counter, the revolutions of a turn."""
+    counter = np.arange(1000)
+    t_rx = counter / 100.0
+    t, period, lost = counter_times("w", counter, t_rx, max_lost_fraction=0.01, max_gap_s=0.5,
+                                    reconstruct=False)
+    assert lost == 0 and abs(period - 0.01) < 1e-12
+    holed = np.delete(counter, np.s_[100:180])  # 0.8 s lost
+    with pytest.raises(MissingSegmentError, match=r"80 of 1000 samples lost to dropouts"):
+        counter_times("w", holed, holed / 100.0, max_lost_fraction=0.1, max_gap_s=0.5,
+                      reconstruct=False)
+    with pytest.raises(InvalidInputError, match="repeats or goes backwards"):
+        counter_times("w", counter[::-1], t_rx, max_lost_fraction=0.01, max_gap_s=0.5,
+                      reconstruct=False)
+    # 10 s at 90 °/s: 2.5 revolutions; a once-per-revolution term averages out
+    rate = np.radians(90.0)
+    angle = rate * t
+    values = np.column_stack([1.0 + 0.5 * np.cos(angle), np.full(t.size, 2.0)])
+    turn = whole_revolutions("w", t, values, t, angle, commanded_revolutions=2)
+    assert turn.n_revolutions == 2 and abs(turn.rate_rps - rate) < 1e-9
+    np.testing.assert_allclose(turn.mean, [1.0, 2.0], atol=1e-3)
+    assert np.abs(turn.residual).max() < 1e-9
+    with pytest.raises(MissingSegmentError,
+                       match=r"holds 2 whole revolution\(s\) of the 4 commanded"):
+        whole_revolutions("w", t, values, t, angle, commanded_revolutions=4)

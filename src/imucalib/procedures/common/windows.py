@@ -12,19 +12,30 @@ Here:
   just outside the feedback span (so a window of exactly N revolutions keeps N whole ones);
 - :func:`harmonic_residual_std`: the scatter of a turning window about what a calibrated model
   predicts there, the mean plus the once-per-revolution harmonic of the table angle
-  (g-sensitivity to the gravity turning in the IMU, the horizontal Earth rate; docs/p1.md).
+  (g-sensitivity to the gravity turning in the IMU, the horizontal Earth rate; docs/p1.md);
+- :func:`counter_times`: a window's sample times from its counter, its dropouts checked;
+- :func:`whole_revolutions`: a turning window's whole-revolution span, its mean rate and the
+  samples' scatter about the once-per-revolution harmonic, the commanded revolutions checked.
 
 Contents
 --------
-:class:`RunningMoments`, :func:`harmonic_residual_std`, :func:`table_angle_at`
+:class:`RunningMoments`, :func:`harmonic_residual_std`, :func:`table_angle_at`,
+:func:`counter_times`, :func:`whole_revolutions`, :class:`TurnSpan`
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["RunningMoments", "harmonic_residual_std", "table_angle_at"]
+from imucalib.errors import InvalidInputError, MissingSegmentError
+from imucalib.processing import compute_integer_revolution_window, reconstruct_time_base
+
+__all__ = ["RunningMoments", "TurnSpan", "counter_times", "harmonic_residual_std",
+           "table_angle_at", "whole_revolutions"]
 
 _F64 = NDArray[np.float64]
 
@@ -103,3 +114,102 @@ def table_angle_at(t: _F64, fb_t: _F64, fb_angle: _F64) -> _F64:
         out[before] = fb_angle[0] + rate * (t[before] - fb_t[0])
         out[after] = fb_angle[-1] + rate * (t[after] - fb_t[-1])
     return out
+
+
+def counter_times(where: str, counter: NDArray[Any], time_s: _F64, *, max_lost_fraction: float,
+                  max_gap_s: float, reconstruct: bool) -> tuple[_F64, float, int]:
+    """Return (sample times, sample period, samples lost) of a window, its dropouts checked.
+
+    With `reconstruct`, the times come from the sample counter on the receive times
+    (:func:`~imucalib.processing.sync.reconstruct_time_base`: what a turn's angle weighting
+    needs); otherwise the receive times serve (a static mean needs no instants). [s], [s]
+
+    Raises
+    ------
+    InvalidInputError
+        A counter that repeats or goes backwards.
+    MissingSegmentError
+        More than `max_lost_fraction` of the samples lost, or a gap longer than `max_gap_s`.
+    """
+    c = np.asarray(counter, dtype=np.int64)
+    steps = np.diff(c)
+    if np.any(steps <= 0):
+        raise InvalidInputError(f"{where}: the sample counter repeats or goes backwards")
+    if reconstruct:
+        base = reconstruct_time_base(c, time_s)
+        t, period = np.asarray(base.time_s, dtype=np.float64), float(base.sample_period_s)
+    else:
+        t = np.asarray(time_s, dtype=np.float64)
+        period = float(t[-1] - t[0]) / float(c[-1] - c[0])
+    lost = int(np.sum(steps - 1))
+    expected = c.size + lost
+    longest = float(np.max(steps) - 1) * period
+    if lost > max_lost_fraction * expected or longest > max_gap_s:
+        raise MissingSegmentError(
+            f"{where}: {lost} of {expected} samples lost to dropouts (longest gap "
+            f"{longest:.3g} s; at most {max_lost_fraction:.0%} and {max_gap_s:g} s are "
+            "accepted)")
+    return t, period, lost
+
+
+@dataclass(frozen=True)
+class TurnSpan:
+    """The whole-revolution span of a turning window (:func:`whole_revolutions`).
+
+    Attributes
+    ----------
+    mean : ndarray, shape (k,)
+        The angle-weighted mean of each column over the span.
+    time_s : ndarray
+        The samples' times in the span. [s]
+    rate_rps : float
+        The mean rate over the span (encoder angle over time). [rad/s]
+    n_revolutions : int
+    residual : ndarray, shape (m, k)
+        The samples about their mean and once-per-revolution harmonic (what the averaging
+        cancels): the noise.
+    """
+
+    mean: _F64
+    time_s: _F64
+    rate_rps: float
+    n_revolutions: int
+    residual: _F64
+
+
+def whole_revolutions(where: str, t: _F64, values: _F64, fb_time_s: _F64, fb_angle_rad: _F64,
+                      commanded_revolutions: object = None) -> TurnSpan:
+    """Return the longest whole-revolution span of a turning window (module docstring).
+
+    The feedback angle is interpolated at the samples' times (:func:`table_angle_at`). The
+    station ends a turn's window on the N-th revolution's crossing, so a sample at each edge
+    may fall outside it: N − 1 whole revolutions make a complete record, fewer one cut short.
+
+    Raises
+    ------
+    MissingSegmentError
+        Fewer than two feedback samples, less than one revolution, or fewer than the commanded
+        revolutions − 1.
+    """
+    if len(fb_time_s) < 2:
+        raise MissingSegmentError(f"{where}: fewer than 2 feedback samples in the window")
+    cols = values.reshape(values.shape[0], -1)
+    angle = table_angle_at(t, np.asarray(fb_time_s, dtype=np.float64),
+                           np.unwrap(np.asarray(fb_angle_rad, dtype=np.float64)))
+    try:
+        win = compute_integer_revolution_window(t, cols, angle_rad=angle)
+    except InvalidInputError as exc:
+        raise MissingSegmentError(f"{where}: {exc}") from None
+    n_rev = int(win.n_revolutions)
+    if isinstance(commanded_revolutions, int | float) and n_rev < int(commanded_revolutions) - 1:
+        raise MissingSegmentError(
+            f"{where}: the turn holds {n_rev} whole revolution(s) of the "
+            f"{int(commanded_revolutions)} commanded (cut short: at least commanded − 1 are "
+            "expected, a sample at each edge may fall outside the window)")
+    sl = slice(win.start_index, win.stop_index)
+    ts, a = t[sl], angle[sl]
+    design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
+    coef, *_ = np.linalg.lstsq(design, cols[sl], rcond=None)
+    return TurnSpan(mean=np.asarray(win.mean, dtype=np.float64).ravel(), time_s=ts,
+                    rate_rps=float((a[-1] - a[0]) / (ts[-1] - ts[0])), n_revolutions=n_rev,
+                    residual=cols[sl] - design @ coef)

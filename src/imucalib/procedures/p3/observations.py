@@ -51,11 +51,7 @@ from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
 from imucalib.procedures.common.noise import block_variance, pooled_white_density
-from imucalib.procedures.common.windows import table_angle_at
-from imucalib.processing import (
-    compute_integer_revolution_window,
-    reconstruct_time_base,
-)
+from imucalib.procedures.common.windows import counter_times, whole_revolutions
 
 __all__ = ["P3Processing", "P3Window", "extract_p3_windows", "p3_unit_names"]
 
@@ -206,57 +202,21 @@ class _Reducer:
                 f"reached its range, e.g. {np.max(np.abs(values)):.6g} m/s² on "
                 f"{self.column}); a clipped mean would bias K2 — lower the top rate or use "
                 "an accelerometer of a larger range")
-        counter = np.asarray(data.columns["counter"], dtype=np.int64)
-        steps = np.diff(counter)
-        if np.any(steps <= 0):
-            raise InvalidInputError(f"{where}: the sample counter repeats or goes backwards")
         spinning = step.role == P3_RATE
-        if spinning:
-            base = reconstruct_time_base(counter, data.time_s)
-            t, period = base.time_s, base.sample_period_s
-        else:
-            t = np.asarray(data.time_s, dtype=np.float64)
-            period = float(t[-1] - t[0]) / float(counter[-1] - counter[0])
-        lost = int(np.sum(steps - 1))
-        expected = len(data) + lost
-        longest = float(np.max(steps) - 1) * period
-        if lost > self.opt.max_lost_fraction * expected or longest > self.opt.max_gap_s:
-            raise MissingSegmentError(
-                f"{where}: {lost} of {expected} samples lost to dropouts (longest gap "
-                f"{longest:.3g} s; at most {self.opt.max_lost_fraction:.0%} and "
-                f"{self.opt.max_gap_s:g} s are accepted)")
+        t, period, lost = counter_times(
+            where, np.asarray(data.columns["counter"]), data.time_s,
+            max_lost_fraction=self.opt.max_lost_fraction, max_gap_s=self.opt.max_gap_s,
+            reconstruct=spinning)
         rate, n_rev = 0.0, 0
         residual = values
         if spinning:
             assert fb is not None
-            if len(fb) < 2:
-                raise MissingSegmentError(f"{where}: fewer than 2 centrifuge feedback samples "
-                                          "in the window")
-            angle = table_angle_at(t, fb.time_s, np.unwrap(fb.columns[self.angle_col]))
-            try:
-                win = compute_integer_revolution_window(t, values[:, None], angle_rad=angle)
-            except InvalidInputError as exc:
-                raise MissingSegmentError(f"{where}: {exc}") from None
-            n_rev = int(win.n_revolutions)
             wanted = step.commanded.get("revolutions") if isinstance(step.commanded,
                                                                       dict) else None
-            # the station ends the window on the N-th revolution's crossing: the unit's samples
-            # inside it may fall a sample short of N at each edge, so N − 1 whole revolutions
-            # are a complete record, fewer a record cut short
-            if isinstance(wanted, int | float) and n_rev < int(wanted) - 1:
-                raise MissingSegmentError(
-                    f"{where}: the record holds {n_rev} whole revolution(s) of the "
-                    f"{int(wanted)} commanded (cut short: the arm did not turn the whole "
-                    "revolutions asked for)")
-            sl = slice(win.start_index, win.stop_index)
-            t, a = t[sl], angle[sl]
-            rate = float((a[-1] - a[0]) / (t[-1] - t[0]))
-            mean = float(np.asarray(win.mean).ravel()[0])
-            # the noise about the once-per-revolution harmonic
-            design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
-            coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
-            residual = values[sl] - design @ coef
-            n = t.size
+            turn = whole_revolutions(where, t, values, fb.time_s, fb.columns[self.angle_col],
+                                     wanted)
+            t, rate, n_rev = turn.time_s, turn.rate_rps, turn.n_revolutions
+            mean, residual, n = float(turn.mean[0]), turn.residual, turn.time_s.size
         else:
             mean = float(values.mean())
             n = values.size

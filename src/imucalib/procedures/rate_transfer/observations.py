@@ -44,8 +44,7 @@ from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.procedures.common.noise import block_variance, pooled_white_density
 from imucalib.procedures.common.reference import site_vectors
-from imucalib.procedures.common.windows import table_angle_at
-from imucalib.processing import compute_integer_revolution_window, reconstruct_time_base
+from imucalib.procedures.common.windows import counter_times, whole_revolutions
 
 __all__ = ["RateProcessing", "RateWindow", "extract_rate_windows", "pooled_se"]
 
@@ -141,40 +140,13 @@ def _reduce(unit: str, step: StepRecord, data: StreamData, fb: StreamData, angle
             f"{where}: {saturated} of {len(data)} samples flagged saturated (largest gyro "
             f"output {np.degrees(np.max(np.abs(values))):.6g} °/s): a clipped mean biases the "
             "scale factor — keep the rates below the gyro's full scale")
-    counter = np.asarray(data.columns["counter"], dtype=np.int64)
-    gaps = np.diff(counter)
-    if np.any(gaps <= 0):
-        raise InvalidInputError(f"{where}: the sample counter repeats or goes backwards")
-    base = reconstruct_time_base(counter, data.time_s)
-    t, period = base.time_s, base.sample_period_s
-    lost = int(np.sum(gaps - 1))
-    expected = len(data) + lost
-    longest = float(np.max(gaps) - 1) * period
-    if lost > opt.max_lost_fraction * expected or longest > opt.max_gap_s:
-        raise MissingSegmentError(
-            f"{where}: {lost} of {expected} samples lost to dropouts (longest gap "
-            f"{longest:.3g} s; at most {opt.max_lost_fraction:.0%} and {opt.max_gap_s:g} s are "
-            "accepted)")
-    if len(fb) < 2:
-        raise MissingSegmentError(f"{where}: fewer than 2 table feedback samples in the window")
-    angle = table_angle_at(t, fb.time_s, np.unwrap(np.asarray(fb.columns[angle_col])))
-    try:
-        win = compute_integer_revolution_window(t, values, angle_rad=angle)
-    except InvalidInputError as exc:
-        raise MissingSegmentError(f"{where}: {exc}") from None
-    n_rev = int(win.n_revolutions)
+    t, period, _ = counter_times(where, np.asarray(data.columns["counter"]), data.time_s,
+                                 max_lost_fraction=opt.max_lost_fraction,
+                                 max_gap_s=opt.max_gap_s, reconstruct=True)
     wanted = step.commanded.get("revolutions") if isinstance(step.commanded, dict) else None
-    if isinstance(wanted, int | float) and n_rev < int(wanted) - 1:
-        raise MissingSegmentError(
-            f"{where}: the turn holds {n_rev} whole revolution(s) of the {int(wanted)} "
-            "commanded (at least commanded − 1 expected: the table did not turn the whole "
-            "revolutions asked for)")
-    sl = slice(win.start_index, win.stop_index)
-    ts, a = t[sl], angle[sl]
-    rate = float((a[-1] - a[0]) / (ts[-1] - ts[0]))
-    design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
-    coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
-    residual = values[sl] - design @ coef
+    turn = whole_revolutions(where, t, values, fb.time_s, np.asarray(fb.columns[angle_col]),
+                             wanted)
+    n_rev, rate, residual, ts = turn.n_revolutions, turn.rate_rps, turn.residual, turn.time_s
     blocks = block_variance(residual, period, opt.noise_block_s)
     commanded = step.commanded.get("rate_dps") if isinstance(step.commanded, dict) else None
     return RateWindow(
@@ -182,7 +154,7 @@ def _reduce(unit: str, step: StepRecord, data: StreamData, fb: StreamData, angle
         commanded_rate_dps=float(commanded) if isinstance(commanded, int | float)
         else math.degrees(rate),
         table_rate_rps=rate, n_revolutions=n_rev,
-        gyro_mean_rps=np.asarray(win.mean, dtype=np.float64).reshape(3),
+        gyro_mean_rps=turn.mean.reshape(3),
         gyro_se_rps=np.full(3, np.nan), duration_s=float(ts[-1] - ts[0]),
         block_variance=blocks)
 
