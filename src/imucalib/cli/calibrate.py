@@ -9,6 +9,24 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from imucalib.cli._app import app, console, err_console, fail
+from imucalib.cli._import_options import (
+    AccelFile,
+    AccelOffset,
+    AccelScale,
+    AccelUnit,
+    ColumnMap,
+    Delimiter,
+    GyroOffset,
+    GyroScale,
+    GyroUnit,
+    ImportFile,
+    SampleRate,
+    SkipRows,
+    TimeColumn,
+    TimeUnit,
+    Units,
+    import_spec_from_options,
+)
 from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 
@@ -21,20 +39,32 @@ __all__ = ["apply", "calibrate", "run_calibration"]
 def run_calibration(recording: Path, imu: str | None, model: str, out: Path | None, *,
                     progress: Callable[[float], None] | None = None,
                     extra: dict[str, Any] | None = None,
-                    more: Sequence[Path] = ()) -> tuple[ProcedureResult, list[Path]]:
+                    more: Sequence[Path] = (), procedure_name: str | None = None
+                    ) -> tuple[ProcedureResult, list[Path]]:
     """Analyse a recording with its procedure (the registry's choice); write its outputs.
 
     `progress` is given the fraction of the analysis done (the procedure's own measure).
     `extra` holds procedure options given on the command line (refused by a procedure that
-    does not take them); `more` further recordings of a lot (P2 only).
+    does not take them); `more` further recordings of a lot (P2 only). `procedure_name`
+    names the procedure instead of the recording's roles; a log that is not a Recording (a
+    CSV) is then analysed directly by a procedure that takes ``import_spec`` (the field
+    calibration).
     """
     from imucalib.exports.outputs import write_outputs
     from imucalib.io.reader import open_recording
     from imucalib.procedures import registry
 
-    with open_recording(recording) as rec:
-        name = registry.identify(rec)
+    if procedure_name is None:
+        with open_recording(recording) as rec:
+            name = registry.identify(rec)
+    else:
+        name = procedure_name
     procedure = registry.get(name)
+    if recording.suffix.lower() not in (".h5", ".hdf5") and \
+            "import_spec" not in procedure.analysis_options:
+        raise InvalidInputError(f"procedure {name} analyses a Recording of its plan; "
+                                f"{recording} is a log (a CSV goes through --steps, "
+                                "docs/import.md)")
     options: dict[str, Any] = {"model": model} if "model" in procedure.analysis_options else {}
     given = {k: v for k, v in (extra or {}).items() if v is not None}
     refused = sorted(set(given) - set(procedure.analysis_options))
@@ -103,7 +133,10 @@ def _pairs(given: list[str] | None, flag: str) -> dict[str, tuple[float, float]]
 @app.command()
 def calibrate(
     recording: Annotated[Path, typer.Argument(
-        help="Recording (.h5) of a plan run or a simulation; or a CSV with --steps.")],
+        metavar="[PROCEDURE] RECORDING",
+        help="Recording (.h5) of a plan run or a simulation; or a CSV with --steps; or a "
+             "procedure's name and its data: `field DATA.csv` calibrates a hand-held log "
+             "(docs/field.md).")],
     more: Annotated[list[Path] | None, typer.Argument(
         metavar="[MORE]...", help="Further P2 recordings calibrated with the first as one "
                                   "production lot.")] = None,
@@ -138,6 +171,37 @@ def calibrate(
     k2_target: Annotated[float | None, typer.Option(
         help="P3: the expanded uncertainty (k = 2) K2 must reach [g/g²] (default 1e-7).")]
     = None,
+    latitude: Annotated[float | None, typer.Option(
+        help="field: the site's latitude [°] (local g as normal gravity there).")] = None,
+    height: Annotated[float | None, typer.Option(
+        help="field: the site's height above the ellipsoid [m].")] = None,
+    gravity: Annotated[float | None, typer.Option(
+        help="field: local g [m/s²], instead of normal gravity.")] = None,
+    accel_form: Annotated[str | None, typer.Option(
+        help="field: auto, gravity-norm (poses of unknown orientation) or six-position "
+             "(a fixture's faces).")] = None,
+    gyro_form: Annotated[str | None, typer.Option(
+        help="field: auto, gravity (imu_tk), turns (Ferraris known angle) or none.")] = None,
+    static_threshold: Annotated[float | None, typer.Option(
+        help="field: the static detector's multiple of the initial variance (default: "
+             "chosen by the smallest gravity-norm χ²/ν).")] = None,
+    init_static_s: Annotated[float | None, typer.Option(
+        help="field: the initial rest at the start of the log [s] (default 2).")] = None,
+    import_file: ImportFile = None,
+    column_map: ColumnMap = None,
+    units: Units = None,
+    gyro_unit: GyroUnit = None,
+    accel_unit: AccelUnit = None,
+    gyro_scale: GyroScale = None,
+    accel_scale: AccelScale = None,
+    gyro_offset: GyroOffset = None,
+    accel_offset: AccelOffset = None,
+    time_column: TimeColumn = None,
+    time_unit: TimeUnit = None,
+    sample_rate_hz: SampleRate = None,
+    delimiter: Delimiter = None,
+    skip_rows: SkipRows = None,
+    accel_file: AccelFile = None,
 ) -> None:
     """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
 
@@ -145,27 +209,52 @@ def calibrate(
     decision; an Allan recording the noise terms (JSON, Kalibr and OpenVINS YAML, a datasheet
     table, figures); a P2 recording every unit with its temperature models; a P3 recording
     the test accelerometer's K2 on the centrifuge with the unbalance removed. A CSV is
-    calibrated through its step file (--steps).
+    calibrated through its step file (--steps), or, a hand-held log, by `calibrate field
+    DATA.csv` with the import options of `imucalib segments` (docs/field.md).
     """
+    from imucalib.procedures import registry
     from imucalib.report.console import render_result
 
     try:
+        procedure_name = None
+        if str(recording) in registry.names() and not recording.exists():
+            procedure_name = str(recording)
+            if not more:
+                raise InvalidInputError(f"`imucalib calibrate {procedure_name}` needs the data "
+                                        f"to calibrate: imucalib calibrate {procedure_name} "
+                                        "DATA")
+            recording, more = more[0], more[1:]
+        extra: dict[str, Any] = {
+            "workers": workers, "scheduler": scheduler, "lever_arm": lever_arm,
+            "criterion": criterion, "max_order": max_order, "reference_a": reference_a,
+            "reference_b": reference_b, "test": test, "k1": _pairs(k1, "--k1"),
+            "k2_target_g_per_g2": k2_target, "latitude_deg": latitude, "height_m": height,
+            "gravity_mps2": gravity, "accel_form": accel_form, "gyro_form": gyro_form,
+            "static_threshold": static_threshold, "init_static_s": init_static_s}
+        if procedure_name is not None and recording.suffix.lower() not in (".h5", ".hdf5"):
+            extra["import_spec"] = import_spec_from_options(
+                import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
+                accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
+                gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
+                time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
+                skip_rows=skip_rows, accel_file=accel_file)
+            if not recording.is_file():
+                raise InvalidInputError(f"no such file: {recording}")
+        elif procedure_name is None and steps is None and \
+                recording.suffix.lower() in (".csv", ".txt", ".tsv"):
+            raise InvalidInputError(f"{recording}: a CSV or other log needs --steps (a step "
+                                    "file saying what each interval is, docs/import.md); "
+                                    "`imucalib segments DATA --step-file FILE` writes one to "
+                                    "complete; a hand-held log is calibrated by `imucalib "
+                                    "calibrate field DATA` (docs/field.md)")
         if steps is not None:
             recording = import_for_calibration(recording, steps, imu, out)
             console.print(f"imported into {recording} (table stream reconstructed from the "
                           "step file)", highlight=False)
-        elif recording.suffix.lower() in (".csv", ".txt", ".tsv"):
-            raise InvalidInputError(f"{recording}: a CSV or other log needs --steps (a step "
-                                    "file saying what each interval is, docs/import.md); "
-                                    "`imucalib segments DATA --step-file FILE` writes one to "
-                                    "complete")
         with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
             result, written = run_calibration(
                 recording, imu, model, out, progress=update, more=tuple(more or ()),
-                extra={"workers": workers, "scheduler": scheduler, "lever_arm": lever_arm,
-                       "criterion": criterion, "max_order": max_order,
-                       "reference_a": reference_a, "reference_b": reference_b, "test": test,
-                       "k1": _pairs(k1, "--k1"), "k2_target_g_per_g2": k2_target})
+                extra=extra, procedure_name=procedure_name)
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_result(console, result, written)

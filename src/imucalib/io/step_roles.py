@@ -87,6 +87,18 @@ when both directions are run:
 :data:`TUMBLE_DRIFT` ``"tumble.drift"``
     The 0° record repeated at the end of a sequence (the drift check).
 
+Field calibration by hand (docs/field.md); the analysis finds the intervals in the continuous
+IMU stream itself, the roles say what the guided session asked for:
+
+:data:`FIELD_REST` ``"field.rest"``
+    The initial rest (the static detector's reference variance).
+:data:`FIELD_MOVE` ``"field.move"``
+    The operator turns the unit by hand onto another face (an operator check, ``remount``).
+:data:`FIELD_POSE` ``"field.pose"``
+    A static record of one pose (tags ``pose<k>`` or ``turn<face><±360>``, and the face).
+:data:`FIELD_TURN` ``"field.turn"``
+    The operator turns the unit flat on the desk by one full turn (an operator check).
+
 Steps that only prepare (operator checks, warm-up, moving to a start position) have no role.
 
 :func:`role_from_tags` gives the role that the generators now set from what older plans said with
@@ -103,6 +115,11 @@ __all__ = [
     "ALLAN_STATIC",
     "EARTH_RATE_BIAS_POSITION",
     "EARTH_RATE_BIAS_REMOUNT",
+    "FIELD_MOVE",
+    "FIELD_POSE",
+    "FIELD_REST",
+    "FIELD_ROLES",
+    "FIELD_TURN",
     "G_SENSITIVITY_POSITION",
     "INSTALLATION_RATE",
     "INSTALLATION_REMOUNT",
@@ -171,6 +188,13 @@ G_SENSITIVITY_POSITION: Final = "g-sensitivity.position"
 EARTH_RATE_BIAS_REMOUNT: Final = "earth-rate-bias.remount"
 EARTH_RATE_BIAS_POSITION: Final = "earth-rate-bias.position"
 RANDOM_DRIFT_POSITION: Final = "random-drift.position"
+
+FIELD_REST: Final = "field.rest"
+FIELD_MOVE: Final = "field.move"
+FIELD_POSE: Final = "field.pose"
+FIELD_TURN: Final = "field.turn"
+#: Every field role.
+FIELD_ROLES: Final = (FIELD_REST, FIELD_MOVE, FIELD_POSE, FIELD_TURN)
 
 
 def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:

@@ -41,6 +41,7 @@ BUILTIN: dict[str, str] = {
     "earth-rate-bias": "imucalib.procedures.earth_rate_bias.procedure",
     "random-drift": "imucalib.procedures.random_drift.procedure",
     "tumble": "imucalib.procedures.tumble.procedure",
+    "field": "imucalib.procedures.field.procedure",
 }
 
 _registered: dict[str, Procedure] = {}

@@ -1,0 +1,346 @@
+"""The field calibration's analysis: a hand-held log → the unit's triad model.
+
+Steps (docs/field.md derives each):
+
+1. The static intervals and the rotations between them (:func:`.observations.find_intervals`:
+   Tedaldi's variance detector, k chosen by the smallest gravity-norm χ²/ν unless given).
+2. Local g: given, or normal gravity at the given latitude and height (a Type B of 3·10⁻⁵ g for
+   the anomaly), or, with neither, normal gravity at 45° with the whole range of the Earth's
+   normal gravity as a rectangular Type B (σ = 0.015 m/s²: every scale factor then carries
+   1.5·10⁻³) — and a note saying so.
+3. The accelerometer: the gravity-norm fit (F.2) over the poses (unknown orientations; at
+   least ten poses), or the nominal six-position form (F.10) when the poses were placed on a
+   fixture's faces (``accel_form="six-position"``; ``"auto"`` takes it when the poses hold at
+   most six distinct directions, each near its own axis direction: a fixture's faces, or the
+   twin station's exact remounts; the gravity-norm fit cannot see the non-orthogonality from
+   such poses). The coverage check says which
+   directions no pose visited and how many more poses bring each σ under its target.
+4. The gyro bias, and its g-sensitivity G when the poses cover every axis direction: the
+   static gyro means, less the vertical Earth rate along each pose's measured gravity
+   direction (latitude known), fitted by GLS to b + G·f_k (FL.2), the horizontal Earth rate a
+   Type B (unknown heading; independent between poses); χ² across the poses flags a
+   wandering bias (Birge-scaled).
+5. The gyro's M from the rotations between poses (:mod:`imucalib.estimation.gyro_rotations`):
+   a full turn flat on the desk (‖θ‖ within 10 % of n·360° and the gravity direction back
+   within 5°) is a known-angle observation (Ferraris et al. 1995), every other rotation a
+   gravity-referenced one (Tedaldi et al. 2014); ``gyro_form`` chooses "auto" (both),
+   "gravity" or "turns" only, or "none".
+6. The triad model (FL.1) with the joint covariance; every fit's χ²/ν in the result and, on a
+   misfit, the Birge-scaled σ (the project's rule) and a note.
+
+Contents
+--------
+:class:`FieldOptions`, :func:`analyze_field`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib import __version__
+from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.models.earth import normal_gravity_mps2
+from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.result import Provenance
+from imucalib.procedures.field.observations import (
+    FieldLog,
+    StaticPose,
+    find_intervals,
+    static_poses,
+)
+from imucalib.procedures.field.result import (
+    FieldResult,
+    calibration_result,
+    triad_from_field,
+)
+from imucalib.units import EARTH_RATE_RPS
+
+__all__ = ["FieldOptions", "analyze_field"]
+
+_F64 = NDArray[np.float64]
+#: Normal gravity spans 9.7803 (equator) … 9.8322 m/s² (poles) at sea level.
+_G_RANGE_MPS2 = (9.7803, 9.8322)
+#: Relative standard uncertainty of normal gravity as local g (anomalies, ~50 mGal).
+_ANOMALY_REL = 3e-5
+_FULL_TURN_TOL = 0.10
+_TURN_GRAVITY_DEG = 5.0
+#: Poses closer than this are the same pose (a face visited twice). [°]
+_SAME_POSE_DEG = 1.0
+#: A face's pose lies within this of its axis (a unit's own misalignment is ~1°). [°]
+_FACE_DEG = 10.0
+
+
+@dataclass(frozen=True)
+class FieldOptions:
+    """Options of :func:`analyze_field` (module docstring; docs/field.md).
+
+    Attributes
+    ----------
+    accel_form : {"auto", "gravity-norm", "six-position"}
+    gyro_form : {"auto", "gravity", "turns", "none"}
+    gyro_g_sensitivity : {"auto", "yes", "no"}
+        Fit the gyro's g-sensitivity G from the static poses ("auto": when the poses cover
+        every axis direction and there are at least six).
+    gravity_mps2, gravity_std_mps2 : float, optional
+        Local g and its standard uncertainty (default: from the latitude). [m/s²]
+    latitude_deg, height_m : float, optional
+        The site (a Recording's metadata when omitted). [°], [m]
+    static_threshold : float, optional
+        The detector's k; None: chosen automatically.
+    window_s, init_static_s, min_static_s, min_rotation_deg : float
+        Detector settings (:func:`~imucalib.processing.static_detector.
+        detect_static_and_rotations`).
+    noise_block_s : float
+        Block length of the pooled white-noise estimate. [s]
+    target_accel_bias_mps2, target_scale, target_angle_rad : float
+        The σ the coverage check counts poses for.
+    """
+
+    accel_form: str = "auto"
+    gyro_form: str = "auto"
+    gyro_g_sensitivity: str = "auto"
+    gravity_mps2: float | None = None
+    gravity_std_mps2: float | None = None
+    latitude_deg: float | None = None
+    height_m: float | None = None
+    static_threshold: float | None = None
+    window_s: float = 0.5
+    init_static_s: float = 2.0
+    min_static_s: float = 1.0
+    min_rotation_deg: float = 5.0
+    noise_block_s: float = 0.25
+    target_accel_bias_mps2: float = 1e-3
+    target_scale: float = 1e-4
+    target_angle_rad: float = 1e-4
+
+    def __post_init__(self) -> None:
+        if self.accel_form not in ("auto", "gravity-norm", "six-position"):
+            raise InvalidInputError(f"`accel_form` must be auto, gravity-norm or six-position; "
+                                    f"got {self.accel_form!r}")
+        if self.gyro_g_sensitivity not in ("auto", "yes", "no"):
+            raise InvalidInputError(f"`gyro_g_sensitivity` must be auto, yes or no; got "
+                                    f"{self.gyro_g_sensitivity!r}")
+        if self.gyro_form not in ("auto", "gravity", "turns", "none"):
+            raise InvalidInputError(f"`gyro_form` must be auto, gravity, turns or none; got "
+                                    f"{self.gyro_form!r}")
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, float) and not math.isfinite(v):
+                raise InvalidInputError(f"`{f.name}` must be finite; got {v!r}")
+        if self.latitude_deg is not None and not -90.0 <= self.latitude_deg <= 90.0:
+            raise InvalidInputError(f"`latitude_deg` must be in [−90, 90]; got "
+                                    f"{self.latitude_deg!r}")
+
+
+def _gravity(opt: FieldOptions, log: FieldLog) -> tuple[float, float, float | None, str]:
+    """Return (g, σ_g, latitude or None, note) of step 2."""
+    lat = opt.latitude_deg if opt.latitude_deg is not None else log.latitude_deg
+    height = opt.height_m if opt.height_m is not None else (log.height_m or 0.0)
+    if opt.gravity_mps2 is not None:
+        g = float(opt.gravity_mps2)
+        sg = float(opt.gravity_std_mps2 or 0.0)
+        return g, sg, lat, f"local g given: {g:.6f} ± {sg:.2g} m/s²"
+    if lat is not None:
+        g = normal_gravity_mps2(lat, height)
+        sg = opt.gravity_std_mps2 if opt.gravity_std_mps2 is not None else _ANOMALY_REL * g
+        return g, float(sg), lat, (f"local g = normal gravity at {lat:g}°, {height:g} m: "
+                                   f"{g:.6f} ± {sg:.2g} m/s²")
+    g = normal_gravity_mps2(45.0, 0.0)
+    sg = (_G_RANGE_MPS2[1] - _G_RANGE_MPS2[0]) / math.sqrt(12.0)
+    return g, sg, None, (f"no latitude or local g given: normal gravity at 45° ({g:.5f} m/s²) "
+                         f"with σ = {sg:.3f} m/s² for any latitude; every scale factor "
+                         f"carries {sg / g:.1e} of it (give --latitude for 3e-5)")
+
+
+def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | None,
+                 g_sensitivity: bool) -> tuple[_F64, _F64, FitQuality, list[_F64]]:
+    """Step 4: bias (and G) from the static gyro means less the known Earth rate (FL.2).
+
+    Returns the values (b, and G row-major when fitted), their covariance (Birge-scaled on a
+    misfit), the fit quality and the residual per pose.
+    """
+    omega = EARTH_RATE_RPS
+    k = 12 if g_sensitivity else 3
+    info = np.zeros((k, k))
+    rhs = np.zeros(k)
+    rows = []
+    for p, u, f in zip(poses, up, force, strict=True):
+        if lat is None:  # the whole Earth rate unknown in direction
+            vertical = np.zeros(3)
+            type_b = omega**2 / 3.0 * np.eye(3)
+        else:
+            s, c = math.sin(math.radians(lat)), math.cos(math.radians(lat))
+            vertical = omega * s * u
+            type_b = (omega * c) ** 2 / 2.0 * (np.eye(3) - np.outer(u, u))
+        h = np.hstack([np.eye(3), np.kron(np.eye(3), f[None, :])]) if g_sensitivity \
+            else np.eye(3)
+        w = np.linalg.inv(np.diag(p.gyro_se**2) + type_b)
+        r = p.gyro_mean - vertical
+        info += h.T @ w @ h
+        rhs += h.T @ w @ r
+        rows.append((h, w, r))
+    cov = np.linalg.inv(info)
+    values = cov @ rhs
+    resid = [r - h @ values for h, _, r in rows]
+    chi2 = float(sum(e @ w @ e for e, (_, w, _) in zip(resid, rows, strict=True)))
+    quality = assess_fit("gyro (static poses)", chi2, 3 * len(poses) - k)
+    return values, np.asarray(cov * quality.sigma_scale**2, dtype=np.float64), quality, resid
+
+
+def _on_faces(y: _F64) -> bool:
+    """Whether the poses are a fixture's faces (step 3).
+
+    At most six distinct directions (within :data:`_SAME_POSE_DEG`), each within
+    :data:`_FACE_DEG` of a different axis direction.
+    """
+    unit = y / np.linalg.norm(y, axis=1, keepdims=True)
+    distinct: list[_F64] = []
+    for u in unit:
+        if not any(np.degrees(np.arccos(min(1.0, float(u @ d)))) <= _SAME_POSE_DEG
+                   for d in distinct):
+            distinct.append(u)
+    axes = set()
+    for u in distinct:
+        k = int(np.argmax(np.abs(u)))
+        if np.degrees(np.arccos(min(1.0, abs(float(u[k]))))) > _FACE_DEG:
+            return False
+        axes.add((k, bool(u[k] > 0)))
+    return len(distinct) <= 6 and len(axes) == len(distinct)
+
+
+def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
+                  progress: Callable[[float], None] | None = None) -> FieldResult:
+    """Calibrate the IMU of a hand-held log (module docstring).
+
+    Raises
+    ------
+    MissingSegmentError
+        Too few static intervals.
+    InsufficientExcitationError
+        Poses or rotations that leave parameters unseen (named).
+    InvalidInputError
+        Bad options.
+    """
+    from imucalib.estimation.gravity_norm import (
+        correct_accel,
+        fit_gravity_norm,
+        pose_coverage,
+    )
+    from imucalib.estimation.six_position import fit_six_position, nominal_directions
+
+    opt = options or FieldOptions()
+    report = progress or (lambda _f: None)
+    g, sg, lat, g_note = _gravity(opt, log)
+    detection = find_intervals(
+        log, threshold_factor=opt.static_threshold, window_s=opt.window_s,
+        init_static_s=opt.init_static_s, min_static_s=opt.min_static_s,
+        min_rotation_deg=opt.min_rotation_deg, gravity_mps2=g)
+    report(0.3)
+    poses = static_poses(log, detection, block_s=opt.noise_block_s)
+    y = np.array([p.accel_mean for p in poses])
+    sy = np.array([p.accel_se for p in poses])
+    form = opt.accel_form
+    if form == "auto":
+        form = "six-position" if _on_faces(y) else "gravity-norm"
+    notes = [g_note]
+    if form == "gravity-norm":
+        fit = fit_gravity_norm(y, sy, g)
+        # g's Type B: refit with g + δ (the norms scale with g)
+        dg = 1e-4 * g
+        jg = (fit_gravity_norm(y, sy, g + dg).values - fit.values) / dg
+        accel_values = fit.values
+        accel_cov_noise = np.asarray(fit.covariance_noise + np.outer(jg, jg) * sg**2,
+                                     dtype=np.float64)
+        accel_quality = fit.quality
+        residuals = fit.residuals
+        corrected = correct_accel(fit.values, y)
+    else:
+        directions = nominal_directions(y)
+        six = fit_six_position(y, sy, directions, g, gravity_std_mps2=sg)
+        accel_values = six.values
+        accel_cov_noise = np.asarray(six.covariance_noise, dtype=np.float64)
+        accel_quality = six.quality
+        residuals = np.linalg.norm(six.residuals, axis=1)
+        corrected = np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
+                                               (y - six.bias).T).T, dtype=np.float64)
+    accel_cov = accel_cov_noise * accel_quality.sigma_scale**2
+    up = corrected / np.linalg.norm(corrected, axis=1, keepdims=True)
+    report(0.5)
+    missing, needed = pose_coverage(
+        y, sy, g, target_std=[opt.target_accel_bias_mps2] * 3 + [opt.target_scale] * 3
+        + [opt.target_angle_rad] * 3)
+    coverage = {"missing_directions": missing, "poses_needed": needed,
+                "targets": {"accel_bias_mps2": opt.target_accel_bias_mps2,
+                            "scale": opt.target_scale, "angle_rad": opt.target_angle_rad}}
+    if missing:
+        notes.append(f"no pose had gravity within 45° of {', '.join(missing)}: add poses "
+                     "there (the coverage check in the report counts how many)")
+    force = g * up if form == "gravity-norm" else corrected
+    fit_g = opt.gyro_g_sensitivity == "yes" or (
+        opt.gyro_g_sensitivity == "auto" and not missing and len(poses) >= 6)
+    static_values, static_cov, bias_quality, bias_resid = _gyro_static(
+        poses, up, force, lat, fit_g)
+    gyro = _fit_gyro(log, detection, poses, up, opt, accel_values, accel_cov, form)
+    report(0.9)
+    quality: list[FitQuality] = [accel_quality]
+    if gyro is not None:
+        quality.append(gyro["fit"].quality)
+    quality.append(bias_quality)
+    for q in quality:
+        if q.misfit:
+            notes.append(q.summary())
+    names, values, cov = triad_from_field(
+        form, accel_values, accel_cov_noise, static_values, static_cov,
+        None if gyro is None else gyro["fit"].values,
+        None if gyro is None else gyro["fit"].covariance_noise,
+        None if gyro is None else gyro["fit"].cross_covariance)
+    if gyro is None:
+        notes.append("no rotation fitted: the gyro triad is not in the calibration "
+                     "(its bias is in the report)")
+    if form == "gravity-norm":
+        notes.append("the accelerometer frame: x along the sensor x axis, y in the sensors' "
+                     "x–y plane (a field calibration cannot see the case)")
+    prov = Provenance(recording=log.source, software_version=__version__,
+                      created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+                      details={"accel_form": form, "n_poses": len(poses),
+                               "threshold_factor": detection.threshold_factor,
+                               "gravity_mps2": g, "gravity_std_mps2": sg})
+    cal = calibration_result(log.unit, log.source, names, values, cov, tuple(quality),
+                             tuple(notes), prov)
+    pose_rows = [{"index": p.index, "start_time_s": p.start_time_s,
+                  "end_time_s": p.end_time_s, "accel_mean_mps2": p.accel_mean,
+                  "accel_se_mps2": p.accel_se, "gyro_mean_rps": p.gyro_mean,
+                  "gyro_se_rps": p.gyro_se, "accel_residual": residuals[k],
+                  "gyro_bias_residual_rps": bias_resid[k], "up_direction": up[k]}
+                 for k, p in enumerate(poses)]
+    report(1.0)
+    return FieldResult(
+        unit=log.unit, source=log.source, result=cal, accel_form=form,
+        gyro_form="static only" if gyro is None else gyro["form"],
+        gyro_static_names=tuple(f"gyro_bias_{a}" for a in "xyz") + (
+            tuple(f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz") if fit_g else ()),
+        gyro_static_values=static_values, gyro_static_cov=static_cov, gravity_mps2=g,
+        gravity_std_mps2=sg,
+        threshold_factor=detection.threshold_factor, poses=pose_rows,
+        rotations=[] if gyro is None else gyro["rows"], coverage=coverage,
+        quality=tuple(quality), notes=tuple(notes),
+        details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
+                 "window_s": opt.window_s, "accel_values": accel_values,
+                 "accel_covariance": accel_cov})
+
+
+def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], up: _F64,
+              opt: FieldOptions, accel_values: _F64, accel_cov: _F64, form: str
+              ) -> dict[str, Any] | None:
+    """Step 5; None when ``gyro_form`` is "none" or the log holds no rotation."""
+    if opt.gyro_form == "none" or not detection.rotations:
+        return None
+    raise InsufficientExcitationError(["gyro_M"], "the gyro fit from rotations is not wired "
+                                                  "yet")

@@ -1,0 +1,241 @@
+"""From a hand-held log to the field calibration's observations: poses and rotations.
+
+A field log is one IMU's continuous record (a Recording of a guided session, or a user's CSV
+read through the import options of docs/import.md). :func:`find_intervals` runs the variance
+detector of :mod:`imucalib.processing.static_detector` (Tedaldi et al. 2014): with a given
+threshold factor k, or, by default, Tedaldi's search over k for the detection whose
+gravity-norm fit has the smallest χ²/ν. :func:`static_poses` reduces each static interval to
+its mean outputs with a standard error from the white-noise density pooled over every interval
+(block means, :func:`~imucalib.procedures.common.noise.block_variance`): a pose lasts seconds,
+too short for its own noise estimate.
+
+Contents
+--------
+:class:`FieldLog`, :func:`log_from_recording`, :func:`log_from_frame`, :class:`StaticPose`,
+:func:`static_poses`, :func:`find_intervals`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+from imucalib.errors import (
+    CalibrationError,
+    InsufficientExcitationError,
+    InvalidInputError,
+    MissingSegmentError,
+    RecordingError,
+)
+from imucalib.procedures.common.noise import block_variance, pooled_white_density
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.processing.static_detector import StaticDetection
+
+__all__ = ["FieldLog", "StaticPose", "find_intervals", "log_from_frame", "log_from_recording",
+           "static_poses"]
+
+_F64 = NDArray[np.float64]
+#: Threshold factors k tried by the automatic choice (Tedaldi et al. 2014 search a range of
+#: multiples of the initial variance).
+AUTO_THRESHOLDS = (2.0, 3.0, 4.0, 6.0, 8.0, 10.0, 14.0, 20.0)
+
+
+@dataclass(frozen=True, eq=False)
+class FieldLog:
+    """One IMU's continuous record, SI.
+
+    Attributes
+    ----------
+    unit, source : str
+        The IMU and where the data came from (a file).
+    time_s : ndarray, shape (n,)
+    gyro_rps, accel_mps2 : ndarray, shape (n, 3)
+    latitude_deg, height_m : float or None
+        The site, when the source says it (a Recording's metadata).
+    """
+
+    unit: str
+    source: str
+    time_s: _F64
+    gyro_rps: _F64
+    accel_mps2: _F64
+    latitude_deg: float | None = None
+    height_m: float | None = None
+
+    @property
+    def period_s(self) -> float:
+        """Median sample period. [s]"""
+        return float(np.median(np.diff(self.time_s)))
+
+
+def log_from_recording(rec: Recording, unit: str | None = None) -> FieldLog:
+    """Read the IMU stream `unit` (the only one when None) of a Recording whole.
+
+    Raises
+    ------
+    RecordingError
+        No IMU stream, or several and none chosen.
+    """
+    units = [s.unit for s in rec.streams if s.device == "imu"]
+    if (unit is not None and unit not in units) or (unit is None and len(units) != 1):
+        raise RecordingError(f"{rec.path.name} has the IMU stream(s) {units or 'none'}; "
+                             + ("choose one (--imu)" if unit is None else f"not {unit!r}"))
+    name = unit or units[0]
+    data = rec.read_stream("imu", name, columns=[*GYRO_COLUMNS, *ACCEL_COLUMNS])
+    meta = rec.metadata
+    lat = meta.get("latitude_deg")
+    height = meta.get("height_m")
+    return FieldLog(unit=name, source=str(rec.path),
+                    time_s=np.asarray(data.time_s, dtype=np.float64),
+                    gyro_rps=np.column_stack([data.columns[c] for c in GYRO_COLUMNS]),
+                    accel_mps2=np.column_stack([data.columns[c] for c in ACCEL_COLUMNS]),
+                    latitude_deg=None if lat is None else float(lat),
+                    height_m=None if height is None else float(height))
+
+
+def log_from_frame(frame: Any, unit: str, source: str) -> FieldLog:
+    """Wrap a DataFrame of :func:`~imucalib.io.import_spec.read_imu_table` (SI, canonical names).
+
+    Raises
+    ------
+    InvalidInputError
+        A gyro or accelerometer column missing (both triads are needed).
+    """
+    missing = [c for c in (*GYRO_COLUMNS, *ACCEL_COLUMNS) if c not in frame.columns]
+    if missing:
+        raise InvalidInputError(f"{source}: the field calibration needs the gyro and the "
+                                f"accelerometer; columns {missing} are missing (found "
+                                f"{list(frame.columns)}; see docs/import.md for --column-map)")
+    return FieldLog(unit=unit, source=source,
+                    time_s=np.asarray(frame.index, dtype=np.float64),
+                    gyro_rps=frame[list(GYRO_COLUMNS)].to_numpy(dtype=np.float64),
+                    accel_mps2=frame[list(ACCEL_COLUMNS)].to_numpy(dtype=np.float64))
+
+
+@dataclass(frozen=True)
+class StaticPose:
+    """One static interval reduced to its means.
+
+    Attributes
+    ----------
+    index : int
+        Its place among the intervals (0 the initial rest).
+    start_time_s, end_time_s : float
+    n_samples : int
+    accel_mean, accel_se : ndarray, shape (3,)
+        Mean accelerometer output and its standard error. [m/s²]
+    gyro_mean, gyro_se : ndarray, shape (3,)
+        Mean gyro output and its standard error. [rad/s]
+    """
+
+    index: int
+    start_time_s: float
+    end_time_s: float
+    n_samples: int
+    accel_mean: _F64
+    accel_se: _F64
+    gyro_mean: _F64
+    gyro_se: _F64
+
+    @property
+    def duration_s(self) -> float:
+        """Span of its samples. [s]"""
+        return self.end_time_s - self.start_time_s
+
+
+def static_poses(log: FieldLog, detection: StaticDetection, *, block_s: float = 0.25
+                 ) -> list[StaticPose]:
+    """Return the static intervals' means with pooled-noise standard errors (module docstring).
+
+    Raises
+    ------
+    InsufficientExcitationError
+        No interval long enough for three blocks of `block_s` (no noise estimate).
+    """
+    period = log.period_s
+    slices = [slice(s.start_index, s.stop_index) for s in detection.static]
+    blocks = [block_variance(np.column_stack([log.accel_mps2[sl], log.gyro_rps[sl]]),
+                             period, block_s) for sl in slices]
+    density = pooled_white_density(blocks)
+    if density is None:
+        raise InsufficientExcitationError(
+            ["noise"], f"no static interval of {log.source} holds three {block_s:g} s blocks: "
+                       "the poses' noise cannot be estimated (hold each pose longer)")
+    poses = []
+    for k, sl in enumerate(slices):
+        t = log.time_s[sl]
+        span = max(float(t[-1] - t[0]) + period, period)
+        se = density / math.sqrt(span)
+        poses.append(StaticPose(index=k, start_time_s=float(t[0]), end_time_s=float(t[-1]),
+                                n_samples=int(t.size),
+                                accel_mean=log.accel_mps2[sl].mean(axis=0), accel_se=se[:3],
+                                gyro_mean=log.gyro_rps[sl].mean(axis=0), gyro_se=se[3:]))
+    return poses
+
+
+def find_intervals(log: FieldLog, *, threshold_factor: float | None,
+                   window_s: float, init_static_s: float, min_static_s: float,
+                   min_rotation_deg: float, gravity_mps2: float,
+                   candidates: Sequence[float] = AUTO_THRESHOLDS) -> StaticDetection:
+    """Detect the static intervals and rotations, choosing k when not given (module docstring).
+
+    The automatic choice keeps, of the candidate k whose detection gives at least ten poses
+    and a full-rank gravity-norm fit, the one with the smallest χ²/ν; when none does (a
+    fixture's six faces), the k that finds the most intervals (ties: the nearest to 6).
+
+    Raises
+    ------
+    MissingSegmentError
+        Fewer than two static intervals with the given k, or with every candidate.
+    """
+    from imucalib.estimation.gravity_norm import fit_gravity_norm
+    from imucalib.processing.static_detector import detect_static_and_rotations
+
+    def detect(k: float) -> StaticDetection:
+        return detect_static_and_rotations(
+            log.time_s, log.gyro_rps, log.accel_mps2, window_s=window_s,
+            init_static_s=init_static_s, threshold_factor=k, min_static_s=min_static_s,
+            min_rotation_deg=min_rotation_deg)
+
+    if threshold_factor is not None:
+        found = detect(threshold_factor)
+        if len(found.static) < 2:
+            raise MissingSegmentError(
+                f"{log.source}: {len(found.static)} static interval(s) found with the "
+                f"threshold factor {threshold_factor:g} (the log must start at rest for "
+                f"{init_static_s:g} s and hold each pose at least {min_static_s:g} s; try "
+                "another --static-threshold, or none for the automatic choice)")
+        return found
+    best: tuple[tuple[float, int, float], StaticDetection] | None = None
+    tried = []
+    for k in candidates:
+        found = detect(k)
+        tried.append(f"k={k:g}: {len(found.static)}")
+        if len(found.static) < 2:
+            continue
+        score = math.inf
+        if len(found.static) >= 10:
+            try:
+                poses = static_poses(log, found)
+                score = fit_gravity_norm([p.accel_mean for p in poses],
+                                         [p.accel_se for p in poses],
+                                         gravity_mps2).quality.reduced_chi2
+            except CalibrationError:
+                pass
+        key = (score, -len(found.static), abs(k - 6.0))
+        if best is None or key < best[0]:
+            best = (key, found)
+    if best is None:
+        raise MissingSegmentError(
+            f"{log.source}: no threshold factor finds two static intervals (found: "
+            f"{'; '.join(tried)}); the log must start at rest for {init_static_s:g} s, then "
+            f"hold each pose at least {min_static_s:g} s")
+    return best[1]

@@ -1,0 +1,219 @@
+"""The field calibration's result and its triad model.
+
+The field fits estimate the accelerometer in the correction form (F.1) of
+:mod:`imucalib.estimation.gravity_norm` (or the triad form of the six-position fit) and the
+gyro's M in the accelerometer's frame; :func:`triad_from_field` maps them into the triad model
+y = b + (I + M)·x of :mod:`imucalib.models.result` (docs/field.md, Eq. (FL.1)):
+
+    I + M_a = (T·(I + diag s))⁻¹,   b_a = b                                              (FL.1)
+
+x being the specific force in the accelerometer's orthogonal frame a (x along sensor x, y in the
+sensors' x–y plane): I + M_a is upper triangular, its three lower entries exactly zero (with
+zero variance). The covariance is carried through the Jacobian of (FL.1) (numerical, central
+differences), with the gyro block and the gyro–accelerometer cross-covariance of the rotation
+fit as they are.
+
+Contents
+--------
+:class:`FieldResult`, :func:`triad_from_field`, :func:`accel_matrix`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imucalib.models.fit_quality import FitQuality
+from imucalib.models.result import (
+    CalibrationResult,
+    Provenance,
+    triad_parameter_names,
+    triad_parameter_unit,
+)
+from imucalib.procedures.common.static_windows import json_safe
+
+__all__ = ["FieldResult", "accel_matrix", "triad_from_field"]
+
+_F64 = NDArray[np.float64]
+
+
+def accel_matrix(theta: NDArray[np.float64]) -> _F64:
+    """Return I + M_a of (FL.1) for θ = (b, s, α) of (F.1)."""
+    t = np.array([[1.0, -theta[6], theta[7]], [0.0, 1.0, -theta[8]], [0.0, 0.0, 1.0]])
+    return np.asarray(np.linalg.inv(t @ np.diag(1.0 + theta[3:6])), dtype=np.float64)
+
+
+def _accel_triad(theta: _F64) -> _F64:
+    return np.concatenate([theta[:3], (accel_matrix(theta) - np.eye(3)).ravel()])
+
+
+def _jacobian(fun: Any, x: _F64, rel: float = 1e-6) -> _F64:
+    cols = []
+    for i in range(x.size):
+        h = rel * max(1.0, abs(x[i]))
+        up, dn = x.copy(), x.copy()
+        up[i] += h
+        dn[i] -= h
+        cols.append((fun(up) - fun(dn)) / (2 * h))
+    return np.column_stack(cols)
+
+
+def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
+                     gyro_static: _F64, gyro_static_cov: _F64,
+                     gyro_m: _F64 | None, gyro_m_cov: _F64 | None,
+                     gyro_accel_cov: _F64 | None) -> tuple[list[str], _F64, _F64]:
+    """Return (names, values, covariance) of the triad model (FL.1) (module docstring).
+
+    Parameters
+    ----------
+    accel_form : {"gravity-norm", "six-position"}
+        θ of (F.1) (9 values) or (b, M row-major) of (F.10) (12 values).
+    accel_values, accel_cov
+        The accelerometer estimate and its covariance (Birge-scaling not applied).
+    gyro_static, gyro_static_cov
+        Gyro bias (3) [rad/s], and G (9, row-major) [rad/s per m/s²] when fitted, with their
+        covariance.
+    gyro_m, gyro_m_cov, gyro_accel_cov
+        The gyro M (9, row-major), its covariance and its cross-covariance with the accel
+        values (9 × len(accel_values)); None when no rotation was fitted (the gyro triad is
+        then left out: a bias alone is not a triad).
+    """
+    if accel_form == "gravity-norm":
+        jac = _jacobian(_accel_triad, accel_values)
+        a_vals = _accel_triad(accel_values)
+    else:
+        jac = np.eye(12)
+        a_vals = accel_values.copy()
+    names = list(triad_parameter_names("accel", "triad"))
+    values = [a_vals]
+    blocks = [jac @ accel_cov @ jac.T]
+    if gyro_m is None or gyro_m_cov is None:
+        cov = blocks[0]
+        return names, np.concatenate(values), 0.5 * (cov + cov.T)
+    with_g = gyro_static.size == 12
+    names += list(triad_parameter_names("gyro", "triad", g_sensitivity=with_g))
+    values.append(np.concatenate([gyro_static[:3], gyro_m, gyro_static[3:]]))
+    k = 12
+    n = k + 12 + (9 if with_g else 0)
+    static_idx = [k, k + 1, k + 2, *range(k + 12, n)]
+    cov = np.zeros((n, n))
+    cov[:k, :k] = blocks[0]
+    cov[np.ix_(static_idx, static_idx)] = gyro_static_cov
+    cov[k + 3:k + 12, k + 3:k + 12] = gyro_m_cov
+    if gyro_accel_cov is not None:
+        cross = gyro_accel_cov @ jac.T                       # (9, 12)
+        cov[k + 3:k + 12, :k] = cross
+        cov[:k, k + 3:k + 12] = cross.T
+    return names, np.concatenate(values), 0.5 * (cov + cov.T)
+
+
+@dataclass(frozen=True)
+class FieldResult:
+    """A field calibration (the results contract of docs/procedures.md).
+
+    Attributes
+    ----------
+    unit, source : str
+        The IMU and the log analysed.
+    result : CalibrationResult
+        The triad model (accelerometer; gyro when rotations were fitted), model ``"triad"``:
+        what ``imucalib apply`` reads.
+    accel_form : {"gravity-norm", "six-position"}
+    gyro_form : str
+        ``"rotations"`` (gravity-referenced and/or known-angle turns), or ``"bias only"``.
+    gyro_static_names : tuple of str
+        ``gyro_bias_x`` … and, when fitted, ``gyro_G_xx`` … (from the static poses).
+    gyro_static_values, gyro_static_cov : ndarray
+        Their values and covariance (also in `result` when the gyro triad is).
+    gravity_mps2, gravity_std_mps2 : float
+        Local g used and its standard uncertainty. [m/s²]
+    threshold_factor : float
+        The detector's k (chosen or given).
+    poses : list of dict
+        Per static pose: times, means, σ, the fit's residual.
+    rotations : list of dict
+        Per rotation: times, kind, angle, residual.
+    coverage : dict
+        Missing directions and the poses needed per parameter for the targets.
+    quality : tuple of FitQuality
+        χ²/ν of each fit (accel, gyro bias, gyro rotations).
+    notes : tuple of str
+    """
+
+    unit: str
+    source: str
+    result: CalibrationResult
+    accel_form: str
+    gyro_form: str
+    gyro_static_names: tuple[str, ...]
+    gyro_static_values: _F64
+    gyro_static_cov: _F64
+    gravity_mps2: float
+    gravity_std_mps2: float
+    threshold_factor: float
+    poses: list[dict[str, Any]]
+    rotations: list[dict[str, Any]]
+    coverage: dict[str, Any]
+    quality: tuple[FitQuality, ...]
+    notes: tuple[str, ...] = ()
+    details: dict[str, Any] = field(default_factory=dict)
+    procedure: str = "field"
+    passed: bool | None = None
+
+    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
+        """(name, value, σ Birge-scaled on a misfit, SI unit) of every parameter."""
+        cal = self.result
+        std = cal.std(scaled=True)
+        rows = [(n, cal.value(n), std[n], triad_parameter_unit(n)) for n in cal.param_names]
+        if not cal.has_triad("gyro"):
+            sb = np.sqrt(np.diag(self.gyro_static_cov))
+            rows += [(n, float(v), float(s), triad_parameter_unit(n)) for n, v, s in
+                     zip(self.gyro_static_names, self.gyro_static_values, sb, strict=True)]
+        return rows
+
+    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
+        """(names, values, covariance Birge-scaled) for :func:`~imucalib.models.combine`."""
+        cal = self.result
+        return list(cal.param_names), cal.values.copy(), cal.covariance_scaled.copy()
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the whole result as JSON-able data."""
+        rows = self.parameter_rows()
+        out = {
+            "procedure": self.procedure, "unit": self.unit, "source": self.source,
+            "passed": self.passed, "accel_form": self.accel_form, "gyro_form": self.gyro_form,
+            "parameters": {n: {"value": v, "std": s, "unit": u} for n, v, s, u in rows},
+            "fit_quality": [{"group": q.group, "chi2": q.chi2, "dof": q.dof,
+                             "reduced_chi2": q.reduced_chi2, "misfit": q.misfit,
+                             "sigma_scale": q.sigma_scale} for q in self.quality],
+            "gravity_mps2": self.gravity_mps2, "gravity_std_mps2": self.gravity_std_mps2,
+            "threshold_factor": self.threshold_factor,
+            "poses": self.poses, "rotations": self.rotations, "coverage": self.coverage,
+            "result": self.result.to_dict(), "notes": list(self.notes),
+            "details": self.details,
+        }
+        return dict(json_safe(out))  # type: ignore[call-overload]
+
+
+def calibration_result(unit: str, source: str, names: list[str], values: _F64, cov: _F64,
+                       quality: tuple[FitQuality, ...], notes: tuple[str, ...],
+                       provenance: Provenance) -> CalibrationResult:
+    """Build the CalibrationResult; each triad's FitQuality renamed to its group."""
+    groups: list[FitQuality] = []
+    for q in quality:
+        g = q.group.split(" ")[0]
+        if any(n.startswith(g + "_") for n in names) and g not in [x.group for x in groups]:
+            groups.append(replace(q, group=g))
+    return CalibrationResult(
+        sensor_id=unit, procedure="field", model="triad", param_names=tuple(names),
+        values=values, covariance=cov, units={n: triad_parameter_unit(n) for n in names},
+        provenance=provenance, notes=notes, fit_quality=tuple(groups))
+
+
+def rms(values: NDArray[np.float64]) -> float:
+    """Root mean square (NaN for none)."""
+    return float(math.sqrt(np.mean(np.square(values)))) if values.size else math.nan
