@@ -48,6 +48,10 @@ def test_the_same_seed_gives_the_same_session(session):
     assert [p.start_time_s for p in again.statics] == [p.start_time_s for p in session.statics]
     assert not np.array_equal(other.model.accel.bias, session.model.accel.bias)
     assert len(other) != len(session) or not np.array_equal(other.gyro_rps, session.gyro_rps)
+    # the truth at the samples is the motion's, evaluated again at any time
+    kin = session.kinematics(session.time_s)
+    np.testing.assert_array_equal(kin.rate_b_rps, session.true_rate_b_rps)
+    np.testing.assert_array_equal(kin.specific_force_b_mps2, session.true_specific_force_b_mps2)
 
 
 def test_the_session_shape(session):
@@ -183,6 +187,7 @@ def test_outputs_are_the_truth_model_within_the_white_noise(white):
         z.extend((white.gyro_rps[rows].mean(axis=0) - gyro_true) / sig_g)
         z.extend((white.accel_mps2[rows].mean(axis=0) - accel_true) / sig_a)
     z = np.asarray(z)
+    print(f"{z.size} normalised residuals: std {z.std():.3f}, max |z| {np.abs(z).max():.2f}")
     assert np.abs(z).max() < 4.0
     assert 0.7 < z.std() < 1.3  # the spread is the noise's, not a looser bound
     # and the errors are there: a consumer gyro's bias is far above that noise
