@@ -10,8 +10,11 @@ dynamic unbalance), :mod:`~imucalib.sim.fixture` (IMU mounts), :mod:`~imucalib.s
 The station together: :mod:`~imucalib.sim.synth` (an IMU at its own clock),
 :mod:`~imucalib.sim.rig` (:class:`TwinRig`, every stream of the station in virtual time),
 :mod:`~imucalib.sim.scenario` (what to simulate: twin equipment plus a plan's steps),
-:mod:`~imucalib.sim.build` (equipment → rig and truth). A scenario is run into a Recording by the
-station runner on the simulated station (:mod:`imucalib.station.simulate`).
+:mod:`~imucalib.sim.build` (equipment → rig and truth). Field calibration without a table:
+:mod:`~imucalib.sim.handheld` (a hand-held session on a desk, its truth and its CSV) on
+:mod:`~imucalib.sim.hand_motion` (the hand's attitude, rate and angular acceleration). A
+scenario is run into a Recording by the station runner on the simulated station
+(:mod:`imucalib.station.simulate`).
 """
 
 from __future__ import annotations
@@ -36,6 +39,15 @@ from imucalib.sim.fixture import (
     as_rotation,
     hexahedral_fixture,
     single_imu_fixture,
+)
+from imucalib.sim.hand_motion import HandMotion, HandMove, HandSegment
+from imucalib.sim.handheld import (
+    HandheldSession,
+    HandRotation,
+    StaticPose,
+    WrittenCsv,
+    handheld_session,
+    write_session_csv,
 )
 from imucalib.sim.kinematics import (
     ImuKinematics,
@@ -66,6 +78,11 @@ __all__ = [
     "ChamberSpec",
     "ClockSpec",
     "Fixture",
+    "HandMotion",
+    "HandMove",
+    "HandRotation",
+    "HandSegment",
+    "HandheldSession",
     "ImuKinematics",
     "ImuSamples",
     "ImuSynthesizer",
@@ -80,9 +97,11 @@ __all__ = [
     "SimImu",
     "SimRateTable",
     "Site",
+    "StaticPose",
     "TableFeedback",
     "TableGrade",
     "TwinRig",
+    "WrittenCsv",
     "array_fixture",
     "as_rotation",
     "build_rig",
@@ -92,6 +111,7 @@ __all__ = [
     "dynamic_radius_m",
     "earth_rate_n_rps",
     "gravity_n_mps2",
+    "handheld_session",
     "hexahedral_fixture",
     "imu_temperature_degc",
     "load_scenario",
@@ -100,4 +120,5 @@ __all__ = [
     "rot_nt",
     "single_imu_fixture",
     "stationary_platform_motion",
+    "write_session_csv",
 ]

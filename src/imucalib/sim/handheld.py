@@ -1,0 +1,512 @@
+"""Hand-held calibration sessions on the twin: an IMU put on its faces on a desk, turned by hand.
+
+Field calibration has no rate table: the user lays the IMU on a desk, leaves it still for a few
+seconds, turns it by hand to another face, and so on (Tedaldi, Pretto & Menegatti, "A robust and
+easy to implement method for IMU calibration without external equipments", ICRA 2014), and for
+the gyro scale factors turns it through known angles, whole turns flat on the desk (Ferraris,
+Grimaldi & Parvis, "Procedure for effortless in-field calibration of three-axis rate gyros and
+accelerometers", Sensors and Materials 7(5), 1995). :func:`handheld_session` simulates such a
+session with the twin's own IMU (a truth drawn from a grade, its noise and output stage,
+:class:`~imucalib.sim.synth.ImuSynthesizer`), so that every true value is known;
+:func:`write_session_csv` writes it as the CSV a user would have.
+
+Session
+-------
+1. The initial rest (pose 0): z up, tilted less than ``level_tilt_deg``, a random heading, for
+   ``init_static_s`` (the variance detector's reference interval).
+2. Poses 1 … n: pose k has face F_k up, cycling +x, −x, +y, −y, +z, −z (every axis direction),
+   at the attitude
+
+       R_tb = R_z(ψ) · R_h(θ) · R_F                                                   (H.5)
+
+   (R_F puts F up, R_h(θ) tilts it by θ ~ U(off_axis_deg) about a random horizontal axis h,
+   R_z(ψ) a heading ψ ~ U(0, 2π)), held still for U(static_s). With ``full_turns``, the first
+   +x, +y and +z up poses are level instead (θ ~ U(0, level_tilt_deg)) and carry, after their
+   static, a +360° turn about the vertical, a static, a −360° turn and a static: the known
+   angles ±2π of Ferraris' method.
+3. Between poses, a hand rotation along the shortest arc ((H.1) of
+   :mod:`imucalib.sim.hand_motion`), of duration U(rotation_s) (twice that for a full turn),
+   its rate peak at c ~ U(0.3, 0.7) of each move, with probability ``pause_probability`` a pause
+   of 0.2–0.5 s halfway (at s ~ U(0.35, 0.65)), and a tremor of amplitude ``tremor_deg`` at
+   U(6, 10) Hz about a random axis (about the vertical in a full turn: the IMU lies on the desk).
+
+The IMU turns about its own origin at a fixed place (no translation): its specific force is
+gravity seen in the body, its rate ω_tb plus Earth rate
+(:func:`~imucalib.sim.kinematics.compute_imu_kinematics` with the hand attitude as the
+platform). Statics are exactly still relative to the Earth.
+
+Randomness
+----------
+One seed gives the session: a :class:`numpy.random.SeedSequence` of ``seed`` spawns three
+children, the IMU's truth (:func:`~imucalib.models.imu.sample_imu_model`), the motion, and the
+synthesiser's noise.
+
+CSV layouts (:func:`write_session_csv`)
+---------------------------------------
+``"imucal"``: ``t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z``, time in s, accelerometer in m/s², gyro
+in °/s (the imucal layout of :mod:`imucalib.io.csv_layouts`, read with no options).
+``"counts"``: a 2-line preamble, then ``sample;gx;gy;gz;ax;ay;az`` (semicolons), a sample
+counter and integer counts raw = round(value·scale + offset) clipped to [0, 2^bits − 1] (gyro
+value in °/s, accelerometer in g), as an MPU-6050 class part logged by a microcontroller; read
+back with the options in :attr:`WrittenCsv.cli_args` (``--gyro-unit counts --gyro-scale …``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from imucalib import units
+from imucalib._checks import check_finite_scalar, check_nonnegative, check_positive
+from imucalib.errors import ConfigurationError, InvalidInputError
+from imucalib.io.import_spec import COUNTS, ImportSpec
+from imucalib.models.earth import Site
+from imucalib.models.imu import GRADES, ImuModel, sample_imu_model
+from imucalib.models.noise import NoiseModel
+from imucalib.plan.equipment import ImuConfig
+from imucalib.sim.build import _with_errors
+from imucalib.sim.fixture import MountedImu
+from imucalib.sim.hand_motion import HandMotion, HandMove, HandSegment
+from imucalib.sim.kinematics import ImuKinematics, compute_imu_kinematics
+from imucalib.sim.synth import ClockSpec, ImuSynthesizer, SimImu
+
+__all__ = ["FACES", "HandRotation", "HandheldSession", "StaticPose", "WrittenCsv",
+           "handheld_session", "write_session_csv"]
+
+_F64 = NDArray[np.float64]
+#: The face cycle of the poses: the body axis pointing up.
+FACES: tuple[str, ...] = ("+x", "-x", "+y", "-y", "+z", "-z")
+_AXIS = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0),
+         "-y": (0.0, -1.0, 0.0), "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0)}
+_UP_T = np.array([0.0, 0.0, 1.0])
+_PAUSE_S = (0.2, 0.5)
+_TREMOR_HZ = (6.0, 10.0)
+
+
+@dataclass(frozen=True, eq=False)
+class StaticPose:
+    """A true static interval of a session.
+
+    Attributes
+    ----------
+    pose_index : int
+        0 for the initial rest, 1 … n_poses for the visited poses (a pose with full turns has
+        three static intervals of the same index).
+    face : str
+        The body axis nominally up (``"+x"`` …).
+    tilt_deg : float
+        θ of (H.5): the angle between that axis and the vertical. [°]
+    start_time_s, stop_time_s : float
+        The interval [start, stop) of true time. [s]
+    rot_tb : Rotation
+        The true attitude (``v_t = rot_tb.apply(v_b)``).
+    up_b : ndarray, shape (3,)
+        The vertical (up) in the body: the direction of the true specific force. [–]
+    """
+
+    pose_index: int
+    face: str
+    tilt_deg: float
+    start_time_s: float
+    stop_time_s: float
+    rot_tb: Rotation
+    up_b: _F64
+
+
+@dataclass(frozen=True, eq=False)
+class HandRotation:
+    """A true hand rotation between two static intervals.
+
+    Attributes
+    ----------
+    start_time_s, stop_time_s : float
+        Its span (the end of the static before, the start of the one after). [s]
+    rotvec_b_rad : ndarray, shape (3,)
+        φ: R_1 = R_0·exp([φ]×), in the body at the start ((H.1) of
+        :mod:`imucalib.sim.hand_motion`). [rad]
+    full_turn : bool
+        A whole turn about the vertical (φ = ±2π·up_b).
+    angle_rad : float
+        The signed angle: ±2π for a full turn (+ counter-clockwise seen from above), ‖φ‖
+        otherwise. [rad]
+    """
+
+    start_time_s: float
+    stop_time_s: float
+    rotvec_b_rad: _F64
+    full_turn: bool
+    angle_rad: float
+
+
+@dataclass(frozen=True, eq=False)
+class HandheldSession:
+    """A simulated hand-held session: the IMU's output and the truth behind it.
+
+    Attributes
+    ----------
+    time_s : ndarray, shape (n,)
+        Sample times (k / sample_rate_hz). [s]
+    gyro_rps, accel_mps2 : ndarray, shape (n, 3)
+        The IMU's outputs. [rad/s], [m/s²]
+    temperature_degc : ndarray, shape (n,)
+        Its temperature sensor. [°C]
+    model : ImuModel
+        The true IMU (errors, noise, output stage).
+    site : Site
+        Where the desk is.
+    statics : tuple of StaticPose
+        The true static intervals, in time order.
+    rotations : tuple of HandRotation
+        The true rotations, one between each two consecutive statics.
+    motion : HandMotion
+        The motion, to evaluate at any time (:meth:`HandMotion.evaluate`).
+    true_rate_b_rps, true_specific_force_b_mps2 : ndarray, shape (n, 3)
+        The true inputs at the samples (Earth rate included). [rad/s], [m/s²]
+    sample_rate_hz : float
+    grade : str
+    seed : int
+    """
+
+    time_s: _F64
+    gyro_rps: _F64
+    accel_mps2: _F64
+    temperature_degc: _F64
+    model: ImuModel
+    site: Site
+    statics: tuple[StaticPose, ...]
+    rotations: tuple[HandRotation, ...]
+    motion: HandMotion
+    true_rate_b_rps: _F64
+    true_specific_force_b_mps2: _F64
+    sample_rate_hz: float
+    grade: str
+    seed: int
+
+    def __len__(self) -> int:
+        return int(self.time_s.shape[0])
+
+    @property
+    def full_turns(self) -> tuple[HandRotation, ...]:
+        """The full turns about the vertical (Ferraris' known angles)."""
+        return tuple(r for r in self.rotations if r.full_turn)
+
+    def kinematics(self, time_s: _F64) -> ImuKinematics:
+        """Return the true inputs at any times (the same equations as the samples')."""
+        return compute_imu_kinematics(self.motion.platform_motion(time_s), self.site,
+                                      MountedImu("handheld"))
+
+
+def _range(value: tuple[float, float], name: str, *, low: float = 0.0) -> tuple[float, float]:
+    a, b = (check_finite_scalar(v, name) for v in value)
+    if not low <= a <= b:
+        raise InvalidInputError(f"`{name}` must be a range ({low:g} ≤ min ≤ max); got {value}")
+    return a, b
+
+
+def _pose_attitude(face: str, tilt_rad: float, rng: np.random.Generator) -> Rotation:
+    """(H.5): face up, tilted by `tilt_rad` about a random horizontal axis, random heading."""
+    rot_face, _ = Rotation.align_vectors([_UP_T], [_AXIS[face]])
+    az = rng.uniform(0.0, 2.0 * math.pi)
+    tilt = Rotation.from_rotvec(tilt_rad * np.array([math.cos(az), math.sin(az), 0.0]))
+    heading = Rotation.from_rotvec([0.0, 0.0, rng.uniform(0.0, 2.0 * math.pi)])
+    return heading * tilt * rot_face
+
+
+def _moves(t0: float, dur: float, rng: np.random.Generator,
+           pause_probability: float) -> tuple[HandMove, ...]:
+    """Return the moves of s over [t0, t0 + dur]: one, or two with a pause between them."""
+    if rng.random() >= pause_probability:
+        return (HandMove(t0, t0 + dur, 0.0, 1.0, rng.uniform(0.3, 0.7)),)
+    pause = min(rng.uniform(*_PAUSE_S), 0.3 * dur)
+    mid = rng.uniform(0.35, 0.65)
+    t1 = t0 + (dur - pause) * mid
+    return (HandMove(t0, t1, 0.0, mid, rng.uniform(0.3, 0.7)),
+            HandMove(t1 + pause, t0 + dur, mid, 1.0, rng.uniform(0.3, 0.7)))
+
+
+def _random_unit(rng: np.random.Generator) -> _F64:
+    v = rng.standard_normal(3)
+    return np.asarray(v / np.linalg.norm(v), dtype=np.float64)
+
+
+def _rotation(t0: float, dur: float, rot0: Rotation, phi: _F64, rng: np.random.Generator,
+              tremor_rad: float, pause_probability: float, axis: _F64 | None) -> HandSegment:
+    moves = _moves(t0, dur, rng, pause_probability)
+    return HandSegment(t0, t0 + dur, rot0, phi, moves, tremor_rad=tremor_rad,
+                       tremor_hz=rng.uniform(*_TREMOR_HZ),
+                       tremor_phase_rad=rng.uniform(0.0, 2.0 * math.pi),
+                       tremor_axis_b=_random_unit(rng) if axis is None else axis)
+
+
+def _plan(n_poses: int, off_axis: tuple[float, float], static_s: tuple[float, float],
+          rotation_s: tuple[float, float], init_static_s: float, full_turns: bool,
+          level_tilt_deg: float, tremor_rad: float, pause_probability: float,
+          rng: np.random.Generator) -> tuple[HandMotion, list[StaticPose], list[HandRotation]]:
+    """Draw the poses and rotations of a session (module docstring)."""
+    # (pose index, face, tilt [°], with turns)
+    poses: list[tuple[int, str, float, bool]] = [(0, "+z", rng.uniform(0.0, level_tilt_deg),
+                                                  False)]
+    turned: set[str] = set()
+    for k in range(n_poses):
+        face = FACES[k % len(FACES)]
+        turns = full_turns and face.startswith("+") and face not in turned
+        if turns:
+            turned.add(face)
+        tilt = rng.uniform(0.0, level_tilt_deg) if turns else rng.uniform(*off_axis)
+        poses.append((k + 1, face, tilt, turns))
+    segments: list[HandSegment] = []
+    statics: list[StaticPose] = []
+    rotations: list[HandRotation] = []
+    t = 0.0
+
+    def hold(index: int, face: str, tilt: float, rot: Rotation, dur: float) -> None:
+        nonlocal t
+        segments.append(HandSegment(t, t + dur, rot, np.zeros(3)))
+        statics.append(StaticPose(index, face, tilt, t, t + dur, rot, rot.inv().apply(_UP_T)))
+        t += dur
+
+    def move(rot0: Rotation, phi: _F64, dur: float, turn: bool, axis: _F64 | None) -> None:
+        nonlocal t
+        segments.append(_rotation(t, dur, rot0, phi, rng, tremor_rad, pause_probability, axis))
+        angle = float(np.dot(phi, rot0.inv().apply(_UP_T))) if turn else float(
+            np.linalg.norm(phi))
+        rotations.append(HandRotation(t, t + dur, phi, turn, angle))
+        t += dur
+
+    rot = Rotation.identity()
+    for index, face, tilt, turns in poses:
+        new = _pose_attitude(face, math.radians(tilt), rng)
+        if index > 0:
+            move(rot, (rot.inv() * new).as_rotvec(), rng.uniform(*rotation_s), False, None)
+        rot = new
+        hold(index, face, tilt, rot, init_static_s if index == 0 else rng.uniform(*static_s))
+        if turns:
+            up_b = rot.inv().apply(_UP_T)
+            for sign in (1.0, -1.0):
+                move(rot, sign * 2.0 * math.pi * up_b, 2.0 * rng.uniform(*rotation_s), True,
+                     up_b)
+                hold(index, face, tilt, rot, rng.uniform(*static_s))
+    return HandMotion(tuple(segments)), statics, rotations
+
+
+def _model(grade: str, rng: np.random.Generator, sample_rate_hz: float, noise: str,
+           errors: dict[str, object] | None) -> ImuModel:
+    if grade not in GRADES:
+        raise ConfigurationError(f"unknown IMU grade {grade!r}; expected one of {sorted(GRADES)}")
+    if noise not in ("grade", "white"):
+        raise ConfigurationError(f"`noise` must be 'grade' or 'white'; got {noise!r}")
+    model = sample_imu_model(grade, rng, sample_rate_hz=sample_rate_hz)
+    if errors:
+        try:
+            cfg = ImuConfig(name="handheld", grade=grade, errors=errors)
+        except ValueError as exc:  # pydantic's ValidationError: the key or shape named
+            raise InvalidInputError(f"`errors`: {exc}") from exc
+        model = _with_errors(model, cfg)
+    if noise == "white":
+        model = dataclasses.replace(
+            model, gyro_noise=NoiseModel(white_density=model.gyro_noise.white_density),
+            accel_noise=NoiseModel(white_density=model.accel_noise.white_density))
+    return model
+
+
+def handheld_session(
+    grade: str = "consumer",
+    *,
+    seed: int,
+    n_poses: int = 18,
+    off_axis_deg: tuple[float, float] = (5.0, 30.0),
+    static_s: tuple[float, float] = (4.0, 8.0),
+    rotation_s: tuple[float, float] = (1.5, 4.0),
+    init_static_s: float = 10.0,
+    full_turns: bool = True,
+    sample_rate_hz: float = 100.0,
+    site: Site | None = None,
+    noise: Literal["grade", "white"] = "grade",
+    errors: dict[str, object] | None = None,
+    tremor_deg: float = 0.3,
+    pause_probability: float = 0.3,
+    level_tilt_deg: float = 2.0,
+    temperature_degc: float = 25.0,
+) -> HandheldSession:
+    """Simulate a hand-held calibration session on the twin (module docstring).
+
+    Parameters
+    ----------
+    grade : {"consumer", "tactical", "navigation"}
+        The IMU's grade; its truth is drawn from it.
+    seed : int
+        Seeds everything: the same seed gives the same session, bit for bit.
+    n_poses : int
+        Poses visited after the initial rest (at least 6: every face up once).
+    off_axis_deg : (float, float)
+        Range of a pose's tilt θ from its face (H.5). [°]
+    static_s, rotation_s : (float, float)
+        Ranges of a static's and a rotation's duration (a full turn takes twice). [s]
+    init_static_s : float
+        The initial rest. [s]
+    full_turns : bool
+        Add ±360° turns about the vertical at the first +x, +y and +z up poses (then level).
+    sample_rate_hz : float
+        The IMU's output data rate. [Hz]
+    site : Site, optional
+        Where the desk is (default latitude 45°, the twin's default site).
+    noise : {"grade", "white"}
+        The grade's noise, or its white terms only (a bias that does not wander).
+    errors : dict, optional
+        Truth parameters replaced, ``"<triad>.<parameter>"`` → values (SI), as
+        ``ImuConfig.errors`` (docs/twin.md).
+    tremor_deg : float
+        Hand tremor amplitude during rotations. [°]
+    pause_probability : float
+        Chance that a rotation pauses halfway, in [0, 1].
+    level_tilt_deg : float
+        Largest tilt of the initial rest and of the poses with full turns. [°]
+    temperature_degc : float
+        The IMU's (constant) temperature. [°C]
+
+    Returns
+    -------
+    HandheldSession
+
+    Raises
+    ------
+    InvalidInputError
+        A range that is not one, n_poses < 6, a bad `errors` entry.
+    ConfigurationError
+        An unknown grade or noise kind.
+    """
+    if not isinstance(n_poses, int) or n_poses < len(FACES):
+        raise InvalidInputError(f"`n_poses` must be an integer ≥ {len(FACES)} (every face up "
+                                f"once); got {n_poses!r}")
+    off_axis = _range(off_axis_deg, "off_axis_deg")
+    if off_axis[1] >= 90.0:
+        raise InvalidInputError(f"`off_axis_deg` must stay below 90°; got {off_axis_deg}")
+    statics_s = _range(static_s, "static_s", low=1e-3)
+    rotations_s = _range(rotation_s, "rotation_s", low=1e-3)
+    init_s = check_positive(init_static_s, "init_static_s")
+    fs = check_positive(sample_rate_hz, "sample_rate_hz")
+    tremor = check_nonnegative(tremor_deg, "tremor_deg") * units.DEG
+    pause = check_finite_scalar(pause_probability, "pause_probability")
+    if not 0.0 <= pause <= 1.0:
+        raise InvalidInputError(f"`pause_probability` must be in [0, 1]; got {pause}")
+    level = check_nonnegative(level_tilt_deg, "level_tilt_deg")
+    temp = check_finite_scalar(temperature_degc, "temperature_degc")
+    site = Site(latitude_deg=45.0) if site is None else site
+    model_ss, motion_ss, synth_ss = np.random.SeedSequence(abs(int(seed))).spawn(3)
+    model = _model(grade, np.random.default_rng(model_ss), fs, noise, errors)
+    motion, statics, rotations = _plan(n_poses, off_axis, statics_s, rotations_s, init_s,
+                                       full_turns, level, tremor, pause,
+                                       np.random.default_rng(motion_ss))
+    mount = MountedImu("handheld")
+    synth = ImuSynthesizer(SimImu("handheld", model, ClockSpec()), np.random.default_rng(synth_ss))
+    samples = synth.synthesize(
+        motion.duration_s,
+        lambda t: compute_imu_kinematics(motion.platform_motion(t), site, mount),
+        lambda t: (np.full(t.shape, temp), np.zeros(t.shape)))
+    return HandheldSession(
+        time_s=samples.time_s, gyro_rps=samples.gyro_rps, accel_mps2=samples.accel_mps2,
+        temperature_degc=samples.temperature_degc, model=model, site=site,
+        statics=tuple(statics), rotations=tuple(rotations), motion=motion,
+        true_rate_b_rps=samples.true_rate_b_rps,
+        true_specific_force_b_mps2=samples.true_specific_force_b_mps2,
+        sample_rate_hz=fs, grade=grade, seed=int(seed))
+
+
+@dataclass(frozen=True)
+class WrittenCsv:
+    """A session written as a user's CSV, and how to read it back.
+
+    Attributes
+    ----------
+    path : Path
+    layout : str
+        ``"imucal"`` or ``"counts"``.
+    spec : ImportSpec
+        The import specification that reads it (:func:`~imucalib.io.import_spec.read_imu_table`).
+    cli_args : tuple of str
+        The same as command-line options (empty: none needed).
+    """
+
+    path: Path
+    layout: str
+    spec: ImportSpec
+    cli_args: tuple[str, ...]
+
+
+def write_session_csv(
+    session: HandheldSession,
+    path: str | os.PathLike[str],
+    *,
+    layout: Literal["imucal", "counts"] = "imucal",
+    gyro_counts_per_dps: float = 65.5,
+    accel_counts_per_g: float = 16384.0,
+    zero_code: int = 32768,
+    bits: int = 16,
+) -> WrittenCsv:
+    """Write `session` as the CSV a user would have (module docstring, "CSV layouts").
+
+    Parameters
+    ----------
+    session : HandheldSession
+    path : str or Path
+        The file to write.
+    layout : {"imucal", "counts"}
+        imucal's names in SI (gyro °/s), or raw integer counts.
+    gyro_counts_per_dps, accel_counts_per_g : float
+        With ``"counts"``: the sensitivities (an MPU-6050 at ±500 °/s and ±2 g: 65.5 and
+        16384; at ±250 °/s a full turn by hand can clip). [1/(°/s)], [1/g]
+    zero_code : int
+        With ``"counts"``: the code of zero (unsigned output). [counts]
+    bits : int
+        With ``"counts"``: the word length; codes are clipped to [0, 2^bits − 1].
+
+    Returns
+    -------
+    WrittenCsv
+        The path, the layout and the options that read it back.
+
+    Raises
+    ------
+    InvalidInputError
+        An unknown layout or a non-positive sensitivity.
+    """
+    p = Path(path)
+    if layout == "imucal":
+        data = np.column_stack([session.time_s, session.accel_mps2,
+                                np.rad2deg(session.gyro_rps)])
+        with p.open("w", encoding="utf-8", newline="\n") as fh:
+            fh.write("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n")
+            np.savetxt(fh, data, fmt="%.10g", delimiter=",")
+        return WrittenCsv(p, layout, ImportSpec(), ())
+    if layout != "counts":
+        raise InvalidInputError(f"`layout` must be 'imucal' or 'counts'; got {layout!r}")
+    g_scale = check_positive(gyro_counts_per_dps, "gyro_counts_per_dps")
+    a_scale = check_positive(accel_counts_per_g, "accel_counts_per_g")
+    top = (1 << int(bits)) - 1
+    gyro = np.rint(np.rad2deg(session.gyro_rps) * g_scale + zero_code)
+    accel = np.rint(session.accel_mps2 / units.G0_MPS2 * a_scale + zero_code)
+    counts = np.clip(np.column_stack([gyro, accel]), 0, top).astype(np.int64)
+    rows = np.column_stack([np.arange(len(session), dtype=np.int64), counts])
+    with p.open("w", encoding="utf-8", newline="\n") as fh:
+        fh.write(f"# imucalib twin, hand-held session, grade {session.grade}, seed {session.seed}"
+                 f"\n# {session.sample_rate_hz:g} Hz, gyro {g_scale:g} LSB/(deg/s), accel "
+                 f"{a_scale:g} LSB/g, zero {zero_code}\n")
+        fh.write("sample;gx;gy;gz;ax;ay;az\n")
+        np.savetxt(fh, rows, fmt="%d", delimiter=";")
+    spec = ImportSpec(gyro_unit=COUNTS, accel_unit=COUNTS, gyro_scale=g_scale,
+                      accel_scale=a_scale, gyro_offset=float(zero_code),
+                      accel_offset=float(zero_code), time_column="sample",
+                      sample_rate_hz=session.sample_rate_hz, delimiter=";", skip_rows=2)
+    args = ("--skip-rows", "2", "--delimiter", ";", "--time-column", "sample",
+            "--sample-rate-hz", f"{session.sample_rate_hz:g}", "--gyro-unit", COUNTS,
+            "--gyro-scale", f"{g_scale:g}", "--gyro-offset", str(zero_code), "--accel-unit",
+            COUNTS, "--accel-scale", f"{a_scale:g}", "--accel-offset", str(zero_code))
+    return WrittenCsv(p, layout, spec, args)
