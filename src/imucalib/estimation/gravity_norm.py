@@ -14,7 +14,14 @@ mean output of a pose), the nine unknowns θ = (b, s, α) minimise
 
     χ²(θ) = Σ_k (‖a_k(θ)‖ − g)² / σ_k²,   σ_k² = û_kᵀ·diag(σ_y,k²)·û_k                  (F.2)
 
-(û_k = a_k/‖a_k‖: only the noise along gravity moves the norm). :func:`fit_gravity_norm`
+(û_k = a_k/‖a_k‖: only the noise along gravity moves the norm). A consumer accelerometer's
+quadratic scale factor (K2 up to 10⁻³ g/g²) is a misfit of (F.1) at the 10⁻⁴ level; the
+optional model
+
+    a = T·(I + diag s)·(d − k2∘d²),   d = y − b                                          (F.1′)
+
+(k2 per axis, [1/(m/s²)]; to first order the forward model's y_i += K2_i·x_i², K2 = k2) adds
+three unknowns. :func:`fit_gravity_norm`
 solves (F.2) by Gauss–Newton with the analytic Jacobian, returns the covariance
 (JᵀW J)⁻¹ (the Cramér–Rao bound of the design for white noise), χ²/ν and its Birge-scaled
 covariance on a misfit (the project's rule, docs/processing-estimation.md), and refuses a
@@ -50,6 +57,8 @@ _F64 = NDArray[np.float64]
 #: The unknowns of (F.1), in order.
 PARAMETERS: Final = ("bias_x", "bias_y", "bias_z", "scale_x", "scale_y", "scale_z",
                      "alpha_yz", "alpha_zy", "alpha_zx")
+#: The optional quadratic terms of (F.1′), after :data:`PARAMETERS`.
+K2_PARAMETERS: Final = ("k2_x", "k2_y", "k2_z")
 _DIRECTIONS: Final = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
                       "+z": (0, 0, 1), "-z": (0, 0, -1)}
 #: Where added poses go once no axis direction is missing: the 12 directions halfway between
@@ -60,27 +69,37 @@ _BETWEEN: Final = tuple(tuple(v) for v in (
 
 
 def correct_accel(theta: ArrayLike, y: ArrayLike) -> _F64:
-    """Apply (F.1): the corrected specific force of outputs `y` (n, 3) under θ. [m/s²]"""
-    p = as_array(theta, "theta", shape=(9,))
-    yy = np.atleast_2d(as_array(y, "y"))
-    t = np.array([[1.0, -p[6], p[7]], [0.0, 1.0, -p[8]], [0.0, 0.0, 1.0]])
-    return np.asarray(((yy - p[:3]) * (1.0 + p[3:6])) @ t.T, dtype=np.float64)
+    """Apply (F.1) or (F.1′): the corrected specific force of outputs `y` (n, 3). [m/s²]
+
+    θ holds the nine values of :data:`PARAMETERS`, or twelve with the quadratic terms of
+    :data:`K2_PARAMETERS`.
+    """
+    p = np.asarray(theta, dtype=np.float64)
+    if p.shape not in ((9,), (12,)):
+        raise InvalidInputError(f"`theta` must hold 9 or 12 values; got shape {p.shape}")
+    return _jacobian(p, np.atleast_2d(as_array(y, "y")))[0]
 
 
 def _jacobian(p: _F64, y: _F64) -> tuple[_F64, _F64]:
-    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9) of (F.1)."""
+    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9 or 12) of (F.1) or (F.1′)."""
     d = y - p[:3]                                   # y − b
     k = 1.0 + p[3:6]
-    v = d * k                                       # (I + diag s)(y − b)
+    k2 = p[9:12] if p.size == 12 else np.zeros(3)
+    w = d - k2 * d**2                               # the quadratic term removed (F.1′)
+    v = w * k                                       # (I + diag s)(y − b − k2∘(y − b)²)
     t = np.array([[1.0, -p[6], p[7]], [0.0, 1.0, -p[8]], [0.0, 0.0, 1.0]])
     a = v @ t.T
     u = a / np.linalg.norm(a, axis=1, keepdims=True)
-    # ∂a/∂b = −T·diag(k); ∂a/∂s_j = T[:, j]·d_j; ∂a/∂α: a_x −= α_yz v_y, a_x += α_zy v_z,
-    # a_y −= α_zx v_z
-    jb = -(u @ t) * k
-    js = (u @ t) * d
+    # ∂a/∂b = −T·diag(k·(1 − 2 k2 d)); ∂a/∂s_j = T[:, j]·w_j; ∂a/∂α: a_x −= α_yz v_y,
+    # a_x += α_zy v_z, a_y −= α_zx v_z; ∂a/∂k2_j = −T[:, j]·k_j·d_j²
+    ut = u @ t
+    jb = -ut * k * (1.0 - 2.0 * k2 * d)
+    js = ut * w
     ja = np.column_stack([-u[:, 0] * v[:, 1], u[:, 0] * v[:, 2], -u[:, 1] * v[:, 2]])
-    return a, np.column_stack([jb, js, ja])
+    cols = [jb, js, ja]
+    if p.size == 12:
+        cols.append(-ut * k * d**2)
+    return a, np.column_stack(cols)
 
 
 @dataclass(frozen=True)
@@ -89,9 +108,10 @@ class GravityNormFit:
 
     Attributes
     ----------
-    values : ndarray, shape (9,)
-        θ = (b [m/s²], s [–], α [rad]) of :data:`PARAMETERS`.
-    covariance : ndarray, shape (9, 9)
+    values : ndarray, shape (9,) or (12,)
+        θ = (b [m/s²], s [–], α [rad]) of :data:`PARAMETERS` (and k2 [1/(m/s²)] of
+        :data:`K2_PARAMETERS`).
+    covariance : ndarray, shape (9, 9) or (12, 12)
         Birge-scaled on a misfit.
     covariance_noise : ndarray, shape (9, 9)
         (JᵀW J)⁻¹: the Cramér–Rao bound of the design for the means' σ.
@@ -116,24 +136,30 @@ class GravityNormFit:
 
 def _check_rank(j: _F64, sw: _F64) -> None:
     jw = j * sw[:, None]
+    names_all = (*PARAMETERS, *K2_PARAMETERS)
     scale = np.linalg.norm(jw, axis=0)
     if np.any(scale == 0):
-        names = [PARAMETERS[i] for i in np.flatnonzero(scale == 0)]
+        names = [names_all[i] for i in np.flatnonzero(scale == 0)]
         raise InsufficientExcitationError(
             names, f"the poses do not excite {names} at all (add poses with gravity along "
                    "other axes; pose_coverage says which)")
     _, s, vt = np.linalg.svd(jw / scale, full_matrices=False)
     weak = s < 1e-6 * s[0]
     if weak.any():
-        names = sorted({PARAMETERS[int(np.argmax(np.abs(row)))] for row in vt[weak]})
+        names = sorted({names_all[int(np.argmax(np.abs(row)))] for row in vt[weak]})
         raise InsufficientExcitationError(
             names, f"the poses cannot separate {names} (the design is rank-deficient: add "
                    "poses with gravity along other axes; pose_coverage says which)")
 
 
 def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
-                     max_iter: int = 50, tol: float = 1e-12) -> GravityNormFit:
+                     k2: bool = False, max_iter: int = 50, tol: float = 1e-12
+                     ) -> GravityNormFit:
     """Solve (F.2) by Gauss–Newton from b = 0, s = 0, α = 0 (module docstring).
+
+    With ``k2=True`` the model is (F.1′), three quadratic terms more (:data:`K2_PARAMETERS`,
+    [1/(m/s²)]): their poses need every axis at several |x_i| (tilted poses), else the design
+    is refused as rank-deficient.
 
     Parameters
     ----------
@@ -156,14 +182,15 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     yy = as_array(y, "y", shape=(None, 3))
     sy = as_array(y_std, "y_std", shape=yy.shape)
     n = yy.shape[0]
-    if n < len(PARAMETERS) + 1:
-        raise InvalidInputError(f"the gravity-norm fit needs at least {len(PARAMETERS) + 1} "
-                                f"static poses (9 unknowns and a degree of freedom); got {n}")
+    m = len(PARAMETERS) + (len(K2_PARAMETERS) if k2 else 0)
+    if n < m + 1:
+        raise InvalidInputError(f"the gravity-norm fit needs at least {m + 1} static poses "
+                                f"({m} unknowns and a degree of freedom); got {n}")
     if np.any(sy <= 0):
         raise InvalidInputError("`y_std` must be positive")
     if not (np.isfinite(gravity_mps2) and gravity_mps2 > 0):
         raise InvalidInputError(f"`gravity_mps2` must be positive; got {gravity_mps2!r}")
-    p = np.zeros(9)
+    p = np.zeros(m)
     for it in range(1, max_iter + 1):
         a, j = _jacobian(p, yy)
         u = a / np.linalg.norm(a, axis=1, keepdims=True)
@@ -186,7 +213,7 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     jw = j / sr[:, None]
     cov = np.linalg.inv(jw.T @ jw)
     cov = 0.5 * (cov + cov.T)
-    quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - 9)
+    quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - m)
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
                           covariance_noise=cov, quality=quality, residuals=r, iterations=it)
 

@@ -48,7 +48,8 @@ def accel_matrix(theta: NDArray[np.float64]) -> _F64:
 
 
 def _accel_triad(theta: _F64) -> _F64:
-    return np.concatenate([theta[:3], (accel_matrix(theta) - np.eye(3)).ravel()])
+    """(b, M row-major[, K2]) of (FL.1) from θ of (F.1) or (F.1′) (K2 = k2 to first order)."""
+    return np.concatenate([theta[:3], (accel_matrix(theta) - np.eye(3)).ravel(), theta[9:]])
 
 
 def _jacobian(fun: Any, x: _F64, rel: float = 1e-6) -> _F64:
@@ -71,7 +72,7 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
     Parameters
     ----------
     accel_form : {"gravity-norm", "six-position"}
-        θ of (F.1) (9 values) or (b, M row-major) of (F.10) (12 values).
+        θ of (F.1) (9 values) or (F.1′) (12), or (b, M row-major) of (F.10) (12 values).
     accel_values, accel_cov
         The accelerometer estimate and its covariance (Birge-scaling not applied).
     gyro_static, gyro_static_cov
@@ -88,7 +89,7 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
     else:
         jac = np.eye(12)
         a_vals = accel_values.copy()
-    names = list(triad_parameter_names("accel", "triad"))
+    names = list(triad_parameter_names("accel", "triad", k2=a_vals.size == 15))
     values = [a_vals]
     blocks = [jac @ accel_cov @ jac.T]
     if gyro_m is None or gyro_m_cov is None:
@@ -97,7 +98,7 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
     with_g = gyro_static.size == 12
     names += list(triad_parameter_names("gyro", "triad", g_sensitivity=with_g))
     values.append(np.concatenate([gyro_static[:3], gyro_m, gyro_static[3:]]))
-    k = 12
+    k = a_vals.size
     n = k + 12 + (9 if with_g else 0)
     static_idx = [k, k + 1, k + 2, *range(k + 12, n)]
     cov = np.zeros((n, n))
@@ -105,7 +106,7 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
     cov[np.ix_(static_idx, static_idx)] = gyro_static_cov
     cov[k + 3:k + 12, k + 3:k + 12] = gyro_m_cov
     if gyro_accel_cov is not None:
-        cross = gyro_accel_cov @ jac.T                       # (9, 12)
+        cross = gyro_accel_cov @ jac.T                       # (9, 12 or 15)
         cov[k + 3:k + 12, :k] = cross
         cov[:k, k + 3:k + 12] = cross.T
     return names, np.concatenate(values), 0.5 * (cov + cov.T)

@@ -1,0 +1,43 @@
+"""The truth of a hand-held twin session in the field calibration's terms (docs/field.md).
+
+The field fit sees the accelerometer in its own orthogonal frame a (x along sensor x, y in the
+sensors' x–y plane). With the twin's y_a − b_a = (I + M_a)·x_b (+ K2 terms) and the RQ
+decomposition I + M_a = U·Q (U upper triangular with a positive diagonal, Q a rotation:
+x_a = Q·x_b), the truth in frame a is U − I for the accelerometer, (I + M_g)·Qᵀ − I for the
+gyro's M and G·Qᵀ for its g-sensitivity (Eq. (FL.1) of docs/field.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+from imucalib.models.imu import ImuModel
+
+
+def frame_rotation(model: ImuModel) -> tuple[np.ndarray, np.ndarray]:
+    """Return (U, Q) with I + M_a = U·Q, diag U > 0."""
+    u, q = scipy.linalg.rq(np.eye(3) + np.asarray(model.accel.scale_misalignment))
+    s = np.diag(np.sign(np.diag(u)))
+    return u @ s, s @ q
+
+
+def field_truth(model: ImuModel, *, six_position: bool = False) -> dict[str, float]:
+    """The truth by the names of the field result's triad model (SI)."""
+    a, g = model.accel, model.gyro
+    if six_position:
+        ua, q = np.eye(3) + np.asarray(a.scale_misalignment), np.eye(3)
+    else:
+        ua, q = frame_rotation(model)
+    mg = (np.eye(3) + np.asarray(g.scale_misalignment)) @ q.T - np.eye(3)
+    gs = np.asarray(g.g_sensitivity) @ q.T
+    out = {}
+    for i, ax in enumerate("xyz"):
+        out[f"accel_bias_{ax}"] = float(np.asarray(a.bias)[i])
+        out[f"gyro_bias_{ax}"] = float(np.asarray(g.bias)[i])
+        out[f"accel_K2_{ax}"] = float(np.broadcast_to(np.asarray(a.k2), 3)[i])
+        for j, bx in enumerate("xyz"):
+            out[f"accel_M_{ax}{bx}"] = float(ua[i, j] - (i == j))
+            out[f"gyro_M_{ax}{bx}"] = float(mg[i, j])
+            out[f"gyro_G_{ax}{bx}"] = float(gs[i, j])
+    return out
