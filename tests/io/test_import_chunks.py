@@ -229,6 +229,21 @@ def test_the_import_written_chunk_by_chunk_equals_the_whole_file_import(tmp_path
                               b.read_step(0, "table", "commanded").time_s)
 
 
+def test_a_counter_column_of_the_file_is_kept_across_chunks(tmp_path):
+    t = np.arange(0.0, 5.0, 0.01)
+    counter = 1000 + 3 * np.arange(t.size)  # the IMU's own counter, not the one from the times
+    with open(tmp_path / "log.csv", "w", encoding="utf-8") as fh:
+        fh.write(CANONICAL + ",counter\n")
+        for x, c in zip(t, counter, strict=True):
+            fh.write(f"{float(x)!r},0.0,0.0,0.0,0.0,0.0,9.8,{c}\n")
+    steps = parse_step_file('latitude_deg = 45.0\ntable_axes = ["pitch", "roll"]\n'
+                            '[[steps]]\nstart_s = 1.0\nend_s = 3.0\nrole = "p1.accel-position"\n'
+                            'label = "z-up"\nangles_deg = [0.0, 0.0]\n')
+    out = recording_from_csv(tmp_path / "log.csv", steps, tmp_path / "log.h5", chunk_rows=64)
+    with open_recording(out) as rec:
+        assert np.array_equal(rec.read_stream("imu", "log").columns["counter"], counter)
+
+
 # ------------------------------------------------------------------- apply with import options
 def _result(tmp_path: Path) -> tuple[Path, CalibrationResult]:
     names = (*triad_parameter_names("accel", "triad"), *triad_parameter_names("gyro", "triad"))
