@@ -37,6 +37,7 @@ bench: venv
 	$(BIN)/python bench/bench_drivers.py
 	$(BIN)/python bench/bench_p1.py
 	$(BIN)/python bench/bench_p2.py
+	$(BIN)/python bench/bench_import.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

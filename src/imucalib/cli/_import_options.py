@@ -1,4 +1,4 @@
-"""The import options shared by ``imucalib segments``, ``imucalib import`` and ``imucalib allan``.
+"""The import options shared by ``imucalib segments``, ``import``, ``allan`` and ``apply``.
 
 One definition of each option (:data:`ImportFile`, :data:`ColumnMap`, …) and one function,
 :func:`import_spec_from_options`, that turns them (over an ``--import`` TOML file) into the

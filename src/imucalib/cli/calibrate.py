@@ -265,11 +265,31 @@ def calibrate(
 @app.command()
 def apply(
     result_path: Annotated[Path, typer.Argument(metavar="RESULT", help="Result JSON.")],
-    data: Annotated[Path, typer.Argument(help="A recording (.h5) or a CSV file.")],
+    data: Annotated[Path, typer.Argument(help="A recording (.h5) or a CSV/text file (read "
+                                              "through the import options).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Corrected CSV to write.")],
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
+    import_file: ImportFile = None,
+    column_map: ColumnMap = None,
+    units: Units = None,
+    gyro_unit: GyroUnit = None,
+    accel_unit: AccelUnit = None,
+    gyro_scale: GyroScale = None,
+    accel_scale: AccelScale = None,
+    gyro_offset: GyroOffset = None,
+    accel_offset: AccelOffset = None,
+    time_column: TimeColumn = None,
+    time_unit: TimeUnit = None,
+    sample_rate_hz: SampleRate = None,
+    delimiter: Delimiter = None,
+    skip_rows: SkipRows = None,
+    accel_file: AccelFile = None,
 ) -> None:
     """Correct a recording's IMU stream, or a CSV file, with a calibration result.
+
+    A CSV/text file is read in its own layout through the import options (as ``imucalib
+    segments`` reads it, docs/import.md) and corrected chunk by chunk, so a log larger than
+    memory is corrected; the corrected CSV is in SI with canonical column names.
 
     A result with temperature models corrects each sample at the IMU's own temperature (the
     stream's or the CSV's ``temperature_degc`` column), its rate and its heating/cooling leg
@@ -278,12 +298,19 @@ def apply(
     """
     import pandas as pd
 
+    from imucalib.io.import_spec import ImportSpec, iter_imu_table
     from imucalib.models.correct import TemperatureRate, correct_imu_frame
     from imucalib.models.result import CalibrationResult
 
     try:
+        spec = import_spec_from_options(
+            import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
+            accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
+            gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
+            time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
+            skip_rows=skip_rows, accel_file=accel_file)
         result = CalibrationResult.load(result_path)
-        _check_out(out, result_path, data)
+        _check_out(out, result_path, data, *([accel_file] if accel_file else []))
         n = 0
         seen = _TemperatureSeen()
         rate = TemperatureRate()
@@ -297,6 +324,9 @@ def apply(
         if data.suffix.lower() in (".h5", ".hdf5"):
             from imucalib.io.reader import open_recording
 
+            if spec != ImportSpec():
+                raise InvalidInputError(f"{data} is a Recording: the import options (--import, "
+                                        "--column-map, --gyro-unit …) apply to a CSV/text file")
             with open_recording(data) as rec:
                 unit = imu or result.sensor_id
                 info = rec.stream_info("imu", unit)
@@ -308,15 +338,20 @@ def apply(
                         fixed = correct(df)
                         _write_csv(fixed, fh, header=i == 0)
                         n += len(fixed)
-        else:
-            from imucalib.io.csv_import import read_imu_csv
-
-            df = read_imu_csv(data)
-            _check_triads(data, df.columns, result)
-            fixed = correct(df)
-            with open(out, "w", encoding="utf-8") as fh:
-                _write_csv(fixed, fh, header=True)
-            n = len(fixed)
+        else:  # written beside --out and renamed when complete: a defect leaves no part file
+            chunks = iter_imu_table(data, spec)  # the spec and header checked here
+            part = out.with_name(out.name + ".part")
+            try:
+                with open(part, "w", encoding="utf-8") as fh:
+                    for i, df in enumerate(chunks):
+                        if i == 0:
+                            _check_triads(data, df.columns, result)
+                        fixed = correct(df)
+                        _write_csv(fixed, fh, header=i == 0)
+                        n += len(fixed)
+                part.replace(out)
+            finally:
+                part.unlink(missing_ok=True)
     except CalibrationError as exc:
         raise fail(exc) from exc
     except OSError as exc:

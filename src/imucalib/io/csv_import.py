@@ -5,6 +5,9 @@ Contents
 :func:`read_imu_csv`
     A CSV file → a DataFrame indexed by ``time_s`` with canonical column names and the units in
     ``df.attrs["units"]``.
+:func:`iter_imu_csv`, :func:`concat_chunks`
+    The same, in chunks of at most ``chunk_rows`` rows (a large log in bounded memory), and
+    the join of those chunks (what :func:`read_imu_csv` returns).
 :data:`MAX_ABS_TIME_S`, :data:`MAX_TIME_SPAN_S`
     The bounds on the time column.
 
@@ -39,9 +42,13 @@ column and the data row (and file line) where relevant, what was expected and wh
 - the time: decreasing from one row to the next (equal consecutive times are allowed, as in a
   Recording), beyond ±:data:`MAX_ABS_TIME_S`, or spanning more than :data:`MAX_TIME_SPAN_S`.
 
-The file is parsed once by pandas' C reader and checked with array operations: a 10⁶-row
-export (180 MB) reads in about the time pandas alone takes; only the error path looks at single
-lines (to name the line of a bad row).
+The file is parsed once by pandas' C reader, :data:`DEFAULT_CHUNK_ROWS` rows at a time, and
+checked with array operations: a 10⁶-row export (180 MB) reads in about the time pandas alone
+takes; only the error path looks at single lines (to name the line of a bad row). The rows are
+checked chunk by chunk with the same code whichever function reads them: a defect names the
+data row and line over the whole file, and the time checks carry across chunk boundaries. When
+a file spans several chunks, the count of like defects in a message covers the rows read so far
+("in the first N data rows").
 """
 
 from __future__ import annotations
@@ -49,7 +56,7 @@ from __future__ import annotations
 import csv
 import os
 import re
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
@@ -63,10 +70,14 @@ from imucalib.units import parse_unit
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["MAX_ABS_TIME_S", "MAX_TIME_SPAN_S", "WHITESPACE", "read_imu_csv"]
+__all__ = ["DEFAULT_CHUNK_ROWS", "MAX_ABS_TIME_S", "MAX_TIME_SPAN_S", "WHITESPACE", "concat_chunks",
+           "iter_imu_csv", "read_imu_csv"]
 
 #: The `delimiter` of files whose fields are separated by runs of blanks (imu_tk's files).
 WHITESPACE: Final = "whitespace"
+
+#: Rows parsed at a time by :func:`iter_imu_csv` (about 100 MB of parsed columns for an IMU log).
+DEFAULT_CHUNK_ROWS: Final = 1_000_000
 
 #: Largest accepted |time_s|: about 317 years, so Unix-epoch times fit and float64 still resolves
 #: 2 µs. [s]
@@ -243,8 +254,13 @@ def _where(p: Path, row: int, header_line: int = 1) -> str:
 
 
 def _parse(p: Path, n_fields: int, header_line: int = 1, delimiter: str = ",",
-           has_header: bool = True) -> pd.DataFrame:
-    """Parse the rows with pandas' C reader; refuse ragged rows and undecodable bytes."""
+           has_header: bool = True, chunk_rows: int = DEFAULT_CHUNK_ROWS
+           ) -> Iterator[pd.DataFrame]:
+    """Parse the rows with pandas' C reader, `chunk_rows` at a time.
+
+    Ragged rows and undecodable bytes are refused (pandas counts the line of a ragged row over
+    the whole file).
+    """
     import pandas as pd
 
     first, text = _locate(p, 0, header_line)
@@ -257,13 +273,15 @@ def _parse(p: Path, n_fields: int, header_line: int = 1, delimiter: str = ",",
                                 f"{n_fields} (a ragged row)")
     try:
         sep = r"\s+" if delimiter == WHITESPACE else delimiter
+        options: dict[str, Any] = {"names": list(range(n_fields)), "keep_default_na": False,
+                                   "na_values": ["NaN", "nan"], "encoding": "utf-8-sig",
+                                   "sep": sep, "chunksize": chunk_rows}
         if not has_header:  # header_line: the lines skipped
-            return pd.read_csv(p, header=None, names=list(range(n_fields)),
-                               keep_default_na=False, na_values=["NaN", "nan"],
-                               encoding="utf-8-sig", skiprows=header_line, sep=sep)
-        return pd.read_csv(p, header=0, names=list(range(n_fields)), keep_default_na=False,
-                           na_values=["NaN", "nan"], encoding="utf-8-sig",
-                           skiprows=header_line - 1, sep=sep)
+            reader = pd.read_csv(p, header=None, skiprows=header_line, **options)
+        else:
+            reader = pd.read_csv(p, header=0, skiprows=header_line - 1, **options)
+        with reader:
+            yield from reader
     except UnicodeDecodeError as exc:
         raise InvalidInputError(f"{p} is not UTF-8 text: byte 0x{exc.object[exc.start]:02x} "
                                 "after the header cannot be decoded (a binary file, or text in "
@@ -279,8 +297,11 @@ def _parse(p: Path, n_fields: int, header_line: int = 1, delimiter: str = ",",
 
 
 def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int,
-             header_line: int = 1, delimiter: str = ",") -> Any:
-    """Return column `pos` as numbers, or raise naming its first non-numeric cell."""
+             header_line: int = 1, delimiter: str = ",", row0: int = 0) -> Any:
+    """Return column `pos` as numbers, or raise naming its first non-numeric cell.
+
+    `row0` is the data row (0-based, over the whole file) of the first row of `df`.
+    """
     import pandas as pd
 
     col = df[pos]
@@ -292,6 +313,7 @@ def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int,
         return num
     row = int(np.argmax(bad))
     value = col.iloc[row]
+    row += row0
     line, text = _locate(p, row, header_line)
     where = f"data row {row + 1}" + (f" (line {line})" if line > 0 else "")
     if isinstance(value, str) and not value.strip():
@@ -305,8 +327,9 @@ def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int,
                             f"{where} (numbers expected; a missing value is written NaN)")
 
 
-def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any], header_line: int = 1
-                  ) -> None:
+def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any], header_line: int = 1,
+                  row0: int = 0, scope: str = "") -> None:
+    """Refuse NaN/±inf where they are not allowed; `row0`, `scope`: as in :func:`_check_time`."""
     if values.dtype.kind != "f":
         return
     finite = np.isfinite(values)
@@ -319,27 +342,39 @@ def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any], header_line:
     rule = ("time_s and the gyro and accelerometer columns must be finite"
             if name in _MUST_BE_FINITE else "values must be finite numbers or NaN (missing)")
     raise InvalidInputError(f"{p}: column {name!r} holds {_num(values[row])} at "
-                            f"{_where(p, row, header_line)}; "
-                            f"{rule} ({int(bad.sum())} such cell(s))")
+                            f"{_where(p, row0 + row, header_line)}; "
+                            f"{rule} ({int(bad.sum())} such cell(s){scope})")
 
 
-def _check_time(p: Path, t: np.ndarray[Any, Any], header_line: int = 1) -> None:
-    step = np.diff(t)
+def _check_time(p: Path, t: np.ndarray[Any, Any], header_line: int = 1, *, row0: int = 0,
+                before: float | None = None, first: float | None = None, scope: str = ""
+                ) -> None:
+    """Refuse decreasing, too large or too long times.
+
+    `t` holds data rows ``row0 …`` of the file; `before` is the time of the row before them and
+    `first` the file's first time (None: `t` starts the file); `scope` says which rows the
+    counts cover when they are not the whole file (a chunk, :func:`iter_imu_csv`).
+    """
+    ext = t if before is None else np.concatenate(([before], t))
+    shift = row0 if before is None else row0 - 1  # ext[k] is data row shift + k
+    step = np.diff(ext)
     if np.any(step < 0):
-        i = int(np.argmax(step < 0)) + 1
+        k = int(np.argmax(step < 0)) + 1
         raise InvalidInputError(
-            f"{p}: {TIME_COLUMN} decreases at {_where(p, i, header_line)}: {_num(t[i])} s after "
-            f"{_num(t[i - 1])} s; times must not decrease ({int(np.sum(step < 0))} such step(s))")
+            f"{p}: {TIME_COLUMN} decreases at {_where(p, shift + k, header_line)}: {_num(ext[k])} "
+            f"s after {_num(ext[k - 1])} s; times must not decrease "
+            f"({int(np.sum(step < 0))} such step(s){scope})")
     big = np.abs(t) > MAX_ABS_TIME_S
     if big.any():
         i = int(np.argmax(big))
         raise InvalidInputError(
-            f"{p}: {TIME_COLUMN} {_num(t[i])} s at {_where(p, i, header_line)} is beyond "
+            f"{p}: {TIME_COLUMN} {_num(t[i])} s at {_where(p, row0 + i, header_line)} is beyond "
             f"±{MAX_ABS_TIME_S:g} s; "
             "expected seconds (give another unit in the header, e.g. `time_s [ms]`)")
-    if t.size and t[-1] - t[0] > MAX_TIME_SPAN_S:
+    t0 = (t[0] if t.size else 0.0) if first is None else first
+    if t.size and t[-1] - t0 > MAX_TIME_SPAN_S:
         raise InvalidInputError(
-            f"{p}: {TIME_COLUMN} spans {t[-1] - t[0]:.6g} s (from {_num(t[0])} to {_num(t[-1])}); "
+            f"{p}: {TIME_COLUMN} spans {t[-1] - t0:.6g} s (from {_num(t0)} to {_num(t[-1])}); "
             f"expected at most {MAX_TIME_SPAN_S:g} s (366 days) in one file")
 
 
@@ -349,7 +384,8 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
                  skip_rows: int = 0, sample_rate_hz: float | None = None,
                  scales: Mapping[str, float] | None = None,
                  offsets: Mapping[str, float] | None = None,
-                 names: Collection[str] | None = None) -> pd.DataFrame:
+                 names: Collection[str] | None = None,
+                 chunk_rows: int = DEFAULT_CHUNK_ROWS) -> pd.DataFrame:
     """Read a CSV file of IMU samples.
 
     Parameters
@@ -378,6 +414,8 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
     names : sequence of str, optional
         For a file without a header line (imu_tk's): the name of each field; every line after
         the `skip_rows` is a data row.
+    chunk_rows : int
+        Rows parsed at a time (:func:`iter_imu_csv`); the result does not depend on it.
 
     Returns
     -------
@@ -392,6 +430,52 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
     UnitError
         An unknown unit in a header, or one of another dimension than the column's name.
     """
+    chunks = list(iter_imu_csv(path, column_map=column_map, units=units, to_si=to_si, only=only,
+                               delimiter=delimiter, skip_rows=skip_rows,
+                               sample_rate_hz=sample_rate_hz, scales=scales, offsets=offsets,
+                               names=names, chunk_rows=chunk_rows))
+    return concat_chunks(chunks)
+
+
+def concat_chunks(chunks: Sequence[pd.DataFrame]) -> pd.DataFrame:
+    """Join the chunks of :func:`iter_imu_csv` into one frame (the first chunk's ``attrs``)."""
+    if len(chunks) == 1:
+        return chunks[0]
+    import pandas as pd
+
+    df = pd.concat(chunks)
+    df.attrs = dict(chunks[0].attrs)
+    return df
+
+
+def iter_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] | None = None,
+                 units: Mapping[str, str] | None = None, to_si: bool = True,
+                 only: Collection[str] | None = None, delimiter: str = ",",
+                 skip_rows: int = 0, sample_rate_hz: float | None = None,
+                 scales: Mapping[str, float] | None = None,
+                 offsets: Mapping[str, float] | None = None,
+                 names: Collection[str] | None = None,
+                 chunk_rows: int = DEFAULT_CHUNK_ROWS) -> Iterator[pd.DataFrame]:
+    """Read a CSV file of IMU samples in chunks of at most `chunk_rows` rows.
+
+    The parameters are those of :func:`read_imu_csv`, which joins these chunks. The file and
+    header are checked before this returns; each chunk's rows are checked as it is read, with
+    the checks of the module docstring: a defect names the data row and file line counted over
+    the whole file, the time must not decrease across a chunk boundary either, its span is
+    counted from the file's first time, and a sample-rate time base continues from chunk to
+    chunk. Memory holds one chunk (and pandas' parser buffer) at a time.
+
+    Yields
+    ------
+    pandas.DataFrame
+        Consecutive rows, indexed by ``time_s`` [s]; ``df.attrs["units"]`` as
+        :func:`read_imu_csv`.
+
+    Raises
+    ------
+    InvalidInputError, UnitError
+        As :func:`read_imu_csv`; a defect of the rows is raised when its chunk is read.
+    """
     p = Path(path)
     if not (isinstance(skip_rows, int) and skip_rows >= 0):
         raise InvalidInputError(f"`skip_rows` must be an integer ≥ 0; got {skip_rows!r}")
@@ -401,6 +485,8 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
     if sample_rate_hz is not None and not (np.isfinite(sample_rate_hz) and sample_rate_hz > 0):
         raise InvalidInputError(f"the sample rate must be a finite number > 0 Hz; got "
                                 f"{sample_rate_hz}")
+    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
+        raise InvalidInputError(f"`chunk_rows` must be an integer ≥ 1; got {chunk_rows!r}")
     if names is None:
         hdr = skip_rows + 1
         headers = _read_header(p, skip_rows, delimiter)
@@ -416,40 +502,76 @@ def read_imu_csv(path: str | os.PathLike[str], *, column_map: Mapping[str, str] 
             f"`--time-column NAME` (or `column_map` to {TIME_COLUMN!r}), or give "
             "`--sample-rate-hz`; map the others with `--column-map gx=NAME,...` or an "
             "`--import` file (docs/import.md)")
-    raw = _parse(p, len(canon), hdr, delimiter, names is None)
-    if len(raw) == 0:
-        raise InvalidInputError(f"{p}: no data rows after the header; expected at least one row "
-                                "of numbers")
-    data: dict[str, Any] = {}
-    for pos, col in enumerate(canon):
-        if col is None:
-            continue
-        values = _numeric(p, raw, pos, col, len(canon), hdr, delimiter).to_numpy()
-        scale = (scales or {}).get(col)
-        offset = (offsets or {}).get(col)
-        if scale is not None or offset is not None:
-            values = (values.astype(np.float64) - (offset or 0.0)) / (scale or 1.0)
-        unit = col_units[col]
-        factor = 1.0 if _key(unit) in _NO_FACTOR else parse_unit(unit)
-        if to_si and factor != 1.0:
-            si_unit = next((u for suffix, u in _SI_SUFFIXES.items() if col.endswith(suffix)),
-                           None)
-            if si_unit is None:
-                raise InvalidInputError(
-                    f"{p}: column {col!r} is in {unit!r}; to convert it to SI give it a "
-                    f"canonical SI name (ending in {list(_SI_SUFFIXES)}) with `column_map`")
-            with np.errstate(over="ignore"):
-                values = values.astype(np.float64) * factor
-            col_units[col] = si_unit
-        _check_finite(p, col, values, hdr)
-        data[col] = values
-    if TIME_COLUMN in data:
-        t = np.asarray(data.pop(TIME_COLUMN), dtype=np.float64)
-    else:
-        t = np.arange(len(raw), dtype=np.float64) / float(sample_rate_hz or 1.0)
-    _check_time(p, t, hdr)
-    import pandas as pd
+    rows = _parse(p, len(canon), hdr, delimiter, names is None, chunk_rows)
+    reader = _Chunks(p, canon, col_units, hdr, delimiter, to_si, sample_rate_hz, scales or {},
+                     offsets or {}, chunk_rows)
+    return reader.frames(rows)
 
-    df = pd.DataFrame(data, index=pd.Index(t, name=TIME_COLUMN))
-    df.attrs["units"] = {c: col_units[c] for c in df.columns}
-    return df
+
+class _Chunks:
+    """The checks and conversions of each chunk, and what carries from one to the next."""
+
+    def __init__(self, p: Path, canon: list[str | None], col_units: dict[str, str], hdr: int,
+                 delimiter: str, to_si: bool, sample_rate_hz: float | None,
+                 scales: Mapping[str, float], offsets: Mapping[str, float], chunk_rows: int
+                 ) -> None:
+        self.p, self.canon, self.col_units, self.hdr = p, canon, col_units, hdr
+        self.delimiter, self.to_si, self.sample_rate_hz = delimiter, to_si, sample_rate_hz
+        self.scales, self.offsets, self.chunk_rows = scales, offsets, chunk_rows
+        self.row0 = 0  # data rows before the chunk
+        self.last_t: float | None = None
+        self.first_t: float | None = None
+
+    def frames(self, rows: Iterator[pd.DataFrame]) -> Iterator[pd.DataFrame]:
+        for raw in rows:
+            if len(raw) == 0:
+                continue
+            yield self.frame(raw)
+        if self.row0 == 0:
+            raise InvalidInputError(f"{self.p}: no data rows after the header; expected at "
+                                    "least one row of numbers")
+
+    def frame(self, raw: pd.DataFrame) -> pd.DataFrame:
+        import pandas as pd
+
+        p, hdr, n = self.p, self.hdr, len(raw)
+        whole = self.row0 == 0 and n < self.chunk_rows  # the chunk is the whole file
+        scope = "" if whole else f" in the first {self.row0 + n} data rows"
+        col_units = dict(self.col_units)
+        data: dict[str, Any] = {}
+        for pos, col in enumerate(self.canon):
+            if col is None:
+                continue
+            values = _numeric(p, raw, pos, col, len(self.canon), hdr, self.delimiter,
+                              self.row0).to_numpy()
+            scale = self.scales.get(col)
+            offset = self.offsets.get(col)
+            if scale is not None or offset is not None:
+                values = (values.astype(np.float64) - (offset or 0.0)) / (scale or 1.0)
+            unit = col_units[col]
+            factor = 1.0 if _key(unit) in _NO_FACTOR else parse_unit(unit)
+            if self.to_si and factor != 1.0:
+                si_unit = next((u for suffix, u in _SI_SUFFIXES.items() if col.endswith(suffix)),
+                               None)
+                if si_unit is None:
+                    raise InvalidInputError(
+                        f"{p}: column {col!r} is in {unit!r}; to convert it to SI give it a "
+                        f"canonical SI name (ending in {list(_SI_SUFFIXES)}) with `column_map`")
+                with np.errstate(over="ignore"):
+                    values = values.astype(np.float64) * factor
+                col_units[col] = si_unit
+            _check_finite(p, col, values, hdr, self.row0, scope)
+            data[col] = values
+        if TIME_COLUMN in data:
+            t = np.asarray(data.pop(TIME_COLUMN), dtype=np.float64)
+        else:
+            t = (self.row0 + np.arange(n, dtype=np.float64)) / float(self.sample_rate_hz or 1.0)
+        _check_time(p, t, hdr, row0=self.row0, before=self.last_t, first=self.first_t,
+                    scope=scope)
+        if self.first_t is None:
+            self.first_t = float(t[0])
+        self.last_t = float(t[-1])
+        self.row0 += n
+        df = pd.DataFrame(data, index=pd.Index(t, name=TIME_COLUMN))
+        df.attrs["units"] = {c: col_units[c] for c in df.columns}
+        return df

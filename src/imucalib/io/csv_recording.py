@@ -3,7 +3,8 @@
 :func:`recording_from_csv` writes a version 2 Recording that every procedure analyses as it
 does a planned run:
 
-- ``/streams/imu/<unit>``: the CSV's samples in SI (:func:`~imucalib.io.csv_import.read_imu_csv`).
+- ``/streams/imu/<unit>``: the CSV's samples in SI (:func:`~imucalib.io.csv_import.iter_imu_csv`,
+  written chunk by chunk: a log larger than memory imports).
   Columns the CSV lacks are filled: ``counter`` from the time column and the sample rate
   (each sample advances it by ``max(1, round(Δt·f_s))``, so a gap of k sample periods stays
   visible to the time-base reconstruction and equal times still count up),
@@ -48,15 +49,15 @@ from imucalib.conventions import (
 )
 from imucalib.errors import InvalidInputError
 from imucalib.io._schema import ColumnSpec, StreamSpec
-from imucalib.io.csv_import import read_imu_csv
+from imucalib.io.csv_import import DEFAULT_CHUNK_ROWS, iter_imu_csv
 from imucalib.io.hashing import file_sha256
-from imucalib.io.import_spec import ImportSpec, read_imu_table
+from imucalib.io.import_spec import ImportSpec, iter_imu_table
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.step_file import StepEntry, StepFile, step_file_to_toml
 from imucalib.io.streams import DEVICE_TABLE, axis_columns, imu_stream_spec
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Iterator, Mapping
 
     import pandas as pd
 
@@ -72,13 +73,29 @@ MIN_STEP_SAMPLES = 10
 _F64 = NDArray[np.float64]
 
 
-def _counter(t: _F64, df: pd.DataFrame, rate_hz: float) -> NDArray[np.int64]:
-    if COUNTER_COLUMN in df.columns:
-        c = df[COUNTER_COLUMN].to_numpy()
-        if np.all(np.isfinite(c)):
-            return np.asarray(np.round(c), dtype=np.int64)
+def _counter(t: _F64, rate_hz: float) -> NDArray[np.int64]:
+    """Return the counter of times `t`: each sample advances it by max(1, round(Δt·f_s))."""
     steps = np.maximum(1, np.round(np.diff(t) * rate_hz)).astype(np.int64)
     return np.concatenate([np.zeros(1, dtype=np.int64), np.cumsum(steps)])
+
+
+def _imu_rows(df: pd.DataFrame, counter: NDArray[np.int64] | None) -> dict[str, Any]:
+    """Return the IMU stream's columns of one chunk; `counter` None: the file's own, rounded."""
+    t = df.index.to_numpy(dtype=np.float64)
+    n = t.size
+    cols: dict[str, Any] = {
+        TIME_COLUMN: t,
+        COUNTER_COLUMN: (np.asarray(np.round(df[COUNTER_COLUMN].to_numpy()), dtype=np.int64)
+                         if counter is None else counter),
+        "device_time_s": (df["device_time_s"].to_numpy() if "device_time_s" in df.columns
+                          else t)}
+    for col in (*GYRO_COLUMNS, *ACCEL_COLUMNS):
+        cols[col] = df[col].to_numpy(dtype=np.float64)
+    cols[TEMPERATURE_COLUMN] = (df[TEMPERATURE_COLUMN].to_numpy(dtype=np.float64)
+                                if TEMPERATURE_COLUMN in df.columns else np.full(n, np.nan))
+    cols["saturated"] = (df["saturated"].to_numpy() != 0 if "saturated" in df.columns
+                         else np.zeros(n, dtype=bool))
+    return cols
 
 
 def _sample_rate(t: _F64, given: float | None, source: str) -> float:
@@ -136,7 +153,8 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
                        column_map: Mapping[str, str] | None = None,
                        units: Mapping[str, str] | None = None, overwrite: bool = False,
                        spec: ImportSpec | None = None,
-                       step_file_text: str | None = None) -> Path:
+                       step_file_text: str | None = None,
+                       chunk_rows: int = DEFAULT_CHUNK_ROWS) -> Path:
     """Write a Recording from a CSV of IMU samples and its step file (module docstring).
 
     Parameters
@@ -157,6 +175,10 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
         units, counts scale and offset, sample rate …); replaces `column_map` and `units`.
     step_file_text : str, optional
         The step file as the user wrote it, stored in the metadata (default: its TOML).
+    chunk_rows : int
+        Rows read and written at a time. A log of more rows is read twice (first its checks and
+        times, then its samples, chunk by chunk): memory holds a chunk or two plus the time and
+        counter columns (16 bytes a sample), not the whole log.
 
     Returns
     -------
@@ -173,17 +195,31 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
         `out_path` exists and `overwrite` is false, or it cannot be written.
     """
     src = Path(csv_path)
-    if spec is not None:
-        df = read_imu_table(src, spec)
-    else:
-        df = read_imu_csv(src, column_map=column_map, units=units)
-    missing = [c for c in IMU_COLUMNS if c not in df.columns]
-    if missing:
-        raise InvalidInputError(f"{src}: a calibration needs the gyro and accelerometer columns "
-                                f"{list(IMU_COLUMNS)}; missing {missing} (found "
-                                f"{list(df.columns)})")
+
+    def frames() -> Iterator[pd.DataFrame]:
+        if spec is not None:
+            return iter_imu_table(src, spec, chunk_rows=chunk_rows)
+        return iter_imu_csv(src, column_map=column_map, units=units, chunk_rows=chunk_rows)
+
+    # first pass: every check of the rows, the times and whether the file's counter is usable;
+    # a file of one chunk is kept, a larger one read again for the writing
+    times: list[_F64] = []
+    kept: list[pd.DataFrame] | None = []
+    file_counter = True
+    for k, df in enumerate(frames()):
+        if k == 0:
+            missing = [c for c in IMU_COLUMNS if c not in df.columns]
+            if missing:
+                raise InvalidInputError(
+                    f"{src}: a calibration needs the gyro and accelerometer columns "
+                    f"{list(IMU_COLUMNS)}; missing {missing} (found {list(df.columns)})")
+        times.append(df.index.to_numpy(dtype=np.float64))
+        file_counter = file_counter and COUNTER_COLUMN in df.columns and bool(
+            np.all(np.isfinite(df[COUNTER_COLUMN].to_numpy())))
+        kept = [df] if k == 0 else None
     name = unit or steps.unit or src.stem
-    t = df.index.to_numpy(dtype=np.float64)
+    t = times[0] if len(times) == 1 else np.concatenate(times)
+    del times
     rate_hz = _sample_rate(t, steps.sample_rate_hz, str(src))
     used = steps.used_steps
     bounds: list[tuple[int, int]] = []
@@ -218,23 +254,16 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
     if imu_spec:
         meta["imu_spec_json"] = json.dumps(imu_spec)
 
-    counter = _counter(t, df, rate_hz)
+    counter = None if file_counter else _counter(t, rate_hz)
     n = t.size
-    imu_cols: dict[str, Any] = {TIME_COLUMN: t, COUNTER_COLUMN: counter,
-                                "device_time_s": (df["device_time_s"].to_numpy()
-                                                  if "device_time_s" in df.columns else t)}
-    for col in (*GYRO_COLUMNS, *ACCEL_COLUMNS):
-        imu_cols[col] = df[col].to_numpy(dtype=np.float64)
-    imu_cols[TEMPERATURE_COLUMN] = (df[TEMPERATURE_COLUMN].to_numpy(dtype=np.float64)
-                                    if TEMPERATURE_COLUMN in df.columns else np.full(n, np.nan))
-    imu_cols["saturated"] = (df["saturated"].to_numpy() != 0 if "saturated" in df.columns
-                             else np.zeros(n, dtype=bool))
     streams = [imu_stream_spec(name), _table_spec(steps.table_axes)]
     with RecordingWriter(out_path, streams=streams, metadata=meta, overwrite=overwrite,
                          flush_interval_s=math.inf) as writer:
-        chunk = 1 << 18
-        for a in range(0, n, chunk):
-            writer.append("imu", name, {k: v[a:a + chunk] for k, v in imu_cols.items()})
+        a = 0
+        for df in (kept if kept is not None else frames()):
+            writer.append("imu", name, _imu_rows(df, None if counter is None
+                                                 else counter[a:a + len(df)]))
+            a += len(df)
         for step, (i0, i1) in zip(used, bounds, strict=True):
             writer.append(DEVICE_TABLE, RECONSTRUCTED_TABLE, _table_rows(step, steps, t[i0:i1]))
             idx = writer.begin_step(step.kind, step.label or step.role, step.start_s,

@@ -10,8 +10,11 @@ Contents
     An :class:`ImportSpec` from a small TOML file (``--import spec.toml``).
 :func:`read_imu_table`
     A log (one CSV/text file, or imu_tk's gyro and accelerometer files) → a DataFrame in SI
-    indexed by ``time_s``, through :func:`~imucalib.io.csv_import.read_imu_csv` (every check of
+    indexed by ``time_s``, through :func:`~imucalib.io.csv_import.iter_imu_csv` (every check of
     that reader applies: the errors name the file, the column and the row).
+:func:`iter_imu_table`
+    The same log in chunks of at most ``chunk_rows`` rows, for logs larger than memory
+    (docs/import.md, "Large files"); :func:`read_imu_table` joins these chunks.
 
 Raw counts
 ----------
@@ -27,6 +30,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+from collections.abc import Iterator
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,13 +39,20 @@ import numpy as np
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TIME_COLUMN
 from imucalib.errors import InvalidInputError
-from imucalib.io.csv_import import WHITESPACE, _read_header, read_imu_csv
+from imucalib.io.csv_import import (
+    DEFAULT_CHUNK_ROWS,
+    WHITESPACE,
+    _read_header,
+    concat_chunks,
+    iter_imu_csv,
+    read_imu_csv,
+)
 from imucalib.io.csv_layouts import SHORT_NAMES, build_csv_mapping, normalize_column_map
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["COUNTS", "ImportSpec", "load_import_spec", "read_imu_table"]
+__all__ = ["COUNTS", "ImportSpec", "iter_imu_table", "load_import_spec", "read_imu_table"]
 
 #: The unit of raw-count columns.
 COUNTS = "counts"
@@ -207,9 +218,9 @@ def _headerless(headers: list[str]) -> bool:
     return True
 
 
-def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None
-                   ) -> pd.DataFrame:
-    """Read an IMU log into SI through its layout and `spec`.
+def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None, *,
+                   chunk_rows: int = DEFAULT_CHUNK_ROWS) -> pd.DataFrame:
+    """Read an IMU log into SI through its layout and `spec`: :func:`iter_imu_table`, joined.
 
     Parameters
     ----------
@@ -219,6 +230,8 @@ def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None
         first line of four numbers, imu_tk's gyro file (``time x y z`` rows).
     spec : ImportSpec, optional
         How to read it (default: the layout's own names and units).
+    chunk_rows : int
+        Rows parsed at a time; the result does not depend on it.
 
     Returns
     -------
@@ -232,6 +245,39 @@ def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None
         Any defect of the file (naming the column and row), of the spec, or an unknown unit
         (:class:`~imucalib.errors.UnitError`).
     """
+    return concat_chunks(list(iter_imu_table(path, spec, chunk_rows=chunk_rows)))
+
+
+def iter_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None, *,
+                   chunk_rows: int = DEFAULT_CHUNK_ROWS) -> Iterator[pd.DataFrame]:
+    """Read an IMU log into SI in chunks of at most `chunk_rows` rows (bounded memory).
+
+    The chunks joined are :func:`read_imu_table`'s frame, and each is checked as
+    :func:`~imucalib.io.csv_import.iter_imu_csv` checks it: a defect names the column and the
+    data row and line over the whole file, the time must not decrease across chunk boundaries,
+    a sample-rate time base (or a sample counter read as time) continues from chunk to chunk,
+    and a counts scale and offset apply to every chunk. The spec and the header are checked
+    before this returns. imu_tk's two files (``spec.accel_file``), whose accelerometer may be
+    interpolated at the gyro's times, are read whole and yielded as one chunk.
+
+    Parameters
+    ----------
+    path, spec
+        As :func:`read_imu_table`.
+    chunk_rows : int
+        Most rows per chunk (≥ 1).
+
+    Yields
+    ------
+    pandas.DataFrame
+        Consecutive rows, indexed by ``time_s`` [s]; ``df.attrs["units"]`` and
+        ``df.attrs["layout"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`read_imu_table`; a defect of the rows is raised when its chunk is read.
+    """
     spec = spec or ImportSpec()
     _check_spec(spec)
     p = Path(path)
@@ -241,7 +287,9 @@ def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None
     headers = _read_header(p, spec.skip_rows, delimiter)
     if spec.accel_file is not None or (_headerless(headers) and len(headers) == 4
                                        and not spec.column_map):
-        return _read_imu_tk(p, spec)
+        if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
+            raise InvalidInputError(f"`chunk_rows` must be an integer ≥ 1; got {chunk_rows!r}")
+        return iter((_read_imu_tk(p, spec),))
     units = {SHORT_NAMES.get(k, k): v for k, v in spec.units.items()}
     mapping = build_csv_mapping(headers, column_map=normalize_column_map(spec.column_map),
                                 units=units, gyro_unit=_unit(spec, "gyro"),
@@ -254,17 +302,30 @@ def read_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None
                      if h.strip() in mapping.column_map or h.strip() in canonical)
     scales, offsets = _scaling(spec)
     names = {mapping.column_map.get(h.strip(), h.strip()) for h in headers}
-    has_time = TIME_COLUMN in names
-    df = read_imu_csv(p, column_map=mapping.column_map, units=mapping.units, only=only,
-                      delimiter=delimiter, skip_rows=spec.skip_rows,
-                      sample_rate_hz=spec.sample_rate_hz, scales=scales, offsets=offsets)
-    if has_time and spec.sample_rate_hz is not None:  # the time column is a sample counter
-        import pandas as pd
+    counter = TIME_COLUMN in names and spec.sample_rate_hz is not None
+    chunks = iter_imu_csv(p, column_map=mapping.column_map, units=mapping.units, only=only,
+                          delimiter=delimiter, skip_rows=spec.skip_rows,
+                          sample_rate_hz=spec.sample_rate_hz, scales=scales, offsets=offsets,
+                          chunk_rows=chunk_rows)
+    return _tagged(chunks, mapping.layout, spec.sample_rate_hz if counter else None)
 
-        t = np.asarray(df.index, dtype=np.float64)
-        df.index = pd.Index((t - t[0]) / spec.sample_rate_hz, name=TIME_COLUMN)
-    df.attrs["layout"] = mapping.layout
-    return df
+
+def _tagged(chunks: Iterator[pd.DataFrame], layout: str, counter_rate_hz: float | None
+            ) -> Iterator[pd.DataFrame]:
+    """Tag each chunk with its layout; make a sample-counter time column seconds.
+
+    The counter is counted from the file's first count, at `counter_rate_hz`.
+    """
+    import pandas as pd
+
+    first: float | None = None
+    for df in chunks:
+        if counter_rate_hz is not None:  # the time column is a sample counter
+            t = np.asarray(df.index, dtype=np.float64)
+            first = float(t[0]) if first is None else first
+            df.index = pd.Index((t - first) / counter_rate_hz, name=TIME_COLUMN)
+        df.attrs["layout"] = layout
+        yield df
 
 
 def _read_imu_tk(gyro_path: Path, spec: ImportSpec) -> pd.DataFrame:
