@@ -120,10 +120,12 @@ _AXES: Final = ("x", "y", "z")
 PARAMETERS: Final = tuple(f"gyro_M_{i}{j}" for i in _AXES for j in _AXES)
 #: The kinds of rotation observation, (F.6) and (F.7).
 KINDS: Final = ("gravity", "turn")
-#: A column of the whitened Jacobian under this fraction of the largest, or a direction of
-#: the design whose singular value (columns at unit norm) is under it, is not excited: a gyro
+#: A column of the whitened Jacobian under this fraction of the largest is not excited: a gyro
 #: entry seen only through the leak of other axes' rates by the misalignment (≤ a few %).
 _WEAK: Final = 0.05
+#: A direction of the design (columns at unit norm) whose singular value is under this fraction
+#: of the largest is not separable (a good gravity-only design has 0.1–0.2).
+_COLLINEAR: Final = 1e-3
 _ADVICE: Final = ("add rotations about other axes: turns flat on a desk with each axis up, or "
                   "hand rotations that tip each axis through the vertical")
 
@@ -508,7 +510,7 @@ def _whiten(c: _F64, a: _F64) -> _F64:
 
 def _check(jac: _F64, c: _F64) -> None:
     check_rank(_whiten(c, jac), PARAMETERS, subject="the rotations", advice=_ADVICE,
-               weak_column=_WEAK, weak_singular=_WEAK)
+               weak_column=_WEAK, weak_singular=_COLLINEAR)
 
 
 def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | None
@@ -576,15 +578,16 @@ def fit_gyro_rotations(rotations: Sequence[RotationObservation], accel_theta: Ar
     m = np.zeros(9)
     r, jac, c, _ = design.evaluate(m)
     _check(jac, c)
-    for it in range(1, max_iter + 1):
+    it = 0
+    while True:
         step, *_ = np.linalg.lstsq(_whiten(c, jac), -_whiten(c, r), rcond=None)
-        m = m + step
+        m, it = m + step, it + 1
         if np.max(np.abs(step)) < tol:
             break
+        if it >= max_iter:
+            raise ConvergenceError(f"the gyro rotation fit did not converge in {max_iter} "
+                                   "iterations")
         r, jac, c, _ = design.evaluate(m)
-    else:
-        raise ConvergenceError(f"the gyro rotation fit did not converge in {max_iter} "
-                               "iterations")
     return _finish(design, m, it, accel_covariance)
 
 
