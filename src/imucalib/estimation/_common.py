@@ -187,7 +187,7 @@ def check_rank(jw: NDArray[np.float64], names: Sequence[str], *, subject: str, a
     scale = np.linalg.norm(jw, axis=0)
     dead = scale <= weak_column * scale.max()
     if np.any(dead):
-        missing = [names[i] for i in np.flatnonzero(dead)]
+        missing = [names[int(i)] for i in np.flatnonzero(dead)]
         raise InsufficientExcitationError(
             missing, f"{subject} do not excite {missing} at all ({advice})")
     _, s, vt = np.linalg.svd(jw / scale, full_matrices=False)

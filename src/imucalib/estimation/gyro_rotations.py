@@ -405,6 +405,17 @@ class _Design:
         s = ub + ua
         return np.asarray(s / np.linalg.norm(s, axis=1, keepdims=True), dtype=np.float64)
 
+    def end_attitudes(self, m: _F64) -> _F64:
+        """R_T (K, 3, 3) of (F.4) alone, by a pairwise product tree (in order)."""
+        inv = np.linalg.inv(np.eye(3) + m.reshape(3, 3))
+        w = self.rate @ inv.T
+        q = _qexp(0.5 * (w[:, 1:] + w[:, :-1]) * self.dt[:, :-1, None])
+        while q.shape[1] > 1:
+            if q.shape[1] % 2:
+                q = np.concatenate([q, np.tile([1.0, 0.0, 0.0, 0.0], (self.k, 1, 1))], axis=1)
+            q = _qmul(q[:, 0::2], q[:, 1::2])
+        return _qmat(q[:, 0])
+
     def attitudes(self, m: _F64) -> tuple[_F64, _F64, _F64]:
         """ω̂ (K, L, 3) of (F.3), R_t (K, L, 3, 3) of (F.4) and the weights W_t (K, L, 3, 3)."""
         inv = np.linalg.inv(np.eye(3) + m.reshape(3, 3))
@@ -513,9 +524,11 @@ def _check(jac: _F64, c: _F64) -> None:
                weak_column=_WEAK, weak_singular=_COLLINEAR)
 
 
-def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | None
-            ) -> GyroRotationFit:
-    r, jac, c, rt = design.evaluate(m)
+def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | None,
+            jac: _F64, c: _F64) -> GyroRotationFit:
+    """Return the result at `m`, J and C of (F.8)–(F.9) evaluated there (or a step < tol away)."""
+    rt = design.end_attitudes(m)
+    r = design.residuals(m, rt)
     _check(jac, c)
     jw, rw = _whiten(c, jac), _whiten(c, r)
     cov = np.linalg.inv(jw.T @ jw)
@@ -578,17 +591,23 @@ def fit_gyro_rotations(rotations: Sequence[RotationObservation], accel_theta: Ar
     m = np.zeros(9)
     r, jac, c, _ = design.evaluate(m)
     _check(jac, c)
-    it = 0
+    it, full = 0, False
+    # chord steps with J and C of M = 0 (each cuts the error by about ‖M‖) until a step is
+    # under tol, then again with J and C evaluated there
     while True:
         step, *_ = np.linalg.lstsq(_whiten(c, jac), -_whiten(c, r), rcond=None)
         m, it = m + step, it + 1
-        if np.max(np.abs(step)) < tol:
-            break
+        small = bool(np.max(np.abs(step)) < tol)
+        if full and small:
+            return _finish(design, m, it, accel_covariance, jac, c)
         if it >= max_iter:
             raise ConvergenceError(f"the gyro rotation fit did not converge in {max_iter} "
                                    "iterations")
-        r, jac, c, _ = design.evaluate(m)
-    return _finish(design, m, it, accel_covariance)
+        if small:
+            full = True
+            r, jac, c, _ = design.evaluate(m)
+        else:
+            r = design.residuals(m, design.end_attitudes(m))
 
 
 def fit_turns_linear(rotations: Sequence[RotationObservation], accel_theta: ArrayLike, *,
@@ -605,5 +624,6 @@ def fit_turns_linear(rotations: Sequence[RotationObservation], accel_theta: Arra
                                 f"{int((~design.turn).sum())} \"gravity\" rotation(s)")
     r0, jac, c, _ = design.evaluate(np.zeros(9))       # r(M) = r0 + J·M exactly
     _check(jac, c)
-    m, *_ = np.linalg.lstsq(_whiten(c, jac), -_whiten(c, r0), rcond=None)
-    return _finish(design, m, 0, accel_covariance)
+    m = np.asarray(np.linalg.lstsq(_whiten(c, jac), -_whiten(c, r0), rcond=None)[0],
+                   dtype=np.float64)
+    return _finish(design, m, 0, accel_covariance, jac, c)
