@@ -71,23 +71,35 @@ keeps it to the desk's flatness; the residual's χ² shows more), the drift of t
 rotation.
 
 :func:`fit_gyro_rotations` minimises rᵀC⁻¹r over all rotations, of either kind, by
-Gauss–Newton from M = 0 with the Jacobian of (F.6) in M from the same perturbation as (F.8),
+Gauss–Newton from M = 0, with the Jacobian of (F.6) in M from the same perturbation as (F.8),
 δω̂ = −(I + M)⁻¹·δM·ω̂:
 
     ∂r/∂M_ij = [e₁ e₂]ᵀ·[v×]·R_Tᵀ·Σ_t W_t·(I + M)⁻¹·e_i·ω̂_t,j                     (F.9)
 
-C is re-evaluated at each step (it depends on M only through R). The covariance is
-(JᵀC⁻¹J)⁻¹ — the Cramér–Rao bound of the design for this noise — Birge-scaled when χ²/ν
-flags a misfit (:func:`imucalib.models.fit_quality.assess_fit`). With the covariance C_a of
-the accelerometer θ the fit used, the accelerometer's own error is propagated by the
-implicit-function rule,
+(the derivative of the continuous integral: it differs from that of the discrete (F.4) by
+O(Δt²), which changes the steps, not the solution). The steps are chord steps: J and C of
+M = 0 are kept (each step then cuts the error by about ‖M‖) until a step is under `tol`,
+then J and C are evaluated there and the steps repeated (C depends on M only through R). The
+covariance is (JᵀC⁻¹J)⁻¹ — the Cramér–Rao bound of the design for this noise — Birge-scaled
+when χ²/ν flags a misfit (:func:`imucalib.models.fit_quality.assess_fit`). With the
+covariance C_a of the accelerometer θ the fit used, the accelerometer's own error is
+propagated by the implicit-function rule,
 
     A = ∂θ_g/∂θ_a = −(JᵀC⁻¹J)⁻¹·JᵀC⁻¹·∂r/∂θ_a,   cov_g += A·C_a·Aᵀ,
     cov(θ_g, θ_a) = A·C_a                                                          (F.10)
 
-(∂r/∂θ_a by central differences). Turns alone make a linear problem: (F.7) is
-Θ − φn = M·φn, solved in closed form by :func:`fit_turns_linear` (its C does not depend on M,
-so Gauss–Newton reaches the same solution).
+(∂r/∂θ_a by central differences; the error of θ_a is taken as independent of the noise of the
+pose means used here, though the accelerometer fit used the same means: a correlation this
+neglects). Turns alone make a linear problem: (F.7) is Θ − φn = M·φn, solved in closed form
+by :func:`fit_turns_linear` (its C does not depend on M, so Gauss–Newton reaches the same
+solution).
+
+A design that leaves entries of M unseen (turns about one axis only; hand rotations all about
+one body axis, or about the vertical) is refused naming them
+(:class:`~imucalib.errors.InsufficientExcitationError`): at M = 0 and at the solution, a
+column of the whitened J under 5 % of the largest is not excited (at M = 0 an unseen entry
+still shows through the misalignment's leak of the other axes' rates, ≤ a few %), and the
+columns at unit norm must have no singular value under 10⁻³ of the largest.
 
 Contents
 --------
