@@ -145,7 +145,7 @@ def _gravity_plan(grav_s=2.0):
 
 
 def _turn_plan(turn_s=4.0, grav_s=2.0):
-    """Two turns (one each way) with z up, x up... : after 90° about x, y is up; then z."""
+    """Two turns (one each way) with z up, then y up (90° about x), then x up (90° about z)."""
     return [("turn", 1, turn_s), ("turn", -1, turn_s),
             ("gravity", [np.pi / 2, 0.0, 0.0], grav_s), ("turn", 1, turn_s),
             ("turn", -1, turn_s), ("gravity", [0.0, 0.0, np.pi / 2], grav_s),
@@ -360,5 +360,8 @@ def test_bad_fit_inputs_are_refused():
         fit_gyro_rotations([rot, rot, "x"], THETA_A, gyro_noise_density_rps_rthz=N_CONSUMER)
     with pytest.raises(InvalidInputError, match=r"`accel_theta` must have shape \(9\)"):
         fit_gyro_rotations([rot] * 3, THETA_A[:6], gyro_noise_density_rps_rthz=N_CONSUMER)
+    tipped = _one(accel_after_mps2=_raw_accel(np.array([G, 0.0, 0.0])))
+    with pytest.raises(InvalidInputError, match=r"rotation 0's poses are 90\.0° apart"):
+        fit_gyro_rotations([tipped, rot, rot], THETA_A, gyro_noise_density_rps_rthz=N_CONSUMER)
     with pytest.raises(InvalidInputError, match="one or three values > 0"):
         fit_gyro_rotations([rot] * 3, THETA_A, gyro_noise_density_rps_rthz=-1.0)

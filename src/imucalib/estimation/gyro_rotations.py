@@ -138,6 +138,8 @@ _WEAK: Final = 0.05
 #: A direction of the design (columns at unit norm) whose singular value is under this fraction
 #: of the largest is not separable (a good gravity-only design has 0.1–0.2).
 _COLLINEAR: Final = 1e-3
+#: The most a turn's poses may differ in gravity direction (a desk turn keeps it). [°]
+_TURN_APART_DEG: Final = 10.0
 _ADVICE: Final = ("add rotations about other axes: turns flat on a desk with each axis up, or "
                   "hand rotations that tip each axis through the vertical")
 
@@ -379,6 +381,14 @@ class _Design:
         self.slices = np.cumsum([0, *(len(r) for r in self.rows)])
         self._pose_ids()
         self.set_accel(theta_a)
+        self.basis = _basis(self.ua)           # e₁, e₂ of (F.6), fixed at the θ_a given
+        apart = np.degrees(np.arccos(np.clip(np.sum(self.ub * self.ua, axis=1), -1.0, 1.0)))
+        bad = np.flatnonzero(self.turn & (apart > _TURN_APART_DEG))
+        if bad.size:
+            raise InvalidInputError(
+                f"a \"turn\" ends in the pose it started from (gravity within "
+                f"{_TURN_APART_DEG:g}°); rotation {int(bad[0])}'s poses are "
+                f"{apart[bad[0]]:.1f}° apart (tag it \"gravity\")")
         n = self._axis(self.ub, self.ua)
         angle = np.array([abs(r.angle_rad) if r.angle_rad is not None else 0.0 for r in rots])
         self.phi = np.where(np.einsum("ka,ka->k", self.theta_raw, n) < 0, -angle, angle)
@@ -404,13 +414,11 @@ class _Design:
         self.bias_cov[np.arange(self.k), np.arange(self.k)] = self.bias_std**2
 
     def set_accel(self, theta_a: _F64) -> None:
-        """Correct the poses' means with θ_a (F.1); the residual basis (F.6) follows."""
+        """Correct the poses' means with θ_a (F.1) (the basis of (F.6) stays as it was)."""
         self.theta_a = theta_a
         ab, aa = correct_accel(theta_a, self.yb), correct_accel(theta_a, self.ya)
         self.nb, self.na = np.linalg.norm(ab, axis=1), np.linalg.norm(aa, axis=1)
         self.ub, self.ua = ab / self.nb[:, None], aa / self.na[:, None]
-        if not hasattr(self, "basis"):
-            self.basis = _basis(self.ua)        # fixed: ⊥ u_after at the θ_a given
 
     @staticmethod
     def _axis(ub: _F64, ua: _F64) -> _F64:
