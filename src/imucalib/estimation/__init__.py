@@ -31,6 +31,10 @@ Contents
 :mod:`imucalib.estimation.gravity_norm` (imported on its own)
     :func:`~imucalib.estimation.gravity_norm.fit_gravity_norm` (the accelerometer triad from
     static poses of unknown orientation), :func:`~imucalib.estimation.gravity_norm.pose_coverage`.
+:mod:`imucalib.estimation.gyro_rotations` (imported on its own)
+    :func:`~imucalib.estimation.gyro_rotations.fit_gyro_rotations` (the gyro's M from hand
+    rotations between static poses and known turns),
+    :func:`~imucalib.estimation.gyro_rotations.fit_turns_linear`.
 """
 
 from __future__ import annotations

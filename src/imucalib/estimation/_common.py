@@ -14,9 +14,10 @@ import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
-from imucalib.errors import InvalidInputError
+from imucalib.errors import InsufficientExcitationError, InvalidInputError
 
-__all__ = ["EstimateAccessors", "Whitener", "as_design", "as_names", "make_whitener"]
+__all__ = ["EstimateAccessors", "Whitener", "as_design", "as_names", "check_rank",
+           "make_whitener"]
 
 
 class EstimateAccessors:
@@ -167,3 +168,32 @@ def _vector(value: ArrayLike, name: str, m: int) -> NDArray[np.float64]:
         raise InvalidInputError(f"`{name}` must be > 0; got {int(np.sum(arr <= 0))} value(s) ≤ 0 "
                                 f"(min {arr.min():.6g})")
     return arr
+
+
+def check_rank(jw: NDArray[np.float64], names: Sequence[str], *, subject: str, advice: str,
+               weak_column: float = 0.0, weak_singular: float = 1e-6) -> None:
+    """Refuse a rank-deficient whitened Jacobian `jw` (m, p), naming the parameters it misses.
+
+    A column whose norm is at most `weak_column` times the largest is not excited at all; then
+    the columns, each scaled to unit norm, must have no singular value under `weak_singular`
+    times the largest (each weak right singular vector names its largest entry's parameter).
+
+    Raises
+    ------
+    InsufficientExcitationError
+        ``"{subject} do not excite [...] at all ({advice})"`` or ``"{subject} cannot separate
+        [...] (the design is rank-deficient: {advice})"``.
+    """
+    scale = np.linalg.norm(jw, axis=0)
+    dead = scale <= weak_column * scale.max()
+    if np.any(dead):
+        missing = [names[int(i)] for i in np.flatnonzero(dead)]
+        raise InsufficientExcitationError(
+            missing, f"{subject} do not excite {missing} at all ({advice})")
+    _, s, vt = np.linalg.svd(jw / scale, full_matrices=False)
+    weak = s < weak_singular * s[0]
+    if weak.any():
+        missing = sorted({names[int(np.argmax(np.abs(row)))] for row in vt[weak]})
+        raise InsufficientExcitationError(
+            missing, f"{subject} cannot separate {missing} (the design is rank-deficient: "
+                     f"{advice})")

@@ -48,7 +48,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
-from imucalib.errors import ConvergenceError, InsufficientExcitationError, InvalidInputError
+from imucalib.errors import ConvergenceError, InvalidInputError
+from imucalib.estimation._common import check_rank
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["PARAMETERS", "GravityNormFit", "correct_accel", "fit_gravity_norm", "pose_coverage"]
@@ -135,21 +136,9 @@ class GravityNormFit:
 
 
 def _check_rank(j: _F64, sw: _F64) -> None:
-    jw = j * sw[:, None]
-    names_all = (*PARAMETERS, *K2_PARAMETERS)
-    scale = np.linalg.norm(jw, axis=0)
-    if np.any(scale == 0):
-        names = [names_all[i] for i in np.flatnonzero(scale == 0)]
-        raise InsufficientExcitationError(
-            names, f"the poses do not excite {names} at all (add poses with gravity along "
-                   "other axes; pose_coverage says which)")
-    _, s, vt = np.linalg.svd(jw / scale, full_matrices=False)
-    weak = s < 1e-6 * s[0]
-    if weak.any():
-        names = sorted({names_all[int(np.argmax(np.abs(row)))] for row in vt[weak]})
-        raise InsufficientExcitationError(
-            names, f"the poses cannot separate {names} (the design is rank-deficient: add "
-                   "poses with gravity along other axes; pose_coverage says which)")
+    names = (*PARAMETERS, *K2_PARAMETERS)[:j.shape[1]]
+    check_rank(j * sw[:, None], names, subject="the poses",
+               advice="add poses with gravity along other axes; pose_coverage says which")
 
 
 def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
