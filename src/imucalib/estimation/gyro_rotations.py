@@ -549,16 +549,20 @@ def _check(jac: _F64, c: _F64) -> None:
 
 def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | None,
             jac: _F64, c: _F64) -> GyroRotationFit:
-    """Return the result at `m`, J and C of (F.8)–(F.9) evaluated there (or a step < tol away)."""
+    """Return the result at `m`, J and C of (F.8)–(F.9) evaluated there (or a step < tol away).
+
+    With the accelerometer's covariance C_a the residuals' covariance becomes
+    C + D·C_a·Dᵀ (D = ∂r/∂θ_a): one more Gauss–Newton step is taken with it, and χ²/ν, the
+    covariance and the cross-covariance come from it (F.10).
+    """
     rt = design.end_attitudes(m)
     r = design.residuals(m, rt)
     _check(jac, c)
-    jw, rw = _whiten(c, jac), _whiten(c, r)
-    cov = np.linalg.inv(jw.T @ jw)
-    cov = 0.5 * (cov + cov.T)
-    quality = assess_fit("gyro (rotations)", float(rw @ rw), int(r.size - 9))
-    total = cov * quality.sigma_scale**2
+    jw = _whiten(c, jac)
+    cov_noise = np.linalg.inv(jw.T @ jw)
+    cov_noise = 0.5 * (cov_noise + cov_noise.T)
     extra: dict[str, _F64] = {}
+    cov, c_fit = cov_noise, c
     if accel_covariance is not None:
         theta_a = design.theta_a
         na = theta_a.size
@@ -572,13 +576,24 @@ def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | Non
                 cols.append(design.residuals(m, rt))
             da[:, p] = (cols[0] - cols[1]) / (2 * h)
         design.set_accel(theta_a)
-        a = -cov @ jw.T @ _whiten(c, da)
-        extra = {"covariance_accel": a @ ca @ a.T, "cross_covariance": a @ ca,
+        c_fit = c + da @ ca @ da.T
+        c_fit = 0.5 * (c_fit + c_fit.T)
+        jw_t = _whiten(c_fit, jac)
+        step, *_ = np.linalg.lstsq(jw_t, -_whiten(c_fit, r), rcond=None)
+        m = m + step
+        rt = design.end_attitudes(m)
+        r = design.residuals(m, rt)
+        cov = np.linalg.inv(jw_t.T @ jw_t)
+        cov = 0.5 * (cov + cov.T)
+        a = -cov @ jw_t.T @ _whiten(c_fit, da)
+        extra = {"covariance_accel": cov - cov_noise, "cross_covariance": a @ ca,
                  "accel_sensitivity": a}
-        total = total + extra["covariance_accel"]
-    return GyroRotationFit(values=m, covariance=0.5 * (total + total.T), covariance_noise=cov,
-                           quality=quality, residuals=design.per_rotation(r), iterations=it,
-                           **extra)
+    rw = _whiten(c_fit, r)
+    quality = assess_fit("gyro (rotations)", float(rw @ rw), int(r.size - 9))
+    total = cov * quality.sigma_scale**2
+    return GyroRotationFit(values=m, covariance=0.5 * (total + total.T),
+                           covariance_noise=cov_noise, quality=quality,
+                           residuals=design.per_rotation(r), iterations=it, **extra)
 
 
 def fit_gyro_rotations(rotations: Sequence[RotationObservation], accel_theta: ArrayLike, *,

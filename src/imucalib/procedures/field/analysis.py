@@ -281,6 +281,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if form == "auto":
         form = "six-position" if _on_faces(y) else "gravity-norm"
     notes = [g_note]
+    six = None
     if form == "gravity-norm":
         fit, k2_note = _accel_fit(y, sy, g, opt.accel_k2)
         if k2_note:
@@ -321,7 +322,8 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         opt.gyro_g_sensitivity == "auto" and not missing and len(poses) >= 6)
     static_values, static_cov, bias_quality, bias_resid = _gyro_static(
         poses, up, force, lat, fit_g)
-    gyro = _fit_gyro(log, detection, poses, up, opt, accel_values, accel_cov, form)
+    gyro = _fit_gyro(log, detection, poses, up, opt, accel_values, accel_cov, form,
+                     six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
     report(0.9)
     quality: list[FitQuality] = [accel_quality]
     if gyro is not None:
@@ -333,7 +335,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     names, values, cov = triad_from_field(
         form, accel_values, accel_cov_noise, static_values, static_cov,
         None if gyro is None else gyro["fit"].values,
-        None if gyro is None else gyro["fit"].covariance_noise,
+        None if gyro is None else _gyro_cov(gyro["fit"]),
         None if gyro is None else gyro["fit"].cross_covariance)
     if gyro is None:
         notes.append("no rotation fitted: the gyro triad is not in the calibration "
@@ -370,11 +372,110 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                  "accel_covariance": accel_cov})
 
 
+def _gyro_cov(fit: Any) -> _F64:
+    """Return the rotation fit's covariance before Birge scaling, the accelerometer's part in."""
+    extra = fit.covariance_accel if fit.covariance_accel is not None else 0.0
+    return np.asarray(fit.covariance_noise + extra, dtype=np.float64)
+
+
 def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], up: _F64,
-              opt: FieldOptions, accel_values: _F64, accel_cov: _F64, form: str
-              ) -> dict[str, Any] | None:
-    """Step 5; None when ``gyro_form`` is "none" or the log holds no rotation."""
+              opt: FieldOptions, accel_values: _F64, accel_cov: _F64, form: str,
+              six: Any, g_sens: _F64 | None, lat: float | None) -> dict[str, Any] | None:
+    """Step 5; None when ``gyro_form`` is "none" or the log holds no rotation.
+
+    The gyro samples of each rotation are first freed of the g-sensitivity G·f̂(t) (f̂ the
+    corrected accelerometer samples) when G was fitted; each rotation's bias is the mean of
+    its two poses' static means (less their G·f), so that a wandering bias is followed. The
+    integration starts and ends `window_s` inside the static intervals (at most their length):
+    a high detector threshold takes the fading ends of a motion (a hand's tremor) for rest, and
+    an angle cut there is a misfit of up to 10⁻³ rad (found on the twin at k = 20); the extra
+    still samples add only their noise and the bias error, which the fit's covariance carries.
+
+    The Earth's rate turns with the body during a motion, so the two poses' means do not
+    remove it (a 4 s turn of 150° leaves ~2·10⁻⁴ rad, several σ of a consumer gyro at 400 Hz
+    on the twin): its vertical part Ω·sin L is removed sample by sample along the corrected
+    accelerometer's direction (and from the static means), the horizontal part Ω·cos L,
+    whose direction needs the heading, is a Type B on the bias of each motion (σ = Ω·cos L/√2
+    per axis; Ω itself when the latitude is unknown) (FL.4).
+    """
+    from imucalib.estimation.gravity_norm import correct_accel
+    from imucalib.estimation.gyro_rotations import RotationObservation, fit_gyro_rotations
+
     if opt.gyro_form == "none" or not detection.rotations:
+        if opt.gyro_form in ("gravity", "turns"):
+            raise InsufficientExcitationError(
+                ["gyro_M"], f"{log.source}: no rotation between the static poses was found "
+                            f"(gyro_form {opt.gyro_form!r} needs them)")
         return None
-    raise InsufficientExcitationError(["gyro_M"], "the gyro fit from rotations is not wired "
-                                                  "yet")
+    by_stop = {seg.stop_index - 1: k for k, seg in enumerate(detection.static)}
+    by_start = {seg.start_index: k for k, seg in enumerate(detection.static)}
+    if form == "six-position":
+        def correct(y: _F64) -> _F64:
+            return np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
+                                              (np.atleast_2d(y) - six.bias).T).T)
+        theta = np.zeros(9)
+        means = [correct(p.accel_mean)[0] for p in poses]
+    else:
+        def correct(y: _F64) -> _F64:
+            return correct_accel(accel_values, y)
+        theta = accel_values
+        means = [p.accel_mean for p in poses]
+    density = poses[0].gyro_se * math.sqrt(poses[0].duration_s + log.period_s)
+    omega_up = 0.0 if lat is None else EARTH_RATE_RPS * math.sin(math.radians(lat))
+    omega_h = EARTH_RATE_RPS * (1.0 if lat is None else math.cos(math.radians(lat)))
+
+    def vertical(f: _F64) -> _F64:
+        fa = correct(f)
+        return np.asarray(omega_up * fa / np.linalg.norm(fa, axis=1, keepdims=True))
+
+    observations, rows = [], []
+    for rot in detection.rotations:
+        kb, ka = by_stop.get(rot.start_index), by_start.get(rot.stop_index - 1)
+        if kb is None or ka is None:
+            continue
+        # integrate from `window_s` inside the static intervals: a detector threshold that
+        # takes the fading ends of a motion for rest would otherwise cut them off the angle
+        margin = max(1, round(opt.window_s / log.period_s))
+        sl = slice(max(detection.static[kb].start_index, rot.start_index - margin),
+                   min(detection.static[ka].stop_index, rot.stop_index + margin))
+        gyro = log.gyro_rps[sl]
+        before, after = poses[kb], poses[ka]
+        ub, ua = up[kb], up[ka]
+        static_b = before.gyro_mean - vertical(before.accel_mean)[0]
+        static_a = after.gyro_mean - vertical(after.accel_mean)[0]
+        gyro = gyro - vertical(log.accel_mps2[sl])
+        if g_sens is not None:
+            gyro = gyro - correct(log.accel_mps2[sl]) @ g_sens.T
+            static_b = static_b - g_sens @ correct(before.accel_mean)[0]
+            static_a = static_a - g_sens @ correct(after.accel_mean)[0]
+        turns = rot.angle_norm_rad / (2 * math.pi)
+        same_up = math.degrees(math.acos(min(1.0, float(ub @ ua)))) <= _TURN_GRAVITY_DEG
+        is_turn = same_up and round(turns) >= 1 and abs(turns - round(turns)) <= _FULL_TURN_TOL
+        kind = "turn" if is_turn else "gravity"
+        if opt.gyro_form == "turns" and kind != "turn":
+            continue
+        if opt.gyro_form == "gravity":
+            kind = "gravity"
+        observations.append(RotationObservation(
+            kind=kind, time_s=log.time_s[sl], gyro_rps=gyro,
+            bias_rps=0.5 * (static_b + static_a),
+            bias_std_rps=np.sqrt(0.25 * (before.gyro_se**2 + after.gyro_se**2)
+                                 + omega_h**2 / 2.0),
+            accel_before_mps2=means[kb], accel_before_std=before.accel_se,
+            accel_after_mps2=means[ka], accel_after_std=after.accel_se,
+            angle_rad=2 * math.pi * round(turns) if kind == "turn" else None))
+        rows.append({"start_time_s": rot.start_time_s, "end_time_s": rot.end_time_s,
+                     "kind": kind, "angle_deg": math.degrees(rot.angle_norm_rad),
+                     "pose_before": kb, "pose_after": ka})
+    if opt.gyro_form == "turns" and not observations:
+        raise InsufficientExcitationError(
+            ["gyro_M"], f"{log.source}: no full turn flat on the desk was found (a rotation of "
+                        "n·360° within 10 %, the gravity direction back within 5°)")
+    fit = fit_gyro_rotations(observations, theta, gyro_noise_density_rps_rthz=density,
+                             accel_covariance=None if form == "six-position" else accel_cov)
+    for row, r in zip(rows, fit.residuals, strict=True):
+        row["residual"] = r
+    kinds = {o.kind for o in observations}
+    label = ("gravity-referenced and known-angle turns" if kinds == {"gravity", "turn"}
+             else "known-angle turns" if kinds == {"turn"} else "gravity-referenced")
+    return {"fit": fit, "form": label, "rows": rows}
