@@ -583,7 +583,7 @@ def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | Non
         m = m + step
         rt = design.end_attitudes(m)
         r = design.residuals(m, rt)
-        cov = np.linalg.inv(jw_t.T @ jw_t)
+        cov = np.asarray(np.linalg.inv(jw_t.T @ jw_t), dtype=np.float64)
         cov = 0.5 * (cov + cov.T)
         a = -cov @ jw_t.T @ _whiten(c_fit, da)
         extra = {"covariance_accel": cov - cov_noise, "cross_covariance": a @ ca,
