@@ -9,10 +9,13 @@ gyro's M and G·Qᵀ for its g-sensitivity (Eq. (FL.1) of docs/field.md).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.linalg
 
 from imucalib.models.imu import ImuModel
+from imucalib.models.triad import apply_triad
 
 
 def frame_rotation(model: ImuModel) -> tuple[np.ndarray, np.ndarray]:
@@ -22,9 +25,33 @@ def frame_rotation(model: ImuModel) -> tuple[np.ndarray, np.ndarray]:
     return u @ s, s @ q
 
 
-def field_truth(model: ImuModel, *, six_position: bool = False) -> dict[str, float]:
-    """The truth by the names of the field result's triad model (SI)."""
+def session_bias_drift(session: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The mean over the session's static samples of output − deterministic model (gyro, accel).
+
+    With the grade's noise the biases wander (bias instability, random walk): the session's
+    mean bias is b + this (the white part averages out), what a calibration of that session
+    can see.
+    """
+    model = session.model
+    still = np.zeros(session.time_s.size, dtype=bool)
+    for p in session.statics:
+        still |= (session.time_s >= p.start_time_s) & (session.time_s <= p.stop_time_s)
+    f, w = session.true_specific_force_b_mps2[still], session.true_rate_b_rps[still]
+    gyro = apply_triad(model.gyro, w, specific_force_b_mps2=f)
+    accel = apply_triad(model.accel, f, rate_b_rps=w, angular_accel_b_rps2=np.zeros_like(w))
+    return (np.mean(session.gyro_rps[still] - gyro, axis=0),
+            np.mean(session.accel_mps2[still] - accel, axis=0))
+
+
+def field_truth(model: ImuModel, *, six_position: bool = False,
+                session: Any = None) -> dict[str, float]:
+    """The truth by the names of the field result's triad model (SI).
+
+    With `session`, the biases are the session's mean biases (:func:`session_bias_drift`).
+    """
     a, g = model.accel, model.gyro
+    drift_g, drift_a = session_bias_drift(session) if session is not None else (
+        np.zeros(3), np.zeros(3))
     if six_position:
         ua, q = np.eye(3) + np.asarray(a.scale_misalignment), np.eye(3)
     else:
@@ -33,8 +60,8 @@ def field_truth(model: ImuModel, *, six_position: bool = False) -> dict[str, flo
     gs = np.asarray(g.g_sensitivity) @ q.T
     out = {}
     for i, ax in enumerate("xyz"):
-        out[f"accel_bias_{ax}"] = float(np.asarray(a.bias)[i])
-        out[f"gyro_bias_{ax}"] = float(np.asarray(g.bias)[i])
+        out[f"accel_bias_{ax}"] = float(np.asarray(a.bias)[i] + drift_a[i])
+        out[f"gyro_bias_{ax}"] = float(np.asarray(g.bias)[i] + drift_g[i])
         out[f"accel_K2_{ax}"] = float(np.broadcast_to(np.asarray(a.k2), 3)[i])
         for j, bx in enumerate("xyz"):
             out[f"accel_M_{ax}{bx}"] = float(ua[i, j] - (i == j))

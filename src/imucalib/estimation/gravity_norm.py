@@ -240,7 +240,8 @@ def pose_coverage(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
             u = a / np.linalg.norm(a, axis=1, keepdims=True)
             sr = np.sqrt(np.sum((u * ss) ** 2, axis=1))
             jw = j / sr[:, None]
-            std = np.sqrt(np.diag(np.linalg.inv(jw.T @ jw)))
+            var = np.diag(np.linalg.inv(jw.T @ jw))
+            std = np.sqrt(np.where(var > 0, var, np.inf))   # a singular design: unseen
         except np.linalg.LinAlgError:
             std = np.full(9, np.inf)
         for i, name in enumerate(PARAMETERS):

@@ -3,17 +3,17 @@
 With a fixture (a cube, a machined block, a vice on a surface plate) each static pose puts a
 known direction d_k of the fixture frame along the vertical: the six faces give d_k = ±x, ±y,
 ±z, and any other nominal direction may be added. The triad model (docs/processing-
-estimation.md, "Field calibration", Eq. (F.9))
+estimation.md, "Field calibration", Eq. (F.11))
 
-    y_k = b + (I + M)·g·d_k + e_k                                                        (F.9)
+    y_k = b + (I + M)·g·d_k + e_k                                                        (F.11)
 
 is linear in the bias b and the 3 × 3 scale/misalignment matrix M (row: sensor axis, column:
 input axis of the fixture frame), and separates per sensor axis i into
 
-    y_k,i = b_i + g·d_k,i + g·Σ_j M_ij·d_k,j                                             (F.10)
+    y_k,i = b_i + g·d_k,i + g·Σ_j M_ij·d_k,j                                             (F.12)
 
 four unknowns (b_i, M_i·) per axis; the six faces give six equations per axis (ν = 2 each).
-:func:`fit_six_position` solves (F.10) by weighted least squares per axis, with the covariance
+:func:`fit_six_position` solves (F.12) by weighted least squares per axis, with the covariance
 (AᵀWA)⁻¹, χ²/ν over the three axes and the Birge-scaled covariance on a misfit (the project's
 rule): a pose placed off its nominal direction is a misfit here, which the gravity-norm fit of
 :mod:`imucalib.estimation.gravity_norm` does not mind. A Type B standard uncertainty of g adds
@@ -43,7 +43,7 @@ _AXES = "xyz"
 
 @dataclass(frozen=True)
 class SixPositionFit:
-    """The solution of (F.10).
+    """The solution of (F.12).
 
     Attributes
     ----------
@@ -57,7 +57,7 @@ class SixPositionFit:
     covariance_noise : ndarray, shape (12, 12)
         The same before the Birge scaling.
     quality : FitQuality
-        χ²/ν of (F.10) over the three axes.
+        χ²/ν of (F.12) over the three axes.
     residuals : ndarray, shape (n, 3)
         y_k − b − (I + M)·g·d_k. [m/s²]
     """
@@ -100,7 +100,7 @@ def nominal_directions(y: ArrayLike, *, max_off_axis_deg: float = 20.0) -> _F64:
 
 def fit_six_position(y: ArrayLike, y_std: ArrayLike, directions: ArrayLike,
                      gravity_mps2: float, *, gravity_std_mps2: float = 0.0) -> SixPositionFit:
-    """Solve (F.10) per sensor axis (module docstring).
+    """Solve (F.12) per sensor axis (module docstring).
 
     Parameters
     ----------
