@@ -49,6 +49,8 @@ def _display(name: str, value: float, sigma: float, si_unit: str) -> tuple[str, 
 
 
 def _wrote(console: Console, written: Sequence[Path]) -> None:
+    if not written:
+        return
     console.print("wrote " + "\n      ".join(str(p) for p in written), highlight=False)
 
 
@@ -185,7 +187,26 @@ def render_p3(console: Console, result: Any, written: Sequence[Path]) -> None:
     _wrote(console, written)
 
 
+def render_field(console: Console, result: Any, written: Sequence[Path]) -> None:
+    """Print a field calibration: the parameters, each fit's χ²/ν, the session, the notes."""
+    _render_other(console, result, [])
+    for q in result.quality:
+        flag = (f"[yellow]misfit: σ × {q.sigma_scale:.3g} (Birge)[/]" if q.misfit
+                else "consistent with the noise")
+        console.print(f"  {escape(q.group)}: χ²/ν = {q.reduced_chi2:.3g} (ν = {q.dof}), {flag}",
+                      highlight=False)
+    turns = sum(1 for r in result.rotations if r["kind"] == "turn")
+    console.print(f"  {len(result.poses)} static poses (detector k = {result.threshold_factor:g}),"
+                  f" {len(result.rotations)} rotations ({turns} full turns); accelerometer "
+                  f"{result.accel_form}, gyro {result.gyro_form}", highlight=False,
+                  soft_wrap=True)
+    for note in result.notes:
+        console.print(f"  [yellow]note:[/] {escape(note)}", highlight=False, soft_wrap=True)
+    _wrote(console, written)
+
+
 _RENDERERS: dict[str, Callable[[Console, Any, Sequence[Path]], None]] = {
+    "field": render_field,
     "p1": render_calibration,
     "p2": render_p2,
     "p3": render_p3,
