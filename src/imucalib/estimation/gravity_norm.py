@@ -21,7 +21,13 @@ optional model
     a = T·(I + diag s)·(d − k2∘d²),   d = y − b                                          (F.1′)
 
 (k2 per axis, [1/(m/s²)]; to first order the forward model's y_i += K2_i·x_i², K2 = k2) adds
-three unknowns. :func:`fit_gravity_norm`
+three unknowns. A bias that wanders over the session (a consumer accelerometer's bias
+instability) is a misfit the Birge ratio covers badly (it is correlated in time); the optional
+linear drift
+
+    y_k → y_k − ḃ·(t_k − t̄)                                                            (F.1″)
+
+(t̄ the poses' mean time, b then the bias at t̄) adds three rates. :func:`fit_gravity_norm`
 solves (F.2) by Gauss–Newton with the analytic Jacobian, returns the covariance
 (JᵀW J)⁻¹ (the Cramér–Rao bound of the design for white noise), χ²/ν and its Birge-scaled
 covariance on a misfit (the project's rule, docs/processing-estimation.md), and refuses a
@@ -60,6 +66,8 @@ PARAMETERS: Final = ("bias_x", "bias_y", "bias_z", "scale_x", "scale_y", "scale_
                      "alpha_yz", "alpha_zy", "alpha_zx")
 #: The optional quadratic terms of (F.1′), after :data:`PARAMETERS`.
 K2_PARAMETERS: Final = ("k2_x", "k2_y", "k2_z")
+#: The optional bias rates of (F.1″), last. [m/s³]
+DRIFT_PARAMETERS: Final = ("bias_rate_x", "bias_rate_y", "bias_rate_z")
 _DIRECTIONS: Final = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
                       "+z": (0, 0, 1), "-z": (0, 0, -1)}
 #: Where added poses go once no axis direction is missing: the 12 directions halfway between
@@ -135,20 +143,23 @@ class GravityNormFit:
         return np.sqrt(np.diag(self.covariance))
 
 
-def _check_rank(j: _F64, sw: _F64) -> None:
-    names = (*PARAMETERS, *K2_PARAMETERS)[:j.shape[1]]
+def _check_rank(j: _F64, sw: _F64, drift: bool) -> None:
+    core = (*PARAMETERS, *K2_PARAMETERS)[:j.shape[1] - (3 if drift else 0)]
+    names = (*core, *DRIFT_PARAMETERS) if drift else core
     check_rank(j * sw[:, None], names, subject="the poses",
                advice="add poses with gravity along other axes; pose_coverage says which")
 
 
 def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
-                     k2: bool = False, max_iter: int = 50, tol: float = 1e-12
-                     ) -> GravityNormFit:
+                     k2: bool = False, times_s: ArrayLike | None = None, max_iter: int = 50,
+                     tol: float = 1e-12) -> GravityNormFit:
     """Solve (F.2) by Gauss–Newton from b = 0, s = 0, α = 0 (module docstring).
 
     With ``k2=True`` the model is (F.1′), three quadratic terms more (:data:`K2_PARAMETERS`,
     [1/(m/s²)]): their poses need every axis at several |x_i| (tilted poses), else the design
-    is refused as rank-deficient.
+    is refused as rank-deficient. With `times_s` (each pose's mid-time) the bias drifts
+    linearly over the session (F.1″): y_k is replaced by y_k − ḃ·(t_k − t̄), t̄ the mean time,
+    three rates more (:data:`DRIFT_PARAMETERS`, last); b is then the bias at t̄.
 
     Parameters
     ----------
@@ -171,7 +182,13 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     yy = as_array(y, "y", shape=(None, 3))
     sy = as_array(y_std, "y_std", shape=yy.shape)
     n = yy.shape[0]
-    m = len(PARAMETERS) + (len(K2_PARAMETERS) if k2 else 0)
+    core = len(PARAMETERS) + (len(K2_PARAMETERS) if k2 else 0)
+    drift = times_s is not None
+    dt = np.zeros(n)
+    if times_s is not None:
+        tk = as_array(times_s, "times_s", shape=(n,))
+        dt = tk - float(np.mean(tk))
+    m = core + (3 if drift else 0)
     if n < m + 1:
         raise InvalidInputError(f"the gravity-norm fit needs at least {m + 1} static poses "
                                 f"({m} unknowns and a degree of freedom); got {n}")
@@ -179,14 +196,20 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
         raise InvalidInputError("`y_std` must be positive")
     if not (np.isfinite(gravity_mps2) and gravity_mps2 > 0):
         raise InvalidInputError(f"`gravity_mps2` must be positive; got {gravity_mps2!r}")
+    def evaluate(p: _F64) -> tuple[_F64, _F64]:
+        if not drift:
+            return _jacobian(p, yy)
+        a, j = _jacobian(p[:core], yy - np.outer(dt, p[core:]))
+        return a, np.column_stack([j, j[:, :3] * dt[:, None]])
+
     p = np.zeros(m)
     for it in range(1, max_iter + 1):
-        a, j = _jacobian(p, yy)
+        a, j = evaluate(p)
         u = a / np.linalg.norm(a, axis=1, keepdims=True)
         sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
         r = np.linalg.norm(a, axis=1) - gravity_mps2
         if it == 1:
-            _check_rank(j, 1.0 / sr)
+            _check_rank(j, 1.0 / sr, drift)
         jw, rw = j / sr[:, None], r / sr
         step, *_ = np.linalg.lstsq(jw, -rw, rcond=None)
         p = p + step
@@ -195,7 +218,7 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     else:
         raise ConvergenceError(f"the gravity-norm fit did not converge in {max_iter} "
                                "iterations")
-    a, j = _jacobian(p, yy)
+    a, j = evaluate(p)
     u = a / np.linalg.norm(a, axis=1, keepdims=True)
     sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
     r = np.linalg.norm(a, axis=1) - gravity_mps2

@@ -75,6 +75,8 @@ _ANOMALY_REL = 3e-5
 _FULL_TURN_TOL = 0.10
 #: Fewest poses with which "auto" fits the accelerometer's K2 (12 unknowns).
 _K2_MIN_POSES = 16
+#: Fewest poses with which "auto" fits the accelerometer's bias drift (15 unknowns).
+_DRIFT_MIN_POSES = 20
 _TURN_GRAVITY_DEG = 5.0
 #: Poses closer than this are the same pose (a face visited twice). [°]
 _SAME_POSE_DEG = 1.0
@@ -93,6 +95,9 @@ class FieldOptions:
     accel_k2 : {"auto", "yes", "no"}
         Fit the accelerometer's quadratic terms (F.1′) in the gravity-norm form ("auto": with
         at least 16 poses).
+    accel_drift : {"auto", "yes", "no"}
+        Fit a linear drift of the accelerometer's bias over the session (F.1″) ("auto": with
+        at least 20 poses); the bias is then that at the poses' mean time.
     gyro_g_sensitivity : {"auto", "yes", "no"}
         Fit the gyro's g-sensitivity G from the static poses ("auto": when the poses cover
         every axis direction and there are at least six).
@@ -115,6 +120,7 @@ class FieldOptions:
     gyro_form: str = "auto"
     gyro_g_sensitivity: str = "auto"
     accel_k2: str = "auto"
+    accel_drift: str = "auto"
     gravity_mps2: float | None = None
     gravity_std_mps2: float | None = None
     latitude_deg: float | None = None
@@ -133,6 +139,9 @@ class FieldOptions:
         if self.accel_form not in ("auto", "gravity-norm", "six-position"):
             raise InvalidInputError(f"`accel_form` must be auto, gravity-norm or six-position; "
                                     f"got {self.accel_form!r}")
+        if self.accel_drift not in ("auto", "yes", "no"):
+            raise InvalidInputError(f"`accel_drift` must be auto, yes or no; got "
+                                    f"{self.accel_drift!r}")
         if self.accel_k2 not in ("auto", "yes", "no"):
             raise InvalidInputError(f"`accel_k2` must be auto, yes or no; got "
                                     f"{self.accel_k2!r}")
@@ -206,23 +215,29 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
     return values, np.asarray(cov * quality.sigma_scale**2, dtype=np.float64), quality, resid
 
 
-def _accel_fit(y: _F64, sy: _F64, g: float, choice: str) -> tuple[Any, str]:
-    """Step 3's gravity-norm fit, with the quadratic terms (F.1′) unless told not (FL.3)."""
+def _accel_fit(y: _F64, sy: _F64, g: float, choice: str, times: _F64 | None
+               ) -> tuple[Any, str]:
+    """Step 3's gravity-norm fit, with the quadratic terms (F.1′) unless told not.
+
+    `times` (the poses' mid-times) adds the linear bias drift (F.1″).
+    """
+    from functools import partial
+
     from imucalib.estimation.gravity_norm import fit_gravity_norm
 
+    fit = partial(fit_gravity_norm, y, sy, g, times_s=times)
     if choice == "no":
-        return fit_gravity_norm(y, sy, g), ("K2 not fitted (accel_k2 = no): a quadratic "
-                                            "term would bias the biases unseen")
+        return fit(), ("K2 not fitted (accel_k2 = no): a quadratic term would bias the biases "
+                       "unseen")
     if choice == "auto" and len(y) < _K2_MIN_POSES:
-        return fit_gravity_norm(y, sy, g), (
-            f"K2 not fitted ({len(y)} poses; at least {_K2_MIN_POSES} for it): a quadratic "
-            "term biases the biases and the χ² hardly sees it")
+        return fit(), (f"K2 not fitted ({len(y)} poses; at least {_K2_MIN_POSES} for it): a "
+                       "quadratic term biases the biases and the χ² hardly sees it")
     try:
-        return fit_gravity_norm(y, sy, g, k2=True), ""
+        return fit(k2=True), ""
     except CalibrationError as exc:
         if choice == "yes":
             raise
-        return fit_gravity_norm(y, sy, g), f"K2 not fitted: {exc}"
+        return fit(), f"K2 not fitted: {exc}"
 
 
 def _on_faces(y: _F64) -> bool:
@@ -282,20 +297,31 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         form = "six-position" if _on_faces(y) else "gravity-norm"
     notes = [g_note]
     six = None
+    drift_rows: list[tuple[str, float, float, str]] = []
     if form == "gravity-norm":
-        fit, k2_note = _accel_fit(y, sy, g, opt.accel_k2)
+        drift = opt.accel_drift == "yes" or (opt.accel_drift == "auto"
+                                             and len(poses) >= _DRIFT_MIN_POSES)
+        times = np.array([0.5 * (p.start_time_s + p.end_time_s) for p in poses])
+        fit, k2_note = _accel_fit(y, sy, g, opt.accel_k2, times if drift else None)
         if k2_note:
             notes.append(k2_note)
-        with_k2 = fit.values.size == 12
+        core = fit.values.size - (3 if drift else 0)
         # g's Type B: refit with g + δ (the norms scale with g)
         dg = 1e-4 * g
-        jg = (fit_gravity_norm(y, sy, g + dg, k2=with_k2).values - fit.values) / dg
-        accel_values = fit.values
-        accel_cov_noise = np.asarray(fit.covariance_noise + np.outer(jg, jg) * sg**2,
-                                     dtype=np.float64)
+        jg = (fit_gravity_norm(y, sy, g + dg, k2=core == 12,
+                               times_s=times if drift else None).values - fit.values) / dg
+        full_cov = fit.covariance_noise + np.outer(jg, jg) * sg**2
+        accel_values = fit.values[:core]
+        accel_cov_noise = np.asarray(full_cov[:core, :core], dtype=np.float64)
         accel_quality = fit.quality
         residuals = fit.residuals
-        corrected = correct_accel(fit.values, y)
+        if drift:   # the poses' means at t̄, for the gravity directions of the gyro
+            rate = fit.values[core:]
+            y = y - np.outer(times - times.mean(), rate)
+            drift_rows = [(f"accel_bias_rate_{a}", float(v), float(math.sqrt(
+                full_cov[core + i, core + i] * fit.quality.sigma_scale**2)), "m/s^3")
+                for i, (a, v) in enumerate(zip("xyz", rate, strict=True))]
+        corrected = correct_accel(accel_values, y)
     else:
         directions = nominal_directions(y)
         six = fit_six_position(y, sy, directions, g, gravity_std_mps2=sg)
@@ -322,7 +348,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         opt.gyro_g_sensitivity == "auto" and not missing and len(poses) >= 6)
     static_values, static_cov, bias_quality, bias_resid = _gyro_static(
         poses, up, force, lat, fit_g)
-    gyro = _fit_gyro(log, detection, poses, up, opt, accel_values, accel_cov, form,
+    gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov, form,
                      six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
     report(0.9)
     quality: list[FitQuality] = [accel_quality]
@@ -358,6 +384,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                  for k, p in enumerate(poses)]
     report(1.0)
     return FieldResult(
+        extra_rows=drift_rows,
         unit=log.unit, source=log.source, result=cal, accel_form=form,
         gyro_form="static only" if gyro is None else gyro["form"],
         gyro_static_names=tuple(f"gyro_bias_{a}" for a in "xyz") + (
@@ -378,7 +405,7 @@ def _gyro_cov(fit: Any) -> _F64:
     return np.asarray(fit.covariance_noise + extra, dtype=np.float64)
 
 
-def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], up: _F64,
+def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], y: _F64, up: _F64,
               opt: FieldOptions, accel_values: _F64, accel_cov: _F64, form: str,
               six: Any, g_sens: _F64 | None, lat: float | None) -> dict[str, Any] | None:
     """Step 5; None when ``gyro_form`` is "none" or the log holds no rotation.
@@ -396,7 +423,7 @@ def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], up: _F64,
     on the twin): its vertical part Ω·sin L is removed sample by sample along the corrected
     accelerometer's direction (and from the static means), the horizontal part Ω·cos L,
     whose direction needs the heading, is a Type B on the bias of each motion (σ = Ω·cos L/√2
-    per axis; Ω itself when the latitude is unknown) (FL.4).
+    per axis; Ω itself when the latitude is unknown) (FL.3).
     """
     from imucalib.estimation.gravity_norm import correct_accel
     from imucalib.estimation.gyro_rotations import RotationObservation, fit_gyro_rotations
@@ -419,7 +446,7 @@ def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], up: _F64,
         def correct(y: _F64) -> _F64:
             return correct_accel(accel_values, y)
         theta = accel_values
-        means = [p.accel_mean for p in poses]
+        means = list(y)           # the poses' means, at t̄ when the bias drift was fitted
     density = poses[0].gyro_se * math.sqrt(poses[0].duration_s + log.period_s)
     omega_up = 0.0 if lat is None else EARTH_RATE_RPS * math.sin(math.radians(lat))
     omega_h = EARTH_RATE_RPS * (1.0 if lat is None else math.cos(math.radians(lat)))

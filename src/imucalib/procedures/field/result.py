@@ -143,6 +143,10 @@ class FieldResult:
     quality : tuple of FitQuality
         χ²/ν of each fit (accel, gyro bias, gyro rotations).
     notes : tuple of str
+    details : dict
+        The accelerometer's fitted values and covariance as fitted, the latitude, the settings.
+    extra_rows : list of (name, value, σ, unit)
+        Estimates outside the triad model (the accelerometer's bias rates, (F.1″)).
     """
 
     unit: str
@@ -162,6 +166,7 @@ class FieldResult:
     quality: tuple[FitQuality, ...]
     notes: tuple[str, ...] = ()
     details: dict[str, Any] = field(default_factory=dict)
+    extra_rows: list[tuple[str, float, float, str]] = field(default_factory=list)
     procedure: str = "field"
     passed: bool | None = None
 
@@ -174,7 +179,7 @@ class FieldResult:
             sb = np.sqrt(np.diag(self.gyro_static_cov))
             rows += [(n, float(v), float(s), triad_parameter_unit(n)) for n, v, s in
                      zip(self.gyro_static_names, self.gyro_static_values, sb, strict=True)]
-        return rows
+        return rows + list(self.extra_rows)
 
     def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
         """(names, values, covariance Birge-scaled) for :func:`~imucalib.models.combine`."""
