@@ -29,6 +29,7 @@ from imucalib.cli._import_options import (
 )
 from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
+from imucalib.units import DEG_PER_H, G0_MPS2
 
 if TYPE_CHECKING:
     from imucalib.procedures.common.procedure import ProcedureResult
@@ -187,6 +188,11 @@ def calibrate(
              "chosen by the smallest gravity-norm χ²/ν).")] = None,
     init_static_s: Annotated[float | None, typer.Option(
         help="field: the initial rest at the start of the log [s] (default 2).")] = None,
+    accel_instability_ug: Annotated[float | None, typer.Option(
+        help="field: the accelerometer's bias instability from its datasheet [µg], added to "
+             "each pose's noise.")] = None,
+    gyro_instability_dph: Annotated[float | None, typer.Option(
+        help="field: the gyro's bias instability from its datasheet [°/h].")] = None,
     import_file: ImportFile = None,
     column_map: ColumnMap = None,
     units: Units = None,
@@ -230,7 +236,11 @@ def calibrate(
             "reference_b": reference_b, "test": test, "k1": _pairs(k1, "--k1"),
             "k2_target_g_per_g2": k2_target, "latitude_deg": latitude, "height_m": height,
             "gravity_mps2": gravity, "accel_form": accel_form, "gyro_form": gyro_form,
-            "static_threshold": static_threshold, "init_static_s": init_static_s}
+            "static_threshold": static_threshold, "init_static_s": init_static_s,
+            "accel_instability_mps2": None if accel_instability_ug is None
+            else accel_instability_ug * 1e-6 * G0_MPS2,
+            "gyro_instability_rps": None if gyro_instability_dph is None
+            else gyro_instability_dph * DEG_PER_H}
         if procedure_name is not None and recording.suffix.lower() not in (".h5", ".hdf5"):
             extra["import_spec"] = import_spec_from_options(
                 import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,

@@ -42,7 +42,9 @@ class FieldProcedure:
                                   "static_threshold", "window_s", "init_static_s",
                                   "min_static_s", "min_rotation_deg", "noise_block_s",
                                   "target_accel_bias_mps2", "target_scale",
-                                  "target_angle_rad", "import_spec"})
+                                  "target_angle_rad", "accel_k2", "accel_drift",
+                                  "gyro_g_sensitivity", "accel_instability_mps2",
+                                  "gyro_instability_rps", "import_spec"})
     outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
