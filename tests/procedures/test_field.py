@@ -73,6 +73,7 @@ def test_sigma_matches_the_spread_over_sessions():
     rms = math.sqrt(float(np.mean(np.square(z))))
     assert len(z) == 16 * 33
     assert 0.85 < rms < 1.15, rms
+    assert max(abs(v) for v in z) < 4.0
 
 
 def test_the_accelerometer_sigma_is_the_design_bound():

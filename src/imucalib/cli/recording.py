@@ -223,9 +223,10 @@ def segments(
         help="Shortest static segment kept [s] (default 2 for table, 1 for variance).")] = None,
     min_rotating_s: Annotated[float, typer.Option(
         help="Shortest rotating segment kept [s] (table).")] = 2.0,
-    static_threshold: Annotated[float, typer.Option(
+    static_threshold: Annotated[float | None, typer.Option(
         help="Variance: static below this multiple of the initial static interval's "
-             "variance.")] = 6.0,
+             "variance (default: chosen as Tedaldi et al. do, by the smallest gravity-norm "
+             "χ²/ν of the poses it finds; docs/field.md).")] = None,
     init_static_s: Annotated[float, typer.Option(
         help="Variance: length of the initial static interval at the start of the log [s].")]
     = 2.0,
@@ -272,14 +273,20 @@ def segments(
             if accel is None:
                 raise InvalidInputError(f"{path}: --detector variance needs the accelerometer "
                                         "columns (map them with --column-map ax=…,ay=…,az=…)")
-            from imucalib.processing.static_detector import detect_static_and_rotations
+            import numpy as np
 
-            found = detect_static_and_rotations(
-                t, gyro, accel, window_s=0.5 if window_s is None else window_s,
-                init_static_s=init_static_s, threshold_factor=static_threshold,
+            from imucalib.models.earth import normal_gravity_mps2
+            from imucalib.procedures.field.observations import FieldLog, find_intervals
+
+            found = find_intervals(
+                FieldLog(unit or label, label, np.asarray(t, dtype=float),
+                         np.asarray(gyro, dtype=float), np.asarray(accel, dtype=float)),
+                threshold_factor=static_threshold,
+                window_s=0.5 if window_s is None else window_s, init_static_s=init_static_s,
                 min_static_s=1.0 if min_static_s is None else min_static_s,
-                min_rotation_deg=min_rotation_deg)
-            _report_variance(found, label, json_out, step_file, unit, figure, t, gyro, accel)
+                min_rotation_deg=min_rotation_deg, gravity_mps2=normal_gravity_mps2(45.0))
+            _report_variance(found, label, json_out, step_file, unit, figure, t, gyro, accel,
+                             static_threshold is not None)
             return
         win = 1.0 if window_s is None else window_s
         result = detect_segments(t, gyro, accel_mps2=accel, window_s=win,
@@ -371,7 +378,7 @@ def _report_table(result: Any, label: str, window_s: float, json_out: Path | Non
 
 def _report_variance(found: Any, label: str, json_out: Path | None, step_file: Path | None,
                      unit: str | None, figure: Path | None, t: Any, gyro: Any,
-                     accel: Any) -> None:
+                     accel: Any, static_threshold_given: bool = True) -> None:
     import numpy as np
     from rich.table import Table
 
@@ -405,10 +412,11 @@ def _report_variance(found: Any, label: str, json_out: Path | None, step_file: P
         table.add_row(str(i), kind, f"{x.start_time_s:.3f}", f"{x.end_time_s:.3f}",
                       f"{x.duration_s:.3f}", rate, last)
     console.print(table)
+    chosen = "" if static_threshold_given else " (chosen by the smallest gravity-norm χ²/ν)"
     console.print(f"static where the accelerometer variance is below {found.threshold_factor:g} × "
                   f"that of the initial static interval ({found.accel_threshold:.3g} (m/s²)²; "
                   f"gyro {found.gyro_threshold:.3g} (rad/s)²), window {found.window_samples} "
-                  "samples", highlight=False)
+                  f"samples{chosen}", highlight=False)
     doc = {"source": label, "detector": "variance", "window_samples": found.window_samples,
            "threshold_factor": found.threshold_factor,
            "accel_variance_threshold": found.accel_threshold,

@@ -200,6 +200,13 @@ def render_field(console: Console, result: Any, written: Sequence[Path]) -> None
                   f" {len(result.rotations)} rotations ({turns} full turns); accelerometer "
                   f"{result.accel_form}, gyro {result.gyro_form}", highlight=False,
                   soft_wrap=True)
+    need = {n: k for n, k in result.coverage.get("poses_needed", {}).items() if k > 0}
+    if need:
+        worst = max(need.values())
+        more = f"more than {worst - 1}" if worst > 50 else str(worst)
+        console.print(f"  to bring every accelerometer σ under its target: {more} more pose(s) "
+                      f"({', '.join(sorted(need))}); the report's coverage says where",
+                      highlight=False, soft_wrap=True)
     for note in result.notes:
         console.print(f"  [yellow]note:[/] {escape(note)}", highlight=False, soft_wrap=True)
     _wrote(console, written)
