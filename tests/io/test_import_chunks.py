@@ -272,7 +272,7 @@ def test_apply_corrects_a_vendor_log_in_its_own_layout(tmp_path, monkeypatch):
                                "deg/s", "--accel-unit", "g", "--sample-rate-hz", "200",
                                "--skip-rows", "3", "--delimiter", ";"])
     assert done.exit_code == 0, done.output
-    assert f"wrote {out}: {N} corrected samples" in " ".join(done.stdout.split())
+    assert f"wrote{out}:{N}correctedsamples" in "".join(done.stdout.split())
     fixed = pd.read_csv(out)
     assert list(fixed.columns) == ["time_s [s]", *(f"{c} [rad/s]" for c in GYRO),
                                    *(f"{c} [m/s^2]" for c in ACCEL)]

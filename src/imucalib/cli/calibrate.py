@@ -370,7 +370,8 @@ def apply(
     if warning:
         err_console.print(f"[yellow]warning:[/] {warning}", highlight=False, soft_wrap=True)
     console.print(f"wrote {out}: {n:,} corrected samples ({result.procedure} {result.model} "
-                  f"result of {result.sensor_id}{seen.summary()})", highlight=False)
+                  f"result of {result.sensor_id}{seen.summary()})", highlight=False,
+                  soft_wrap=True)
 
 
 class _TemperatureSeen:
