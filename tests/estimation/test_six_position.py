@@ -67,3 +67,18 @@ def test_bad_designs_and_inputs_are_refused():
         fit_six_position(y6, np.full_like(y6, 1e-4), 2 * FACES, G)
     with pytest.raises(InvalidInputError, match="nearest axis"):
         nominal_directions(_outputs(np.array([[0.6, 0.0, 0.8]])))
+
+
+def test_k2_is_separated_by_the_six_faces():
+    k2 = np.array([1e-4, -5e-5, 8e-5])
+    y = _outputs(FACES) + k2 * (G * FACES) ** 2
+    y7 = np.vstack([y, y[0]])
+    faces7 = np.vstack([FACES, FACES[0]])
+    fit = fit_six_position(y7, np.full((7, 3), 1e-4), faces7, G, k2=True)
+    np.testing.assert_allclose(fit.bias, B, atol=1e-10)
+    np.testing.assert_allclose(fit.k2, k2, atol=1e-12)
+    plain = fit_six_position(y, np.full((6, 3), 1e-5), FACES, G)
+    np.testing.assert_allclose(plain.bias, B + k2 * G**2 / 3, atol=1e-10)   # K2 in the bias
+    with pytest.raises(InsufficientExcitationError, match="K2_x"):
+        keep = [0, 1, 2, 2, 4, 5]                                    # no −x face
+        fit_six_position(y[keep], np.full((6, 3), 1e-4), FACES[keep], G, k2=True)

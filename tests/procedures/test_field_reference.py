@@ -122,3 +122,56 @@ def test_imucalib_agrees_with_the_imu_tk_method_where_its_model_holds_and_beats_
     tg = np.array([truth[n] for n in names])
     ours_g = np.array([cal.value(n) for n in names])
     assert np.linalg.norm(ref_g - tg) > 2 * np.linalg.norm(ours_g - tg)
+
+
+def test_imucalib_against_imucal_s_ferraris_calibration_on_a_fixture_session():
+    """imucal (a dev dependency) implements Ferraris et al. (1995) for one record per face and
+    one turn per axis: the six-position form and the known-angle turns. On such a session
+    (faces exact, turns flat, no K2 in the truth: imucal has none) the accelerometer's M agree
+    within 2σ (the same ± differences; imucal uses one visit per face, imucalib every pose),
+    while imucal's gyro bias, which ignores the Earth's rate (and takes one mean over unequal
+    poses), and its gyro M are far off where imucalib's are within 4σ. With the consumer's K2
+    in the truth imucal's accelerometer biases are 40–80σ off (imucalib fits K2)."""
+    from imucal import FerrarisCalibration, FerrarisSignalRegions
+
+    s = handheld_session("consumer", seed=6, noise="white", n_poses=6, off_axis_deg=(0.0, 0.0),
+                         level_tilt_deg=0.0, errors={"accel.k2": [0.0, 0.0, 0.0]})
+    log = FieldLog("IMU", "twin", s.time_s, s.gyro_rps, s.accel_mps2)
+    ours = analyze_field(log, FieldOptions(latitude_deg=s.site.latitude_deg,
+                                           accel_form="six-position", gyro_form="turns"))
+    t = s.time_s
+    regions: dict[str, np.ndarray] = {}
+    first = {}
+    for pose in s.statics[1:]:
+        first.setdefault(pose.face, pose)
+    for axis in "xyz":
+        for sign, tag in (("+", "p"), ("-", "a")):
+            pose = first[sign + axis]
+            keep = (t >= pose.start_time_s + 0.5) & (t <= pose.stop_time_s - 0.5)
+            regions[f"acc_{axis}_{tag}"] = s.accel_mps2[keep]
+            regions[f"gyr_{axis}_{tag}"] = np.degrees(s.gyro_rps[keep])
+    for turn in (r for r in s.rotations if r.full_turn and r.angle_rad > 0):
+        axis = "xyz"[int(np.argmax(np.abs(turn.rotvec_b_rad)))]
+        keep = (t >= turn.start_time_s - 0.2) & (t <= turn.stop_time_s + 0.2)
+        regions[f"acc_{axis}_rot"] = s.accel_mps2[keep]
+        regions[f"gyr_{axis}_rot"] = np.degrees(s.gyro_rps[keep])
+    info = FerrarisCalibration(grav=ours.gravity_mps2, expected_angle=360.0).compute(
+        FerrarisSignalRegions(**regions), s.sample_rate_hz, "m/s^2", "deg/s")
+    cal = ours.result
+    std = cal.std(scaled=True)
+    truth = field_truth(s.model, six_position=True)
+    z = {n: (cal.value(n) - truth[n]) / std[n] for n in cal.param_names if std[n] > 0}
+    assert max(abs(v) for v in z.values()) < 4.0
+    accel_m = info.K_a @ info.R_a - np.eye(3)
+    diff = [abs(accel_m[i, j] - cal.value(f"accel_M_{a}{b}")) / std[f"accel_M_{a}{b}"]
+            for i, a in enumerate("xyz") for j, b in enumerate("xyz")]
+    assert max(diff) < 2.0                  # measured 0.36 (seeds 5–7: 0.82, 0.36, 0.42)
+    gyro_b = np.radians(np.asarray(info.b_g))
+    ours_b = np.array([cal.value(f"gyro_bias_{a}") for a in "xyz"])
+    true_b = np.array([truth[f"gyro_bias_{a}"] for a in "xyz"])
+    assert np.linalg.norm(gyro_b - true_b) > 5 * np.linalg.norm(ours_b - true_b)
+    gyro_m = (info.K_g @ info.R_g - np.eye(3)).ravel()
+    names = [f"gyro_M_{a}{b}" for a in "xyz" for b in "xyz"]
+    true_m = np.array([truth[n] for n in names])
+    ours_m = np.array([cal.value(n) for n in names])
+    assert np.linalg.norm(gyro_m - true_m) > 2 * np.linalg.norm(ours_m - true_m)

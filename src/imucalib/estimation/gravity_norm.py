@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
-from imucalib.errors import ConvergenceError, InvalidInputError
+from imucalib.errors import ConvergenceError, InsufficientExcitationError, InvalidInputError
 from imucalib.estimation._common import check_rank
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
@@ -223,7 +223,15 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
     r = np.linalg.norm(a, axis=1) - gravity_mps2
     jw = j / sr[:, None]
-    cov = np.linalg.inv(jw.T @ jw)
+    _check_rank(j, 1.0 / sr, drift)          # at the solution too: axis-aligned poses
+    try:
+        cov = np.linalg.inv(jw.T @ jw)
+    except np.linalg.LinAlgError:
+        names = [*(*PARAMETERS, *K2_PARAMETERS)[:core], *(DRIFT_PARAMETERS if drift else ())]
+        raise InsufficientExcitationError(
+            names, "the poses leave the gravity-norm fit singular at its solution (poses "
+                   "along the axes alone cannot see the non-orthogonality; add tilted "
+                   "poses, or use the six-position form for a fixture's faces)") from None
     cov = 0.5 * (cov + cov.T)
     quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - m)
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,

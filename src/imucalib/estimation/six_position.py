@@ -13,6 +13,7 @@ input axis of the fixture frame), and separates per sensor axis i into
     y_k,i = b_i + g·d_k,i + g·Σ_j M_ij·d_k,j                                             (F.12)
 
 four unknowns (b_i, M_i·) per axis; the six faces give six equations per axis (ν = 2 each).
+With ``k2=True`` a quadratic term K2_i·(g·d_k,i)² joins each axis (F.12′; ν = 1).
 :func:`fit_six_position` solves (F.12) by weighted least squares per axis, with the covariance
 (AᵀWA)⁻¹, χ²/ν over the three axes and the Birge-scaled covariance on a misfit (the project's
 rule): a pose placed off its nominal direction is a misfit here, which the gravity-norm fit of
@@ -51,9 +52,11 @@ class SixPositionFit:
         b. [m/s²]
     scale_misalignment : ndarray, shape (3, 3)
         M (row sensor axis, column input axis). [–]
-    covariance : ndarray, shape (12, 12)
-        Of (b_x, b_y, b_z, M_xx, M_xy, …, M_zz) (row-major M), g's Type B included,
-        Birge-scaled on a misfit.
+    k2 : ndarray, shape (3,) or (0,)
+        K2 per axis when fitted. [1/(m/s²)]
+    covariance : ndarray, shape (12, 12) or (15, 15)
+        Of (b_x, b_y, b_z, M_xx, M_xy, …, M_zz[, K2_x, K2_y, K2_z]) (row-major M), g's Type B
+        included, Birge-scaled on a misfit.
     covariance_noise : ndarray, shape (12, 12)
         The same before the Birge scaling.
     quality : FitQuality
@@ -64,6 +67,7 @@ class SixPositionFit:
 
     bias: _F64
     scale_misalignment: _F64
+    k2: _F64
     covariance: _F64
     covariance_noise: _F64
     quality: FitQuality
@@ -71,8 +75,8 @@ class SixPositionFit:
 
     @property
     def values(self) -> _F64:
-        """(b, M row-major), the order of :attr:`covariance`."""
-        return np.concatenate([self.bias, self.scale_misalignment.ravel()])
+        """(b, M row-major[, K2]), the order of :attr:`covariance`."""
+        return np.concatenate([self.bias, self.scale_misalignment.ravel(), self.k2])
 
 
 def nominal_directions(y: ArrayLike, *, max_off_axis_deg: float = 20.0) -> _F64:
@@ -99,7 +103,8 @@ def nominal_directions(y: ArrayLike, *, max_off_axis_deg: float = 20.0) -> _F64:
 
 
 def fit_six_position(y: ArrayLike, y_std: ArrayLike, directions: ArrayLike,
-                     gravity_mps2: float, *, gravity_std_mps2: float = 0.0) -> SixPositionFit:
+                     gravity_mps2: float, *, gravity_std_mps2: float = 0.0,
+                     k2: bool = False) -> SixPositionFit:
     """Solve (F.12) per sensor axis (module docstring).
 
     Parameters
@@ -110,6 +115,9 @@ def fit_six_position(y: ArrayLike, y_std: ArrayLike, directions: ArrayLike,
         The nominal up direction d_k of each pose in the fixture frame (unit vectors).
     gravity_mps2, gravity_std_mps2 : float
         Local g and its standard uncertainty. [m/s²]
+    k2 : bool
+        Add the quadratic term K2_i·(g·d_k,i)² per axis (F.12′): the ± faces of axis i then
+        give b_i + K2_i·g² and the other four b_i, so six faces separate it (ν = 1 per axis).
 
     Raises
     ------
@@ -131,34 +139,42 @@ def fit_six_position(y: ArrayLike, y_std: ArrayLike, directions: ArrayLike,
                                 f"got {gravity_mps2!r}, {gravity_std_mps2!r}")
     n = yy.shape[0]
     a = np.column_stack([np.ones(n), gravity_mps2 * d])
+    extra = 1 if k2 else 0
     sv = np.linalg.svd(a, compute_uv=False)
-    if n < 5 or sv[-1] < 1e-9 * sv[0]:
+    if n < 5 + extra or sv[-1] < 1e-9 * sv[0]:
         unseen = [f"M_{i}{_AXES[j]}" for j in range(3) if np.allclose(d[:, j], d[0, j])
                   for i in _AXES]
         raise InsufficientExcitationError(
             unseen or ["bias", "M"],
             f"{n} pose(s) with up directions {np.round(d, 3).tolist()} do not separate the bias "
             "from the scale/misalignment (at least five poses, both signs of every axis)")
-    values = np.zeros(12)
-    cov = np.zeros((12, 12))
+    k = 12 + 3 * extra
+    values = np.zeros(k)
+    cov = np.zeros((k, k))
     resid = np.zeros_like(yy)
     chi2 = 0.0
     for i in range(3):
+        ai = np.column_stack([a, (gravity_mps2 * d[:, i]) ** 2]) if k2 else a
         w = 1.0 / sy[:, i]
-        aw = a * w[:, None]
+        aw = ai * w[:, None]
+        if np.linalg.matrix_rank(aw) < aw.shape[1]:
+            raise InsufficientExcitationError(
+                [f"K2_{_AXES[i]}"], f"the poses do not separate K2_{_AXES[i]} from the bias "
+                                    f"(both faces of {_AXES[i]} and one across are needed)")
         rhs = (yy[:, i] - gravity_mps2 * d[:, i]) * w
         sol, *_ = np.linalg.lstsq(aw, rhs, rcond=None)
         c = np.linalg.inv(aw.T @ aw)
-        idx = [i, *range(3 + 3 * i, 6 + 3 * i)]
+        idx = [i, *range(3 + 3 * i, 6 + 3 * i), *([12 + i] if k2 else [])]
         values[idx] = sol
         cov[np.ix_(idx, idx)] = c
-        resid[:, i] = yy[:, i] - a @ sol - gravity_mps2 * d[:, i]
+        resid[:, i] = yy[:, i] - ai @ sol - gravity_mps2 * d[:, i]
         chi2 += float(np.sum((resid[:, i] * w) ** 2))
     # g's Type B: (I + M)·g is what the poses fix ⇒ ∂M/∂g = −(I + M)/g, exactly correlated
-    jg = np.concatenate([np.zeros(3), -(np.eye(3) + values[3:].reshape(3, 3)).ravel()
-                         / gravity_mps2])
+    jg = np.concatenate([np.zeros(3), -(np.eye(3) + values[3:12].reshape(3, 3)).ravel()
+                         / gravity_mps2, -2.0 * values[12:] / gravity_mps2])
     cov = cov + np.outer(jg, jg) * gravity_std_mps2**2
-    quality = assess_fit("accel (six-position)", chi2, 3 * (n - 4))
-    return SixPositionFit(bias=values[:3], scale_misalignment=values[3:].reshape(3, 3),
+    quality = assess_fit("accel (six-position)", chi2, 3 * (n - 4 - extra))
+    return SixPositionFit(bias=values[:3], scale_misalignment=values[3:12].reshape(3, 3),
+                          k2=values[12:],
                           covariance=cov * quality.sigma_scale**2, covariance_noise=cov,
                           quality=quality, residuals=resid)

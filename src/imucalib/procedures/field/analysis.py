@@ -339,13 +339,18 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         corrected = correct_accel(accel_values, y)
     else:
         directions = nominal_directions(y)
-        six = fit_six_position(y, sy, directions, g, gravity_std_mps2=sg)
+        six_k2 = opt.accel_k2 == "yes" or (opt.accel_k2 == "auto" and len(
+            {tuple(d) for d in directions.tolist()}) == 6 and len(poses) >= 7)
+        six = fit_six_position(y, sy, directions, g, gravity_std_mps2=sg, k2=six_k2)
         accel_values = six.values
         accel_cov_noise = np.asarray(six.covariance_noise, dtype=np.float64)
         accel_quality = six.quality
         residuals = np.linalg.norm(six.residuals, axis=1)
         corrected = np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
                                                (y - six.bias).T).T, dtype=np.float64)
+        if not six_k2:
+            notes.append("K2 not fitted in the six-position form (it needs all six faces and "
+                         "a seventh pose): a quadratic term biases the biases")
     accel_cov = accel_cov_noise * accel_quality.sigma_scale**2
     up = corrected / np.linalg.norm(corrected, axis=1, keepdims=True)
     report(0.5)
@@ -455,8 +460,13 @@ def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], y: _F64, u
         def correct(y: _F64) -> _F64:
             return np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
                                               (np.atleast_2d(y) - six.bias).T).T)
+        # on a fixture the poses' up directions and the turns' axes are the fixture's axes
+        # by construction (a face flat on the desk turns about its own normal): the nominal
+        # directions, exact, as Ferraris et al. take them
+        from imucalib.estimation.six_position import nominal_directions
+
         theta = np.zeros(9)
-        means = [correct(p.accel_mean)[0] for p in poses]
+        means = list(float(np.median(np.linalg.norm(y, axis=1))) * nominal_directions(y))
     else:
         def correct(y: _F64) -> _F64:
             return correct_accel(accel_values, y)

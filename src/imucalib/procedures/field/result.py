@@ -87,7 +87,7 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
         jac = _jacobian(_accel_triad, accel_values)
         a_vals = _accel_triad(accel_values)
     else:
-        jac = np.eye(12)
+        jac = np.eye(accel_values.size)
         a_vals = accel_values.copy()
     names = list(triad_parameter_names("accel", "triad", k2=a_vals.size == 15))
     values = [a_vals]
