@@ -1,6 +1,8 @@
-"""The import options shared by ``imucalib segments``, ``import``, ``allan`` and ``apply``.
+"""The import options of every command that reads a log, declared once.
 
-One definition of each option (:data:`ImportFile`, :data:`ColumnMap`, …) and one function,
+The commands ``segments``, ``import``, ``allan``, ``calibrate`` and ``apply`` share them.
+One definition of each option (:data:`ImportFile`, :data:`ColumnMap`, …), one decorator,
+:func:`with_import_options`, that adds them all to a command, and one function,
 :func:`import_spec_from_options`, that turns them (over an ``--import`` TOML file) into the
 :class:`~imucalib.io.import_spec.ImportSpec` that :func:`~imucalib.io.import_spec.read_imu_table`
 reads with (docs/import.md, "Import specification").
@@ -8,14 +10,19 @@ reads with (docs/import.md, "Import specification").
 
 from __future__ import annotations
 
+import functools
+import inspect
+import typing
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
-__all__ = ["AccelFile", "AccelOffset", "AccelScale", "AccelUnit", "ColumnMap", "Delimiter",
-           "GyroOffset", "GyroScale", "GyroUnit", "ImportFile", "SampleRate", "SkipRows",
-           "TimeColumn", "TimeUnit", "Units", "import_spec_from_options"]
+__all__ = ["IMPORT_OPTIONS", "AccelFile", "AccelOffset", "AccelScale", "AccelUnit", "ColumnMap",
+           "Delimiter", "GyroOffset", "GyroScale", "GyroUnit", "ImportFile", "ImportOptions",
+           "SampleRate", "SkipRows", "TimeColumn", "TimeUnit", "Units",
+           "import_spec_from_options", "with_import_options"]
 
 ImportFile = Annotated[Path | None, typer.Option(
     "--import", help="Import specification (TOML): columns, units, scale, offset, time column "
@@ -72,3 +79,62 @@ def import_spec_from_options(import_file: Path | None = None, *, column_map: str
     base = load_import_spec(import_file) if import_file is not None else ImportSpec()
     return base.merged(column_map=parse_pairs(column_map, "--column-map") or None,
                        units=parse_pairs(units, "--units") or None, **options)
+
+
+#: The import options by parameter name, in the order the commands list them.
+IMPORT_OPTIONS: dict[str, Any] = {
+    "import_file": ImportFile, "column_map": ColumnMap, "units": Units,
+    "gyro_unit": GyroUnit, "accel_unit": AccelUnit, "gyro_scale": GyroScale,
+    "accel_scale": AccelScale, "gyro_offset": GyroOffset, "accel_offset": AccelOffset,
+    "time_column": TimeColumn, "time_unit": TimeUnit, "sample_rate_hz": SampleRate,
+    "delimiter": Delimiter, "skip_rows": SkipRows, "accel_file": AccelFile,
+}
+
+
+class ImportOptions:
+    """The import options a command was given; :meth:`spec` reads them (it may raise)."""
+
+    def __init__(self, given: dict[str, Any]) -> None:
+        self.given = given
+
+    def any(self) -> bool:
+        """Whether any import option was given."""
+        return any(v is not None for v in self.given.values())
+
+    def spec(self) -> Any:
+        """Return the ImportSpec (:func:`import_spec_from_options`).
+
+        Raises
+        ------
+        InvalidInputError
+            A bad ``--column-map`` / ``--units`` item or import file.
+        """
+        opts = dict(self.given)
+        return import_spec_from_options(opts.pop("import_file"), **opts)
+
+
+def with_import_options(command: Callable[..., Any]) -> Callable[..., Any]:
+    """Add the import options to a command: it receives them as ``import_options``.
+
+    The command declares a parameter ``import_options: ImportOptions`` (last); the decorator
+    replaces it, in the signature typer reads, by the options of :data:`IMPORT_OPTIONS`, so
+    every command that reads a log has the same options, declared once.
+    """
+    sig = inspect.signature(command)
+    kept = [p for name, p in sig.parameters.items() if name != "import_options"]
+    added = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None,
+                               annotation=annotation)
+             for name, annotation in IMPORT_OPTIONS.items()]
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        given = {name: kwargs.pop(name, None) for name in IMPORT_OPTIONS}
+        return command(*args, import_options=ImportOptions(given), **kwargs)
+
+    hints = typing.get_type_hints(command, include_extras=True)
+    hints.pop("import_options", None)
+    wrapper.__annotations__ = {**hints, **IMPORT_OPTIONS}
+    wrapper.__signature__ = sig.replace(  # type: ignore[attr-defined]
+        parameters=[p.replace(annotation=hints.get(p.name, p.annotation)) for p in kept]
+        + added)
+    return wrapper

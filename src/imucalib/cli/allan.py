@@ -14,49 +14,20 @@ from typing import Annotated
 import typer
 
 from imucalib.cli._app import app, console, fail
-from imucalib.cli._import_options import (
-    AccelFile,
-    AccelOffset,
-    AccelScale,
-    AccelUnit,
-    ColumnMap,
-    Delimiter,
-    GyroOffset,
-    GyroScale,
-    GyroUnit,
-    ImportFile,
-    SampleRate,
-    SkipRows,
-    TimeColumn,
-    TimeUnit,
-    Units,
-    import_spec_from_options,
-)
+from imucalib.cli._import_options import ImportOptions, with_import_options
 from imucalib.errors import CalibrationError, InvalidInputError
 
 __all__ = ["allan"]
 
 
 @app.command()
+@with_import_options
 def allan(
     data: Annotated[Path, typer.Argument(help="Static log: CSV (incl. rostopic echo -p) or .h5.")],
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Folder for the results.")]
     = None,
-    import_file: ImportFile = None,
-    column_map: ColumnMap = None,
-    units: Units = None,
-    gyro_unit: GyroUnit = None,
-    accel_unit: AccelUnit = None,
-    gyro_scale: GyroScale = None,
-    accel_scale: AccelScale = None,
-    gyro_offset: GyroOffset = None,
-    accel_offset: AccelOffset = None,
-    time_column: TimeColumn = None,
-    time_unit: TimeUnit = None,
-    sample_rate_hz: SampleRate = None,
-    delimiter: Delimiter = None,
-    skip_rows: SkipRows = None,
-    accel_file: AccelFile = None,
+    *,
+    import_options: ImportOptions,
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
 ) -> None:
     """Allan deviations and noise terms of a static log, without a plan (docs/noise.md)."""
@@ -72,12 +43,7 @@ def allan(
 
             from imucalib.io.import_spec import read_imu_table
 
-            frame = read_imu_table(data, import_spec_from_options(
-                    import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
-                    accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
-                    gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
-                    time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
-                    skip_rows=skip_rows, accel_file=accel_file))
+            frame = read_imu_table(data, import_options.spec())
             t = np.asarray(frame.index, dtype=np.float64)
             cols = {c: frame[c].to_numpy() for c in frame.columns}
             result = analyze_allan_arrays(t, cols, source=str(data), unit=imu or "imu")

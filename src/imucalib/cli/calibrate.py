@@ -9,24 +9,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from imucalib.cli._app import app, console, err_console, fail
-from imucalib.cli._import_options import (
-    AccelFile,
-    AccelOffset,
-    AccelScale,
-    AccelUnit,
-    ColumnMap,
-    Delimiter,
-    GyroOffset,
-    GyroScale,
-    GyroUnit,
-    ImportFile,
-    SampleRate,
-    SkipRows,
-    TimeColumn,
-    TimeUnit,
-    Units,
-    import_spec_from_options,
-)
+from imucalib.cli._import_options import ImportOptions, with_import_options
 from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 from imucalib.units import DEG_PER_H, G0_MPS2
@@ -132,6 +115,7 @@ def _pairs(given: list[str] | None, flag: str) -> dict[str, tuple[float, float]]
 
 
 @app.command()
+@with_import_options
 def calibrate(
     recording: Annotated[Path, typer.Argument(
         metavar="[PROCEDURE] RECORDING",
@@ -193,21 +177,8 @@ def calibrate(
              "each pose's noise.")] = None,
     gyro_instability_dph: Annotated[float | None, typer.Option(
         help="field: the gyro's bias instability from its datasheet [°/h].")] = None,
-    import_file: ImportFile = None,
-    column_map: ColumnMap = None,
-    units: Units = None,
-    gyro_unit: GyroUnit = None,
-    accel_unit: AccelUnit = None,
-    gyro_scale: GyroScale = None,
-    accel_scale: AccelScale = None,
-    gyro_offset: GyroOffset = None,
-    accel_offset: AccelOffset = None,
-    time_column: TimeColumn = None,
-    time_unit: TimeUnit = None,
-    sample_rate_hz: SampleRate = None,
-    delimiter: Delimiter = None,
-    skip_rows: SkipRows = None,
-    accel_file: AccelFile = None,
+    *,
+    import_options: ImportOptions,
 ) -> None:
     """Estimate every parameter with its uncertainty, verify, and write the result (JSON).
 
@@ -242,12 +213,7 @@ def calibrate(
             "gyro_instability_rps": None if gyro_instability_dph is None
             else gyro_instability_dph * DEG_PER_H}
         if procedure_name is not None and recording.suffix.lower() not in (".h5", ".hdf5"):
-            extra["import_spec"] = import_spec_from_options(
-                import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
-                accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
-                gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
-                time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
-                skip_rows=skip_rows, accel_file=accel_file)
+            extra["import_spec"] = import_options.spec()
             if not recording.is_file():
                 raise InvalidInputError(f"no such file: {recording}")
         elif procedure_name is None and steps is None and \
@@ -273,27 +239,15 @@ def calibrate(
 
 
 @app.command()
+@with_import_options
 def apply(
     result_path: Annotated[Path, typer.Argument(metavar="RESULT", help="Result JSON.")],
     data: Annotated[Path, typer.Argument(help="A recording (.h5) or a CSV/text file (read "
                                               "through the import options).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Corrected CSV to write.")],
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
-    import_file: ImportFile = None,
-    column_map: ColumnMap = None,
-    units: Units = None,
-    gyro_unit: GyroUnit = None,
-    accel_unit: AccelUnit = None,
-    gyro_scale: GyroScale = None,
-    accel_scale: AccelScale = None,
-    gyro_offset: GyroOffset = None,
-    accel_offset: AccelOffset = None,
-    time_column: TimeColumn = None,
-    time_unit: TimeUnit = None,
-    sample_rate_hz: SampleRate = None,
-    delimiter: Delimiter = None,
-    skip_rows: SkipRows = None,
-    accel_file: AccelFile = None,
+    *,
+    import_options: ImportOptions,
 ) -> None:
     """Correct a recording's IMU stream, or a CSV file, with a calibration result.
 
@@ -313,13 +267,9 @@ def apply(
     from imucalib.models.result import CalibrationResult
 
     try:
-        spec = import_spec_from_options(
-            import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
-            accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
-            gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
-            time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
-            skip_rows=skip_rows, accel_file=accel_file)
+        spec = import_options.spec()
         result = CalibrationResult.load(result_path)
+        accel_file = import_options.given["accel_file"]
         _check_out(out, result_path, data, *([accel_file] if accel_file else []))
         n = 0
         seen = _TemperatureSeen()

@@ -8,24 +8,7 @@ from typing import Annotated, Any
 import typer
 
 from imucalib.cli._app import app, console, fail
-from imucalib.cli._import_options import (
-    AccelFile,
-    AccelOffset,
-    AccelScale,
-    AccelUnit,
-    ColumnMap,
-    Delimiter,
-    GyroOffset,
-    GyroScale,
-    GyroUnit,
-    ImportFile,
-    SampleRate,
-    SkipRows,
-    TimeColumn,
-    TimeUnit,
-    Units,
-    import_spec_from_options,
-)
+from imucalib.cli._import_options import ImportOptions, with_import_options
 from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 
@@ -113,6 +96,7 @@ def _write_text(path: Path, text: str, option: str) -> None:
 
 
 @app.command("import")
+@with_import_options
 def import_csv(
     data: Annotated[Path, typer.Argument(help="IMU samples (CSV with time_s and the six gyro "
                                               "and accelerometer columns).")],
@@ -122,33 +106,15 @@ def import_csv(
     unit: Annotated[str | None, typer.Option(help="The IMU's name (default: the step file's "
                                                   "`unit`, else the CSV's stem).")] = None,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing --out.")] = False,
-    import_file: ImportFile = None,
-    column_map: ColumnMap = None,
-    units: Units = None,
-    gyro_unit: GyroUnit = None,
-    accel_unit: AccelUnit = None,
-    gyro_scale: GyroScale = None,
-    accel_scale: AccelScale = None,
-    gyro_offset: GyroOffset = None,
-    accel_offset: AccelOffset = None,
-    time_column: TimeColumn = None,
-    time_unit: TimeUnit = None,
-    sample_rate_hz: SampleRate = None,
-    delimiter: Delimiter = None,
-    skip_rows: SkipRows = None,
-    accel_file: AccelFile = None,
+    *,
+    import_options: ImportOptions,
 ) -> None:
     """Make a Recording from a CSV and its step file, to calibrate like a planned run."""
     from imucalib.io.csv_recording import recording_from_csv
     from imucalib.io.step_file import load_step_file
 
     try:
-        spec = import_spec_from_options(
-        import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
-        accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
-        gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
-        time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
-        skip_rows=skip_rows, accel_file=accel_file)
+        spec = import_options.spec()
         step_file = load_step_file(steps)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
@@ -208,6 +174,7 @@ def _imu_arrays(path: Path, unit: str | None, spec: Any = None) -> tuple[str, An
 
 
 @app.command()
+@with_import_options
 def segments(
     path: Annotated[Path, typer.Argument(help="IMU data: a CSV/text file or a Recording (.h5).")],
     unit: Annotated[str | None, typer.Option(help="IMU unit of a Recording (default: the "
@@ -240,21 +207,8 @@ def segments(
         "--step-file", help="Also write a step file skeleton here (TOML, every interval "
                             "'skip'): label the intervals, then `imucalib calibrate DATA "
                             "--steps FILE` (docs/import.md).")] = None,
-    import_file: ImportFile = None,
-    column_map: ColumnMap = None,
-    units: Units = None,
-    gyro_unit: GyroUnit = None,
-    accel_unit: AccelUnit = None,
-    gyro_scale: GyroScale = None,
-    accel_scale: AccelScale = None,
-    gyro_offset: GyroOffset = None,
-    accel_offset: AccelOffset = None,
-    time_column: TimeColumn = None,
-    time_unit: TimeUnit = None,
-    sample_rate_hz: SampleRate = None,
-    delimiter: Delimiter = None,
-    skip_rows: SkipRows = None,
-    accel_file: AccelFile = None,
+    *,
+    import_options: ImportOptions,
 ) -> None:
     """Find the static and rotating intervals of IMU data that has no step records."""
     from imucalib.processing import detect_segments
@@ -262,12 +216,7 @@ def segments(
     try:
         if detector not in ("table", "variance"):
             raise InvalidInputError(f"--detector must be 'table' or 'variance'; got {detector!r}")
-        spec = import_spec_from_options(
-            import_file, column_map=column_map, units=units, gyro_unit=gyro_unit,
-            accel_unit=accel_unit, gyro_scale=gyro_scale, accel_scale=accel_scale,
-            gyro_offset=gyro_offset, accel_offset=accel_offset, time_column=time_column,
-            time_unit=time_unit, sample_rate_hz=sample_rate_hz, delimiter=delimiter,
-            skip_rows=skip_rows, accel_file=accel_file)
+        spec = import_options.spec()
         label, t, gyro, accel = _imu_arrays(path, unit, spec)
         if detector == "variance":
             if accel is None:
