@@ -13,6 +13,47 @@ from imucalib.procedures import generate_p1_plan
 from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
 
+# --- the order of the run: the longest files first (``make test`` runs ``-n 2 --dist worksteal``)
+
+TESTS = Path(__file__).resolve().parent
+
+#: The test files that take longest, longest first (seconds on a loaded 2-core machine, from
+#: ``pytest -n 2 --durations``): P2 twin 257, P3 twin 189, durability 110, README commands 99,
+#: P1 closed loop 67, CSV calibration 63, noise fit 59, faults 50, P1 gyro Monte Carlo 48,
+#: drivers over TCP 41 (mostly real-time waits), rate transfer twin 40. Started first, they
+#: leave the many short tests to fill the end of the run on both workers; with xdist's
+#: ``worksteal`` an idle worker takes half of the other's pending tests, so neither waits on a
+#: long file collected last (the README commands were). Only the order changes, never a test.
+LONGEST_FIRST = (
+    "procedures/test_p2_twin.py",
+    "procedures/test_p3_twin.py",
+    "station/test_durability.py",
+    "test_readme_commands.py",
+    "procedures/test_p1_closed_loop.py",
+    "procedures/test_calibrate_csv.py",
+    "analysis/test_noise_fit.py",
+    "station/test_faults.py",
+    "procedures/test_p1_gyro_monte_carlo.py",
+    "station/test_driver_run.py",
+    "procedures/test_rate_transfer_twin.py",
+)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Move the files of :data:`LONGEST_FIRST` to the front, in that order (a stable sort:
+    the order inside each file, and of all other files, is kept)."""
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+
+    def key(item: pytest.Item) -> int:
+        try:
+            name = item.path.resolve().relative_to(TESTS).as_posix()
+        except ValueError:
+            return len(rank)
+        return rank.get(name, len(rank))
+
+    items.sort(key=key)
+
+
 
 def p1_plan(grade: str = "tactical", seed: int = 1, *, repetitions: int = 1,
             ideal: bool = True, static_s: float = 300.0, **kwargs) -> Plan:
