@@ -21,7 +21,7 @@ demo: venv
 test: venv
 	$(BIN)/python -m ruff check src tests bench
 	$(BIN)/python -m mypy
-	$(BIN)/python -m pytest -n 2 --dist worksteal -q
+	$(BIN)/python -m pytest -n 2 -q
 
 lint: venv
 	$(BIN)/python -m ruff check src tests bench

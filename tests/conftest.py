@@ -13,7 +13,7 @@ from imucalib.procedures import generate_p1_plan
 from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
 
-# --- the order of the run (``make test`` runs ``pytest -n 2 --dist worksteal``)
+# --- the order of the run (``make test`` runs ``pytest -n 2``; pyproject sets ``--dist worksteal``)
 
 TESTS = Path(__file__).resolve().parent
 
