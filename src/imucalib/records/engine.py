@@ -38,12 +38,20 @@ BEGIN_OPTION: Final = "imucalib_sqlite_begin"
 MIGRATIONS: Final = Path(__file__).resolve().parent / "migrations"
 
 
+def _make_folder(folder: Path, url: str) -> None:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RecordsError(f"cannot open the records database {safe_url(url)}: expected a "
+                           f"folder {folder} that can be created, got {exc}") from exc
+
+
 def default_url() -> str:
     """Return ``sqlite:///<user data dir>/records.db``, creating the folder (platformdirs)."""
     import platformdirs
 
     folder = Path(platformdirs.user_data_dir("imucalib"))
-    folder.mkdir(parents=True, exist_ok=True)
+    _make_folder(folder, str(folder / "records.db"))
     return f"sqlite:///{folder / 'records.db'}"
 
 
@@ -94,7 +102,7 @@ def make_engine(url: str) -> Engine:
         if parsed.get_backend_name() == "sqlite":
             database = parsed.database or ""
             if database and database != ":memory:" and not database.startswith("file:"):
-                Path(database).expanduser().parent.mkdir(parents=True, exist_ok=True)
+                _make_folder(Path(database).expanduser().parent, url)
             engine = create_engine(parsed, connect_args={"timeout": BUSY_TIMEOUT_MS / 1000})
             _sqlite_listeners(engine)
             return engine
