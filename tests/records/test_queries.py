@@ -28,7 +28,7 @@ def test_drift_across_three_calibrations_with_an_amendment(records, make_result)
     assert [p.result_id for p in points] == [ids[0], fixed, ids[2]]
     std = make_result("IMU-3").std()["accel_b_x"]
     assert all(p.std == std and p.unit == "m/s^2" for p in points)
-    with pytest.raises(RecordsError, match="carries parameter 'accel_bias_x'.*accel_K_x"):
+    with pytest.raises(RecordsError, match=r"carries parameter 'accel_bias_x'.*accel_K_x"):
         records.drift("IMU-3", "accel_bias_x")
 
 
@@ -78,5 +78,5 @@ def test_runs_of_a_plan_by_hash_or_name(records, make_result):
     c = _calibrate(records, make_result, "U3", datetime(2026, 1, 3, tzinfo=UTC), 0.01, plan="A")
     by_name = records.runs_of_plan("A")
     assert [r.result_ids for r in by_name] == [(a,), (c,)]
-    assert records.runs_of_plan("A".encode().hex().ljust(64, "0")) == by_name
+    assert records.runs_of_plan(b"A".hex().ljust(64, "0")) == by_name
     assert records.runs_of_plan("C") == []

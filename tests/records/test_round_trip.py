@@ -79,7 +79,7 @@ def test_any_result_with_parameter_rows_is_accepted(records):
 
 def test_unknown_things_are_named(records, make_result):
     records.add_unit("IMU-1", model="BMI088", maker="Bosch", specification={"range_g": 24})
-    with pytest.raises(RecordsError, match="no unit with serial 'IMU-2'.*known serials: IMU-1"):
+    with pytest.raises(RecordsError, match=r"no unit with serial 'IMU-2'.*known serials: IMU-1"):
         records.history("IMU-2")
     with pytest.raises(RecordsError, match="already recorded"):
         records.add_unit("IMU-1")

@@ -442,8 +442,10 @@ class Records:
                          write=False)
 
     def result_document(self, result_id: int) -> dict[str, Any]:
-        """Return the stored ``to_dict()`` document of a result (``CalibrationResult.from_dict``
-        rebuilds it)."""
+        """Return the stored ``to_dict()`` document of a result.
+
+        ``CalibrationResult.from_dict`` rebuilds the result from it.
+        """
         def work(session: Session) -> dict[str, Any]:
             row = session.get(Result, result_id)
             if row is None:

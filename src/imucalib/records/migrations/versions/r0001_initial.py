@@ -19,7 +19,7 @@ _TZ = sa.DateTime(timezone=True)
 
 
 def _chain() -> list[sa.Column]:
-    """The chain columns of every chained table (imucalib.records.schema._Chained)."""
+    """Return the chain columns of every chained table (imucalib.records.schema._Chained)."""
     return [
         sa.Column("id", sa.Integer(), autoincrement=False, nullable=False),
         sa.Column("seq", sa.Integer(), nullable=False),
