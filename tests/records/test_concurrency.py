@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import multiprocessing
+from itertools import pairwise
 from pathlib import Path
+
+from sqlalchemy import text
 
 from imucalib.records import open_records
 
@@ -32,3 +35,7 @@ def test_two_processes_lose_nothing_and_keep_the_chain(records_url, monkeypatch)
         assert rec.units().count("SHARED") == 1
         assert sum(len(h.reviews) for h in results) == 6
         assert rec.verify() == []
+        with rec.engine.connect() as conn:
+            writers = conn.execute(text("SELECT operator FROM runs ORDER BY seq")).scalars().all()
+    # the two writers really overlapped (not one after the other): the chain alternates
+    assert sum(a != b for a, b in pairwise(writers)) >= 5
