@@ -26,4 +26,4 @@ def write_results(url: str, worker: int, count: int, barrier: Barrier) -> None:
             if i % 10 == 0:
                 rec.review(rid, f"worker {worker}", approved=True)
                 rec.get_or_create_unit("SHARED")  # both create it: one wins, the other finds it
-            time.sleep(0.005)  # give the other writer a turn (SQLite's busy wait backs off)
+            time.sleep(0.01)  # give the other writer a turn (SQLite's busy wait backs off)

@@ -37,5 +37,7 @@ def test_two_processes_lose_nothing_and_keep_the_chain(records_url, monkeypatch)
         assert rec.verify() == []
         with rec.engine.connect() as conn:
             writers = conn.execute(text("SELECT operator FROM runs ORDER BY seq")).scalars().all()
-    # the two writers really overlapped (not one after the other): the chain alternates
-    assert sum(a != b for a, b in pairwise(writers)) >= 5
+    # the two writers really overlapped: one wrote between two writes of the other (A…B…A);
+    # one after the other would switch once (SQLite's busy wait may starve one for a while,
+    # so more alternation is typical, 44 to 51 of 59 here, but not asked for)
+    assert sum(a != b for a, b in pairwise(writers)) >= 2
