@@ -24,8 +24,13 @@ def test_two_processes_lose_nothing_and_keep_the_chain(records_url, monkeypatch)
                          args=(records_url, w, PER_WORKER, barrier)) for w in (1, 2)]
     for p in procs:
         p.start()
+    seen = []  # verify while they write: a read sees a result with all its parameters or not
+    with open_records(records_url) as reader:
+        while any(p.is_alive() for p in procs):
+            seen.append(reader.verify(recordings=False))
     for p in procs:
         p.join(timeout=120)
+    assert all(problems == [] for problems in seen) and len(seen) > 1
     assert [p.exitcode for p in procs] == [0, 0]
     with open_records(records_url) as rec:
         results = [h for s in rec.units() if s != "SHARED" for h in rec.history(s)]

@@ -148,12 +148,20 @@ class Records:
 
     # --- transactions -----------------------------------------------------------------------
     def _run(self, work: Callable[[Session], _T], *, write: bool) -> _T:
+        """Run `work` in one transaction, retried when the database is busy.
+
+        A write on SQLite begins with ``BEGIN IMMEDIATE``; a read sees one snapshot (SQLite's
+        WAL read transaction, PostgreSQL's REPEATABLE READ), so :meth:`verify` never sees a
+        result without the parameters committed with it.
+        """
         sqlite = self.engine.dialect.name == "sqlite"
         for attempt in range(ATTEMPTS):
             try:
                 with self.engine.connect() as conn:
                     if write and sqlite:
                         conn.execution_options(**{BEGIN_OPTION: "BEGIN IMMEDIATE"})
+                    elif not write and not sqlite:  # one snapshot for all a query reads
+                        conn.execution_options(isolation_level="REPEATABLE READ")
                     with conn.begin(), Session(bind=conn, expire_on_commit=False) as session:
                         out = work(session)
                         session.flush()
