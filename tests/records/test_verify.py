@@ -8,6 +8,11 @@ import json
 from datetime import UTC, datetime
 
 from sqlalchemy import text
+from sqlalchemy.orm import Session
+
+from imucalib.records.canonical import chain_hash, row_content
+from imucalib.records.chain import children_of
+from imucalib.records.schema import Result
 
 
 def _populate(records, make_result, recording_file):
@@ -107,3 +112,22 @@ def test_a_row_can_be_rehashed_by_hand(records, make_result, recording_file):
         assert row["prev_hash"] == prev
         assert hashlib.sha256((prev + canonical).encode()).hexdigest() == row["row_hash"]
         prev = row["row_hash"]
+
+
+def test_a_rehashed_edit_breaks_the_link_to_the_next_row(records, make_result, recording_file):
+    _, ids, _ = _populate(records, make_result, recording_file)
+    with Session(records.engine) as session:  # the forger recomputes the edited row's hash
+        row = session.get(Result, ids[0])
+        row.amendment_reason = "forged"
+        forged = chain_hash(row.prev_hash, row_content(row, **children_of(session, row)))
+    _sql(records, "UPDATE results SET amendment_reason = 'forged', row_hash = :h WHERE id = :i",
+         h=forged, i=ids[0])
+    problems = records.verify()
+    assert [(p.table, p.key) for p in problems] == [("results", ids[1])]
+    assert "chain broken" in problems[0].what
+
+
+def test_a_removed_equipment_link_is_named(records, make_result, recording_file):
+    run, _, _ = _populate(records, make_result, recording_file)
+    _sql(records, "DELETE FROM run_equipment WHERE run_id = :i", i=run)
+    assert [(p.table, p.key) for p in records.verify()] == [("runs", run)]
