@@ -28,7 +28,7 @@ RANK = {
     "station": 6,
     "drivers": 7, "procedures": 7,
     "report": 8,
-    "exports": 9,
+    "exports": 9, "records": 9,
     "demo": 10, "cli": 10,
     "__main__": 11, "__init__": 11,
 }
@@ -79,6 +79,7 @@ def test_no_module_imports_a_higher_layer():
     ("imucalib.plan", "imucalib.sim"),
     ("imucalib.io", "imucalib.plan"),
     ("imucalib.procedures.registry", "imucalib.procedures.p1.analysis"),
+    ("imucalib.records", "sqlalchemy"),
 ])
 def test_importing_one_module_loads_no_unrelated_layer(module, must_not_load):
     code = (f"import sys, {module}; "

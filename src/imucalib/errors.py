@@ -23,6 +23,8 @@ Hierarchy
   - :class:`DeviceError`: equipment faults
     - :class:`DeviceTimeoutError` (also a ``TimeoutError``)
   - :class:`GuardTripError`: a guard stopped a step
+  - :class:`RecordsError`: the calibration records database (unreachable, a newer schema,
+    an unknown serial or record)
 - :class:`CalibrationWarning` (a ``UserWarning``)
 """
 
@@ -46,6 +48,7 @@ __all__ = [
     "RecordingError",
     "RecordingFormatError",
     "RecordingOpenForWriteError",
+    "RecordsError",
     "SaturationError",
     "StorageFullError",
     "UnitError",
@@ -146,6 +149,14 @@ class DeviceTimeoutError(DeviceError, TimeoutError):
 
 class GuardTripError(CalibrationError):
     """A guard stopped a step (table drift, rate error, saturation, counter gap, …)."""
+
+
+class RecordsError(CalibrationError):
+    """The calibration records database cannot do what was asked (docs/records.md).
+
+    An unreachable database URL, a schema newer than this software, an unknown serial number or
+    record id, an amendment of a result that was already amended.
+    """
 
 
 class CalibrationWarning(UserWarning):

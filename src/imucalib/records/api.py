@@ -1,0 +1,683 @@
+"""The calibration records: append units, stations, equipment, runs, results, reviews; query them.
+
+Contents
+--------
+:class:`Records`
+    One object per database; each method is one transaction (docs/records.md).
+:func:`open_records`
+    Resolve the URL, bring the schema up to date, return a :class:`Records`.
+
+Every write appends rows to the hash chains (:mod:`imucalib.records.chain`); nothing is ever
+updated or deleted. An amendment is a new result, version n + 1, whose ``replaces`` names the
+result it supersedes; "current" means not replaced.
+
+Due rules (docs/records.md, "Due rules")
+----------------------------------------
+(R.4) a unit's due date = the date of its last calibration + its interval (its own
+      ``recal_interval_days``, else the `interval_days` asked for); the last calibration is the
+      latest run date (``started_utc``, else the result's ``created_utc``) among its current
+      results whose decision is not a fail; a unit with none is due now;
+(R.5) a piece of equipment is due when its current certificate's ``due_on`` ≤ the date asked
+      (a missing ``due_on`` is due).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from datetime import UTC, date, datetime, timedelta
+from pathlib import Path
+from typing import Any, Final, TypeVar
+
+from sqlalchemy import Engine, or_, select
+from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError
+from sqlalchemy.orm import Session
+
+from imucalib.errors import InvalidInputError, RecordsError
+from imucalib.io.hashing import file_sha256
+from imucalib.records import chain
+from imucalib.records.canonical import canonical_json
+from imucalib.records.engine import BEGIN_OPTION, make_engine, resolve_url, safe_url, upgrade
+from imucalib.records.schema import (
+    CHAINED,
+    Equipment,
+    Result,
+    ResultParameter,
+    Review,
+    Run,
+    RunEquipment,
+    Station,
+    Unit,
+)
+from imucalib.records.views import (
+    ChainHead,
+    DriftPoint,
+    DueUnit,
+    EquipmentView,
+    HistoryEntry,
+    ParameterRow,
+    Problem,
+    ReviewView,
+    RunView,
+)
+
+__all__ = ["DEFAULT_INTERVAL_DAYS", "Records", "open_records"]
+
+#: Recalibration interval of a unit without its own. [d]
+DEFAULT_INTERVAL_DAYS: Final = 365
+#: Attempts of a transaction that met a busy database or a deadlock.
+ATTEMPTS: Final = 8
+_T = TypeVar("_T")
+
+
+def _software_version() -> str:
+    from imucalib import __version__
+
+    return __version__
+
+
+def _utc(value: datetime | None) -> datetime | None:
+    if value is None:
+        return None
+    return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
+
+
+def _as_utc(value: datetime) -> datetime:
+    out = _utc(value)
+    assert out is not None
+    return out
+
+
+def _json_text(value: Mapping[str, Any] | None, name: str) -> str:
+    try:
+        return canonical_json(dict(value or {}))
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"`{name}` must be JSON-able; got {value!r} ({exc})") from exc
+
+
+def parameter_rows(result: Any) -> list[ParameterRow]:
+    """Return a result's parameters: its ``parameter_rows()`` or a CalibrationResult's fields.
+
+    ``parameter_rows()`` may yield :class:`ParameterRow`, ``(name, value, std, unit)`` tuples or
+    mappings with those keys.
+    """
+    if hasattr(result, "parameter_rows"):
+        rows = []
+        for item in result.parameter_rows():
+            if isinstance(item, ParameterRow):
+                rows.append(item)
+            elif isinstance(item, Mapping):
+                rows.append(ParameterRow(str(item["name"]), float(item["value"]),
+                                         float(item["std"]), str(item.get("unit", ""))))
+            else:
+                name, value, std, unit = item
+                rows.append(ParameterRow(str(name), float(value), float(std), str(unit)))
+        return rows
+    if hasattr(result, "param_names") and hasattr(result, "std"):
+        std = result.std()
+        return [ParameterRow(n, float(v), float(std[n]), str(result.units.get(n, "")))
+                for n, v in zip(result.param_names, result.values, strict=True)]
+    raise InvalidInputError("a result must have `parameter_rows()` or be a CalibrationResult; "
+                            f"got {type(result).__name__}")
+
+
+class Records:
+    """The calibration records of one database (use :func:`open_records`).
+
+    Parameters
+    ----------
+    engine : Engine
+        From :func:`imucalib.records.engine.make_engine`, schema already at head.
+    """
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self.url = safe_url(engine.url.render_as_string(hide_password=False))
+
+    def close(self) -> None:
+        """Release the connections."""
+        self.engine.dispose()
+
+    def __enter__(self) -> Records:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    # --- transactions -----------------------------------------------------------------------
+    def _run(self, work: Callable[[Session], _T], *, write: bool) -> _T:
+        """Run `work` in one transaction, retried when the database is busy.
+
+        A write on SQLite begins with ``BEGIN IMMEDIATE``; a read sees one snapshot (SQLite's
+        WAL read transaction, PostgreSQL's REPEATABLE READ), so :meth:`verify` never sees a
+        result without the parameters committed with it.
+        """
+        sqlite = self.engine.dialect.name == "sqlite"
+        for attempt in range(ATTEMPTS):
+            try:
+                with self.engine.connect() as conn:
+                    if write and sqlite:
+                        conn.execution_options(**{BEGIN_OPTION: "BEGIN IMMEDIATE"})
+                    elif not write and not sqlite:  # one snapshot for all a query reads
+                        conn.execution_options(isolation_level="REPEATABLE READ")
+                    with conn.begin(), Session(bind=conn, expire_on_commit=False) as session:
+                        out = work(session)
+                        session.flush()
+                return out
+            except OperationalError as exc:
+                text = str(exc.orig).lower()
+                transient = ("locked" in text or "busy" in text or "deadlock" in text
+                             or "could not serialize" in text)
+                if not transient or attempt == ATTEMPTS - 1:
+                    raise RecordsError(f"records database {self.url}: {exc.orig}") from exc
+                time.sleep(0.05 * 2 ** attempt)
+            except IntegrityError as exc:
+                raise RecordsError(f"records database {self.url} refused the write: "
+                                   f"{exc.orig}") from exc
+            except DBAPIError as exc:
+                raise RecordsError(f"records database {self.url}: {exc.orig}") from exc
+        raise AssertionError("unreachable")  # pragma: no cover
+
+    # --- units, stations, equipment ---------------------------------------------------------
+    @staticmethod
+    def _unit(session: Session, serial: str) -> Unit:
+        unit = session.scalars(select(Unit).where(Unit.serial == serial)).first()
+        if unit is None:
+            known = session.scalars(select(Unit.serial).order_by(Unit.seq).limit(10)).all()
+            raise RecordsError(f"no unit with serial {serial!r} in the records; known serials: "
+                               f"{', '.join(known) or 'none'}")
+        return unit
+
+    @staticmethod
+    def _new_unit(session: Session, serial: str, model: str, maker: str,
+                  specification: Mapping[str, Any] | None,
+                  recal_interval_days: int | None) -> Unit:
+        if not serial:
+            raise InvalidInputError("`serial` must be a non-empty string; got ''")
+        if recal_interval_days is not None and recal_interval_days <= 0:
+            raise InvalidInputError("`recal_interval_days` must be > 0; got "
+                                    f"{recal_interval_days}")
+        return chain.append(session, Unit(
+            serial=serial, model=model, maker=maker,
+            specification_json=_json_text(specification, "specification"),
+            recal_interval_days=recal_interval_days))
+
+    def add_unit(self, serial: str, model: str = "", maker: str = "",
+                 specification: Mapping[str, Any] | None = None,
+                 recal_interval_days: int | None = None) -> int:
+        """Add a unit and return its id.
+
+        Raises
+        ------
+        RecordsError
+            A unit with that serial is already recorded.
+        """
+        def work(session: Session) -> int:
+            chain.lock(session, Unit)
+            if session.scalars(select(Unit.id).where(Unit.serial == serial)).first():
+                raise RecordsError(f"a unit with serial {serial!r} is already recorded")
+            return self._new_unit(session, serial, model, maker, specification,
+                                  recal_interval_days).id
+        return self._run(work, write=True)
+
+    def get_or_create_unit(self, serial: str, model: str = "", maker: str = "",
+                           specification: Mapping[str, Any] | None = None,
+                           recal_interval_days: int | None = None) -> int:
+        """Return the id of the unit `serial`, adding it (with the other fields) if new."""
+        return self._run(lambda s: self._get_or_create(s, serial, model, maker, specification,
+                                                       recal_interval_days), write=True)
+
+    def _get_or_create(self, session: Session, serial: str, model: str = "", maker: str = "",
+                       specification: Mapping[str, Any] | None = None,
+                       recal_interval_days: int | None = None) -> int:
+        chain.lock(session, Unit)
+        found = session.scalars(select(Unit.id).where(Unit.serial == serial)).first()
+        if found is not None:
+            return int(found)
+        return self._new_unit(session, serial, model, maker, specification,
+                              recal_interval_days).id
+
+    def add_station(self, name: str, location: str = "") -> int:
+        """Add a station and return its id (RecordsError if the name is taken)."""
+        def work(session: Session) -> int:
+            chain.lock(session, Station)
+            if session.scalars(select(Station.id).where(Station.name == name)).first():
+                raise RecordsError(f"a station named {name!r} is already recorded")
+            return chain.append(session, Station(name=name, location=location)).id
+        return self._run(work, write=True)
+
+    @staticmethod
+    def _station_id(session: Session, station: int | str | None) -> int | None:
+        if station is None:
+            return None
+        where = Station.id == station if isinstance(station, int) else Station.name == station
+        found = session.scalars(select(Station.id).where(where)).first()
+        if found is None:
+            raise RecordsError(f"no station {station!r} in the records")
+        return int(found)
+
+    def add_equipment(self, station: int | str | None, kind: str, model: str = "",
+                      serial: str = "", certificate: str = "",
+                      calibrated_on: date | None = None, due_on: date | None = None) -> int:
+        """Add a piece of equipment with its certificate and return its id."""
+        def work(session: Session) -> int:
+            return chain.append(session, Equipment(
+                station_id=self._station_id(session, station), kind=kind, model=model,
+                serial=serial, certificate=certificate, calibrated_on=calibrated_on,
+                due_on=due_on)).id
+        return self._run(work, write=True)
+
+    def recertify_equipment(self, equipment_id: int, certificate: str, calibrated_on: date,
+                            due_on: date) -> int:
+        """Record a new certificate of a piece of equipment; return the new row's id.
+
+        The old row stays; the new one ``replaces`` it and is what :meth:`due_equipment` reads.
+        """
+        def work(session: Session) -> int:
+            old = session.get(Equipment, equipment_id)
+            if old is None:
+                raise RecordsError(f"no equipment with id {equipment_id} in the records")
+            chain.lock(session, Equipment)
+            newer = session.scalars(select(Equipment.id)
+                                    .where(Equipment.replaces_id == equipment_id)).first()
+            if newer is not None:
+                raise RecordsError(f"equipment {equipment_id} was already replaced by {newer}; "
+                                   f"recertify {newer}")
+            return chain.append(session, Equipment(
+                station_id=old.station_id, kind=old.kind, model=old.model, serial=old.serial,
+                certificate=certificate, calibrated_on=calibrated_on, due_on=due_on,
+                replaces_id=equipment_id)).id
+        return self._run(work, write=True)
+
+    # --- runs, results, reviews -------------------------------------------------------------
+    def record_run(self, *, plan_name: str = "", plan_hash: str = "", procedure: str = "",
+                   recording: str | os.PathLike[str] | None = None,
+                   recording_sha256: str | None = None,
+                   environment: Mapping[str, Any] | None = None, operator: str = "",
+                   software_version: str | None = None, station: int | str | None = None,
+                   equipment: Sequence[int] = (), started_utc: datetime | None = None,
+                   ended_utc: datetime | None = None) -> int:
+        """Record a run and return its id.
+
+        Parameters
+        ----------
+        recording : path, optional
+            The Recording file; stored as an absolute path. Its SHA-256 is computed when
+            `recording_sha256` is not given.
+        environment : mapping, optional
+            JSON-able conditions (temperature, humidity, …).
+        software_version : str, optional
+            Default: this imucalib's version.
+        equipment : sequence of int
+            Ids of the equipment used.
+
+        Raises
+        ------
+        RecordsError
+            A recording that cannot be read when its SHA-256 must be computed; an unknown
+            station or equipment id.
+        """
+        path = "" if recording is None else str(Path(recording).expanduser().resolve())
+        sha = recording_sha256 or ""
+        if path and not sha:
+            try:
+                sha = file_sha256(path)
+            except OSError as exc:
+                raise RecordsError(f"cannot hash the recording {path}: {exc}") from exc
+        env_text = _json_text(environment, "environment")
+        ids = sorted({int(i) for i in equipment})
+
+        def work(session: Session) -> int:
+            station_id = self._station_id(session, station)
+            for eq in ids:
+                if session.get(Equipment, eq) is None:
+                    raise RecordsError(f"no equipment with id {eq} in the records")
+            run = chain.append(session, Run(
+                plan_name=plan_name, plan_hash=plan_hash, procedure=procedure,
+                recording_path=path, recording_sha256=sha, environment_json=env_text,
+                operator=operator, software_version=software_version or _software_version(),
+                station_id=station_id, started_utc=_utc(started_utc),
+                ended_utc=_utc(ended_utc)), equipment=ids)
+            session.add_all(RunEquipment(run_id=run.id, equipment_id=eq) for eq in ids)
+            return run.id
+        return self._run(work, write=True)
+
+    @staticmethod
+    def _append_result(session: Session, *, run_id: int, serial: str, result: Any,
+                       passed: bool | None, verification: Mapping[str, Any] | None,
+                       version: int, replaces: int | None, reason: str,
+                       unit_id: int | None = None) -> int:
+        if session.get(Run, run_id) is None:
+            raise RecordsError(f"no run with id {run_id} in the records")
+        rows = parameter_rows(result)
+        document = result.to_dict() if hasattr(result, "to_dict") else {}
+        row = Result(run_id=run_id, unit_id=unit_id, procedure=str(getattr(result, "procedure",
+                                                                           "")),
+                     model=str(getattr(result, "model", "")), passed=passed,
+                     verification_json=_json_text(verification, "verification"),
+                     document_json=_json_text(document, "result.to_dict()"), version=version,
+                     replaces_id=replaces, amendment_reason=reason)
+        params = [ResultParameter(name=r.name, value=r.value, std=r.std, unit=r.unit)
+                  for r in rows]
+        if len({p.name for p in params}) != len(params):
+            raise InvalidInputError(f"parameter names of result for {serial!r} must be unique")
+        chain.append(session, row, parameters=chain.parameter_content(params))
+        for p in params:
+            p.result_id = row.id
+        session.add_all(params)
+        return row.id
+
+    def record_result(self, run_id: int, result: Any, passed: bool | None = None,
+                      verification: Mapping[str, Any] | None = None, *,
+                      serial: str | None = None) -> int:
+        """Record a unit's result of a run (version 1) and return its id.
+
+        Parameters
+        ----------
+        run_id : int
+        result : CalibrationResult or any object with ``parameter_rows()`` (and optionally
+            ``to_dict()``, ``procedure``, ``model``, ``sensor_id``)
+        passed : bool or None
+            The decision: passed, failed, or not decided.
+        verification : mapping, optional
+            The verification outcome (JSON-able).
+        serial : str, optional
+            The unit; default ``result.sensor_id``. A new serial adds the unit.
+        """
+        serial = serial or str(getattr(result, "sensor_id", ""))
+        if not serial:
+            raise InvalidInputError("the result names no unit: give `serial` or a result with "
+                                    "`sensor_id`")
+
+        def work(session: Session) -> int:
+            unit_id = self._get_or_create(session, serial)
+            return self._append_result(session, run_id=run_id, serial=serial, result=result,
+                                       passed=passed, verification=verification, version=1,
+                                       replaces=None, reason="", unit_id=unit_id)
+        return self._run(work, write=True)
+
+    def amend(self, result_id: int, result: Any, reason: str, passed: bool | None = None,
+              verification: Mapping[str, Any] | None = None) -> int:
+        """Record a new version of result `result_id` and return its id; the old one stays.
+
+        Raises
+        ------
+        RecordsError
+            An unknown result, one that was already amended (amend its successor), or an
+            empty `reason`.
+        """
+        if not reason.strip():
+            raise RecordsError("an amendment needs a reason; got an empty one")
+
+        def work(session: Session) -> int:
+            chain.lock(session, Result)
+            old = session.get(Result, result_id)
+            if old is None:
+                raise RecordsError(f"no result with id {result_id} in the records")
+            newer = session.scalars(select(Result.id)
+                                    .where(Result.replaces_id == result_id)).first()
+            if newer is not None:
+                raise RecordsError(f"result {result_id} was already amended by result {newer}; "
+                                   f"amend {newer}")
+            unit = session.get(Unit, old.unit_id)
+            assert unit is not None
+            return self._append_result(session, run_id=old.run_id, serial=unit.serial,
+                                       result=result, passed=passed, verification=verification,
+                                       version=old.version + 1, replaces=result_id,
+                                       reason=reason, unit_id=old.unit_id)
+        return self._run(work, write=True)
+
+    def review(self, result_id: int, who: str, approved: bool, comment: str = "",
+               when: datetime | None = None) -> int:
+        """Record a review of a result and return its id."""
+        if not who:
+            raise InvalidInputError("`who` must name the reviewer; got ''")
+
+        def work(session: Session) -> int:
+            if session.get(Result, result_id) is None:
+                raise RecordsError(f"no result with id {result_id} in the records")
+            return chain.append(session, Review(
+                result_id=result_id, reviewer=who, approved=bool(approved), comment=comment,
+                reviewed_utc=_utc(when) or datetime.now(UTC))).id
+        return self._run(work, write=True)
+
+    # --- queries ----------------------------------------------------------------------------
+    def units(self) -> list[str]:
+        """Return every recorded serial number, in the order they were added."""
+        return self._run(lambda s: list(s.scalars(select(Unit.serial).order_by(Unit.seq))),
+                         write=False)
+
+    def result_document(self, result_id: int) -> dict[str, Any]:
+        """Return the stored ``to_dict()`` document of a result.
+
+        ``CalibrationResult.from_dict`` rebuilds the result from it.
+        """
+        def work(session: Session) -> dict[str, Any]:
+            row = session.get(Result, result_id)
+            if row is None:
+                raise RecordsError(f"no result with id {result_id} in the records")
+            return dict(json.loads(row.document_json))
+        return self._run(work, write=False)
+
+    @staticmethod
+    def _entries(session: Session, results: Iterable[Result]) -> list[HistoryEntry]:
+        out = []
+        for res in results:
+            run = session.get(Run, res.run_id)
+            unit = session.get(Unit, res.unit_id)
+            assert run is not None and unit is not None
+            successor = session.scalars(select(Result.id)
+                                        .where(Result.replaces_id == res.id)).first()
+            params = session.scalars(select(ResultParameter)
+                                     .where(ResultParameter.result_id == res.id)
+                                     .order_by(ResultParameter.id)).all()
+            reviews = session.scalars(select(Review).where(Review.result_id == res.id)
+                                      .order_by(Review.seq)).all()
+            out.append(HistoryEntry(
+                result_id=res.id, run_id=res.run_id, serial=unit.serial,
+                procedure=res.procedure, model=res.model, version=res.version,
+                calibrated_utc=_utc(run.started_utc) or _as_utc(res.created_utc),
+                created_utc=_as_utc(res.created_utc), passed=res.passed,
+                replaces=res.replaces_id, replaced_by=successor,
+                amendment_reason=res.amendment_reason,
+                parameters=tuple(ParameterRow(p.name, p.value, p.std, p.unit) for p in params),
+                reviews=tuple(ReviewView(r.id, r.result_id, r.reviewer,
+                                         _as_utc(r.reviewed_utc), r.approved, r.comment)
+                              for r in reviews),
+                plan_name=run.plan_name, plan_hash=run.plan_hash))
+        return out
+
+    def history(self, serial: str) -> list[HistoryEntry]:
+        """Return every result of unit `serial` in recording order, amended ones included.
+
+        An amended result has ``replaced_by`` set; its amendment has ``replaces`` and
+        ``amendment_reason``.
+
+        Raises
+        ------
+        RecordsError
+            An unknown serial (the message lists known ones).
+        """
+        def work(session: Session) -> list[HistoryEntry]:
+            unit = self._unit(session, serial)
+            rows = session.scalars(select(Result).where(Result.unit_id == unit.id)
+                                   .order_by(Result.seq)).all()
+            return self._entries(session, rows)
+        return self._run(work, write=False)
+
+    def result(self, result_id: int) -> HistoryEntry:
+        """Return one result as a history entry (RecordsError if unknown)."""
+        def work(session: Session) -> HistoryEntry:
+            row = session.get(Result, result_id)
+            if row is None:
+                raise RecordsError(f"no result with id {result_id} in the records")
+            return self._entries(session, [row])[0]
+        return self._run(work, write=False)
+
+    def drift(self, serial: str, parameter: str) -> list[DriftPoint]:
+        """Return `parameter` of unit `serial` across its current results, oldest first.
+
+        Raises
+        ------
+        RecordsError
+            An unknown serial, or a parameter none of its results carries.
+        """
+        entries = [e for e in self.history(serial) if e.current]
+        points = []
+        for e in entries:
+            try:
+                p = e.parameter(parameter)
+            except KeyError:
+                continue
+            assert e.calibrated_utc is not None
+            points.append(DriftPoint(e.calibrated_utc, p.value, p.std, p.unit, e.result_id))
+        if entries and not points:
+            names = sorted({p.name for e in entries for p in e.parameters})
+            raise RecordsError(f"no result of unit {serial!r} carries parameter {parameter!r}; "
+                               f"they carry {', '.join(names[:12])}"
+                               f"{' …' if len(names) > 12 else ''}")
+        return sorted(points, key=lambda d: (d.calibrated_utc, d.result_id))
+
+    def due_units(self, as_of: date | None = None,
+                  interval_days: int = DEFAULT_INTERVAL_DAYS) -> list[DueUnit]:
+        """Return the units due for recalibration on `as_of` (default today), Eq. (R.4)."""
+        day = as_of or datetime.now(UTC).date()
+        if interval_days <= 0:
+            raise InvalidInputError(f"`interval_days` must be > 0; got {interval_days}")
+
+        def work(session: Session) -> list[DueUnit]:
+            due = []
+            replaced = set(session.scalars(select(Result.replaces_id).where(
+                Result.replaces_id.is_not(None))))
+            for unit in session.scalars(select(Unit).order_by(Unit.seq)).all():
+                interval = unit.recal_interval_days or interval_days
+                rows = session.scalars(
+                    select(Result).where(Result.unit_id == unit.id,
+                                         or_(Result.passed.is_(None), Result.passed.is_(True)))
+                ).all()
+                best: tuple[datetime, int] | None = None
+                for res in rows:
+                    if res.id in replaced:
+                        continue
+                    run = session.get(Run, res.run_id)
+                    assert run is not None
+                    when = _utc(run.started_utc) or _as_utc(res.created_utc)
+                    if best is None or when > best[0]:
+                        best = (when, res.id)
+                if best is None:
+                    due.append(DueUnit(unit.serial, unit.model, None, None, interval, None))
+                    continue
+                last = best[0].date()
+                due_on = last + timedelta(days=interval)
+                if due_on <= day:
+                    due.append(DueUnit(unit.serial, unit.model, last, due_on, interval, best[1]))
+            return due
+        return self._run(work, write=False)
+
+    def equipment(self, *, current_only: bool = True) -> list[EquipmentView]:
+        """Return the equipment (by default only current certificates), in recording order."""
+        def work(session: Session) -> list[EquipmentView]:
+            replaced = set(session.scalars(select(Equipment.replaces_id).where(
+                Equipment.replaces_id.is_not(None))))
+            out = []
+            for eq in session.scalars(select(Equipment).order_by(Equipment.seq)):
+                if current_only and eq.id in replaced:
+                    continue
+                station = session.get(Station, eq.station_id) if eq.station_id else None
+                out.append(EquipmentView(eq.id, station.name if station else "", eq.kind,
+                                         eq.model, eq.serial, eq.certificate, eq.calibrated_on,
+                                         eq.due_on, eq.replaces_id))
+            return out
+        return self._run(work, write=False)
+
+    def due_equipment(self, as_of: date | None = None) -> list[EquipmentView]:
+        """Return the current equipment whose certificate is due on `as_of`, Eq. (R.5)."""
+        day = as_of or datetime.now(UTC).date()
+        return [e for e in self.equipment() if e.due_on is None or e.due_on <= day]
+
+    def runs_of_plan(self, plan: str) -> list[RunView]:
+        """Return every run whose plan hash or plan name is `plan`, oldest first."""
+        def work(session: Session) -> list[RunView]:
+            runs = session.scalars(select(Run).where(or_(Run.plan_hash == plan,
+                                                         Run.plan_name == plan))
+                                   .order_by(Run.seq)).all()
+            return [self._run_view(session, r) for r in runs]
+        return self._run(work, write=False)
+
+    def run(self, run_id: int) -> RunView:
+        """Return one run (RecordsError if unknown)."""
+        def work(session: Session) -> RunView:
+            row = session.get(Run, run_id)
+            if row is None:
+                raise RecordsError(f"no run with id {run_id} in the records")
+            return self._run_view(session, row)
+        return self._run(work, write=False)
+
+    @staticmethod
+    def _run_view(session: Session, run: Run) -> RunView:
+        station = session.get(Station, run.station_id) if run.station_id else None
+        eq = chain.children_of(session, run)["equipment"]
+        results = session.scalars(select(Result.id).where(Result.run_id == run.id)
+                                  .order_by(Result.seq)).all()
+        return RunView(run.id, run.plan_name, run.plan_hash, run.procedure, run.recording_path,
+                       run.recording_sha256, dict(json.loads(run.environment_json)),
+                       run.operator, run.software_version, station.name if station else "",
+                       tuple(eq), _utc(run.started_utc), _utc(run.ended_utc), tuple(results))
+
+    # --- tamper evidence --------------------------------------------------------------------
+    def heads(self) -> list[ChainHead]:
+        """Return the head of every chain (keep them elsewhere; :meth:`verify` checks them)."""
+        def work(session: Session) -> list[ChainHead]:
+            out = []
+            for model in CHAINED:
+                head = session.execute(select(model.seq, model.row_hash)
+                                       .order_by(model.seq.desc()).limit(1)).first()
+                out.append(ChainHead(model.__tablename__,  # type: ignore[attr-defined]
+                                     int(head[0]) if head else 0,
+                                     str(head[1]) if head else ""))
+            return out
+        return self._run(work, write=False)
+
+    def verify(self, *, recordings: bool = True,
+               anchors: Iterable[ChainHead] = ()) -> list[Problem]:
+        """Re-hash every row and recording; return every mismatch (empty: all is intact).
+
+        Parameters
+        ----------
+        recordings : bool
+            Also re-hash each run's recording file.
+        anchors : iterable of ChainHead
+            Heads kept from an earlier :meth:`heads`; each must still be in its chain with the
+            same hash (this catches a deleted last row).
+        """
+        from imucalib.records.verify import verify_session
+
+        anchor_list = list(anchors)
+        return self._run(lambda s: verify_session(s, recordings=recordings,
+                                                  anchors=anchor_list), write=False)
+
+
+def open_records(url: str | None = None) -> Records:
+    """Open (creating or upgrading as needed) the records database and return it.
+
+    Parameters
+    ----------
+    url : str, optional
+        A SQLAlchemy URL (``sqlite:///path.db``, ``postgresql+psycopg://user@host/db``) or an
+        SQLite file path; default ``$IMUCALIB_DB``, else ``records.db`` in the user's data
+        directory (docs/records.md, "Where the database is").
+
+    Raises
+    ------
+    RecordsError
+        An unusable URL, an unreachable database, or a schema newer than this software.
+    """
+    engine = make_engine(resolve_url(url))
+    try:
+        upgrade(engine)
+    except BaseException:
+        engine.dispose()
+        raise
+    return Records(engine)

@@ -1,0 +1,183 @@
+"""The tables of the calibration records database (SQLAlchemy 2 declarative models).
+
+Contents
+--------
+:class:`Base`
+    The declarative base; ``Base.metadata`` is what the migrations create.
+:class:`Unit`, :class:`Station`, :class:`Equipment`, :class:`Run`, :class:`Result`,
+:class:`Review`
+    The chained tables: each row carries ``seq`` (1, 2, … per table, equal to its ``id``),
+    ``prev_hash`` and ``row_hash`` (docs/records.md, Eqs. (R.1)–(R.3)).
+:class:`RunEquipment`, :class:`ResultParameter`
+    Child rows hashed with their parent (a run's equipment, a result's parameters).
+:data:`CHAINED`
+    The chained models in the order :meth:`~imucalib.records.api.Records.verify` checks them.
+
+Nothing here is ever updated or deleted by :class:`~imucalib.records.api.Records`: an amendment
+is a new :class:`Result` whose ``replaces_id`` names the one it replaces, a new certificate a new
+:class:`Equipment` row whose ``replaces_id`` names the old one. JSON documents (a unit's
+specification, a run's environment, a result's verification and full result document) are
+stored as canonical JSON text (:func:`imucalib.records.canonical.canonical_json`), so that the
+text hashed is the text stored.
+"""
+
+from __future__ import annotations
+
+from datetime import date, datetime
+from typing import Final
+
+from sqlalchemy import (
+    Boolean,
+    Date,
+    DateTime,
+    Float,
+    ForeignKey,
+    Integer,
+    MetaData,
+    String,
+    Text,
+)
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
+
+__all__ = [
+    "CHAINED",
+    "Base",
+    "Equipment",
+    "Result",
+    "ResultParameter",
+    "Review",
+    "Run",
+    "RunEquipment",
+    "Station",
+    "Unit",
+]
+
+#: Constraint names Alembic can find again (the migrations use the same convention).
+NAMING: Final = {
+    "ix": "ix_%(column_0_label)s",
+    "uq": "uq_%(table_name)s_%(column_0_name)s",
+    "ck": "ck_%(table_name)s_%(constraint_name)s",
+    "fk": "fk_%(table_name)s_%(column_0_name)s_%(referred_table_name)s",
+    "pk": "pk_%(table_name)s",
+}
+HASH_LEN: Final = 64
+
+
+class Base(DeclarativeBase):
+    """Declarative base of the records tables."""
+
+    metadata = MetaData(naming_convention=NAMING)
+
+
+class _Chained:
+    """The chain columns every chained table has (docs/records.md, "The hash chain")."""
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=False)
+    seq: Mapped[int] = mapped_column(Integer, unique=True)
+    prev_hash: Mapped[str] = mapped_column(String(HASH_LEN))
+    row_hash: Mapped[str] = mapped_column(String(HASH_LEN))
+    created_utc: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
+class Unit(_Chained, Base):
+    """An IMU unit, known by its serial number."""
+
+    __tablename__ = "units"
+    serial: Mapped[str] = mapped_column(String(200), unique=True)
+    model: Mapped[str] = mapped_column(String(200), default="")
+    maker: Mapped[str] = mapped_column(String(200), default="")
+    specification_json: Mapped[str] = mapped_column(Text, default="{}")
+    recal_interval_days: Mapped[int | None] = mapped_column(Integer, nullable=True)
+
+
+class Station(_Chained, Base):
+    """A calibration station (a place where runs are made)."""
+
+    __tablename__ = "stations"
+    name: Mapped[str] = mapped_column(String(200), unique=True)
+    location: Mapped[str] = mapped_column(String(400), default="")
+
+
+class Equipment(_Chained, Base):
+    """A piece of equipment of a station with its own calibration certificate."""
+
+    __tablename__ = "equipment"
+    station_id: Mapped[int | None] = mapped_column(ForeignKey("stations.id"), nullable=True)
+    kind: Mapped[str] = mapped_column(String(100))
+    model: Mapped[str] = mapped_column(String(200), default="")
+    serial: Mapped[str] = mapped_column(String(200), default="")
+    certificate: Mapped[str] = mapped_column(String(200), default="")
+    calibrated_on: Mapped[date | None] = mapped_column(Date, nullable=True)
+    due_on: Mapped[date | None] = mapped_column(Date, nullable=True)
+    replaces_id: Mapped[int | None] = mapped_column(ForeignKey("equipment.id"), nullable=True,
+                                                    unique=True)
+
+
+class Run(_Chained, Base):
+    """One execution of a plan on a station: the recording it left and its circumstances."""
+
+    __tablename__ = "runs"
+    plan_name: Mapped[str] = mapped_column(String(200), default="", index=True)
+    plan_hash: Mapped[str] = mapped_column(String(HASH_LEN), default="", index=True)
+    procedure: Mapped[str] = mapped_column(String(50), default="")
+    recording_path: Mapped[str] = mapped_column(Text, default="")
+    recording_sha256: Mapped[str] = mapped_column(String(HASH_LEN), default="")
+    environment_json: Mapped[str] = mapped_column(Text, default="{}")
+    operator: Mapped[str] = mapped_column(String(200), default="")
+    software_version: Mapped[str] = mapped_column(String(50), default="")
+    station_id: Mapped[int | None] = mapped_column(ForeignKey("stations.id"), nullable=True)
+    started_utc: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
+    ended_utc: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
+
+
+class RunEquipment(Base):
+    """The equipment a run used (hashed with the run)."""
+
+    __tablename__ = "run_equipment"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    run_id: Mapped[int] = mapped_column(ForeignKey("runs.id"), index=True)
+    equipment_id: Mapped[int] = mapped_column(ForeignKey("equipment.id"))
+
+
+class Result(_Chained, Base):
+    """The result of one unit in one run, version 1, or an amendment (version > 1)."""
+
+    __tablename__ = "results"
+    run_id: Mapped[int] = mapped_column(ForeignKey("runs.id"), index=True)
+    unit_id: Mapped[int] = mapped_column(ForeignKey("units.id"), index=True)
+    procedure: Mapped[str] = mapped_column(String(50), default="")
+    model: Mapped[str] = mapped_column(String(50), default="")
+    passed: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
+    verification_json: Mapped[str] = mapped_column(Text, default="{}")
+    document_json: Mapped[str] = mapped_column(Text, default="{}")
+    version: Mapped[int] = mapped_column(Integer, default=1)
+    replaces_id: Mapped[int | None] = mapped_column(ForeignKey("results.id"), nullable=True,
+                                                    unique=True)
+    amendment_reason: Mapped[str] = mapped_column(Text, default="")
+
+
+class ResultParameter(Base):
+    """One parameter of a result with its standard uncertainty (hashed with the result)."""
+
+    __tablename__ = "result_parameters"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    result_id: Mapped[int] = mapped_column(ForeignKey("results.id"), index=True)
+    name: Mapped[str] = mapped_column(String(100))
+    value: Mapped[float] = mapped_column(Float)
+    std: Mapped[float] = mapped_column(Float)
+    unit: Mapped[str] = mapped_column(String(50), default="")
+
+
+class Review(_Chained, Base):
+    """A review of a result: who, when, approved or not, and why."""
+
+    __tablename__ = "reviews"
+    result_id: Mapped[int] = mapped_column(ForeignKey("results.id"), index=True)
+    reviewer: Mapped[str] = mapped_column(String(200))
+    reviewed_utc: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    approved: Mapped[bool] = mapped_column(Boolean)
+    comment: Mapped[str] = mapped_column(Text, default="")
+
+
+#: The chained tables, in the order verify checks them.
+CHAINED: Final[tuple[type[_Chained], ...]] = (Unit, Station, Equipment, Run, Result, Review)

@@ -1,0 +1,94 @@
+"""A CalibrationResult in and out; history and amendment (the original stays, both shown)."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+
+import numpy as np
+import pytest
+
+from imucalib.errors import InvalidInputError, RecordsError
+from imucalib.models.result import CalibrationResult
+
+
+def test_calibration_result_round_trips(records, make_result, recording_file):
+    res = make_result("IMU-7", 0.0123)
+    run = records.record_run(plan_name="p1-short", plan_hash="ab" * 32, procedure="p1",
+                             recording=recording_file, operator="ana",
+                             environment={"temperature_degc": 23.1})
+    rid = records.record_result(run, res, passed=True, verification={"max_error": 1e-4})
+    back = CalibrationResult.from_dict(records.result_document(rid))
+    np.testing.assert_array_equal(back.values, res.values)
+    np.testing.assert_array_equal(back.covariance, res.covariance)
+    assert back.to_dict() == res.to_dict()
+    entry = records.result(rid)
+    std = res.std()
+    assert [p.name for p in entry.parameters] == list(res.param_names)
+    for p in entry.parameters:
+        assert p.value == res.value(p.name)  # exact: doubles on both backends
+        assert p.std == std[p.name]
+        assert p.unit == res.units[p.name]
+    assert entry.passed is True and entry.serial == "IMU-7" and entry.version == 1
+    view = records.run(run)
+    assert view.environment == {"temperature_degc": 23.1} and view.operator == "ana"
+    assert view.recording_path == str(recording_file.resolve()) and len(view.recording_sha256) == 64
+    assert view.result_ids == (rid,)
+    assert records.verify() == []
+
+
+def test_amendment_keeps_the_original_and_history_shows_both(records, make_result):
+    run = records.record_run(plan_name="p1", started_utc=datetime(2026, 1, 5, tzinfo=UTC))
+    first = records.record_result(run, make_result("IMU-1", 0.01), passed=None)
+    records.review(first, "bo", approved=False, comment="bias x looks wrong")
+    before = records.result(first)
+    second = records.amend(first, make_result("IMU-1", 0.02), reason="wrong table offset",
+                           passed=True)
+    history = records.history("IMU-1")
+    assert [h.result_id for h in history] == [first, second]
+    old, new = history
+    assert old.replaced_by == second and not old.current
+    assert new.replaces == first and new.current and new.version == 2
+    assert new.amendment_reason == "wrong table offset"
+    assert old.parameters == before.parameters  # untouched
+    assert old.parameter("accel_b_x").value == 0.01 and new.parameter("accel_b_x").value == 0.02
+    assert [r.comment for r in old.reviews] == ["bias x looks wrong"] and new.reviews == ()
+    with pytest.raises(RecordsError, match=f"already amended by result {second}; amend {second}"):
+        records.amend(first, make_result("IMU-1"), reason="again")
+    with pytest.raises(RecordsError, match="needs a reason"):
+        records.amend(second, make_result("IMU-1"), reason=" ")
+    assert records.verify() == []
+
+
+def test_any_result_with_parameter_rows_is_accepted(records):
+    class Minimal:
+        procedure, model = "allan", "noise"
+
+        def parameter_rows(self):
+            return [("arw", 1e-3, 1e-4, "rad/s^0.5"), {"name": "vrw", "value": 2e-3,
+                                                       "std": 2e-4, "unit": "m/s^1.5"}]
+
+    run = records.record_run(plan_name="allan")
+    rid = records.record_result(run, Minimal(), serial="IMU-9")
+    entry = records.result(rid)
+    assert [(p.name, p.value, p.std) for p in entry.parameters] == [
+        ("arw", 1e-3, 1e-4), ("vrw", 2e-3, 2e-4)]
+    assert records.result_document(rid) == {}
+    with pytest.raises(InvalidInputError, match="names no unit"):
+        records.record_result(run, Minimal())
+
+
+def test_unknown_things_are_named(records, make_result):
+    records.add_unit("IMU-1", model="BMI088", maker="Bosch", specification={"range_g": 24})
+    with pytest.raises(RecordsError, match=r"no unit with serial 'IMU-2'.*known serials: IMU-1"):
+        records.history("IMU-2")
+    with pytest.raises(RecordsError, match="already recorded"):
+        records.add_unit("IMU-1")
+    with pytest.raises(RecordsError, match="no run with id 99"):
+        records.record_result(99, make_result("IMU-1"))
+    with pytest.raises(RecordsError, match="no result with id 42"):
+        records.review(42, "bo", approved=True)
+    with pytest.raises(RecordsError, match="no station 'lab 9'"):
+        records.record_run(station="lab 9")
+    assert records.units() == ["IMU-1"]
+    assert records.get_or_create_unit("IMU-1") == 1
+    assert records.verify() == []
