@@ -22,7 +22,7 @@ RANK = {
     "errors": 0,
     "units": 1, "conventions": 1, "_checks": 1, "_lazy": 1,
     "models": 2,
-    "io": 3, "processing": 3, "estimation": 3, "analysis": 3,
+    "io": 3, "processing": 3, "estimation": 3, "analysis": 3, "records": 3,
     "plan": 4,
     "sim": 5,
     "station": 6,

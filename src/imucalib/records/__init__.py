@@ -1,0 +1,1 @@
+"""The records database: units, equipment, runs, results and reviews (docs/records-backup.md)."""
