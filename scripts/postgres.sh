@@ -57,10 +57,11 @@ install_postgresql() {
         || die "no PostgreSQL server binaries found and apt-get is missing:" \
                "install PostgreSQL's server (initdb, pg_ctl, postgres) and put it on PATH"
     printf 'postgres.sh: installing Debian'"'"'s postgresql package\n' >&2
-    "${prefix[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update >&2 \
-        && "${prefix[@]}" env DEBIAN_FRONTEND=noninteractive \
-               apt-get install -y --no-install-recommends postgresql >&2 \
-        || die "apt-get could not install the postgresql package"
+    if ! { "${prefix[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update >&2 \
+               && "${prefix[@]}" env DEBIAN_FRONTEND=noninteractive \
+                      apt-get install -y --no-install-recommends postgresql >&2; }; then
+        die "apt-get could not install the postgresql package"
+    fi
 }
 
 # Run a command as the server's user (root: imucalib-pg; anyone else: themselves).
@@ -69,7 +70,7 @@ as_pg() {
         if command -v runuser >/dev/null 2>&1; then
             runuser -u "$PG_SYSTEM_USER" -- "$@"
         else
-            su -s /bin/sh "$PG_SYSTEM_USER" -c '"$0" "$@"' -- "$@"
+            su -s /bin/bash -c "$(printf '%q ' "$@")" "$PG_SYSTEM_USER"
         fi
     else
         "$@"
@@ -141,8 +142,9 @@ start() {
             --no-locale >"$dir/initdb.log" 2>&1 \
             || { cat "$dir/initdb.log" >&2; die "initdb failed in $data"; }
         # Trust on the socket in DIR and on 127.0.0.1 only: no other host may connect.
-        as_pg sh -c 'printf "%s\n" "local all all trust" "host all all 127.0.0.1/32 trust" \
-            >"$1/pg_hba.conf"' sh "$data"
+        # (Rewriting the file keeps its owner, the server's user.)
+        printf '%s\n' "local all all trust" "host all all 127.0.0.1/32 trust" \
+            >"$data/pg_hba.conf"
     fi
 
     for tries in 1 2 3 4 5; do

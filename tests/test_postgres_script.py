@@ -3,7 +3,8 @@
 The start/connect/stop cycle runs where a server is known to be startable: when
 ``IMUCALIB_TEST_PG_URL`` is set (``.ci/run`` sets it after the script itself started the suite's
 server, so a broken script has already failed CI). Elsewhere it is not collected, so that a
-developer's ``make test`` never installs Debian packages; the argument checks run everywhere.
+developer's ``make test`` never installs Debian packages; the argument checks run everywhere,
+and shellcheck runs where it is installed.
 """
 
 from __future__ import annotations
@@ -86,3 +87,11 @@ if os.environ.get("IMUCALIB_TEST_PG_URL"):
         finally:
             _run("stop", str(work))
             shutil.rmtree(work, ignore_errors=True)
+
+
+if shutil.which("shellcheck"):
+
+    def test_the_scripts_are_shellcheck_clean():
+        done = subprocess.run(["shellcheck", str(SCRIPT), str(ROOT / ".ci" / "run")],
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0, done.stdout
