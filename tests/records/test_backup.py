@@ -77,7 +77,8 @@ def _populate(url: str, units: int = 3, per_unit: int = 4) -> None:
              "bias_mps2": FLOATS[(u * per_unit + k) % len(FLOATS)],
              "scale_ppm": None if k == 1 else 12.5 * k - 3e-9,
              "price": decimal.Decimal("1234.5678") if k == 0 else None,
-             "digest": bytes(range(256)) if k == 2 else hashlib.sha256(bytes([u, k])).digest(),
+             "digest": (bytes(range(256)) if k == 2
+                        else hashlib.sha256(f"{u}.{k}".encode()).digest()),
              "note": "β-test ✓ \"quoted\"\nline" if k == 3 else None}
             for u in range(units) for k in range(per_unit)])
     engine.dispose()

@@ -364,7 +364,9 @@ def _dump_table(conn: Connection, table: sa.Table, path: Path) -> tuple[int, Fil
     size = rows = 0
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("wb") as f:
-        result = conn.execute(sa.select(*table.columns).order_by(*order))
+        # Streamed (a server-side cursor on PostgreSQL): a large table is never all in memory.
+        result = conn.execute(sa.select(*table.columns).order_by(*order)
+                              .execution_options(yield_per=_INSERT_BATCH_ROWS))
         for row in result:
             line = json.dumps({n: _encode(v) for n, v in zip(names, row, strict=True)},
                               ensure_ascii=False, allow_nan=False, separators=(",", ":"))
