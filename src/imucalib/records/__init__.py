@@ -16,6 +16,8 @@ Contents
     What the queries return.
 :mod:`imucalib.records.engine`
     The URL rules, the SQLite connection settings, the schema upgrade.
+:mod:`imucalib.records.backup`
+    Consistent backups to several places with a checksum manifest, their verification, restore.
 
 Importing this package imports no SQLAlchemy; each name loads its module when first used.
 """
