@@ -13,6 +13,21 @@ from imucalib.procedures import generate_p1_plan
 from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation
 
+# --- the records database: every test session writes into its own, never the user's ---------
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _records_database(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Point ``IMUCALIB_DB`` at a fresh SQLite file for the session (subprocesses inherit it).
+
+    ``imucalib calibrate`` and ``imucalib run`` record by default (docs/records.md); without
+    this the suite would write into the user's data directory.
+    """
+    import os
+
+    os.environ["IMUCALIB_DB"] = str(tmp_path_factory.mktemp("records") / "records.db")
+
+
 # --- the order of the run (``make test`` runs ``pytest -n 2``; pyproject sets ``--dist worksteal``)
 
 TESTS = Path(__file__).resolve().parent

@@ -9,8 +9,11 @@ Run as ``python -m imucalib.demo --out DIR``. It
 3. calibrates: estimates every parameter with its uncertainty (full triad model), checks the
    residuals, the held-out accuracy and the repeatability, and decides pass/fail;
 4. compares the estimates with the twin's truth (which only the demo and the tests read);
+5. records the calibration in the records database (docs/records.md: ``--db URL``, default
+   ``$IMUCALIB_DB``, else records.db in the user's data directory; ``--no-record`` skips it);
 
-and prints where the files are. ``--quick`` shortens the static record and runs one repetition.
+and prints where the files and the record are. ``--quick`` shortens the static record and runs
+one repetition.
 """
 
 from __future__ import annotations
@@ -59,6 +62,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     parser.add_argument("--seed", type=int, default=1, help="seed of the twin")
     parser.add_argument("--quick", action="store_true", help="one repetition, 10 min static")
+    parser.add_argument("--db", default=None, help="records database URL or SQLite file")
+    parser.add_argument("--no-record", action="store_true", help="do not record the result")
     args = parser.parse_args(argv)
     console = Console()
     from imucalib.exports.outputs import write_outputs
@@ -102,6 +107,12 @@ def main(argv: list[str] | None = None) -> int:
         with open_recording(path) as rec:
             truth = rec.truth
         console.print(_truth_table(analysis, truth))
+        if not args.no_record:
+            from imucalib.records.calibrations import record_calibration
+
+            console.rule("[bold]5. Record")
+            console.print(record_calibration(analysis, path, db=args.db, operator="demo"),
+                          highlight=False)
     except CalibrationError as exc:
         Console(stderr=True).print(f"[bold red]error:[/] {exc}", highlight=False)
         return 2

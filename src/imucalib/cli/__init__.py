@@ -15,6 +15,7 @@ Commands
 ``allan DATA``                     noise terms of a bare static log (CSV, ROS CSV or .h5)
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
+``records list|show|history|…``    the calibration records database (docs/records.md)
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     calibrate,
     plan,
     recording,
+    records,
     run,
     station,
     twin,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import getpass
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -177,6 +178,11 @@ def calibrate(
              "each pose's noise.")] = None,
     gyro_instability_dph: Annotated[float | None, typer.Option(
         help="field: the gyro's bias instability from its datasheet [°/h].")] = None,
+    db: Annotated[str | None, typer.Option(
+        "--db", help="Records database (default: $IMUCALIB_DB, else records.db in the user's "
+                     "data directory; docs/records.md).")] = None,
+    no_record: Annotated[bool, typer.Option(
+        "--no-record", help="Do not record the result in the records database.")] = False,
     *,
     import_options: ImportOptions,
 ) -> None:
@@ -187,7 +193,8 @@ def calibrate(
     table, figures); a P2 recording every unit with its temperature models; a P3 recording
     the test accelerometer's K2 on the centrifuge with the unbalance removed. A CSV is
     calibrated through its step file (--steps), or, a hand-held log, by `calibrate field
-    DATA.csv` with the import options of `imucalib segments` (docs/field.md).
+    DATA.csv` with the import options of `imucalib segments` (docs/field.md). The result is
+    recorded in the records database (docs/records.md; ``--no-record`` skips it).
     """
     from imucalib.procedures import registry
     from imucalib.report.console import render_result
@@ -234,6 +241,14 @@ def calibrate(
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_result(console, result, written)
+    if not no_record:
+        from imucalib.records.calibrations import record_calibration
+
+        try:
+            console.print(record_calibration(result, recording, db=db,
+                                             operator=getpass.getuser()), highlight=False)
+        except CalibrationError as exc:
+            raise fail(exc) from exc
     if result.passed is False:
         raise typer.Exit(code=1)
 

@@ -96,7 +96,8 @@ _PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "st
                  "test_range_g": "test_range_g", "n_rates": "n_rates",
                  "test_load_kg": "test_load_kg", "unbalance_um": "unbalance_um",
                  "tumble": "tumble", "both_directions": "both_directions",
-                 "rates": "rates_dps"}
+                 "rates": "rates_dps", "n_poses": "n_poses", "full_turns": "full_turns",
+                 "tilt_deg": "tilt_deg"}
 
 
 def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
@@ -188,6 +189,15 @@ def new(
         help="P3: run every rate at +ω and −ω.")] = False,
     rates: Annotated[str | None, typer.Option(
         help="P3, rate-transfer: the rates, e.g. '5,12.5,18,27' [°/s].")] = None,
+    n_poses: Annotated[int, typer.Option(
+        help="field: static poses after the initial rest (at least 6).", min=1, max=200)]
+    = 12,
+    full_turns: Annotated[bool, typer.Option(
+        help="field: ± full turns flat on the desk about each axis (the gyro's scale).")]
+    = True,
+    tilt_deg: Annotated[float, typer.Option(
+        help="field: how far the second round of poses leans [°].", min=0.0, max=60.0)]
+    = 20.0,
 ) -> None:
     """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
     from imucalib.plan import describe_plan, write_plan
@@ -205,7 +215,8 @@ def new(
                  "pose_order": pose_order, "static_radius_m": radius_m,
                  "test_range_g": test_range_g, "n_rates": n_rates,
                  "test_load_kg": test_load_kg, "unbalance_um": unbalance_um, "tumble": tumble,
-                 "both_directions": both_directions, "rates_dps": _numbers(rates, "--rates")}
+                 "both_directions": both_directions, "rates_dps": _numbers(rates, "--rates"),
+                 "n_poses": n_poses, "full_turns": full_turns, "tilt_deg": tilt_deg}
         # only what the command line gave: each generator keeps its own defaults
         explicit = {keyword for param, keyword in _PLAN_OPTIONS.items()
                     if (src := ctx.get_parameter_source(param)) is not None

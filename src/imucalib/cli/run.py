@@ -7,7 +7,7 @@ import sys
 import time
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Group
@@ -17,6 +17,7 @@ from rich.table import Table
 from imucalib.cli._app import app, console, err_console, fail
 from imucalib.cli._progress import make_progress, shows_progress
 from imucalib.errors import CalibrationError, ConfigurationError
+from imucalib.plan.io import plan_hash
 from imucalib.plan.schema import Plan
 from imucalib.station.devices import Station
 from imucalib.station.operator import AutoOperator, Operator, OperatorAnswer
@@ -115,11 +116,21 @@ def run(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No live view nor progress bar "
                                         "(none is drawn anyway when stderr is not a terminal).")]
     = False,
+    db: Annotated[str | None, typer.Option(
+        "--db", help="Records database (default: $IMUCALIB_DB, else records.db in the user's "
+                     "data directory; docs/records.md).")] = None,
+    no_record: Annotated[bool, typer.Option(
+        "--no-record", help="Do not record the run in the records database.")] = False,
+    override_due: Annotated[str | None, typer.Option(
+        "--override-due", help="Run although the station's equipment is overdue for "
+                               "calibration; the reason is recorded with the run.")] = None,
 ) -> None:
     """Run a plan on the twin or on real equipment, writing a crash-safe recording.
 
     On a terminal, stderr shows a live view of the station and a progress bar: station time
-    done of the plan's least station time, with an ETA.
+    done of the plan's least station time, with an ETA. The run is recorded in the records
+    database (``--no-record`` skips it); a station whose registered equipment is overdue for
+    calibration is refused unless ``--override-due REASON``.
     """
     from imucalib.plan import load_plan
     from imucalib.station.runner import resume_run, run_plan
@@ -162,6 +173,8 @@ def run(
             if plan_path is None:
                 raise ConfigurationError("give a PLAN file, or --resume FILE")
             plan = load_plan(plan_path)
+            station_name = "sim" if station == "sim" else Path(station).stem
+            equipment = [] if no_record else _check_due(db, station_name, override_due)
             if not yes and not sys.stdin.isatty() and any(
                     s.kind == "operator-check" for s in plan.steps):
                 raise ConfigurationError(
@@ -189,8 +202,43 @@ def run(
                       "`imucalib run --resume FILE`")
         raise typer.Exit(code=130) from None
     _report(summary)
+    if not no_record and resume is None:
+        from imucalib.records import open_records
+
+        try:
+            with open_records(db) as records:
+                run_id = records.record_run(
+                    plan_name=plan.name, plan_hash=plan_hash(plan), procedure=plan.procedure,
+                    recording=summary.path, operator=who,
+                    station=station_name if equipment else None,
+                    equipment=[e.equipment_id for e in equipment],
+                    environment={"status": summary.status, "override_due": override_due or ""})
+                console.print(f"recorded run {run_id} in {records.url}", highlight=False)
+        except CalibrationError as exc:
+            raise fail(exc) from exc
     if summary.status != "done":
         raise typer.Exit(code=1)
+
+
+def _check_due(db: str | None, station_name: str, override: str | None) -> list[Any]:
+    """Return the station's current equipment; refuse overdue equipment unless overridden."""
+    from datetime import date
+
+    from imucalib.records import open_records
+
+    with open_records(db) as records:
+        mine = [e for e in records.equipment() if e.station == station_name]
+    overdue = [e for e in mine if e.due_on is not None and e.due_on < date.today()]
+    if overdue and not override:
+        names = "; ".join(f"{e.kind} {e.model} {e.serial} (certificate {e.certificate or '?'}, "
+                          f"due {e.due_on})" for e in overdue)
+        raise ConfigurationError(f"station {station_name!r} has equipment overdue for "
+                                 f"calibration: {names}; recalibrate it, or pass "
+                                 "--override-due REASON (recorded with the run)")
+    if overdue:
+        err_console.print(f"[yellow]warning:[/] running with overdue equipment: {override}",
+                          highlight=False)
+    return mine
 
 
 class _nothing:  # noqa: N801 - a no-op context manager

@@ -1,0 +1,288 @@
+"""``imucalib records …``: the calibration records database (docs/records.md).
+
+``list``, ``show``, ``history``, ``drift``, ``due``, ``review``, ``amend``, ``verify``,
+``backup``, ``restore`` and ``add-equipment``; every command takes ``--db URL`` (default
+``$IMUCALIB_DB``, else ``records.db`` in the user's data directory) and the listing ones
+``--json``. ``imucalib calibrate`` records by default through
+:func:`imucalib.records.calibrations.record_calibration`.
+"""
+
+from __future__ import annotations
+
+import json
+from datetime import date
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+from rich.table import Table
+
+from imucalib.cli._app import app, console, fail, typer_app
+from imucalib.errors import CalibrationError, InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.records.api import Records
+
+__all__ = ["records_app"]
+
+records_app = typer_app(help="The calibration records: history, drift, due dates, reviews, "
+                             "amendments, tamper evidence, backups (docs/records.md).",
+                        no_args_is_help=True)
+app.add_typer(records_app, name="records")
+
+Db = Annotated[str | None, typer.Option(
+    "--db", help="Database URL or SQLite file (default: $IMUCALIB_DB, else records.db in the "
+                 "user's data directory).")]
+Json = Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")]
+
+
+def _open(db: str | None) -> Records:
+    from imucalib.records import open_records
+
+    return open_records(db)
+
+
+def _jsonable(value: Any) -> Any:
+    from dataclasses import asdict, is_dataclass
+
+    if is_dataclass(value) and not isinstance(value, type):
+        return _jsonable(asdict(value))
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, date):
+        return value.isoformat()
+    return value
+
+
+def _print(rows: list[Any], as_json: bool, title: str, columns: list[str]) -> None:
+    data = [_jsonable(r) for r in rows]
+    if as_json:
+        console.print_json(json.dumps(data))
+        return
+    table = Table(*columns, title=title)
+    for row in data:
+        table.add_row(*("" if row.get(c) is None else str(row.get(c)) for c in columns))
+    console.print(table)
+
+
+@records_app.command("list")
+def list_units(db: Db = None, as_json: Json = False) -> None:
+    """List the units and when each is due (the last calibration of each)."""
+    try:
+        with _open(db) as records:
+            rows = records.due_units(date(9999, 12, 31))
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    _print(rows, as_json, "units", ["serial", "model", "last_calibrated", "due_on",
+                                    "result_id"])
+
+
+@records_app.command()
+def history(serial: Annotated[str, typer.Argument(help="The unit's serial number.")],
+            db: Db = None, as_json: Json = False) -> None:
+    """Every result of a unit, amendments beside what they replaced."""
+    try:
+        with _open(db) as records:
+            rows = records.history(serial)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    _print(rows, as_json, f"history of {serial}",
+           ["result_id", "version", "procedure", "calibrated_utc", "passed", "replaces",
+            "replaced_by", "amendment_reason"])
+
+
+@records_app.command()
+def show(result_id: Annotated[int, typer.Argument(help="Result id.")], db: Db = None) -> None:
+    """Print one result: its parameters, run, reviews (JSON)."""
+    try:
+        with _open(db) as records:
+            doc = records.result_document(result_id)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print_json(json.dumps(_jsonable(doc), default=str))
+
+
+@records_app.command()
+def drift(serial: Annotated[str, typer.Argument(help="The unit's serial number.")],
+          parameter: Annotated[str, typer.Argument(help="A parameter, e.g. accel_bias_x.")],
+          db: Db = None, as_json: Json = False,
+          figure: Annotated[Path | None, typer.Option(
+              "--figure", help="Also draw the values with their 2σ bars (PNG).")] = None) -> None:
+    """One parameter of a unit across its calibrations."""
+    try:
+        with _open(db) as records:
+            rows = records.drift(serial, parameter)
+        if figure is not None:
+            from imucalib.report.drift_figure import save_drift_figure
+
+            save_drift_figure(figure, [r.calibrated_utc for r in rows],
+                              [r.value for r in rows], [r.std for r in rows],
+                              title=f"{serial} {parameter}",
+                              unit=rows[0].unit if rows else "")
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    _print(rows, as_json, f"{parameter} of {serial}",
+           ["calibrated_utc", "value", "std", "unit", "result_id"])
+
+
+@records_app.command()
+def due(db: Db = None, as_json: Json = False,
+        as_of: Annotated[str | None, typer.Option(help="Date (YYYY-MM-DD; default today).")]
+        = None,
+        equipment: Annotated[bool, typer.Option(help="Equipment due instead of units.")]
+        = False) -> None:
+    """Units (or equipment) due for calibration."""
+    try:
+        day = date.fromisoformat(as_of) if as_of else date.today()
+    except ValueError:
+        raise fail(InvalidInputError(f"--as-of wants YYYY-MM-DD; got {as_of!r}")) from None
+    try:
+        with _open(db) as records:
+            if equipment:
+                rows: list[Any] = records.due_equipment(day)
+                cols = ["equipment_id", "station", "kind", "model", "serial", "certificate",
+                        "due_on"]
+            else:
+                rows = records.due_units(day)
+                cols = ["serial", "model", "last_calibrated", "due_on", "result_id"]
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    _print(rows, as_json, f"{'equipment' if equipment else 'units'} due on {day}", cols)
+
+
+@records_app.command("add-equipment")
+def add_equipment(kind: Annotated[str, typer.Option(help="rate-table, chamber, centrifuge …")],
+                  due_on: Annotated[str, typer.Option(help="Calibration due (YYYY-MM-DD).")],
+                  station: Annotated[str, typer.Option(help="The station's name.")] = "sim",
+                  model: Annotated[str, typer.Option()] = "",
+                  serial: Annotated[str, typer.Option()] = "",
+                  certificate: Annotated[str, typer.Option(help="Its certificate id.")] = "",
+                  calibrated_on: Annotated[str | None, typer.Option(
+                      help="Its last calibration (YYYY-MM-DD).")] = None,
+                  db: Db = None) -> None:
+    """Register a station's equipment with its own calibration certificate and due date."""
+    try:
+        try:
+            due_day = date.fromisoformat(due_on)
+            cal_day = date.fromisoformat(calibrated_on) if calibrated_on else None
+        except ValueError:
+            raise InvalidInputError(f"dates are YYYY-MM-DD; got {due_on!r}, "
+                                    f"{calibrated_on!r}") from None
+        with _open(db) as records:
+            if station not in {e.station for e in records.equipment()}:
+                try:
+                    records.add_station(station)
+                except CalibrationError:
+                    pass                          # it exists without equipment yet
+            eid = records.add_equipment(station, kind, model=model, serial=serial,
+                                        certificate=certificate, calibrated_on=cal_day,
+                                        due_on=due_day)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"equipment {eid}: {kind} {model} {serial} at {station}, due {due_day}",
+                  highlight=False)
+
+
+@records_app.command()
+def review(result_id: Annotated[int, typer.Argument(help="Result id.")],
+           who: Annotated[str, typer.Option(help="Reviewer's name.")],
+           approve: Annotated[bool, typer.Option("--approve/--reject")] = True,
+           comment: Annotated[str, typer.Option()] = "", db: Db = None) -> None:
+    """Record a review (approval or rejection) of a result."""
+    try:
+        with _open(db) as records:
+            rid = records.review(result_id, who, approve, comment)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"review {rid}: result {result_id} {'approved' if approve else 'rejected'} "
+                  f"by {who}", highlight=False)
+
+
+@records_app.command()
+def amend(result_id: Annotated[int, typer.Argument(help="The result replaced.")],
+          new_result: Annotated[Path, typer.Argument(help="The new result JSON.")],
+          reason: Annotated[str, typer.Option(help="Why (recorded).")],
+          db: Db = None) -> None:
+    """Record a new version of a result; the original stays, `history` shows both."""
+    from imucalib.models.result import CalibrationResult
+
+    try:
+        cal = CalibrationResult.load(new_result)
+        with _open(db) as records:
+            rid = records.amend(result_id, cal, reason)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"result {rid} amends result {result_id} ({reason})", highlight=False)
+
+
+@records_app.command()
+def verify(db: Db = None, as_json: Json = False,
+           recordings: Annotated[bool, typer.Option(
+               help="Also re-hash the recording files.")] = True) -> None:
+    """Re-hash every record and recording; name every mismatch (exit 1 when any)."""
+    try:
+        with _open(db) as records:
+            problems = records.verify(recordings=recordings)
+            where = records.url
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    if as_json:
+        console.print_json(json.dumps(_jsonable(problems)))
+    elif problems:
+        _print(problems, False, f"{len(problems)} problem(s) in {where}",
+               ["table", "key", "what"])
+    else:
+        console.print(f"every record and recording in {where} is intact", highlight=False)
+    if problems:
+        raise typer.Exit(code=1)
+
+
+@records_app.command()
+def backup(dests: Annotated[list[Path], typer.Argument(help="One or more backup folders.")],
+           db: Db = None,
+           recordings: Annotated[bool, typer.Option(
+               help="Also copy the recordings the runs name.")] = True) -> None:
+    """Back up the database (a consistent snapshot) and the recordings, verified."""
+    from imucalib.records.backup import backup as do_backup
+
+    try:
+        import sqlalchemy as sa
+
+        with _open(db) as records:
+            url = records.engine.url
+            with records.engine.connect() as conn:
+                paths = conn.execute(sa.text("SELECT recording_path FROM runs")).scalars()
+                files = sorted({Path(p) for p in paths if p}) if recordings else []
+        manifests = do_backup(url, dests, recordings=files)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    for dest, m in zip(dests, manifests, strict=True):
+        console.print(f"backed up into {dest}: {sum(t.rows for t in m.tables)} rows, "
+                      f"{len(m.recordings)} recording(s), verified", highlight=False)
+
+
+@records_app.command()
+def restore(source: Annotated[Path, typer.Argument(help="A backup folder.")],
+            db: Annotated[str, typer.Option("--db", help="An empty database to restore into.")],
+            recordings_dir: Annotated[Path | None, typer.Option(
+                help="Where to put the recordings.")] = None) -> None:
+    """Rebuild a database from a backup after verifying it; then verify the chain."""
+    from imucalib.records import open_records
+    from imucalib.records.backup import restore as do_restore
+    from imucalib.records.engine import resolve_url, upgrade
+
+    try:
+        summary = do_restore(source, resolve_url(db), create_schema=upgrade,
+                             recordings_dir=recordings_dir)
+        with open_records(db) as records:
+            problems = records.verify(recordings=recordings_dir is not None)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"restored {sum(summary.rows.values())} rows of {len(summary.rows)} tables "
+                  f"and {len(summary.files)} recording(s) into {db}", highlight=False)
+    if problems:
+        _print(problems, False, "problems after restore", ["table", "key", "what"])
+        raise typer.Exit(code=1)
+    console.print("the restored records verify", highlight=False)
