@@ -1,4 +1,4 @@
-"""Backups of the records database (imucalib.records.backup; docs/records-backup.md).
+"""Backups of the records database (imucalib.records.backup; docs/records.md, "Backups").
 
 A stand-in schema of two tables (units ← results, a foreign key, datetimes, floats, bytes,
 decimals) on every available backend (tests/records/_backends.py): SQLite always, PostgreSQL

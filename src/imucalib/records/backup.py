@@ -1,6 +1,6 @@
 """Backups of the records database and their restore, verified by checksums.
 
-A backup is a folder (docs/records-backup.md) holding
+A backup is a folder (docs/records.md, "Backups") holding
 
 - ``tables/<table>.jsonl``: every row of every table, one JSON object a line, the tables in
   dependency order (parents before children), read in **one** snapshot: a ``REPEATABLE READ``
