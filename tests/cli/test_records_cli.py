@@ -94,6 +94,9 @@ def test_a_run_is_recorded_and_overdue_equipment_refused_unless_overridden(tmp_p
                               "--db", db, "--override-due", "certificate renewal booked"])
     assert res.exit_code == 0, res.output
     assert "recorded run" in res.output
+    res = runner.invoke(app, ["records", "runs", "field", "--db", db, "--json"])
+    runs = json.loads(res.output)
+    assert len(runs) == 1 and runs[0]["recording_path"] == str(out.resolve())
     res = runner.invoke(app, ["records", "due", "--equipment", "--db", db, "--json"])
     assert [e["certificate"] for e in json.loads(res.output)] == ["C-17"]
     with h5py.File(out, "a") as f:                      # an edited recording is named

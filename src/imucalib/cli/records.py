@@ -1,6 +1,6 @@
 """``imucalib records …``: the calibration records database (docs/records.md).
 
-``list``, ``show``, ``history``, ``drift``, ``due``, ``review``, ``amend``, ``verify``,
+``list``, ``runs``, ``show``, ``history``, ``drift``, ``due``, ``review``, ``amend``, ``verify``,
 ``backup``, ``restore`` and ``add-equipment``; every command takes ``--db URL`` (default
 ``$IMUCALIB_DB``, else ``records.db`` in the user's data directory) and the listing ones
 ``--json``. ``imucalib calibrate`` records by default through
@@ -91,6 +91,19 @@ def history(serial: Annotated[str, typer.Argument(help="The unit's serial number
     _print(rows, as_json, f"history of {serial}",
            ["result_id", "version", "procedure", "calibrated_utc", "passed", "replaces",
             "replaced_by", "amendment_reason"])
+
+
+@records_app.command()
+def runs(plan: Annotated[str, typer.Argument(help="A plan's name or hash.")], db: Db = None,
+         as_json: Json = False) -> None:
+    """Every run of a plan, oldest first."""
+    try:
+        with _open(db) as records:
+            rows = records.runs_of_plan(plan)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    _print(rows, as_json, f"runs of {plan}", ["run_id", "plan_name", "procedure", "operator",
+                                               "started_utc", "recording_path"])
 
 
 @records_app.command()
