@@ -233,11 +233,24 @@ def amend(result_id: Annotated[int, typer.Argument(help="The result replaced.")]
 @records_app.command()
 def verify(db: Db = None, as_json: Json = False,
            recordings: Annotated[bool, typer.Option(
-               help="Also re-hash the recording files.")] = True) -> None:
+               help="Also re-hash the recording files.")] = True,
+           anchors: Annotated[Path | None, typer.Option(
+               help="A heads.json kept elsewhere (every backup writes one): its chain heads "
+                    "must still be there, which catches a deleted last row.")] = None) -> None:
     """Re-hash every record and recording; name every mismatch (exit 1 when any)."""
+    from imucalib.records.views import ChainHead
+
     try:
+        heads: list[ChainHead] = []
+        if anchors is not None:
+            try:
+                heads = [ChainHead(str(h["table"]), int(h["seq"]), str(h["row_hash"]))
+                         for h in json.loads(anchors.read_text(encoding="utf-8"))]
+            except (OSError, ValueError, KeyError, TypeError) as exc:
+                raise InvalidInputError(f"{anchors}: not a heads.json (a list of table, seq, "
+                                        f"row_hash): {exc}") from exc
         with _open(db) as records:
-            problems = records.verify(recordings=recordings)
+            problems = records.verify(recordings=recordings, anchors=heads)
             where = records.url
     except CalibrationError as exc:
         raise fail(exc) from exc
@@ -268,9 +281,15 @@ def backup(dests: Annotated[list[Path], typer.Argument(help="One or more backup 
             with records.engine.connect() as conn:
                 paths = conn.execute(sa.text("SELECT recording_path FROM runs")).scalars()
                 files = sorted({Path(p) for p in paths if p}) if recordings else []
+            heads = [_jsonable(h) for h in records.heads()]
         manifests = do_backup(url, dests, recordings=files)
+        for dest in dests:      # the chain heads, kept apart: `verify --anchors` reads them
+            (Path(dest) / "heads.json").write_text(json.dumps(heads, indent=1) + "\n",
+                                                   encoding="utf-8")
     except CalibrationError as exc:
         raise fail(exc) from exc
+    except OSError as exc:
+        raise fail(InvalidInputError(f"cannot write heads.json: {exc}")) from exc
     for dest, m in zip(dests, manifests, strict=True):
         console.print(f"backed up into {dest}: {sum(t.rows for t in m.tables)} rows, "
                       f"{len(m.recordings)} recording(s), verified", highlight=False)
