@@ -112,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
 
             console.rule("[bold]5. Record")
             console.print(record_calibration(analysis, path, db=args.db, operator="demo"),
-                          highlight=False)
+                          highlight=False, soft_wrap=True)
     except CalibrationError as exc:
         Console(stderr=True).print(f"[bold red]error:[/] {exc}", highlight=False)
         return 2

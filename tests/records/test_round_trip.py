@@ -92,3 +92,22 @@ def test_unknown_things_are_named(records, make_result):
     assert records.units() == ["IMU-1"]
     assert records.get_or_create_unit("IMU-1") == 1
     assert records.verify() == []
+
+
+def test_a_parameter_that_was_not_estimated_is_left_out_of_the_rows(tmp_path):
+    """A procedure may report a quantity as NaN (not estimated): SQLite would store NULL."""
+    from types import SimpleNamespace
+
+    from imucalib.records import open_records
+
+    result = SimpleNamespace(procedure="p3", sensor_id="T-1", model="", passed=True,
+                             parameter_rows=lambda: [("K2", 7e-6, 1.5e-8, "1/(m/s^2)"),
+                                                     ("nominal_radius", float("nan"),
+                                                      float("nan"), "m")])
+    with open_records(str(tmp_path / "r.db")) as records:
+        run = records.record_run(procedure="p3")
+        rid = records.record_result(run, result, passed=True)
+        assert rid > 0
+        assert len(records.drift("T-1", "K2")) == 1
+        assert records.drift("T-1", "nominal_radius") == []
+        assert records.verify() == []

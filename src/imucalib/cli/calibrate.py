@@ -246,7 +246,8 @@ def calibrate(
 
         try:
             console.print(record_calibration(result, recording, db=db,
-                                             operator=getpass.getuser()), highlight=False)
+                                             operator=getpass.getuser()), highlight=False,
+                          soft_wrap=True)
         except CalibrationError as exc:
             raise fail(exc) from exc
     if result.passed is False:

@@ -213,7 +213,8 @@ def run(
                     station=station_name if equipment else None,
                     equipment=[e.equipment_id for e in equipment],
                     environment={"status": summary.status, "override_due": override_due or ""})
-                console.print(f"recorded run {run_id} in {records.url}", highlight=False)
+                console.print(f"recorded run {run_id} in {records.url}", highlight=False,
+                              soft_wrap=True)
         except CalibrationError as exc:
             raise fail(exc) from exc
     if summary.status != "done":

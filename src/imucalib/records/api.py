@@ -24,6 +24,7 @@ Due rules (docs/records.md, "Due rules")
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -101,8 +102,15 @@ def parameter_rows(result: Any) -> list[ParameterRow]:
     """Return a result's parameters: its ``parameter_rows()`` or a CalibrationResult's fields.
 
     ``parameter_rows()`` may yield :class:`ParameterRow`, ``(name, value, std, unit)`` tuples or
-    mappings with those keys.
+    mappings with those keys. A row whose value or standard uncertainty is not a finite number
+    (a quantity a procedure reports as not estimated: P3's nominal radii, say) is left out of
+    the parameter rows; the result's stored document keeps it.
     """
+    return [r for r in _parameter_rows(result)
+            if math.isfinite(r.value) and math.isfinite(r.std)]
+
+
+def _parameter_rows(result: Any) -> list[ParameterRow]:
     if hasattr(result, "parameter_rows"):
         rows = []
         for item in result.parameter_rows():
