@@ -109,5 +109,6 @@ def test_a_parameter_that_was_not_estimated_is_left_out_of_the_rows(tmp_path):
         rid = records.record_result(run, result, passed=True)
         assert rid > 0
         assert len(records.drift("T-1", "K2")) == 1
-        assert records.drift("T-1", "nominal_radius") == []
+        with pytest.raises(RecordsError, match="carries parameter 'nominal_radius'; they carry K2"):
+            records.drift("T-1", "nominal_radius")
         assert records.verify() == []
