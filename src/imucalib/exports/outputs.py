@@ -25,6 +25,10 @@ format             file                           content
                                                   bars, χ²/ν (a calibration)
 ``temperature-png`` ``….temperature.png``         P2: every parameter against temperature with
                                                   its model and 2σ band
+``c-runtime``      ``….c/``                       the calibration as C99 for firmware:
+                                                  ``imucal_params.h`` and the runtime library
+                                                  (:mod:`imucalib.exports.c_runtime`,
+                                                  docs/c-runtime.md); in no default list
 =================  =============================  ================================================
 
 A batch (P2: one result per unit, :class:`~imucalib.procedures.p2.batch.P2BatchResult`) is
@@ -164,6 +168,12 @@ def _temperature_png(result: Any, folder: Path, stem: str) -> list[Path]:
     return [save_temperature_figure(result, folder / f"{stem}.temperature.png")]
 
 
+def _c_runtime(result: Any, folder: Path, stem: str) -> list[Path]:
+    from imucalib.exports.c_runtime import write_c_runtime
+
+    return write_c_runtime(_calibration(result, "c-runtime"), folder / f"{stem}.c")
+
+
 def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> list[Path]:
     """Write every unit's files, then the batch's summary (module docstring)."""
     from imucalib.procedures.p2.batch import summary_rows
@@ -209,6 +219,7 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "figures": _figures,
     "residuals-png": _residuals_png,
     "temperature-png": _temperature_png,
+    "c-runtime": _c_runtime,
 }
 
 
