@@ -176,15 +176,16 @@ def triad_result(rng: np.random.Generator) -> CalibrationResult:
 
 def temperature_result(rng: np.random.Generator, *, model: str = "triad",
                        order: int = 3) -> CalibrationResult:
-    """Every parameter a polynomial of `order` in T − T0; some with rate and leg terms."""
+    """Every parameter (K2 included) a polynomial of `order` in T − T0; some with rate and leg."""
     if model == "triad":
         names = [*triad_parameter_names("gyro", "triad", g_sensitivity=True),
-                 *triad_parameter_names("accel", "triad")]
+                 *triad_parameter_names("accel", "triad", k2=True)]
     else:
         names = [*triad_parameter_names("gyro", "per-axis"),
                  *triad_parameter_names("accel", "per-axis")]
 
-    scales = [{"bias": 0.02, "b": 0.02, "M": 2e-3, "G": 1e-4, "K": 2e-3}[n.split("_")[1]]
+    scales = [{"bias": 0.02, "b": 0.02, "M": 2e-3, "G": 1e-4, "K": 2e-3,
+               "K2": 1e-4}[n.split("_")[1]]
               for n in names]
     values = np.array([(1.0 if n.split("_")[1] == "K" else 0.0) + float(rng.normal()) * s
                        for n, s in zip(names, scales, strict=True)])

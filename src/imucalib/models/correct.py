@@ -225,7 +225,8 @@ def correct_imu(gyro_rps: ArrayLike | None, accel_mps2: ArrayLike | None,
     Notes
     -----
     With temperature models each sample is corrected with the parameters at its (T, Ṫ, ℓ),
-    Eq. (T1) of docs/processing-estimation.md: x = (I + M(T))⁻¹·(y − b(T) − G(T)·f), or
+    Eq. (T1) of docs/processing-estimation.md: x = (I + M(T))⁻¹·h⁻¹(y − b(T) − G(T)·f), with
+    h(u)_i = u_i + K2_i(T)·u_i² inverted in closed form (Eq. (C3) of docs/c-runtime.md), or
     x_i = y_i/K_i(T) − b_i(T) for a per-axis result.
     """
     _check_units(result, gyro_unit, accel_unit)
@@ -289,7 +290,7 @@ def _values_per_sample(result: CalibrationResult, samples: _F64 | None,
 
 def _correct_per_sample(result: CalibrationResult, triad: str, values: _F64, y: _F64,
                         specific_force: _F64 | None) -> _F64:
-    """Invert y = b + (I + M)·x + G·f (or y_i = K_i·(x_i + b_i)) with per-sample parameters."""
+    """Invert y = b + h_K2((I + M)·x) + G·f (or y_i = K_i·(x_i + b_i)), per-sample parameters."""
     index = {name: i for i, name in enumerate(result.param_names)}
 
     def cols(names: list[str]) -> _F64:
@@ -309,12 +310,32 @@ def _correct_per_sample(result: CalibrationResult, triad: str, values: _F64, y: 
                 raise InvalidInputError("this result has a gyro g-sensitivity: correcting the "
                                         "gyro needs the accelerometer data too")
             rest = rest - np.einsum("nij,nj->ni", g, specific_force)
+    if f"{triad}_K2_x" in index:
+        rest = _k2_inverse(cols([f"{triad}_K2_{a}" for a in AXES]), rest, triad)
     a = cols([f"{triad}_M_{i}{j}" for i in AXES for j in AXES]).reshape(n, 3, 3) + np.eye(3)
     try:
         return np.asarray(np.linalg.solve(a, rest[..., None])[..., 0], dtype=np.float64)
     except np.linalg.LinAlgError as exc:
         raise InvalidInputError(f"I + M of the {triad} triad is singular at some "
                                 "temperature") from exc
+
+
+def _k2_inverse(k2: _F64, r: _F64, triad: str) -> _F64:
+    """Solve u + K2·u² = r per axis on the branch through 0: u = 2r / (1 + √(1 + 4·K2·r)).
+
+    The root :func:`~imucalib.models.triad.correct_triad` converges to when K3, Koq and the
+    asymmetry are 0 (docs/c-runtime.md, Eq. (C3)).
+    """
+    if not np.any(k2 != 0.0):
+        return r
+    disc = 1.0 + 4.0 * k2 * r
+    bad = ~(disc >= 0.0)
+    if np.any(bad):
+        raise InvalidInputError(
+            f"cannot invert the {triad} K2 model u + K2·u² for {int(np.count_nonzero(bad))} "
+            f"value(s) (largest |measured - bias| {float(np.max(np.abs(r[bad]))):g}): outside "
+            "its monotonic range")
+    return np.asarray(2.0 * r / (1.0 + np.sqrt(disc)), dtype=np.float64)
 
 
 def correct_imu_frame(df: pd.DataFrame, result: CalibrationResult, *,
