@@ -10,6 +10,9 @@ Contents
     MAT.
 :mod:`imucalib.exports.noise`
     Kalibr and OpenVINS YAML, the datasheet-style noise table.
+:mod:`imucalib.exports.c_runtime`
+    :func:`write_c_runtime`: a calibration as a C99 parameter header plus the runtime library
+    that applies it in firmware (docs/c-runtime.md).
 
 Each is imported from its module (this package imports nothing eagerly).
 """
