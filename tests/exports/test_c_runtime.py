@@ -29,7 +29,8 @@ T_RANGE = (-40.0, 85.0)
 CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 
 #: The test driver: samples (g, a, T, Ṫ, ℓ) from in.bin → per sample rc_d, g_d, a_d, rc_f, g_f,
-#: a_f to out.bin (doubles); prints the time per sample of each precision. [ns]
+#: a_f to out.bin (doubles); prints the legs of four rates (double, float), then the time per
+#: sample of each precision. [ns]
 DRIVER = r"""
 #include <stdio.h>
 #include <stdlib.h>
@@ -82,6 +83,11 @@ int main(int argc, char **argv)
         }
     }
     c2 = clock();
+    printf("%d %d %d %d %d %d %d %d\n", imucal_temperature_leg_d(0.0021),
+           imucal_temperature_leg_d(0.002), imucal_temperature_leg_d(-0.0021),
+           imucal_temperature_leg_d(0.0), imucal_temperature_leg_f(0.0021f),
+           imucal_temperature_leg_f(0.002f), imucal_temperature_leg_f(-0.0021f),
+           imucal_temperature_leg_f(0.0f));
     printf("%.6g %.6g\n", 1e9 * (double)(c1 - c0) / CLOCKS_PER_SEC / (double)(REPEAT * n),
            1e9 * (double)(c2 - c1) / CLOCKS_PER_SEC / (double)(REPEAT * n));
     if (!(out = fopen(argv[2], "wb")) || fwrite(o, sizeof *o, (size_t)n * 14, out)
@@ -119,7 +125,9 @@ def _run_c(result: CalibrationResult, folder: Path, samples: np.ndarray
     run = subprocess.run([str(exe), str(folder / "in.bin"), str(folder / "out.bin")],
                          capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr
-    ns_d, ns_f = (float(v) for v in run.stdout.split())
+    legs, times = run.stdout.splitlines()
+    assert legs.split() == ["1", "0", "-1", "0"] * 2  # the dead band of temperature_leg
+    ns_d, ns_f = (float(v) for v in times.split())
     out = np.fromfile(folder / "out.bin", dtype=np.float64).reshape(len(samples), 14)
     return out, (ns_d, ns_f)
 
