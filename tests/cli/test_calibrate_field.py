@@ -38,6 +38,21 @@ def test_a_raw_count_log_is_calibrated_and_corrected_end_to_end(tmp_path: Path):
     assert report["accel_form"] == "gravity-norm" and len(report["poses"]) == 25
     assert (out / "mpu.IMU.field.parameters.csv").read_text(encoding="utf-8").startswith(
         "parameter,value,std_uncertainty,unit\n")
+    # the C99 runtime of the result compiles as firmware would build it (docs/c-runtime.md)
+    import shutil
+    import subprocess
+
+    res = runner.invoke(app, ["export", str(out / "mpu.IMU.field.result.json"), "--format",
+                              "c-runtime", "-o", str(tmp_path / "fw")])
+    assert res.exit_code == 0, res.output
+    folder = tmp_path / "fw" / "mpu.IMU.field.c"
+    cc = shutil.which("cc")
+    assert cc, "a C compiler (cc) is needed"
+    done = subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-c",
+                           str(folder / "imucalib_runtime.c"), "-o", str(tmp_path / "rt.o")],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert "gyro" in (folder / "imucal_params.h").read_text(encoding="utf-8")
     # the same import options correct the log: at rest the corrected norm is local g
     corrected = tmp_path / "corrected.csv"
     res = runner.invoke(app, ["apply", str(out / "mpu.IMU.field.result.json"),

@@ -47,9 +47,16 @@ def recover(
 
 @app.command()
 def export(
-    path: Annotated[Path, typer.Argument(help="Recording (.h5).")],
-    stream: Annotated[str, typer.Option(help="Stream as DEVICE/UNIT, e.g. imu/IMU-0001.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.csv or .mat).")],
+    path: Annotated[Path, typer.Argument(help="Recording (.h5), or a result (.result.json) "
+                                              "with --format.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.csv or .mat); for a "
+                                                          "result, a folder.")],
+    stream: Annotated[str | None, typer.Option(
+        help="Stream as DEVICE/UNIT, e.g. imu/IMU-0001 (a recording).")] = None,
+    fmt: Annotated[str | None, typer.Option(
+        "--format", help="For a result: c-runtime (a C99 header and library that apply it "
+                         "in firmware, docs/c-runtime.md), parameters-csv or result-json.")]
+    = None,
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
     step_file: Annotated[Path | None, typer.Option(
         "--step-file", help="Also write the recording's steps as a step file (TOML) here: "
@@ -57,10 +64,20 @@ def export(
                             "it (docs/import.md).")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)] = False,
 ) -> None:
-    """Export a stream, or one step of it, as CSV or MAT (chosen by the file suffix)."""
+    """Export a stream (or one step of it) as CSV or MAT, or a result in another format.
+
+    A recording's stream goes to CSV or MAT by the file suffix; a calibration result
+    (``.result.json``) to ``--format`` (the C99 runtime, docs/c-runtime.md).
+    """
     from imucalib.exports.streams import export_csv, export_mat
     from imucalib.io.reader import open_recording
     from imucalib.io.step_file import step_file_from_recording, step_file_to_toml
+
+    if path.suffix.lower() == ".json" or fmt is not None:
+        _export_result(path, out, fmt)
+        return
+    if stream is None:
+        raise fail(InvalidInputError("--stream DEVICE/UNIT is needed to export a recording"))
 
     device, _, unit = stream.partition("/")
     try:
@@ -86,6 +103,30 @@ def export(
     console.print(f"wrote {out}", highlight=False)
     if step_file is not None:
         console.print(f"wrote {step_file}", highlight=False)
+
+
+def _export_result(path: Path, out: Path, fmt: str | None) -> None:
+    """Write a calibration result in `fmt` into the folder `out`."""
+    from types import SimpleNamespace
+
+    from imucalib.exports.outputs import write_outputs
+    from imucalib.models.result import CalibrationResult
+
+    allowed = ("c-runtime", "parameters-csv", "result-json")
+    try:
+        if fmt not in allowed:
+            raise InvalidInputError(f"--format must be one of {', '.join(allowed)} for a "
+                                    f"result; got {fmt!r}")
+        cal = CalibrationResult.load(path)
+        wrapped = SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id,
+                                  passed=None)
+        out.mkdir(parents=True, exist_ok=True)
+        written = write_outputs(wrapped, out, formats=(fmt,), name=path.name.split(".")[0])
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    except OSError as exc:
+        raise fail(InvalidInputError(f"cannot write into {out}: {exc.strerror or exc}")) from exc
+    console.print("wrote " + ", ".join(str(p) for p in written), highlight=False)
 
 
 def _write_text(path: Path, text: str, option: str) -> None:
