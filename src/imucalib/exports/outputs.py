@@ -25,6 +25,9 @@ format             file                           content
                                                   bars, χ²/ν (a calibration)
 ``temperature-png`` ``….temperature.png``         P2: every parameter against temperature with
                                                   its model and 2σ band
+``report-pdf``     ``….report.pdf``               the calibration report (certificate):
+                                                  docs/reporting.md, "The calibration report"
+``report-html``    ``….report.html``              the same report as one self-contained page
 =================  =============================  ================================================
 
 A batch (P2: one result per unit, :class:`~imucalib.procedures.p2.batch.P2BatchResult`) is
@@ -164,6 +167,33 @@ def _temperature_png(result: Any, folder: Path, stem: str) -> list[Path]:
     return [save_temperature_figure(result, folder / f"{stem}.temperature.png")]
 
 
+def _report(fmt: str) -> _Writer:
+    def writer(result: Any, folder: Path, stem: str) -> list[Path]:
+        from imucalib.report.document import build_report
+
+        recording = None
+        name = _recording_name(result)
+        if name and (folder / name).is_file():  # written beside the recording (the demo)
+            recording = folder / name
+        document = build_report(result, recording=recording)
+        if fmt == "report-pdf":
+            from imucalib.report.pdf import write_report_pdf
+
+            return [write_report_pdf(document, folder / f"{stem}.report.pdf")]
+        from imucalib.report.html import write_report_html
+
+        return [write_report_html(document, folder / f"{stem}.report.html")]
+
+    return writer
+
+
+def _recording_name(result: Any) -> str:
+    cal = getattr(result, "result", None)
+    prov = getattr(cal, "provenance", None) or getattr(result, "provenance", None)
+    name = getattr(prov, "recording", "") or ""
+    return Path(str(name)).name if name else ""
+
+
 def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> list[Path]:
     """Write every unit's files, then the batch's summary (module docstring)."""
     from imucalib.procedures.p2.batch import summary_rows
@@ -209,6 +239,8 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "figures": _figures,
     "residuals-png": _residuals_png,
     "temperature-png": _temperature_png,
+    "report-pdf": _report("report-pdf"),
+    "report-html": _report("report-html"),
 }
 
 
