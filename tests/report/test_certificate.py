@@ -17,6 +17,7 @@ from html import escape
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 from pypdf import PdfReader
 
@@ -186,3 +187,30 @@ def test_p1_writes_the_pdf_by_default(certificate):
     assert [p.name for p in written] == ["d.IMU-0001.p1.report.pdf",
                                          "d.IMU-0001.p1.report.html"]
     assert written[0].read_bytes().startswith(b"%PDF")
+
+
+def test_a_noise_characterisation_gets_its_noise_tables_and_allan_figures(tmp_path):
+    from imucalib.procedures.allan.analysis import analyze_allan_arrays
+
+    rng = np.random.default_rng(1)
+    n, rate_hz, sigma_rps = 20000, 100.0, 1e-3
+    columns = {f"gyro_{a}_rps": rng.normal(0.0, sigma_rps, n) for a in "xyz"}
+    columns.update({f"accel_{a}_mps2": rng.normal(0.0, 1e-2, n) for a in "xyz"})
+    columns["temperature_degc"] = np.full(n, 21.5)
+    result = analyze_allan_arrays(np.arange(n) / rate_hz, columns, source="rest.csv",
+                                  unit="IMU-A")
+    doc = build_report(result)
+    assert [s.title for s in doc.sections] == list(SECTION_TITLES)
+    results = doc.section("5.")
+    assert [t.header[2:] for t in results.tables] == [("gyro_x", "gyro_y", "gyro_z"),
+                                                      ("accel_x", "accel_y", "accel_z")]
+    assert len(results.figures) == 2 and all(f.png.startswith(b"\x89PNG") for f in results.figures)
+    arw = dict((row[0], row[2:]) for row in results.tables[0].rows)["Angle random walk"]
+    # white noise σ at rate f: ARW = σ/√f [rad/√s] = σ/√f · (180/π) · 60 [°/√h]
+    truth_deg_rth = sigma_rps / np.sqrt(rate_hz) * np.degrees(1.0) * 60.0
+    for cell in arw:
+        value = float(cell.split("±")[0])
+        assert abs(value - truth_deg_rth) < 0.05 * truth_deg_rth
+    assert "21.5 °C" in " ".join(c for t in doc.section("3.").tables for r in t.rows for c in r)
+    pages = PdfReader(str(write_report_pdf(doc, tmp_path / "a.pdf"))).pages
+    assert all(doc.report_id in p.extract_text() for p in pages)

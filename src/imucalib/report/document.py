@@ -241,7 +241,11 @@ def _object_section(unit: Mapping[str, Any], serial: str) -> Section:
                    (ReportTable("identification", ("item", "value"), rows),))
 
 
-def _traceability(station_kind: str) -> str:
+def _traceability(station_kind: str, *, reference: bool = True) -> str:
+    if not reference:
+        return ("Traceability: a noise characterisation uses no reference quantity; its values "
+                "come from the unit's own output and the recording's time base, whose accuracy "
+                "bounds theirs.")
     if station_kind == "digital-twin":
         return ("Traceability: this calibration was made on the digital twin (a simulated "
                 "station). Its references are simulated and are NOT traceable to the SI; the "
@@ -253,7 +257,8 @@ def _traceability(station_kind: str) -> str:
             "(15.041 °/h). imucalib does not verify the table's certificate.")
 
 
-def _equipment_section(meta: Mapping[str, Any], plan: Any, software: str) -> Section:
+def _equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
+                       reference: bool = True) -> Section:
     station = _json_field(meta, "station_json")
     kind = str(station.get("kind") or meta.get("source") or "—")
     rows: list[tuple[str, str]] = [("station", kind)]
@@ -268,7 +273,7 @@ def _equipment_section(meta: Mapping[str, Any], plan: Any, software: str) -> Sec
             rows.append((key.replace("_", " "), f"{value:g}" if isinstance(value, float)
                          else str(value)))
     rows.append(("software", f"imucalib {software}"))
-    return Section(SECTION_TITLES[1], (_traceability(kind),),
+    return Section(SECTION_TITLES[1], (_traceability(kind, reference=reference),),
                    (ReportTable("equipment", ("item", "value"), tuple(rows)),))
 
 
@@ -431,18 +436,27 @@ def _p1_sections(analysis: Any, meta: Mapping[str, Any]) -> tuple[list[Section],
 
 def _generic_sections(result: Any, meta: Mapping[str, Any]
                       ) -> tuple[list[Section], Any, bool]:
+    from imucalib.report.console import display_parameter
+
     rows_of = getattr(result, "parameter_rows", None)
-    if not callable(rows_of):
-        raise InvalidInputError(f"a {result.procedure} result has no parameter rows: no report "
-                                "can be built from it")
-    cal = getattr(result, "result", None)
+    cal: Any = getattr(result, "result", None)
     prov = getattr(cal, "provenance", None) or getattr(result, "provenance", None)
     rows = []
-    for name, value, sigma, unit in rows_of():
-        v, big_u = _expanded_cells(float(value), float(sigma))
-        rows.append((str(name), v, big_u, str(unit)))
+    if callable(rows_of):
+        for name, value, sigma, unit in rows_of():
+            v, big_u = _expanded_cells(float(value), float(sigma))
+            rows.append((str(name), v, big_u, str(unit)))
+    elif callable(getattr(cal, "std", None)) and hasattr(cal, "param_names"):
+        std = cal.std(scaled=True)  # a calibration result without a procedure's analysis
+        for name in cal.param_names:
+            rows.append((name, *display_parameter(name, cal.value(name),
+                                                  COVERAGE_FACTOR * std[name],
+                                                  cal.units[name])))
+    else:
+        raise InvalidInputError(f"a {result.procedure} result has no parameter rows: no report "
+                                "can be built from it")
     table = ReportTable(f"{result.procedure} results of {result.unit}",
-                        ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit (SI)"),
+                        ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
                         tuple(rows))
     passed = result.passed
     decision = {None: "No conformity decision was made.",
@@ -465,13 +479,18 @@ def _allan_sections(result: Any, meta: Mapping[str, Any]) -> tuple[list[Section]
     from imucalib.report.allan_figure import plot_allan_triad
     from imucalib.report.noise_table import format_noise_table
 
-    tables, figures = [], []
+    tables, figures, convention = [], [], ""
     for i, seg in enumerate(result.segments):
-        lines = [ln for ln in format_noise_table(seg.fits(), fmt="markdown").splitlines()
-                 if ln.startswith("|") and not set(ln) <= set("|-: ")]
-        cells = [tuple(c.strip() for c in ln.strip("|").split("|")) for ln in lines]
-        if cells:
-            tables.append(ReportTable(f"record {i}: {seg.label}", cells[0], tuple(cells[1:])))
+        markdown = format_noise_table(seg.fits(), fmt="markdown")
+        for block in markdown.split("\n\n"):
+            lines = [ln for ln in block.splitlines()
+                     if ln.startswith("|") and not set(ln) <= set("|-: ")]
+            cells = [tuple(c.strip() for c in ln.strip("|").split("|")) for ln in lines]
+            if cells:
+                tables.append(ReportTable(f"record {i}: {seg.label}", cells[0],
+                                          tuple(cells[1:])))
+            elif block.strip():
+                convention = block.strip()
         for sensor in ("gyro", "accel"):
             if any(c.sensor == sensor for c in seg.channels):
                 fig = _figure(lambda p, seg=seg, sensor=sensor: plot_allan_triad(seg, sensor,
@@ -484,14 +503,14 @@ def _allan_sections(result: Any, meta: Mapping[str, Any]) -> tuple[list[Section]
         if temps else {}
     sections = [
         _object_section({"serial": result.unit}, str(result.unit)),
-        _equipment_section(meta, None, result.software_version),
+        _equipment_section(meta, None, result.software_version, reference=False),
         _environment_section(meta, site),
         Section(SECTION_TITLES[3], ("Noise characterisation (docs/noise.md): overlapping Allan "
                                     "deviation of each static record and a fit of the noise "
                                     "terms; each value with its standard uncertainty.",)),
-        Section(SECTION_TITLES[4], ("The noise table gives value ± standard uncertainty "
-                                    "(k = 1), GUM 7.2.6 rounding.",), tuple(tables),
-                tuple(figures)),
+        Section(SECTION_TITLES[4], ("The noise tables give value ± standard uncertainty "
+                                    "(k = 1), GUM 7.2.6 rounding.", *filter(None, [convention])),
+                tuple(tables), tuple(figures)),
     ]
     recs = ["Use the noise terms in the navigation filter's process noise."]
     prov = type("Prov", (), {"recording": Path(result.recording).name,
