@@ -214,3 +214,16 @@ def test_a_noise_characterisation_gets_its_noise_tables_and_allan_figures(tmp_pa
     assert "21.5 °C" in " ".join(c for t in doc.section("3.").tables for r in t.rows for c in r)
     pages = PdfReader(str(write_report_pdf(doc, tmp_path / "a.pdf"))).pages
     assert all(doc.report_id in p.extract_text() for p in pages)
+
+
+def test_a_guarded_rule_is_stated_with_its_guard_band(consumer_run):
+    from imucalib.procedures.p1.analysis import P1Options, analyze_p1
+
+    analysis = analyze_p1(consumer_run, options=P1Options(acceptance="guarded", guard_band_k=3.0,
+                                                          hash_recording=False))
+    doc = build_report(analysis)
+    results = " ".join(doc.section("5.").paragraphs)
+    assert "rule 'guarded', guard band k = 3" in results
+    assert "|value| + 3·u is within its limit" in results
+    appendix = dict(doc.section("Appendix").tables[0].rows)
+    assert appendix["recording SHA-256"] == "not hashed"

@@ -358,7 +358,7 @@ def _appendix(meta: Mapping[str, Any], plan: Any, prov: Any, extra: Sequence[tup
             ("software version", getattr(prov, "software_version", "") or "—"),
             ("result created (UTC)", getattr(prov, "created_utc", "") or "—"), *extra]
     return Section(SECTION_TITLES[6],
-                   ("The raw data are identified by their SHA-256: `imucalib` recomputes it "
+                   ("The raw data are identified by their SHA-256: imucalib recomputes it "
                     "from the recording file.",),
                    (ReportTable("plan and raw data", ("item", "value"), tuple(rows)),))
 

@@ -110,8 +110,9 @@ def write_report_pdf(document: ReportDocument, path: str | os.PathLike[str]) -> 
     body = ParagraphStyle("body", parent=styles["BodyText"], fontName=_FONT, fontSize=9,
                           leading=11.5)
     cell = ParagraphStyle("cell", parent=body, fontSize=7.5, leading=9)
-    head = ParagraphStyle("head", parent=styles["Heading2"], fontName=_FONT_BOLD, fontSize=12)
-    sub = ParagraphStyle("sub", parent=body, fontName=_FONT_BOLD, fontSize=9)
+    head = ParagraphStyle("head", parent=styles["Heading2"], fontName=_FONT_BOLD, fontSize=12,
+                          keepWithNext=1)
+    sub = ParagraphStyle("sub", parent=body, fontName=_FONT_BOLD, fontSize=9, keepWithNext=1)
     title = ParagraphStyle("title", parent=styles["Title"], fontName=_FONT_BOLD, fontSize=15)
     out = Path(path)
     doc = SimpleDocTemplate(str(out), pagesize=A4, leftMargin=15 * mm, rightMargin=15 * mm,
