@@ -102,7 +102,8 @@ def main(argv: list[str] | None = None) -> int:
         console.rule("[bold]3. Calibrate and verify")
         analysis = p1.analyze(path, options={"model": "triad"})
         assert isinstance(analysis, P1Analysis)
-        render_result(console, analysis, write_outputs(analysis, args.out, name=path.stem))
+        written = write_outputs(analysis, args.out, name=path.stem)
+        render_result(console, analysis, written)
         console.rule("[bold]4. Against the truth")
         with open_recording(path) as rec:
             truth = rec.truth
@@ -116,8 +117,11 @@ def main(argv: list[str] | None = None) -> int:
     except CalibrationError as exc:
         Console(stderr=True).print(f"[bold red]error:[/] {exc}", highlight=False)
         return 2
+    pdf = next((p for p in written if p.suffix == ".pdf"), None)
     console.print(f"\nFiles are in {args.out.resolve()}: the plan, the recording, the result "
-                  "(.result.json) and the full report (.report.json)", highlight=False)
+                  "(.result.json) and the full report (.report.json)"
+                  + (f"\nCalibration report (PDF): {pdf.resolve()}" if pdf else ""),
+                  highlight=False, soft_wrap=True)
     return 0 if analysis.decision.passed else 1
 
 

@@ -46,6 +46,15 @@ def test_calibrations_are_recorded_queried_reviewed_amended_verified_and_backed_
     res = runner.invoke(app, ["records", "review", str(first_id), "--who", "A. Auditor",
                               "--comment", "ok", "--db", db])
     assert res.exit_code == 0 and "approved by A. Auditor" in res.output
+    # the certificate of that result carries its review (imucalib report, docs/reporting.md)
+    import pypdf
+
+    pdf = tmp_path / "jan.report.pdf"
+    res = runner.invoke(app, ["report", str(first), "--result-id", str(first_id), "--db", db,
+                              "-o", str(pdf)])
+    assert res.exit_code == 0, res.output
+    text = " ".join(page.extract_text() for page in pypdf.PdfReader(pdf).pages)
+    assert "A. Auditor" in text and f"-R{first_id}" in text
     res = runner.invoke(app, ["records", "amend", str(first_id), str(first), "--reason",
                               "re-analysed", "--db", db])
     assert res.exit_code == 0, res.output

@@ -46,7 +46,8 @@ def test_p1_outputs_are_named_after_the_recording_unit_and_procedure(tmp_path):
     result = _p1_like()
     written = write_outputs(result, tmp_path / "new", name="run")
     assert [p.name for p in written] == ["run.IMU-7.p1.result.json", "run.IMU-7.p1.report.json",
-                                         "run.IMU-7.p1.residuals.png"]
+                                         "run.IMU-7.p1.residuals.png",
+                                         "run.IMU-7.p1.report.pdf"]
     back = CalibrationResult.from_json(written[0].read_text())
     np.testing.assert_array_equal(back.values, result.result.values)
     assert json.loads(written[1].read_text())["decision"] == {"passed": True}

@@ -16,6 +16,7 @@ Commands
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 ``records list|show|history|…``    the calibration records database (docs/records.md)
+``report RESULT|RECORDING``        the calibration report (certificate) as PDF or HTML
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     plan,
     recording,
     records,
+    report,
     run,
     station,
     twin,

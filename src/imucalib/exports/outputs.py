@@ -29,6 +29,9 @@ format             file                           content
                                                   ``imucal_params.h`` and the runtime library
                                                   (:mod:`imucalib.exports.c_runtime`,
                                                   docs/c-runtime.md); in no default list
+``report-pdf``     ``….report.pdf``               the calibration report (certificate):
+                                                  docs/reporting.md, "The calibration report"
+``report-html``    ``….report.html``              the same report as one self-contained page
 =================  =============================  ================================================
 
 A batch (P2: one result per unit, :class:`~imucalib.procedures.p2.batch.P2BatchResult`) is
@@ -174,6 +177,33 @@ def _c_runtime(result: Any, folder: Path, stem: str) -> list[Path]:
     return write_c_runtime(_calibration(result, "c-runtime"), folder / f"{stem}.c")
 
 
+def _report(fmt: str) -> _Writer:
+    def writer(result: Any, folder: Path, stem: str) -> list[Path]:
+        from imucalib.report.document import build_report
+
+        recording = None
+        name = _recording_name(result)
+        if name and (folder / name).is_file():  # written beside the recording (the demo)
+            recording = folder / name
+        document = build_report(result, recording=recording)
+        if fmt == "report-pdf":
+            from imucalib.report.pdf import write_report_pdf
+
+            return [write_report_pdf(document, folder / f"{stem}.report.pdf")]
+        from imucalib.report.html import write_report_html
+
+        return [write_report_html(document, folder / f"{stem}.report.html")]
+
+    return writer
+
+
+def _recording_name(result: Any) -> str:
+    cal = getattr(result, "result", None)
+    prov = getattr(cal, "provenance", None) or getattr(result, "provenance", None)
+    name = getattr(prov, "recording", "") or ""
+    return Path(str(name)).name if name else ""
+
+
 def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> list[Path]:
     """Write every unit's files, then the batch's summary (module docstring)."""
     from imucalib.procedures.p2.batch import summary_rows
@@ -220,6 +250,8 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "residuals-png": _residuals_png,
     "temperature-png": _temperature_png,
     "c-runtime": _c_runtime,
+    "report-pdf": _report("report-pdf"),
+    "report-html": _report("report-html"),
 }
 
 

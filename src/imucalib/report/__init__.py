@@ -12,6 +12,11 @@ Contents
     The terminal rendering of procedure results.
 :mod:`imucalib.report.numbers`
     A value with its uncertainty as text, GUM 7.2.6 rounding (docs/reporting.md).
+:mod:`imucalib.report.document`
+    The calibration report (certificate) as data: :func:`~imucalib.report.document.build_report`.
+:mod:`imucalib.report.pdf`, :mod:`imucalib.report.html`
+    The report as PDF (:func:`~imucalib.report.pdf.write_report_pdf`) and as one HTML page
+    (:func:`~imucalib.report.html.write_report_html`).
 """
 
 from __future__ import annotations

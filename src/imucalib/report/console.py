@@ -22,7 +22,8 @@ from rich.table import Column, Table
 from imucalib import units
 from imucalib.report.numbers import round_pair
 
-__all__ = ["render_calibration", "render_noise_characterization", "render_p3", "render_result"]
+__all__ = ["display_parameter", "render_calibration", "render_noise_characterization", "render_p3",
+           "render_result"]
 
 # display unit of each parameter symbol: (unit text, SI value of one display unit); M's
 # off-diagonal (misalignment) elements are in _OFF_DIAGONAL instead (docs/reporting.md)
@@ -36,8 +37,14 @@ _DISPLAY = {
 _OFF_DIAGONAL = ("µrad", units.URAD)
 
 
-def _display(name: str, value: float, sigma: float, si_unit: str) -> tuple[str, str, str]:
-    """(value, standard uncertainty, unit) cells of one parameter, GUM 7.2.6 rounding."""
+def display_parameter(name: str, value: float, sigma: float, si_unit: str
+                      ) -> tuple[str, str, str]:
+    """(value, uncertainty, unit) cells of one parameter in its display unit, GUM 7.2.6 rounding.
+
+    `sigma` may be a standard or an expanded uncertainty: it is rounded to two significant
+    digits and the value to the same decimal place (docs/reporting.md). A scale factor ``K`` is
+    shown as its deviation from 1.
+    """
     parts = name.split("_")
     triad, symbol = parts[0], parts[1]
     unit, scale = _DISPLAY.get((triad, symbol), (si_unit, 1.0))
@@ -68,14 +75,14 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
                   title=f"{result.sensor_id}: {result.procedure.upper()} {result.model} model")
     std = result.std()
     for name in result.param_names:
-        value, sigma, unit = _display(name, result.value(name), std[name],
+        value, sigma, unit = display_parameter(name, result.value(name), std[name],
                                       result.units[name])
         row = repeat.get(name)
         rep = "—" if row is None else ("[green]pass[/]" if row.passed else "[red]FAIL[/]")
         cells = [name, value, sigma, unit, rep]
         if misfit:
             scale = result.sigma_scale(name)
-            cells.insert(3, _display(name, result.value(name), std[name] * scale,
+            cells.insert(3, display_parameter(name, result.value(name), std[name] * scale,
                                      result.units[name])[1] if scale != 1.0 else "")
         table.add_row(*cells)
     console.print(table)

@@ -36,7 +36,7 @@ class P1Procedure:
     plan_options = frozenset({"grade", "repetitions", "static_s", "sample_rate_hz", "seed",
                               "serial", "model", "maker", "acceptance"})
     analysis_options = frozenset({"model"})
-    outputs = ("result-json", "report-json", "residuals-png")
+    outputs = ("result-json", "report-json", "residuals-png", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.p1.plan.generate_p1_plan` (its keywords)."""
