@@ -55,6 +55,7 @@ def test_calibrations_are_recorded_queried_reviewed_amended_verified_and_backed_
     assert res.exit_code == 0, res.output
     text = " ".join(page.extract_text() for page in pypdf.PdfReader(pdf).pages)
     assert "A. Auditor" in text and f"-R{first_id}" in text
+    assert "uses no rotation table" in text                # a field calibration's references
     res = runner.invoke(app, ["records", "amend", str(first_id), str(first), "--reason",
                               "re-analysed", "--db", db])
     assert res.exit_code == 0, res.output

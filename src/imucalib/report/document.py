@@ -241,7 +241,13 @@ def _object_section(unit: Mapping[str, Any], serial: str) -> Section:
                    (ReportTable("identification", ("item", "value"), rows),))
 
 
-def _traceability(station_kind: str, *, reference: bool = True) -> str:
+def _traceability(station_kind: str, *, reference: bool = True, procedure: str = "") -> str:
+    if procedure == "field":
+        return ("Traceability: a field calibration by hand uses no rotation table. Its references "
+                "are local gravity (normal gravity at the stated latitude and height with a Type "
+                "B for the local anomaly, or the value given), the known angle of whole turns "
+                "flat on a surface, and the Earth rate as a defined constant (15.041 °/h); the "
+                "orientations of the poses are not references (docs/field.md).")
     if not reference:
         return ("Traceability: a noise characterisation uses no reference quantity; its values "
                 "come from the unit's own output and the recording's time base, whose accuracy "
@@ -258,7 +264,7 @@ def _traceability(station_kind: str, *, reference: bool = True) -> str:
 
 
 def _equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
-                       reference: bool = True) -> Section:
+                       reference: bool = True, procedure: str = "") -> Section:
     station = _json_field(meta, "station_json")
     kind = str(station.get("kind") or meta.get("source") or "—")
     rows: list[tuple[str, str]] = [("station", kind)]
@@ -273,7 +279,8 @@ def _equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
             rows.append((key.replace("_", " "), f"{value:g}" if isinstance(value, float)
                          else str(value)))
     rows.append(("software", f"imucalib {software}"))
-    return Section(SECTION_TITLES[1], (_traceability(kind, reference=reference),),
+    return Section(SECTION_TITLES[1], (_traceability(kind, reference=reference,
+                                                     procedure=procedure),),
                    (ReportTable("equipment", ("item", "value"), tuple(rows)),))
 
 
@@ -466,7 +473,8 @@ def _generic_sections(result: Any, meta: Mapping[str, Any]
     details = dict(getattr(prov, "details", {}) or {})
     sections = [
         _object_section(details.get("unit", {"serial": result.unit}), str(result.unit)),
-        _equipment_section(meta, None, getattr(prov, "software_version", "") or "—"),
+        _equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
+                           procedure=str(result.procedure)),
         _environment_section(meta, {}),
         Section(SECTION_TITLES[3], (f"Procedure {result.procedure} (docs/).", *notes)),
         Section(SECTION_TITLES[4], (_u_paragraph(), *reasons), (table,)),
