@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import re
+import shutil
+import subprocess
 from decimal import ROUND_HALF_UP, Decimal
 from html import escape
 from pathlib import Path
@@ -227,3 +230,22 @@ def test_a_guarded_rule_is_stated_with_its_guard_band(consumer_run):
     assert "|value| + 3·u is within its limit" in results
     appendix = dict(doc.section("Appendix").tables[0].rows)
     assert appendix["recording SHA-256"] == "not hashed"
+
+
+if shutil.which("pdftoppm") or os.environ.get("IMUCALIB_TEST_PDFTOPPM"):
+    # defined where the renderer is (CI installs poppler-utils: .ci/run), never skipped there
+    def test_the_pages_render_to_png(certificate):
+        """Smoke test: pdftoppm renders every page of the certificate to a non-blank PNG."""
+        exe = shutil.which("pdftoppm")
+        assert exe, "pdftoppm (poppler-utils) is needed: .ci/run installs it"
+        pdf = certificate.out / "c.report.pdf"
+        done = subprocess.run([exe, "-png", "-r", "40", str(pdf), str(certificate.out / "pg")],
+                              capture_output=True, text=True, check=False)
+        assert done.returncode == 0, done.stderr
+        pngs = sorted(certificate.out.glob("pg-*.png"))
+        assert len(pngs) == len(certificate.pages) >= 3
+        import matplotlib.image as mpimg
+
+        for png in pngs:
+            img = mpimg.imread(png)
+            assert img.shape[0] > 200 and img.std() > 0.01      # something is printed
