@@ -20,7 +20,6 @@ Contents
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -219,7 +218,3 @@ def calibration_result(unit: str, source: str, names: list[str], values: _F64, c
         values=values, covariance=cov, units={n: triad_parameter_unit(n) for n in names},
         provenance=provenance, notes=notes, fit_quality=tuple(groups))
 
-
-def rms(values: NDArray[np.float64]) -> float:
-    """Root mean square (NaN for none)."""
-    return float(math.sqrt(np.mean(np.square(values)))) if values.size else math.nan
