@@ -24,7 +24,9 @@ from imucalib.errors import InvalidInputError
 from imucalib.exports.intrinsics import (
     format_ros_yaml,
     intrinsics_struct,
+    kalibr_intrinsics,
     openvins_intrinsics,
+    write_kalibr_intrinsics,
     write_mat,
     write_mat73,
     write_openvins_intrinsics,
@@ -33,7 +35,7 @@ from imucalib.exports.outputs import OUTPUT_FORMATS
 from imucalib.models.result import CalibrationResult, triad_parameter_names
 from imucalib.models.triad import apply_triad
 
-_NEW = ("mat", "mat73", "ros-yaml", "openvins-imu")
+_NEW = ("mat", "mat73", "ros-yaml", "kalibr-imu", "openvins-imu")
 
 
 def _result(*, k2: bool = True, model: str = "triad", seed: int = 3) -> CalibrationResult:
@@ -167,9 +169,37 @@ def test_openvins_intrinsics_invert_the_forward_model(tmp_path: Path) -> None:
     assert np.max(np.abs(w_bad - w_true)) > 1e-4
 
 
-def test_openvins_refuses_k2() -> None:
+def test_kalibr_intrinsics_invert_the_forward_model(tmp_path: Path) -> None:
+    """Kalibr's IccScaledMisalignedImu (X4), inverted: a_i = M⁻¹(a_m − b_a), then ω_i."""
+    cal = _result(k2=False)
+    doc = yaml.safe_load(write_kalibr_intrinsics(cal, tmp_path / "k.yaml").read_text("utf-8"))
+    assert doc["model"] == "scale-misalignment"
+    m_a, m_g = np.array(doc["accelerometers"]["M"]), np.array(doc["gyroscopes"]["M"])
+    a, c_gyro_i = np.array(doc["gyroscopes"]["A"]), np.array(doc["gyroscopes"]["C_gyro_i"])
+    c_i_s = np.array(doc["imucalib_C_i_sensor"])
+    for m in (m_a, m_g):  # Kalibr's design variables: lower triangular
+        assert np.all(np.triu(m, 1) == 0.0) and np.all(np.diag(m) > 0)
+    for r in (c_gyro_i, c_i_s):
+        np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-14)
+        assert np.linalg.det(r) == pytest.approx(1.0, abs=1e-14)
+    rng = np.random.default_rng(9)
+    f_true = rng.normal(size=(200, 3)) * 9.81
+    w_true = rng.normal(size=(200, 3)) * 2.0
+    accel_m = apply_triad(cal.triad_model("accel"), f_true)
+    gyro_m = apply_triad(cal.triad_model("gyro"), w_true, specific_force_b_mps2=f_true)
+    b_a, b_g = np.array(doc["imucalib_bias_accel"]), np.array(doc["imucalib_bias_gyro"])
+    a_i = np.linalg.solve(m_a, (accel_m - b_a).T).T
+    w_i = (c_gyro_i.T @ np.linalg.solve(m_g, (gyro_m - b_g - (a @ c_gyro_i @ a_i.T).T).T)).T
+    assert np.max(np.abs(a_i - f_true @ c_i_s.T)) < 1e-9  # the input, in Kalibr's frame i
+    assert np.max(np.abs(w_i - w_true @ c_i_s.T)) < 1e-9
+    assert np.max(np.abs(c_i_s - np.eye(3))) > 1e-4  # i is not S: the rotation matters
+
+
+def test_openvins_and_kalibr_refuse_k2() -> None:
     with pytest.raises(InvalidInputError, match="K2"):
         openvins_intrinsics(_result(k2=True))
+    with pytest.raises(InvalidInputError, match="K2"):
+        kalibr_intrinsics(_result(k2=True))
 
 
 def test_formats_are_registered_and_need_a_calibration(tmp_path: Path) -> None:

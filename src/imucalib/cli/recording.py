@@ -56,7 +56,7 @@ def export(
     fmt: Annotated[str | None, typer.Option(
         "--format", help="For a result: c-runtime (a C99 header and library that apply it "
                          "in firmware, docs/c-runtime.md), parameters-csv, result-json, mat, "
-                         "mat73, ros-yaml or openvins-imu (docs/exports.md).")]
+                         "mat73, ros-yaml, kalibr-imu or openvins-imu (docs/exports.md).")]
     = None,
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
     step_file: Annotated[Path | None, typer.Option(
@@ -114,7 +114,7 @@ def _export_result(path: Path, out: Path, fmt: str | None) -> None:
     from imucalib.models.result import CalibrationResult
 
     allowed = ("c-runtime", "parameters-csv", "result-json", "mat", "mat73", "ros-yaml",
-               "openvins-imu")
+               "kalibr-imu", "openvins-imu")
     try:
         if fmt not in allowed:
             raise InvalidInputError(f"--format must be one of {', '.join(allowed)} for a "

@@ -1,4 +1,4 @@
-"""A calibration's intrinsics for the tools users feed: MATLAB (v5, v7.3), ROS YAML, OpenVINS.
+"""A calibration's intrinsics for the tools users feed: MATLAB, ROS YAML, Kalibr, OpenVINS.
 
 Contents
 --------
@@ -9,6 +9,8 @@ Contents
     MATLAB userblock and ``MATLAB_class`` attributes).
 :func:`format_ros_yaml`, :func:`write_ros_yaml`
     A ROS-style parameter YAML, one namespace per triad.
+:func:`kalibr_intrinsics`, :func:`format_kalibr_intrinsics`, :func:`write_kalibr_intrinsics`
+    Kalibr's ``scale-misalignment`` IMU model (``M``, ``A``, ``C_gyro_i``).
 :func:`openvins_intrinsics`, :func:`format_openvins_intrinsics`, :func:`write_openvins_intrinsics`
     The intrinsics of OpenVINS' ``kalibr_imu_chain.yaml`` (``Tw``, ``R_IMUtoGYRO``, ``Ta``,
     ``R_IMUtoACC``, ``Tg``).
@@ -32,7 +34,20 @@ and keeps only the lower triangle of D_w, D_a (its ``kalibr`` intrinsic model). 
 which makes (X2) the exact inverse of (X1) with the IMU frame equal to S. K2 ≠ 0 and the
 biases have no place in (X2): a result with K2 ≠ 0 is refused; the biases are written as
 ``imucalib_bias_gyro`` / ``imucalib_bias_accel`` (OpenVINS ignores them; its biases are state).
-Kalibr's own ``scale-misalignment`` model is not written (docs/exports.md says why).
+
+Kalibr's ``scale-misalignment`` IMU model (its source, ``IccSensors.py``,
+``IccScaledMisalignedImu``) is the forward direction, in an IMU frame i where the accelerometer's
+M is lower triangular::
+
+    a_m = M_accel·a_i + b_a,   ω_m = M_gyro·C_gyro_i·ω_i + A·C_gyro_i·a_i + b_g             (X4)
+
+With i = C_i_s·S (a rotation of imucalib's sensor frame S), (X1) = (X4) when::
+
+    I + M_a = M_accel·C_i_s,   (I + M_g)·C_i_sᵀ = M_gyro·C_gyro_i,   A = G·C_i_sᵀ·C_gyro_iᵀ   (X5)
+
+two LQ splits (L lower triangular with positive diagonal times a rotation). C_i_s is written as
+``imucalib_C_i_sensor`` (Kalibr's i differs from S by it; Kalibr estimates its camera–IMU
+extrinsics in i).
 """
 
 from __future__ import annotations
@@ -50,10 +65,13 @@ from imucalib.errors import InvalidInputError
 from imucalib.models.result import CalibrationResult
 
 __all__ = [
+    "format_kalibr_intrinsics",
     "format_openvins_intrinsics",
     "format_ros_yaml",
     "intrinsics_struct",
+    "kalibr_intrinsics",
     "openvins_intrinsics",
+    "write_kalibr_intrinsics",
     "write_mat",
     "write_mat73",
     "write_openvins_intrinsics",
@@ -231,6 +249,75 @@ def _rotation_lower(d: _F64, triad: str) -> tuple[_F64, _F64]:
     return q.T * signs, signs[:, None] * lower
 
 
+def _lower_rotation(x: _F64, triad: str) -> tuple[_F64, _F64]:
+    """Split `x` = L·Q, L lower triangular with positive diagonal, Q a rotation (Eq. X5)."""
+    if not np.linalg.det(x) > 0.0:
+        raise InvalidInputError(f"the {triad} I + M has a determinant ≤ 0; it is no "
+                                "scale/misalignment Kalibr can hold")
+    q, upper = np.linalg.qr(x.T)  # xᵀ = q·upper  ⇒  x = upperᵀ·qᵀ
+    signs = np.sign(np.diag(upper))
+    return upper.T * signs, signs[:, None] * q.T
+
+
+def _no_k2(s: dict[str, Any], tool: str) -> None:
+    if "K2_a" in s and np.any(s["K2_a"] != 0.0):
+        raise InvalidInputError(f"the result's accelerometer K2 is not 0; {tool}'s IMU model "
+                                "has no quadratic scale factor (docs/exports.md)")
+
+
+def kalibr_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
+    """Return Kalibr's ``M_accel``, ``M_gyro``, ``A``, ``C_gyro_i`` and ``C_i_sensor`` (Eq. X5).
+
+    Needs both triads in the result.
+
+    Raises
+    ------
+    InvalidInputError
+        A triad missing, K2 ≠ 0 (not in Kalibr's model), or an I + M with determinant ≤ 0.
+    """
+    s = intrinsics_struct(cal)
+    _no_k2(s, "Kalibr")
+    if "M_a" not in s or "M_g" not in s:
+        raise InvalidInputError("Kalibr's IMU model needs both the gyro and the accelerometer "
+                                "calibrated")
+    m_accel, c_i_s = _lower_rotation(np.eye(3) + s["M_a"], "accel")
+    m_gyro, c_gyro_i = _lower_rotation((np.eye(3) + s["M_g"]) @ c_i_s.T, "gyro")
+    a = np.asarray(s["G_g"] @ c_i_s.T @ c_gyro_i.T, dtype=np.float64)
+    return {"M_accel": m_accel, "M_gyro": m_gyro, "A": a, "C_gyro_i": c_gyro_i,
+            "C_i_sensor": c_i_s}
+
+
+def format_kalibr_intrinsics(cal: CalibrationResult) -> str:
+    """Return the intrinsics in the layout of Kalibr's ``scale-misalignment`` IMU result YAML."""
+    k = kalibr_intrinsics(cal)
+    s = intrinsics_struct(cal)
+
+    def block(indent: str, mat: _F64) -> list[str]:
+        return [f"{indent}- {_flow(row)}" for row in mat]
+
+    lines = [f"# imucalib {__version__}: IMU intrinsics in Kalibr's scale-misalignment model",
+             "# (a_m = M a_i + b_a; w_m = M C_gyro_i w_i + A C_gyro_i a_i + b_g; docs/exports.md)",
+             "model: scale-misalignment",
+             "accelerometers:",
+             "  M:", *block("    ", k["M_accel"]),
+             "gyroscopes:",
+             "  M:", *block("    ", k["M_gyro"]),
+             "  A:", *block("    ", k["A"]),
+             "  C_gyro_i:", *block("    ", k["C_gyro_i"]),
+             "# the frame i = imucalib_C_i_sensor * (imucalib's sensor frame)",
+             "imucalib_C_i_sensor:", *block("  ", k["C_i_sensor"]),
+             f"imucalib_bias_accel: {_flow(s['b_a'])}  # m/s^2, in the accelerometer's output",
+             f"imucalib_bias_gyro: {_flow(s['b_g'])}  # rad/s, in the gyro's output"]
+    return "\n".join(lines) + "\n"
+
+
+def write_kalibr_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str]) -> Path:
+    """Write :func:`format_kalibr_intrinsics` to `path`; return the path."""
+    out = Path(path)
+    out.write_text(format_kalibr_intrinsics(cal), encoding="utf-8")
+    return out
+
+
 def openvins_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
     """Return OpenVINS' ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` (Eq. X3).
 
@@ -242,9 +329,7 @@ def openvins_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
         K2 ≠ 0 (not in OpenVINS' model), or an I + M with determinant ≤ 0.
     """
     s = intrinsics_struct(cal)
-    if "K2_a" in s and np.any(s["K2_a"] != 0.0):
-        raise InvalidInputError("the result's accelerometer K2 is not 0; OpenVINS' IMU model "
-                                "has no quadratic scale factor (docs/exports.md)")
+    _no_k2(s, "OpenVINS")
     out: dict[str, _F64] = {}
     for triad, t_key, r_key in (("gyro", "Tw", "R_IMUtoGYRO"), ("accel", "Ta", "R_IMUtoACC")):
         t = _SUFFIX[triad]
@@ -252,7 +337,7 @@ def openvins_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
             out[t_key], out[r_key] = np.eye(3), np.eye(3)
             continue
         q, lower = _rotation_lower(np.linalg.inv(np.eye(3) + s[f"M_{t}"]), triad)
-        out[t_key] = np.linalg.inv(lower)
+        out[t_key] = np.asarray(np.linalg.inv(lower), dtype=np.float64)
         out[r_key] = q.T
     out["Tg"] = np.asarray(s.get("G_g", np.zeros((3, 3))), dtype=np.float64)
     return out

@@ -35,6 +35,8 @@ format             file                           content
 ``mat73``          ``….intrinsics73.mat``         the same as MATLAB v7.3 (HDF5)
 ``ros-yaml``       ``….ros.yaml``                 a ROS-style parameter YAML, one namespace per
                                                   triad
+``kalibr-imu``     ``….kalibr-imu.yaml``          Kalibr ``scale-misalignment`` intrinsics (``M``,
+                                                  ``A``, ``C_gyro_i``)
 ``openvins-imu``   ``….openvins-imu.yaml``        OpenVINS ``kalibr_imu_chain.yaml`` intrinsics
                                                   (``Tw``, ``R_IMUtoGYRO``, ``Ta``,
                                                   ``R_IMUtoACC``, ``Tg``)
@@ -192,6 +194,7 @@ def _intrinsics(fmt: str, suffix: str) -> _Writer:
 
         write = {"mat": intrinsics.write_mat, "mat73": intrinsics.write_mat73,
                  "ros-yaml": intrinsics.write_ros_yaml,
+                 "kalibr-imu": intrinsics.write_kalibr_intrinsics,
                  "openvins-imu": intrinsics.write_openvins_intrinsics}[fmt]
         return [write(_calibration(result, fmt), folder / f"{stem}{suffix}")]
 
@@ -274,6 +277,7 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "mat": _intrinsics("mat", ".intrinsics.mat"),
     "mat73": _intrinsics("mat73", ".intrinsics73.mat"),
     "ros-yaml": _intrinsics("ros-yaml", ".ros.yaml"),
+    "kalibr-imu": _intrinsics("kalibr-imu", ".kalibr-imu.yaml"),
     "openvins-imu": _intrinsics("openvins-imu", ".openvins-imu.yaml"),
     "report-pdf": _report("report-pdf"),
     "report-html": _report("report-html"),
