@@ -97,6 +97,7 @@ def test_mat73_is_hdf5_with_the_matlab_header_and_round_trips(tmp_path: Path) ->
     with h5py.File(path, "r") as fh:
         g = fh["imucal"]
         assert g.attrs["MATLAB_class"] == b"struct"
+        assert [b"".join(f).decode() for f in g.attrs["MATLAB_fields"]] == list(s)
         assert g["M_a"].attrs["MATLAB_class"] == b"double"
         for key in ("M_a", "M_g", "G_g", "covariance"):
             np.testing.assert_array_equal(g[key][()].T, s[key])
@@ -193,6 +194,25 @@ def test_kalibr_intrinsics_invert_the_forward_model(tmp_path: Path) -> None:
     assert np.max(np.abs(a_i - f_true @ c_i_s.T)) < 1e-9  # the input, in Kalibr's frame i
     assert np.max(np.abs(w_i - w_true @ c_i_s.T)) < 1e-9
     assert np.max(np.abs(c_i_s - np.eye(3))) > 1e-4  # i is not S: the rotation matters
+
+
+def test_a_gyro_only_result(tmp_path: Path) -> None:
+    full = _result(k2=False)
+    names = [n for n in full.param_names if n.startswith("gyro_")]
+    idx = [full.param_names.index(n) for n in names]
+    cal = CalibrationResult(sensor_id="G", procedure="p1", model="triad",
+                            param_names=tuple(names), values=full.values[idx],
+                            covariance=full.covariance[np.ix_(idx, idx)],
+                            units={n: "1" for n in names})
+    s = intrinsics_struct(cal)
+    assert "M_a" not in s and "b_a" not in s and s["G_g"][0, 1] == cal.value("gyro_G_xy")
+    ov = openvins_intrinsics(cal)
+    np.testing.assert_array_equal(ov["Ta"], np.eye(3))
+    np.testing.assert_array_equal(ov["R_IMUtoACC"], np.eye(3))
+    with pytest.raises(InvalidInputError, match="both the gyro and the accelerometer"):
+        kalibr_intrinsics(cal)
+    m = loadmat(write_mat(cal, tmp_path / "g.mat"))["imucal"][0, 0]
+    assert "M_a" not in m.dtype.names and m["M_g"].shape == (3, 3)
 
 
 def test_openvins_and_kalibr_refuse_k2() -> None:

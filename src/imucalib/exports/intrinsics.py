@@ -152,10 +152,10 @@ def write_mat73(cal: CalibrationResult, path: str | os.PathLike[str], *,
     """Write :func:`intrinsics_struct` as struct `name` of a MATLAB v7.3 (HDF5) file.
 
     The file is HDF5 with a 512-byte userblock holding the MATLAB header; the struct is a
-    group (``MATLAB_class`` ``struct``), each number array a dataset (``double``) stored
-    transposed (MATLAB is column-major: h5py reads ``f[name][field][()].T``), each string a
-    ``char`` dataset of UTF-16 code units (``MATLAB_int_decode`` 2), string lists as blank-padded
-    char matrices.
+    group (``MATLAB_class`` ``struct``, ``MATLAB_fields`` its field names), each number array
+    a dataset (``double``) stored transposed (MATLAB is column-major: h5py reads
+    ``f[name][field][()].T``), each string a ``char`` dataset of UTF-16 code units
+    (``MATLAB_int_decode`` 2), string lists as blank-padded char matrices.
     """
     import h5py
 
@@ -164,6 +164,9 @@ def write_mat73(cal: CalibrationResult, path: str | os.PathLike[str], *,
     with h5py.File(out, "w", userblock_size=_USERBLOCK_BYTES) as fh:
         group = fh.create_group(name)
         group.attrs["MATLAB_class"] = np.bytes_("struct")
+        fields = np.empty(len(struct), dtype=object)  # the field order, as MATLAB writes it
+        fields[:] = [np.array(list(key), dtype="S1") for key in struct]
+        group.attrs.create("MATLAB_fields", data=fields, dtype=h5py.vlen_dtype(np.dtype("S1")))
         for key, value in struct.items():
             if isinstance(value, str | list):
                 rows = [value] if isinstance(value, str) else value
