@@ -55,7 +55,8 @@ def export(
         help="Stream as DEVICE/UNIT, e.g. imu/IMU-0001 (a recording).")] = None,
     fmt: Annotated[str | None, typer.Option(
         "--format", help="For a result: c-runtime (a C99 header and library that apply it "
-                         "in firmware, docs/c-runtime.md), parameters-csv or result-json.")]
+                         "in firmware, docs/c-runtime.md), parameters-csv, result-json, mat, "
+                         "mat73, ros-yaml, kalibr-imu or openvins-imu (docs/exports.md).")]
     = None,
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
     step_file: Annotated[Path | None, typer.Option(
@@ -112,7 +113,8 @@ def _export_result(path: Path, out: Path, fmt: str | None) -> None:
     from imucalib.exports.outputs import write_outputs
     from imucalib.models.result import CalibrationResult
 
-    allowed = ("c-runtime", "parameters-csv", "result-json")
+    allowed = ("c-runtime", "parameters-csv", "result-json", "mat", "mat73", "ros-yaml",
+               "kalibr-imu", "openvins-imu")
     try:
         if fmt not in allowed:
             raise InvalidInputError(f"--format must be one of {', '.join(allowed)} for a "

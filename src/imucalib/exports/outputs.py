@@ -29,6 +29,17 @@ format             file                           content
                                                   ``imucal_params.h`` and the runtime library
                                                   (:mod:`imucalib.exports.c_runtime`,
                                                   docs/c-runtime.md); in no default list
+``mat``            ``….intrinsics.mat``           the calibration as a MATLAB v5 struct ``imucal``
+                                                  (:mod:`imucalib.exports.intrinsics`,
+                                                  docs/exports.md); in no default list
+``mat73``          ``….intrinsics73.mat``         the same as MATLAB v7.3 (HDF5)
+``ros-yaml``       ``….ros.yaml``                 a ROS-style parameter YAML, one namespace per
+                                                  triad
+``kalibr-imu``     ``….kalibr-imu.yaml``          Kalibr ``scale-misalignment`` intrinsics (``M``,
+                                                  ``A``, ``C_gyro_i``)
+``openvins-imu``   ``….openvins-imu.yaml``        OpenVINS ``kalibr_imu_chain.yaml`` intrinsics
+                                                  (``Tw``, ``R_IMUtoGYRO``, ``Ta``,
+                                                  ``R_IMUtoACC``, ``Tg``)
 ``report-pdf``     ``….report.pdf``               the calibration report (certificate):
                                                   docs/reporting.md, "The calibration report"
 ``report-html``    ``….report.html``              the same report as one self-contained page
@@ -177,6 +188,19 @@ def _c_runtime(result: Any, folder: Path, stem: str) -> list[Path]:
     return write_c_runtime(_calibration(result, "c-runtime"), folder / f"{stem}.c")
 
 
+def _intrinsics(fmt: str, suffix: str) -> _Writer:
+    def writer(result: Any, folder: Path, stem: str) -> list[Path]:
+        from imucalib.exports import intrinsics
+
+        write = {"mat": intrinsics.write_mat, "mat73": intrinsics.write_mat73,
+                 "ros-yaml": intrinsics.write_ros_yaml,
+                 "kalibr-imu": intrinsics.write_kalibr_intrinsics,
+                 "openvins-imu": intrinsics.write_openvins_intrinsics}[fmt]
+        return [write(_calibration(result, fmt), folder / f"{stem}{suffix}")]
+
+    return writer
+
+
 def _report(fmt: str) -> _Writer:
     def writer(result: Any, folder: Path, stem: str) -> list[Path]:
         from imucalib.report.document import build_report
@@ -250,6 +274,11 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "residuals-png": _residuals_png,
     "temperature-png": _temperature_png,
     "c-runtime": _c_runtime,
+    "mat": _intrinsics("mat", ".intrinsics.mat"),
+    "mat73": _intrinsics("mat73", ".intrinsics73.mat"),
+    "ros-yaml": _intrinsics("ros-yaml", ".ros.yaml"),
+    "kalibr-imu": _intrinsics("kalibr-imu", ".kalibr-imu.yaml"),
+    "openvins-imu": _intrinsics("openvins-imu", ".openvins-imu.yaml"),
     "report-pdf": _report("report-pdf"),
     "report-html": _report("report-html"),
 }
