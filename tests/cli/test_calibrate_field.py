@@ -110,3 +110,16 @@ def test_bad_field_inputs_exit_2_with_one_line(tmp_path: Path):
     assert "imucalib calibrate field DATA" in csv_without_procedure.output
     res = runner.invoke(app, ["calibrate", "p1", str(gyro_only)])
     assert res.exit_code == 2 and "analyses a Recording" in res.output
+
+
+def test_a_serial_with_a_slash_names_files_not_folders(tmp_path: Path):
+    s = handheld_session("tactical", seed=43, noise="white")
+    written = write_session_csv(s, tmp_path / "u.csv", layout="counts")
+    res = runner.invoke(app, ["calibrate", "field", str(written.path), "--imu", "SN/42",
+                              "--no-record", "-o", str(tmp_path), *written.cli_args])
+    assert res.exit_code == 0, res.output
+    result = tmp_path / "u.SN_42.field.result.json"
+    assert CalibrationResult.load(result).sensor_id == "SN/42"
+    res = runner.invoke(app, ["export", str(result), "--format", "ros-yaml", "-o",
+                              str(tmp_path / "x")])
+    assert res.exit_code == 0, res.output

@@ -228,17 +228,22 @@ def _recording_name(result: Any) -> str:
     return Path(str(name)).name if name else ""
 
 
+def _safe(unit: Any) -> str:
+    """Return a unit's name as a file-name part ('SN/42' → 'SN_42': not a folder)."""
+    return "".join("_" if c in "/\\\0" else c for c in str(unit))
+
+
 def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> list[Path]:
     """Write every unit's files, then the batch's summary (module docstring)."""
     from imucalib.procedures.p2.batch import summary_rows
 
     written: list[Path] = []
     for unit_result in batch.results:
-        stem = f"{name}.{unit_result.unit}.{batch.procedure}"
+        stem = f"{name}.{_safe(unit_result.unit)}.{batch.procedure}"
         formats = chosen if unit_result.error == "" else ("report-json",)
         for fmt in formats:
             written += OUTPUT_FORMATS[fmt](unit_result, out, stem)
-    stem = f"{name}.{batch.unit}.{batch.procedure}"
+    stem = f"{name}.{_safe(batch.unit)}.{batch.procedure}"
     rows = summary_rows(batch)
     summary = out / f"{stem}.summary.json"
     summary.write_text(json.dumps({"procedure": batch.procedure, "passed": batch.passed,
@@ -323,7 +328,7 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
     out.mkdir(parents=True, exist_ok=True)
     if hasattr(result, "results"):
         return _write_batch(result, out, chosen, name)
-    stem = f"{name}.{result.unit}.{result.procedure}"
+    stem = f"{name}.{_safe(result.unit)}.{result.procedure}"
     written: list[Path] = []
     for fmt in chosen:
         written += OUTPUT_FORMATS[fmt](result, out, stem)
