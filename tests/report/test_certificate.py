@@ -249,3 +249,16 @@ if shutil.which("pdftoppm") or os.environ.get("IMUCALIB_TEST_PDFTOPPM"):
         for png in pngs:
             img = mpimg.imread(png)
             assert img.shape[0] > 200 and img.std() > 0.01      # something is printed
+
+
+def test_the_held_out_and_repeatability_checks_are_drawn(certificate):
+    results = certificate.doc.section("5")
+    captions = [f.caption for f in results.figures]
+    assert len(captions) == 2 and captions[1].startswith("Held-out verification")
+    assert all(f.png[:8] == b"\x89PNG\r\n\x1a\n" for f in results.figures)
+    assert "Held-out verification and repeatability" in certificate.text
+    checks = [c for c in certificate.analysis.checks if c.name.startswith("held-out")
+              or c.name == "repeatability"]
+    # this run has one repetition: repeatability is not assessed and has no rows to draw
+    assert [c.name for c in checks if c.rows] == ["held-out accelerometer accuracy",
+                                                  "held-out gyro accuracy"]

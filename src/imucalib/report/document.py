@@ -430,8 +430,15 @@ def _p1_sections(analysis: Any, meta: Mapping[str, Any]) -> tuple[list[Section],
     fig = _figure(lambda p: save_residual_figure(analysis, p),
                   "Residual mean of each window and axis with ±2 standard-error bars "
                   "(top: accelerometer [µg]; bottom: gyro [°/h]).")
+    from imucalib.report.checks_figure import save_checks_figure
+
+    verified = [c for c in analysis.checks if c.name.startswith("held-out")
+                or c.name == "repeatability"]
+    checks_fig = _figure(lambda p: save_checks_figure(verified, p),
+                         "Held-out verification and repeatability: each quantity's |value| "
+                         "over its limit (the dashed line); green passes, red fails.")
     results = Section(SECTION_TITLES[4], (_u_paragraph(), *fit_text, *rule_par),
-                      tuple(tables), (fig,) if fig is not None else ())
+                      tuple(tables), tuple(f for f in (fig, checks_fig) if f is not None))
     recs = _recommendations(analysis.decision.passed, analysis.decision.failed,
                             analysis.decision.not_assessed, bool(result.misfit))
     sections = [_object_section(unit, result.sensor_id),
