@@ -119,6 +119,9 @@ def write_report_pdf(document: ReportDocument, path: str | os.PathLike[str]) -> 
                             topMargin=18 * mm, bottomMargin=16 * mm, title=document.title,
                             author="imucalib", subject=document.report_id)
     width = A4[0] - 30 * mm
+    #: a figure may fill at most this much of the frame's height (its caption and spacing
+    #: need the rest): a tall figure is scaled down to fit one page
+    max_height = (A4[1] - 34 * mm) * 0.85
     story: list[Any] = [Paragraph(escape(document.title), title),
                         Paragraph(escape(f"Report id: {document.report_id}. Issued "
                                          f"{document.issued_utc}."), body)]
@@ -137,7 +140,7 @@ def write_report_pdf(document: ReportDocument, path: str | os.PathLike[str]) -> 
             story += [Spacer(1, 2 * mm), Paragraph(escape(table.title), sub), t]
         for fig in section.figures:
             img = Image(io.BytesIO(fig.png))
-            scale = min(width / img.drawWidth, 1.0)
+            scale = min(width / img.drawWidth, max_height / img.drawHeight, 1.0)
             img.drawWidth *= scale
             img.drawHeight *= scale
             story.append(KeepTogether([Spacer(1, 2 * mm), img,
