@@ -52,6 +52,9 @@ __all__ = ["C_RUNTIME_FILES", "MAX_TEMPERATURE_ORDER", "write_c_runtime"]
 
 #: The fixed library's files, copied next to the generated header.
 C_RUNTIME_FILES: Final = ("imucalib_runtime.h", "imucalib_runtime.c")
+#: The body of imucalib_runtime.c, written once for both precisions (package data only): it is
+#: inlined where the .c includes it, so the folder written stands alone.
+_IMPL: Final = "imucalib_runtime_impl.h"
 #: Polynomial terms per slot in the runtime (``IMUCAL_MAX_TERMS``); the highest order is one less.
 _MAX_TERMS: Final = 8
 #: The highest order m of Eq. (C1) the runtime evaluates.
@@ -255,9 +258,11 @@ def write_c_runtime(result: CalibrationResult, folder: str | os.PathLike[str], *
     params.write_text(header, encoding="utf-8")
     written = [params]
     library = resources.files("imucalib.exports").joinpath("c")
+    body = library.joinpath(_IMPL).read_text(encoding="utf-8")
     for file_name in C_RUNTIME_FILES:
         path = out / file_name
-        path.write_text(library.joinpath(file_name).read_text(encoding="utf-8"),
-                        encoding="utf-8")
+        text = library.joinpath(file_name).read_text(encoding="utf-8")
+        # the library's body is kept once in the package and written out for each precision
+        path.write_text(text.replace(f'#include "{_IMPL}"\n', body), encoding="utf-8")
         written.append(path)
     return written
