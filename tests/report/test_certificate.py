@@ -175,7 +175,9 @@ def test_a_result_with_parameter_rows_gets_the_same_rule():
                              to_dict=lambda: {"rows": rows}, parameter_rows=lambda: rows)
     doc = build_report(result)
     table = doc.section("5.").tables[0]
-    assert table.rows == (("gyro_bias_x", "+1.235e-5", "0.064e-5", "rad/s"),
+    # a triad parameter in its display unit (1.23456e-5 rad/s = 2.5465 °/h, U = 0.1324 °/h),
+    # any other in SI; U = 2u to two significant digits, the value to the same place
+    assert table.rows == (("gyro_bias_x", "+2.55", "0.13", "°/h"),
                           ("K2", "-12", "10", "1/g"))
     assert [s.title for s in doc.sections] == list(SECTION_TITLES)
     assert doc.section("6.").paragraphs[0].startswith("Decision: FAIL")

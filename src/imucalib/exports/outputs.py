@@ -49,8 +49,10 @@ A batch (P2: one result per unit, :class:`~imucalib.procedures.p2.batch.P2BatchR
 written unit by unit, each unit's files named after it (a unit that could not be calibrated
 gets its ``report.json`` only, which holds the error), then the batch's own files:
 ``<name>.<array|lot>.p2.summary.json`` and ``.summary.csv`` (one row per unit: pass/fail, the
-compensated errors, the parameters furthest from the lot, the error) and, for two or more
-calibrated units, ``.lot.png`` (every parameter's spread across the units).
+compensated errors, the parameters furthest from the lot, the error), for two or more
+calibrated units ``.lot.png`` (every parameter's spread across the units), and with
+``report-pdf``/``report-html`` the summary report ``.summary.report.pdf``/``.html``
+(:func:`~imucalib.report.document.build_summary_report`) beside each unit's own report.
 
 The record index ``.k`` appears only when the characterisation holds more than one record.
 
@@ -201,6 +203,16 @@ def _intrinsics(fmt: str, suffix: str) -> _Writer:
     return writer
 
 
+def _write_document(document: Any, fmt: str, path_stem: Path) -> Path:
+    if fmt == "report-pdf":
+        from imucalib.report.pdf import write_report_pdf
+
+        return write_report_pdf(document, path_stem.with_name(path_stem.name + ".pdf"))
+    from imucalib.report.html import write_report_html
+
+    return write_report_html(document, path_stem.with_name(path_stem.name + ".html"))
+
+
 def _report(fmt: str) -> _Writer:
     def writer(result: Any, folder: Path, stem: str) -> list[Path]:
         from imucalib.report.document import build_report
@@ -210,13 +222,7 @@ def _report(fmt: str) -> _Writer:
         if name and (folder / name).is_file():  # written beside the recording (the demo)
             recording = folder / name
         document = build_report(result, recording=recording)
-        if fmt == "report-pdf":
-            from imucalib.report.pdf import write_report_pdf
-
-            return [write_report_pdf(document, folder / f"{stem}.report.pdf")]
-        from imucalib.report.html import write_report_html
-
-        return [write_report_html(document, folder / f"{stem}.report.html")]
+        return [_write_document(document, fmt, folder / f"{stem}.report")]
 
     return writer
 
@@ -263,6 +269,13 @@ def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> lis
         from imucalib.report.p2_figures import save_lot_figure
 
         written.append(save_lot_figure(batch, out / f"{stem}.lot.png"))
+    reports = [f for f in chosen if f in ("report-pdf", "report-html")]
+    if reports:
+        from imucalib.report.document import build_summary_report
+
+        document = build_summary_report(batch)
+        written += [_write_document(document, f, out / f"{stem}.summary.report")
+                    for f in reports]
     return written
 
 

@@ -22,7 +22,8 @@ from rich.table import Column, Table
 from imucalib import units
 from imucalib.report.numbers import round_pair
 
-__all__ = ["display_parameter", "render_calibration", "render_noise_characterization", "render_p3",
+__all__ = ["display_parameter", "display_unit", "render_calibration",
+           "render_noise_characterization", "render_p3",
            "render_result"]
 
 # display unit of each parameter symbol: (unit text, SI value of one display unit); M's
@@ -45,14 +46,26 @@ def display_parameter(name: str, value: float, sigma: float, si_unit: str
     digits and the value to the same decimal place (docs/reporting.md). A scale factor ``K`` is
     shown as its deviation from 1.
     """
+    unit, scale = display_unit(name, si_unit)
+    shown = value - 1.0 if name.split("_")[1:2] == ["K"] else value  # K as its deviation from 1
+    cells = round_pair(shown / scale, sigma / scale, sign=True)
+    return cells.value_text, cells.uncertainty_text, unit
+
+
+def display_unit(name: str, si_unit: str) -> tuple[str, float]:
+    """Return (display unit, SI value of one display unit) of a triad parameter (docs/reporting.md).
+
+    ``accel_bias_x`` → ("µg", 9.80665e-6); an M off-diagonal element → ("µrad", 1e-6); a name
+    outside the table keeps its SI unit (scale 1).
+    """
     parts = name.split("_")
+    if len(parts) < 2:
+        return si_unit, 1.0
     triad, symbol = parts[0], parts[1]
     unit, scale = _DISPLAY.get((triad, symbol), (si_unit, 1.0))
     if symbol == "M" and len(parts) == 3 and len(parts[2]) == 2 and parts[2][0] != parts[2][1]:
         unit, scale = _OFF_DIAGONAL  # a misalignment, a small angle
-    shown = value - 1.0 if symbol == "K" else value  # a scale factor as its deviation from 1
-    cells = round_pair(shown / scale, sigma / scale, sign=True)
-    return cells.value_text, cells.uncertainty_text, unit
+    return unit, scale
 
 
 def _wrote(console: Console, written: Sequence[Path]) -> None:

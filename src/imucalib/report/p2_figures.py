@@ -74,6 +74,15 @@ def save_temperature_figure(unit_result: Any, path: str | os.PathLike[str]) -> P
     path : str or Path
         The file to write.
     """
+    from imucalib.report.figure_cache import png_once
+
+    out = Path(path)
+    out.write_bytes(png_once(unit_result, "p2-temperature",
+                             lambda p: _draw_temperature(unit_result, p)))
+    return out
+
+
+def _draw_temperature(unit_result: Any, out: Path) -> None:
     points = unit_result.points
     fig, axes = _figure(len(PARAM_NAMES), 6, 16.0, 2.2)
     legs = sorted({p.leg for p in points})
@@ -116,13 +125,19 @@ def save_temperature_figure(unit_result: Any, path: str | os.PathLike[str]) -> P
     axes[0].legend(fontsize=6, loc="best")
     fig.suptitle(f"P2 unit {unit_result.unit}: parameters against internal temperature [°C] "
                  "(2σ bars; models with 2σ bands)", fontsize=10)
-    out = Path(path)
     fig.savefig(out, dpi=90)
-    return out
 
 
 def save_lot_figure(batch: Any, path: str | os.PathLike[str]) -> Path:
     """Save the lot's spread of every parameter at T0 across units (module docstring) as PNG."""
+    from imucalib.report.figure_cache import png_once
+
+    out = Path(path)
+    out.write_bytes(png_once(batch, "p2-lot", lambda p: _draw_lot(batch, p)))
+    return out
+
+
+def _draw_lot(batch: Any, out: Path) -> None:
     done = [r for r in batch.results if r.result is not None]
     fig, axes = _figure(len(PARAM_NAMES), 6, 16.0, 2.0)
     names = [r.unit for r in done]
@@ -144,6 +159,4 @@ def save_lot_figure(batch: Any, path: str | os.PathLike[str]) -> Path:
         ax.grid(True, axis="y", alpha=0.3)
     fig.suptitle(f"P2 lot: every parameter at T0 across {len(done)} unit(s) (green pass, red "
                  "fail; 2σ bars; grey: the median)", fontsize=10)
-    out = Path(path)
     fig.savefig(out, dpi=90)
-    return out

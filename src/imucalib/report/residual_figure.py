@@ -62,6 +62,14 @@ def save_residual_figure(analysis: Any, path: str | os.PathLike[str]) -> Path:
     -------
     Path
     """
+    from imucalib.report.figure_cache import png_once
+
+    out = Path(path)
+    out.write_bytes(png_once(analysis, "residuals", lambda p: _draw(analysis, p)))
+    return out
+
+
+def _draw(analysis: Any, out: Path) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -87,6 +95,4 @@ def save_residual_figure(analysis: Any, path: str | os.PathLike[str]) -> Path:
         if q is not None and q.dof > 0:
             title += f"; χ²/ν = {q.reduced_chi2:.3g}" + (" — MODEL MISFIT" if q.misfit else "")
         _panel(ax, labels, mean, se, unit, title)
-    out = Path(path)
     fig.savefig(out, dpi=110)
-    return out

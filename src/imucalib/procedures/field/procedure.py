@@ -45,7 +45,7 @@ class FieldProcedure:
                                   "target_angle_rad", "accel_k2", "accel_drift",
                                   "gyro_g_sensitivity", "accel_instability_mps2",
                                   "gyro_instability_rps", "import_spec"})
-    outputs = ("result-json", "report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.field.plan.generate_field_plan` (its keywords)."""

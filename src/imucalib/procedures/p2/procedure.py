@@ -39,7 +39,7 @@ class P2Procedure:
     analysis_options = frozenset({"lever_arm", "max_order", "criterion", "rate_term",
                                   "hysteresis", "reference_temperature_degc", "workers",
                                   "scheduler"})
-    outputs = ("result-json", "report-json", "temperature-png")
+    outputs = ("result-json", "report-json", "temperature-png", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.p2.plan.generate_p2_plan` (its keywords)."""

@@ -1,0 +1,104 @@
+"""The report of any result with parameters: every parameter with its U, the checks, the decision.
+
+Used for the procedures without a content module of their own (the classical tests, P3, field)
+and for a calibration result read back from its JSON file. The rows come from the result's
+``parameter_rows()`` (name, value, u, unit) or, for a bare
+:class:`~imucalib.models.result.CalibrationResult`, from its parameters (u Birge-scaled under a
+misfit).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from imucalib.errors import CalibrationError, InvalidInputError
+from imucalib.report.document import (
+    COVERAGE_FACTOR,
+    SECTION_TITLES,
+    ReportContent,
+    ReportTable,
+    Section,
+)
+from imucalib.report.sections import (
+    environment_section,
+    equipment_section,
+    expanded_cells,
+    object_section,
+    recommendations,
+    u_paragraph,
+)
+
+__all__ = ["content"]
+
+
+def _rows(result: Any, cal: Any) -> list[tuple[str, str, str, str]]:
+    """(parameter, value, U, unit) rows: triad parameters in display units, others in SI."""
+    from imucalib.report.console import display_parameter
+
+    rows_of = getattr(result, "parameter_rows", None)
+    if callable(rows_of):
+        items = [(str(n), float(v), float(s), str(u)) for n, v, s, u in rows_of()]
+    elif callable(getattr(cal, "std", None)) and hasattr(cal, "param_names"):
+        std = cal.std(scaled=True)  # a calibration result without a procedure's analysis
+        items = [(n, cal.value(n), std[n], cal.units[n]) for n in cal.param_names]
+    else:
+        raise InvalidInputError(f"a {result.procedure} result has no parameter rows: no report "
+                                "can be built from it")
+    rows = []
+    for name, value, sigma, unit in items:
+        if name.startswith(("accel_", "gyro_")) and name.count("_") >= 2:
+            rows.append((name, *display_parameter(name, value, COVERAGE_FACTOR * sigma, unit)))
+        else:
+            rows.append((name, *expanded_cells(value, sigma), unit))
+    return rows
+
+
+def _process(result: Any, cal: Any) -> tuple[list[str], bool]:
+    """Return the process paragraphs (the procedure, each fit's χ²/ν) and the misfit flag."""
+    from imucalib.procedures import registry
+
+    name = str(result.procedure)
+    try:
+        text = f"Procedure {name}: {registry.get(name).description}"
+    except CalibrationError:
+        text = f"Procedure {name}"
+    doc = _DOCS.get(name, "docs/procedures.md")
+    paragraphs = [f"{text.rstrip('.')} ({doc})."]
+    quality = tuple(getattr(result, "quality", ()) or getattr(cal, "fit_quality", ()) or ())
+    paragraphs += [q.summary() for q in quality if callable(getattr(q, "summary", None))]
+    misfit = any(bool(getattr(q, "misfit", False)) for q in quality)
+    paragraphs += [f"Note: {n}" for n in getattr(result, "notes", ()) or ()]
+    return paragraphs, misfit
+
+
+#: Procedure → its documentation page (the process section cites it).
+_DOCS = {"p3": "docs/p3.md", "field": "docs/field.md", "tumble": "docs/tumble.md",
+         "installation": "docs/installation.md", "g_sensitivity": "docs/g-sensitivity.md",
+         "earth_rate_bias": "docs/earth-rate-bias.md", "random_drift": "docs/random-drift.md",
+         "rate_transfer": "docs/rate-transfer.md", "p1": "docs/p1.md", "p2": "docs/p2.md"}
+
+
+def content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
+    """Return sections 1–5 of any result with parameters (module docstring)."""
+    cal: Any = getattr(result, "result", None)
+    prov = getattr(cal, "provenance", None) or getattr(result, "provenance", None)
+    table = ReportTable(f"{result.procedure} results of {result.unit}",
+                        ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
+                        tuple(_rows(result, cal)))
+    passed = result.passed
+    decision = {None: "No conformity decision was made.",
+                True: "Every assessed check passed.", False: "A check failed."}[passed]
+    reasons = list(getattr(result, "reasons", ()) or ())
+    process, misfit = _process(result, cal)
+    details = dict(getattr(prov, "details", {}) or {})
+    sections = (
+        object_section(details.get("unit", {"serial": result.unit}), str(result.unit)),
+        equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
+                          procedure=str(result.procedure)),
+        environment_section(meta, {}),
+        Section(SECTION_TITLES[3], tuple(process)),
+        Section(SECTION_TITLES[4], (u_paragraph(), *reasons), (table,)),
+    )
+    recs = recommendations(passed, reasons, (), misfit)
+    return ReportContent(sections, decision, passed, tuple(recs), prov)

@@ -1,0 +1,103 @@
+"""P1's part of the calibration report: process, parameters, checks, residual and checks figures.
+
+The results section holds every parameter with U = k·u (R.1 of :mod:`imucalib.report.document`),
+the verification checks, the conformity table against the plan's acceptance limits, the
+residual figure (per position and rate) and the held-out/repeatability figure (docs/p1.md,
+docs/reporting.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from imucalib.report.document import (
+    COVERAGE_FACTOR,
+    SECTION_TITLES,
+    ReportContent,
+    ReportTable,
+    Section,
+)
+from imucalib.report.sections import (
+    environment_section,
+    equipment_section,
+    figure_of,
+    object_section,
+    recommendations,
+    u_paragraph,
+    yes_no,
+)
+
+__all__ = ["content"]
+
+
+def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
+    """Return P1's sections 1–5 (None for a result without its observations)."""
+    if not hasattr(analysis, "observations"):
+        return None
+    from imucalib.report.console import display_parameter
+    from imucalib.report.residual_figure import save_residual_figure
+
+    result, obs = analysis.result, analysis.observations
+    prov = result.provenance
+    details = dict(prov.details)
+    plan = getattr(obs, "plan", None)
+    unit = details.get("unit", {"serial": result.sensor_id})
+    site = {"latitude": f"{obs.latitude_deg:g}°", "table heading": f"{obs.heading_deg:g}°",
+            "local gravity used": f"{obs.gravity_mps2:.6f} m/s²"}
+    n_windows = details.get("n_windows", len(obs.windows))
+    process = Section(SECTION_TITLES[3], (
+        "Procedure P1 (docs/p1.md): two-dimensional calibration on a dual-axis table — static "
+        "positions, a static noise record, rate points about each axis, held-out positions and "
+        "rates, repetitions — fitted by weighted least squares with a Kalman cross-check.",
+        f"Model: {result.model}; repetitions: {', '.join(map(str, obs.repetitions))}; "
+        f"{n_windows} windows reduced; sample rate {obs.sample_rate_hz:g} Hz"
+        + (f", low-pass cut-off {obs.cutoff_hz:g} Hz" if obs.cutoff_hz else "")
+        + f"; outliers removed: {details.get('outliers_removed', 0)}.",
+        *(f"Note: {n}" for n in result.notes)))
+    std = result.std(scaled=True)
+    rows = []
+    for name in result.param_names:
+        value, big_u, shown_unit = display_parameter(name, result.value(name),
+                                                     COVERAGE_FACTOR * std[name],
+                                                     result.units[name])
+        rows.append((name, value, big_u, shown_unit))
+    params = ReportTable(f"calibrated parameters of {result.sensor_id} ({result.model} model)",
+                         ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
+                         tuple(rows))
+    checks = ReportTable("verification", ("check", "verdict", "summary"),
+                         tuple((c.name, yes_no(c.passed), c.summary) for c in analysis.checks))
+    spec = next((c for c in analysis.checks if c.name == "specification"), None)
+    accept = details.get("acceptance", {})
+    rule_par = [f"Decision rule: {analysis.decision.rule}."]
+    if accept:
+        rule_par.append(f"Acceptance (plan's [acceptance]): rule '{accept.get('rule')}', "
+                        f"guard band k = {float(accept.get('guard_band_k', 2.0)):g}.")
+    tables = [params, checks]
+    if spec is not None and spec.rows:
+        tables.append(ReportTable(
+            "conformity with the specification (acceptance limits)",
+            ("quantity", "|value|", "limit", "unit", "verdict"),
+            tuple((r.name, f"{abs(r.value):.3g}", f"{r.limit:.3g}", r.unit,
+                   "pass" if r.passed else "FAIL") for r in spec.rows)))
+    fit_text = [q.summary() for q in result.fit_quality]
+    fig = figure_of(lambda p: save_residual_figure(analysis, p),
+                  "Residual mean of each window and axis with ±2 standard-error bars "
+                  "(top: accelerometer [µg]; bottom: gyro [°/h]).")
+    from imucalib.report.checks_figure import save_checks_figure
+
+    verified = [c for c in analysis.checks if c.name.startswith("held-out")
+                or c.name == "repeatability"]
+    checks_fig = figure_of(lambda p: save_checks_figure(verified, p),
+                         "Held-out verification and repeatability: each quantity's |value| "
+                         "over its limit (the dashed line); green passes, red fails.")
+    results = Section(SECTION_TITLES[4], (u_paragraph(), *fit_text, *rule_par),
+                      tuple(tables), tuple(f for f in (fig, checks_fig) if f is not None))
+    recs = recommendations(analysis.decision.passed, analysis.decision.failed,
+                            analysis.decision.not_assessed, bool(result.misfit))
+    sections = [object_section(unit, result.sensor_id),
+                equipment_section(meta, plan, prov.software_version),
+                environment_section(meta, site), process, results]
+    return ReportContent(tuple(sections), analysis.decision.summary(), analysis.decision.passed,
+                         tuple(recs), prov, plan)
+

@@ -1,0 +1,137 @@
+"""P2's part of the calibration report of one unit: the parameters at T0, their temperature models.
+
+One unit of an array full-temperature calibration (docs/p2.md) gets its own report: the
+parameters at the reference temperature T0 with U = k·u (R.1 of :mod:`imucalib.report.document`),
+each parameter's temperature model (order and how it was chosen, the linear coefficient c₁ of
+(T1) with its U, χ²/ν of the fit, the held-out check of the model at temperatures it was not
+fitted to), the errors left after compensation that the decision judges, and the figure of every
+parameter against the unit's internal temperature with its model and 2σ band
+(:func:`~imucalib.report.p2_figures.save_temperature_figure`). The summary of the whole array
+or lot is :func:`~imucalib.report.document.build_summary_report`.
+
+(T1): p(T, Ṫ, ℓ) = Σ c_j (T − T0)^j + d·Ṫ + h·ℓ (docs/processing-estimation.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from imucalib import units
+from imucalib.report.document import (
+    COVERAGE_FACTOR,
+    SECTION_TITLES,
+    ReportContent,
+    ReportTable,
+    Section,
+)
+from imucalib.report.numbers import round_pair
+from imucalib.report.sections import (
+    environment_section,
+    equipment_section,
+    figure_of,
+    object_section,
+    parameter_table,
+    recommendations,
+    u_paragraph,
+)
+
+__all__ = ["content"]
+
+
+def _model_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
+    """One row per temperature model: order, c₁ ± U per °C, χ²/ν, the held-out check."""
+    from imucalib.report.console import display_unit
+
+    cal = unit_result.result
+    rows = []
+    for name, fit in unit_result.models.items():
+        unit, scale = display_unit(name, cal.units.get(name, ""))
+        if fit.order >= 1:
+            std = np.asarray(fit.std(), dtype=float)
+            cells = round_pair(fit.model.coefficients[1] / scale,
+                               COVERAGE_FACTOR * float(std[1]) / scale, sign=True)
+            slope = f"{cells.value_text} ± {cells.uncertainty_text} {unit}/°C"
+        else:
+            slope = "— (constant)"
+        check = unit_result.held_out.get(name)
+        if check is None:
+            held = "not checked (no held-out point)"
+        else:
+            z = float(np.max(np.abs(check.normalised_residuals)))
+            held = (f"{'consistent' if check.consistent else 'NOT consistent'}: max|z| "
+                    f"{z:.2g}, p = {check.p_value:.2g} (ν = {check.dof})")
+        rows.append((name, f"{fit.order} ({fit.criterion.upper()})", slope,
+                     f"{fit.quality.reduced_chi2:.3g}", held))
+    return tuple(rows)
+
+
+def _error_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
+    err = unit_result.compensated_error
+    rows = []
+    if err.get("accel_mps2") is not None:
+        rows.append(("accelerometer", f"{err['accel_mps2'] / units.G0_MPS2 * 1e3:.3g} mg"))
+    if err.get("gyro_rps") is not None:
+        rows.append(("gyro", f"{err['gyro_rps'] / units.DEG:.3g} °/s"))
+    return tuple(rows)
+
+
+def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
+    """Return a P2 unit's sections 1–5 (None for anything but a calibrated P2 unit)."""
+    if getattr(unit_result, "result", None) is None or not hasattr(unit_result, "models"):
+        return None
+    from imucalib.report.p2_figures import save_temperature_figure
+
+    cal = unit_result.result
+    prov = cal.provenance
+    points = unit_result.points
+    temps = [p.temperature_degc for p in points]
+    held = sum(p.held_out for p in points)
+    legs = sorted({p.leg for p in points})
+    t0 = cal.reference_temperature_degc
+    site = {"temperature points (internal, min / max)":
+            f"{min(temps):+.1f} / {max(temps):+.1f} °C" if temps else "—",
+            "temperature legs": ", ".join(legs) or "—"}
+    process = Section(SECTION_TITLES[3], (
+        "Procedure P2 (docs/p2.md): array full-temperature calibration — the IMUs on a cube in "
+        "a thermal chamber on a rotation table; at each temperature point static positions and "
+        "±ω turns give every parameter (least squares, with the closed form as a cross-check); "
+        "each parameter's temperature dependence is fitted as a polynomial (T1) whose order is "
+        "chosen by AICc or cross-validation; held-out temperature points check the models.",
+        f"{len(points) - held} calibration and {held} held-out temperature point(s); the "
+        f"parameters hold at T0 = {t0:g} °C.",
+        *(q.summary() for q in cal.fit_quality),
+        *(f"Note: {n}" for n in unit_result.notes)))
+    tables = [parameter_table(cal, f"parameters of {unit_result.unit} at T0 = {t0:g} °C"),
+              ReportTable("temperature models (T1)",
+                          ("parameter", "order (criterion)", f"c₁ ± U (k = {COVERAGE_FACTOR:g})",
+                           "χ²/ν", "held-out check"), _model_rows(unit_result))]
+    errors = _error_rows(unit_result)
+    if errors:
+        tables.append(ReportTable("largest error after compensation (held-out points when there "
+                                  "are any)", ("triad", "error"), errors))
+    fig = figure_of(lambda p: save_temperature_figure(unit_result, p),
+                    "Every parameter against the unit's internal temperature: the estimate at "
+                    "each point with 2σ bars (open: held out), the model with its 2σ band, per "
+                    "leg.")
+    reasons = list(unit_result.reasons)
+    results = Section(SECTION_TITLES[4],
+                      (u_paragraph(), "Decision rule: the largest accelerometer and gyro error "
+                       "left after compensation, at the held-out temperature points, within the "
+                       "plan's accuracy limits; the closed form agrees with least squares.",
+                       *(f"Failed: {r}." for r in reasons)),
+                      tuple(tables), (fig,) if fig is not None else ())
+    passed = unit_result.passed
+    decision = ("Every assessed check passed." if passed else
+                "FAIL: " + "; ".join(reasons) + "." if passed is False else
+                "No conformity decision was made.")
+    misfit = any(q.misfit for q in cal.fit_quality)
+    recs = recommendations(passed, reasons, (), misfit)
+    details = dict(prov.details)
+    sections = (object_section(details.get("unit", {"serial": unit_result.unit}),
+                               str(unit_result.unit)),
+                equipment_section(meta, None, prov.software_version, procedure="p2"),
+                environment_section(meta, site), process, results)
+    return ReportContent(sections, decision, passed, tuple(recs), prov)
