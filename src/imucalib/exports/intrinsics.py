@@ -266,8 +266,17 @@ def write_mat73(cal: CalibrationResult, path: str | os.PathLike[str], *,
     return out
 
 
+def _yfloat(value: float) -> str:
+    """Return ``repr(value)`` as a YAML 1.1 float: ``1e-05`` (a string to PyYAML) → ``1.0e-05``."""
+    text = repr(float(value))
+    if "e" in text and "." not in text:
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}.0e{exponent}"
+    return text
+
+
 def _flow(values: Any) -> str:
-    return "[" + ", ".join(repr(float(v)) for v in np.ravel(values)) + "]"
+    return "[" + ", ".join(_yfloat(v) for v in np.ravel(values)) + "]"
 
 
 def format_ros_yaml(cal: CalibrationResult) -> str:
@@ -279,7 +288,9 @@ def format_ros_yaml(cal: CalibrationResult) -> str:
     ``units``; the values hold at T0. A result with temperature models adds
     ``temperature_models``, one mapping per parameter with a model of Eq. (T1) (the fields of
     :func:`temperature_models_struct`, ``null`` for a term or range the model has not, the
-    held-out check as a mapping or ``null``). Floats are ``repr`` (round-trip exact).
+    held-out check as a mapping or ``null``). Floats are ``repr`` with a ``.0`` put before an
+    exponent that lacks a point (``1.0e-05``: YAML 1.1 reads ``1e-05`` as a string); they
+    round-trip exactly.
     """
     s = intrinsics_struct(cal)
     unit = {"accel": "m/s^2", "gyro": "rad/s"}
@@ -322,7 +333,7 @@ def _ros_temperature_models(cal: CalibrationResult) -> list[str]:
                   if v is not None]
         ho = tm.held_out
         lines += [f"  {_quote(tm.name)}:",
-                  f"    reference_temperature_degc: {tm.reference_temperature_degc!r}",
+                  f"    reference_temperature_degc: {_yfloat(tm.reference_temperature_degc)}",
                   f"    coefficients: {_flow(tm.coefficients)}",
                   f"    rate_coefficient: {_scalar(tm.rate_coefficient)}",
                   f"    leg_coefficient: {_scalar(tm.leg_coefficient)}",
@@ -330,23 +341,23 @@ def _ros_temperature_models(cal: CalibrationResult) -> list[str]:
                   "    covariance_terms: [" + ", ".join(_quote(t) for t in terms) + "]",
                   "    temperature_range_degc: " + ("null" if tm.temperature_range_degc is None
                                                     else _flow(tm.temperature_range_degc)),
-                  f"    chi2: {tm.chi2!r}",
+                  f"    chi2: {_yfloat(tm.chi2)}",
                   f"    dof: {tm.dof}",
                   f"    order_criterion: {_quote(tm.order_criterion)}"]
         if ho is None:
             lines.append("    held_out: null")
         else:
             lines += ["    held_out:",
-                      f"      max_abs_z: {ho.max_abs_z!r}",
-                      f"      chi2: {ho.chi2!r}",
+                      f"      max_abs_z: {_yfloat(ho.max_abs_z)}",
+                      f"      chi2: {_yfloat(ho.chi2)}",
                       f"      dof: {ho.dof}",
-                      f"      p_value: {ho.p_value!r}",
+                      f"      p_value: {_yfloat(ho.p_value)}",
                       f"      consistent: {'true' if ho.consistent else 'false'}"]
     return lines
 
 
 def _scalar(value: float | None) -> str:
-    return "null" if value is None else repr(float(value))
+    return "null" if value is None else _yfloat(value)
 
 
 def _quote(text: str) -> str:
@@ -497,7 +508,7 @@ def _temperature_lines(indent: str, temperature_degc: float | None) -> list[str]
         return []
     return [f"{indent}# the result's temperature models (Eq. (T1)) evaluated at this temperature",
             f"{indent}# (rate 0, the mean of the heating and cooling legs), in degC",
-            f"{indent}imucalib_temperature_degc: {temperature_degc!r}"]
+            f"{indent}imucalib_temperature_degc: {_yfloat(temperature_degc)}"]
 
 
 def write_kalibr_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str], *,
