@@ -524,3 +524,17 @@ def test_yaml_floats_without_a_point_load_as_numbers() -> None:
     doc = yaml.safe_load(format_ros_yaml(cal))
     assert doc["values"] == list(values)
     assert doc["gyro"]["bias"] == [1e-05, -3e-20, 1e+22]
+
+
+def test_write_outputs_passes_a_temperature_to_kalibr_and_openvins_only(tmp_path: Path) -> None:
+    from imucalib.exports.outputs import write_outputs
+
+    wrapped = SimpleNamespace(result=_temperature_result(), procedure="p1", unit="U")
+    (path,) = write_outputs(wrapped, tmp_path, ("openvins-imu",), name="n",  # type: ignore[arg-type]
+                            temperature_degc=40.0)
+    assert yaml.safe_load(path.read_text("utf-8"))["imu0"]["imucalib_temperature_degc"] == 40.0
+    with pytest.raises(InvalidInputError, match="a temperature applies to"):
+        write_outputs(wrapped, tmp_path, ("kalibr-imu", "mat"), name="n",  # type: ignore[arg-type]
+                      temperature_degc=40.0)
+    with pytest.raises(InvalidInputError, match="--temperature"):
+        write_outputs(wrapped, tmp_path, ("kalibr-imu",), name="n")  # type: ignore[arg-type]
