@@ -33,6 +33,7 @@ from imucalib.exports.intrinsics import (
 )
 from imucalib.exports.outputs import OUTPUT_FORMATS
 from imucalib.models.result import CalibrationResult, triad_parameter_names
+from imucalib.models.temperature_record import HeldOutOutcome, ParameterTemperatureModel
 from imucalib.models.triad import apply_triad
 
 _NEW = ("mat", "mat73", "ros-yaml", "kalibr-imu", "openvins-imu")
@@ -241,3 +242,299 @@ def test_cli_exports_a_result_as_ros_yaml(tmp_path: Path) -> None:
     assert out.exit_code == 0, out.output
     (written,) = (tmp_path / "o").glob("*.ros.yaml")
     assert yaml.safe_load(written.read_text(encoding="utf-8"))["values"] == list(cal.values)
+
+
+# --- temperature models (Eq. (T1)) -----------------------------------------------------------
+
+T0 = 25.0
+#: parameter → (c_1 … c_m, rate d or None, leg h or None, fitted range or None, held out?)
+_MODELS = {
+    "gyro_bias_x": ((2e-4, -3e-6), 4e-3, 1e-4, (-20.0, 60.0), True),
+    "gyro_M_zz": ((1e-5,), 2e-4, None, (-30.0, 80.0), False),
+    "gyro_G_yz": ((), None, None, (-30.0, 80.0), False),
+    "accel_bias_z": ((-5e-4, 1e-6, -2e-8), None, 3e-4, None, False),
+    "accel_M_xy": ((4e-6,), None, None, (-10.0, 70.0), False),
+}
+#: the intersection of the ranges above
+_RANGE = (-10.0, 60.0)
+
+
+def _temperature_result(*, k2: bool = False, model: str = "triad",
+                        models: dict[str, tuple] | None = None) -> CalibrationResult:
+    """:func:`_result` with temperature models, each with a full random covariance."""
+    base = _result(k2=k2, model=model)
+    rng = np.random.default_rng(21)
+    records = []
+    for name, (cs, d, h, span, held) in (models or _MODELS).items():
+        q = 1 + len(cs) + (d is not None) + (h is not None)
+        a = rng.normal(size=(q, q)) * 1e-5
+        records.append(ParameterTemperatureModel(
+            name=name, reference_temperature_degc=T0, coefficients=(base.value(name), *cs),
+            rate_coefficient=d, leg_coefficient=h, covariance=a @ a.T,
+            chi2=float(rng.uniform(1, 9)), dof=7, order_criterion="aicc",
+            temperature_range_degc=span,
+            held_out=HeldOutOutcome(1.25, 3.5, 4, 0.47, True) if held else None))
+    return replace(base, temperature_models=tuple(records))
+
+
+def _terms(tm: ParameterTemperatureModel) -> list[str]:
+    return ([f"c_{j}" for j in range(len(tm.coefficients))]
+            + (["d"] if tm.rate_coefficient is not None else [])
+            + (["h"] if tm.leg_coefficient is not None else []))
+
+
+def _nan_or(value: float | None) -> float:
+    return float("nan") if value is None else value
+
+
+def test_mat_v5_carries_the_temperature_models(tmp_path: Path) -> None:
+    cal = _temperature_result()
+    m = loadmat(write_mat(cal, tmp_path / "t.mat"))["imucal"][0, 0]
+    tms = m["temperature_models"][0, 0]
+    assert sorted(tms.dtype.names) == sorted(_MODELS)
+    for tm in cal.temperature_models:
+        s = tms[tm.name][0, 0]
+        assert str(s["name"][0]) == tm.name
+        assert s["reference_temperature_degc"][0, 0] == T0
+        assert s["coefficients"].shape == (len(tm.coefficients), 1)  # a column
+        np.testing.assert_array_equal(s["coefficients"].ravel(), tm.coefficients)
+        np.testing.assert_array_equal(s["covariance"], np.atleast_2d(tm.covariance))
+        np.testing.assert_array_equal(s["rate_coefficient"][0, 0], _nan_or(tm.rate_coefficient))
+        np.testing.assert_array_equal(s["leg_coefficient"][0, 0], _nan_or(tm.leg_coefficient))
+        assert [str(t).rstrip() for t in s["covariance_terms"]] == _terms(tm)
+        assert s["temperature_range_degc"].shape == (1, 2)
+        np.testing.assert_array_equal(s["temperature_range_degc"][0],
+                                      tm.temperature_range_degc or (np.nan, np.nan))
+        assert s["chi2"][0, 0] == tm.chi2 and s["dof"][0, 0] == tm.dof
+        assert str(s["order_criterion"][0]) == "aicc"
+        ho = tm.held_out
+        np.testing.assert_array_equal(
+            [s[f"held_out_{k}"][0, 0] for k in ("max_abs_z", "chi2", "dof", "p_value",
+                                                "consistent")],
+            [np.nan] * 5 if ho is None else [ho.max_abs_z, ho.chi2, ho.dof, ho.p_value, 1.0])
+    # the values hold at T0 (c_0), and a result without models has no such field
+    np.testing.assert_array_equal(m["values"].ravel(), cal.values)
+    plain = loadmat(write_mat(_result(), tmp_path / "p.mat"))["imucal"][0, 0]
+    assert "temperature_models" not in plain.dtype.names
+
+
+def test_mat73_carries_the_temperature_models(tmp_path: Path) -> None:
+    cal = _temperature_result()
+    path = write_mat73(cal, tmp_path / "t73.mat")
+    with h5py.File(path, "r") as fh:
+        g = fh["imucal"]
+        assert b"".join(g.attrs["MATLAB_fields"][-1]).decode() == "temperature_models"
+        tms = g["temperature_models"]
+        assert tms.attrs["MATLAB_class"] == b"struct"
+        assert sorted(b"".join(f).decode() for f in tms.attrs["MATLAB_fields"]) == sorted(_MODELS)
+        for tm in cal.temperature_models:
+            s = tms[tm.name]
+            assert s.attrs["MATLAB_class"] == b"struct"
+            assert "".join(chr(c) for c in s["name"][()].T.ravel()) == tm.name
+            assert s["coefficients"].shape == (1, len(tm.coefficients))  # a column, transposed
+            np.testing.assert_array_equal(s["coefficients"][()].ravel(), tm.coefficients)
+            np.testing.assert_array_equal(s["covariance"][()].T, np.atleast_2d(tm.covariance))
+            np.testing.assert_array_equal(s["rate_coefficient"][()].item(),
+                                          _nan_or(tm.rate_coefficient))
+            np.testing.assert_array_equal(s["leg_coefficient"][()].item(),
+                                          _nan_or(tm.leg_coefficient))
+            np.testing.assert_array_equal(s["temperature_range_degc"][()].T,
+                                          [tm.temperature_range_degc or (np.nan, np.nan)])
+            assert s["reference_temperature_degc"][()].item() == T0
+            assert s["chi2"][()].item() == tm.chi2 and s["dof"][()].item() == tm.dof
+            terms = ["".join(chr(c) for c in row).rstrip() for row in s["covariance_terms"][()].T]
+            assert terms == _terms(tm)
+            assert "".join(chr(c) for c in s["order_criterion"][()].T.ravel()) == "aicc"
+            held = s["held_out_p_value"][()].item()
+            assert held == 0.47 if tm.held_out else np.isnan(held)
+
+
+def test_ros_yaml_carries_the_temperature_models() -> None:
+    cal = _temperature_result()
+    doc = yaml.safe_load(format_ros_yaml(cal))
+    tms = doc["temperature_models"]
+    assert sorted(tms) == sorted(_MODELS)
+    for tm in cal.temperature_models:
+        d = tms[tm.name]
+        assert d["reference_temperature_degc"] == T0
+        assert d["coefficients"] == list(tm.coefficients)  # exact: repr floats
+        assert d["rate_coefficient"] == tm.rate_coefficient  # None ↔ null
+        assert d["leg_coefficient"] == tm.leg_coefficient
+        q = tm.n_terms
+        np.testing.assert_array_equal(np.reshape(d["covariance"], (q, q)), tm.covariance)
+        assert d["covariance_terms"] == _terms(tm)
+        rng = d["temperature_range_degc"]
+        assert (rng is None and tm.temperature_range_degc is None) \
+            or tuple(rng) == tm.temperature_range_degc
+        assert (d["chi2"], d["dof"], d["order_criterion"]) == (tm.chi2, tm.dof, "aicc")
+        ho = tm.held_out
+        assert d["held_out"] == (None if ho is None else {
+            "max_abs_z": ho.max_abs_z, "chi2": ho.chi2, "dof": ho.dof, "p_value": ho.p_value,
+            "consistent": True})
+    assert "temperature_models" not in yaml.safe_load(format_ros_yaml(_result()))
+
+
+def test_a_per_axis_result_with_temperature_models_exports_to_mat(tmp_path: Path) -> None:
+    models = {"accel_K_x": ((1e-5,), None, None, None, False),
+              "gyro_b_y": ((2e-4,), None, 5e-5, None, False)}
+    cal = _temperature_result(model="per-axis", models=models)
+    m = loadmat(write_mat(cal, tmp_path / "pa.mat"))["imucal"][0, 0]
+    assert m["M_a"][0, 0] == cal.value("accel_K_x") - 1.0  # at T0
+    assert m["temperature_models"][0, 0]["gyro_b_y"][0, 0]["leg_coefficient"][0, 0] == 5e-5
+
+
+def _at(cal: CalibrationResult, t_degc: float) -> CalibrationResult:
+    """The forward model's parameters at `t_degc` (rate 0, mean leg), without the models."""
+    values, _ = cal.values_at(t_degc, 0.0, 0.0)
+    return replace(cal, values=values[0], temperature_models=())
+
+
+def _samples(cal: CalibrationResult, seed: int) -> tuple[np.ndarray, ...]:
+    rng = np.random.default_rng(seed)
+    f_true = rng.normal(size=(200, 3)) * 9.81
+    w_true = rng.normal(size=(200, 3)) * 2.0
+    accel_m = apply_triad(cal.triad_model("accel"), f_true)
+    gyro_m = apply_triad(cal.triad_model("gyro"), w_true, specific_force_b_mps2=f_true)
+    return f_true, w_true, accel_m, gyro_m
+
+
+def test_openvins_with_temperature_models_inverts_the_model_at_that_temperature(
+        tmp_path: Path) -> None:
+    cal, t = _temperature_result(), 55.0
+    doc = yaml.safe_load(write_openvins_intrinsics(cal, tmp_path / "o.yaml",
+                                                   temperature_degc=t).read_text("utf-8"))
+    assert doc["imu0"]["imucalib_temperature_degc"] == t
+    f_true, w_true, accel_m, gyro_m = _samples(_at(cal, t), 31)
+    w_hat, a_hat = _openvins_correct(doc, gyro_m, accel_m)
+    assert np.max(np.abs(a_hat - f_true)) < 1e-9
+    assert np.max(np.abs(w_hat - w_true)) < 1e-9
+    # the values at T0 would not do: the temperature dependence is in the file
+    at_t0 = yaml.safe_load(write_openvins_intrinsics(cal, tmp_path / "o0.yaml",
+                                                     temperature_degc=T0).read_text("utf-8"))
+    w_0, a_0 = _openvins_correct(at_t0, gyro_m, accel_m)
+    assert np.max(np.abs(a_0 - f_true)) > 1e-4 and np.max(np.abs(w_0 - w_true)) > 1e-4
+    assert at_t0["imu0"]["imucalib_bias_gyro"] == list(cal.triad_model("gyro").bias)
+
+
+def test_kalibr_with_temperature_models_inverts_the_model_at_that_temperature(
+        tmp_path: Path) -> None:
+    cal, t = _temperature_result(), -5.5
+    doc = yaml.safe_load(write_kalibr_intrinsics(cal, tmp_path / "k.yaml",
+                                                 temperature_degc=t).read_text("utf-8"))
+    assert doc["imucalib_temperature_degc"] == t
+    f_true, w_true, accel_m, gyro_m = _samples(_at(cal, t), 32)
+    m_a, m_g = np.array(doc["accelerometers"]["M"]), np.array(doc["gyroscopes"]["M"])
+    a, c_gyro_i = np.array(doc["gyroscopes"]["A"]), np.array(doc["gyroscopes"]["C_gyro_i"])
+    c_i_s = np.array(doc["imucalib_C_i_sensor"])
+    b_a, b_g = np.array(doc["imucalib_bias_accel"]), np.array(doc["imucalib_bias_gyro"])
+    a_i = np.linalg.solve(m_a, (accel_m - b_a).T).T
+    w_i = (c_gyro_i.T @ np.linalg.solve(m_g, (gyro_m - b_g - (a @ c_gyro_i @ a_i.T).T).T)).T
+    assert np.max(np.abs(a_i - f_true @ c_i_s.T)) < 1e-9
+    assert np.max(np.abs(w_i - w_true @ c_i_s.T)) < 1e-9
+
+
+def test_kalibr_and_openvins_refuse_temperature_models_without_a_temperature(
+        tmp_path: Path) -> None:
+    cal = _temperature_result()
+    for write in (write_kalibr_intrinsics, write_openvins_intrinsics):
+        with pytest.raises(InvalidInputError, match="--temperature") as err:
+            write(cal, tmp_path / "x.yaml")
+        assert all(name in str(err.value) for name in _MODELS)
+        for t in (_RANGE[0] - 0.5, _RANGE[1] + 0.5):
+            with pytest.raises(InvalidInputError, match="outside the range"):
+                write(cal, tmp_path / "x.yaml", temperature_degc=t)
+        with pytest.raises(InvalidInputError, match="finite"):
+            write(cal, tmp_path / "x.yaml", temperature_degc=float("nan"))
+        write(cal, tmp_path / "x.yaml", temperature_degc=_RANGE[1])  # the ends are inside
+    with pytest.raises(InvalidInputError, match="--temperature"):
+        kalibr_intrinsics(cal)
+    with pytest.raises(InvalidInputError, match="--temperature"):
+        openvins_intrinsics(cal)
+
+
+def test_a_result_without_temperature_models_is_written_as_before(tmp_path: Path) -> None:
+    cal = _result(k2=False)
+    for write in (write_kalibr_intrinsics, write_openvins_intrinsics):
+        plain = write(cal, tmp_path / "a.yaml").read_text("utf-8")
+        assert "imucalib_temperature_degc" not in plain
+        assert write(cal, tmp_path / "b.yaml", temperature_degc=40.0).read_text("utf-8") == plain
+
+
+def test_openvins_file_names_the_estimator_config_keys(tmp_path: Path) -> None:
+    text = write_openvins_intrinsics(_result(k2=False), tmp_path / "o.yaml").read_text("utf-8")
+    head = [line for line in text.splitlines() if line.startswith("#")]
+    assert any("calib_imu_intrinsics" in line for line in head)
+    assert any("calib_imu_g_sensitivity" in line for line in head)
+    assert any("relative_config_imu" in line for line in head)
+    imu = yaml.safe_load(text)["imu0"]
+    assert imu["model"] == "kalibr"  # OpenVINS' imu model key is in this file, not the config
+    for key in ("Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"):  # what its loader reads
+        assert np.shape(imu[key]) == (3, 3)
+    for line in text.splitlines():  # cv::FileStorage splits a trailing comment at ':'
+        if "#" in line and not line.lstrip().startswith("#"):
+            assert ":" not in line.split("#", 1)[1], line
+
+
+def _cli_result(tmp_path: Path) -> Path:
+    cal = replace(_temperature_result(), sensor_id="IMU-7")
+    src = tmp_path / "run.result.json"
+    src.write_text(cal.to_json(), encoding="utf-8")
+    return src
+
+
+@pytest.mark.parametrize("fmt", ["kalibr-imu", "openvins-imu"])
+def test_cli_needs_a_temperature_for_a_result_with_models(tmp_path: Path, fmt: str) -> None:
+    src = _cli_result(tmp_path)
+    out = CliRunner().invoke(app, ["export", str(src), "--format", fmt,
+                                   "--out", str(tmp_path / "o")])
+    assert out.exit_code != 0
+    assert "--temperature" in out.output and "gyro_bias_x" in out.output
+    assert "Traceback" not in out.output and isinstance(out.exception, SystemExit)
+    out = CliRunner().invoke(app, ["export", str(src), "--format", fmt, "--temperature", "30",
+                                   "--out", str(tmp_path / "o")])
+    assert out.exit_code == 0, out.output
+    (written,) = (tmp_path / "o").glob(f"*.{fmt}.yaml")
+    doc = yaml.safe_load(written.read_text(encoding="utf-8"))
+    stated = doc["imucalib_temperature_degc"] if fmt == "kalibr-imu" \
+        else doc["imu0"]["imucalib_temperature_degc"]
+    assert stated == 30.0
+    out = CliRunner().invoke(app, ["export", str(src), "--format", fmt, "--temperature", "99",
+                                   "--out", str(tmp_path / "o")])
+    assert out.exit_code != 0 and "outside the range" in out.output
+
+
+def test_cli_refuses_a_temperature_for_other_formats(tmp_path: Path) -> None:
+    src = _cli_result(tmp_path)
+    out = CliRunner().invoke(app, ["export", str(src), "--format", "mat", "--temperature", "30",
+                                   "--out", str(tmp_path / "o")])
+    assert out.exit_code != 0 and "--temperature applies to" in out.output
+    out = CliRunner().invoke(app, ["export", str(src), "--format", "ros-yaml",
+                                   "--out", str(tmp_path / "o")])
+    assert out.exit_code == 0, out.output
+    (written,) = (tmp_path / "o").glob("*.ros.yaml")
+    assert "gyro_bias_x" in yaml.safe_load(written.read_text("utf-8"))["temperature_models"]
+
+
+def test_yaml_floats_without_a_point_load_as_numbers() -> None:
+    """repr(1e-05) is '1e-05', a string to YAML 1.1 (PyYAML); it is written as 1.0e-05."""
+    base = _result(k2=False)
+    values = base.values.copy()
+    values[:3] = (1e-05, -3e-20, 1e+22)
+    cal = replace(base, values=values)
+    doc = yaml.safe_load(format_ros_yaml(cal))
+    assert doc["values"] == list(values)
+    assert doc["gyro"]["bias"] == [1e-05, -3e-20, 1e+22]
+
+
+def test_write_outputs_passes_a_temperature_to_kalibr_and_openvins_only(tmp_path: Path) -> None:
+    from imucalib.exports.outputs import write_outputs
+
+    wrapped = SimpleNamespace(result=_temperature_result(), procedure="p1", unit="U")
+    (path,) = write_outputs(wrapped, tmp_path, ("openvins-imu",), name="n",  # type: ignore[arg-type]
+                            temperature_degc=40.0)
+    assert yaml.safe_load(path.read_text("utf-8"))["imu0"]["imucalib_temperature_degc"] == 40.0
+    with pytest.raises(InvalidInputError, match="a temperature applies to"):
+        write_outputs(wrapped, tmp_path, ("kalibr-imu", "mat"), name="n",  # type: ignore[arg-type]
+                      temperature_degc=40.0)
+    with pytest.raises(InvalidInputError, match="--temperature"):
+        write_outputs(wrapped, tmp_path, ("kalibr-imu",), name="n")  # type: ignore[arg-type]

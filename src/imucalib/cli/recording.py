@@ -58,6 +58,11 @@ def export(
                          "in firmware, docs/c-runtime.md), parameters-csv, result-json, mat, "
                          "mat73, ros-yaml, kalibr-imu or openvins-imu (docs/exports.md).")]
     = None,
+    temperature: Annotated[float | None, typer.Option(
+        "--temperature", help="For a result with temperature models and --format kalibr-imu or "
+                              "openvins-imu: the temperature (°C) to evaluate the parameters "
+                              "at; those formats hold constant intrinsics "
+                              "(docs/exports.md).")] = None,
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
     step_file: Annotated[Path | None, typer.Option(
         "--step-file", help="Also write the recording's steps as a step file (TOML) here: "
@@ -75,8 +80,11 @@ def export(
     from imucalib.io.step_file import step_file_from_recording, step_file_to_toml
 
     if path.suffix.lower() == ".json" or fmt is not None:
-        _export_result(path, out, fmt)
+        _export_result(path, out, fmt, temperature)
         return
+    if temperature is not None:
+        raise fail(InvalidInputError("--temperature is for a result exported with --format "
+                                     "kalibr-imu or openvins-imu, not a recording"))
     if stream is None:
         raise fail(InvalidInputError("--stream DEVICE/UNIT is needed to export a recording"))
 
@@ -106,11 +114,12 @@ def export(
         console.print(f"wrote {step_file}", highlight=False)
 
 
-def _export_result(path: Path, out: Path, fmt: str | None) -> None:
-    """Write a calibration result in `fmt` into the folder `out`."""
+def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: float | None
+                   ) -> None:
+    """Write a calibration result in `fmt` into the folder `out` (at `temperature_degc`)."""
     from types import SimpleNamespace
 
-    from imucalib.exports.outputs import write_outputs
+    from imucalib.exports.outputs import TEMPERATURE_FORMATS, write_outputs
     from imucalib.models.result import CalibrationResult
 
     allowed = ("c-runtime", "parameters-csv", "result-json", "mat", "mat73", "ros-yaml",
@@ -119,11 +128,17 @@ def _export_result(path: Path, out: Path, fmt: str | None) -> None:
         if fmt not in allowed:
             raise InvalidInputError(f"--format must be one of {', '.join(allowed)} for a "
                                     f"result; got {fmt!r}")
+        if temperature_degc is not None and fmt not in TEMPERATURE_FORMATS:
+            raise InvalidInputError(
+                f"--temperature applies to --format {' or '.join(TEMPERATURE_FORMATS)} only; "
+                f"{fmt} holds the result as it is (mat, mat73 and ros-yaml carry its "
+                "temperature models)")
         cal = CalibrationResult.load(path)
         wrapped = SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id,
                                   passed=None)
         out.mkdir(parents=True, exist_ok=True)
-        written = write_outputs(wrapped, out, formats=(fmt,), name=path.name.split(".")[0])
+        written = write_outputs(wrapped, out, formats=(fmt,), name=path.name.split(".")[0],
+                                temperature_degc=temperature_degc)
     except CalibrationError as exc:
         raise fail(exc) from exc
     except OSError as exc:

@@ -48,12 +48,23 @@ With i = C_i_s·S (a rotation of imucalib's sensor frame S), (X1) = (X4) when::
 two LQ splits (L lower triangular with positive diagonal times a rotation). C_i_s is written as
 ``imucalib_C_i_sensor`` (Kalibr's i differs from S by it; Kalibr estimates its camera–IMU
 extrinsics in i).
+
+Temperature models (docs/processing-estimation.md, Eq. (T1))::
+
+    p(T, Ṫ, ℓ) = Σ_j c_j (T − T0)^j + d·Ṫ + h·ℓ                                             (T1)
+
+MATLAB and ROS YAML carry them (:func:`temperature_models_struct`; the values hold at T0).
+Kalibr's and OpenVINS' models hold constant intrinsics: for a result with temperature models
+their writers need a temperature and write the parameters evaluated there (Ṫ = 0, ℓ = 0;
+:func:`at_temperature`), stating it as ``imucalib_temperature_degc``; without one they refuse.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Final
 
@@ -65,12 +76,14 @@ from imucalib.errors import InvalidInputError
 from imucalib.models.result import CalibrationResult
 
 __all__ = [
+    "at_temperature",
     "format_kalibr_intrinsics",
     "format_openvins_intrinsics",
     "format_ros_yaml",
     "intrinsics_struct",
     "kalibr_intrinsics",
     "openvins_intrinsics",
+    "temperature_models_struct",
     "write_kalibr_intrinsics",
     "write_mat",
     "write_mat73",
@@ -95,13 +108,15 @@ def intrinsics_struct(cal: CalibrationResult) -> dict[str, Any]:
     axis, column: input axis); ``K2_a`` (3,) and ``G_g`` (3, 3) (zeros where the model has
     none). A per-axis result is given in the triad form (b = K·b_axis, M = diag(K − 1)). Then
     ``param_names``, ``values``, ``covariance``, ``units`` (aligned with ``param_names``),
-    ``sensor_id``, ``procedure``, ``model``. Temperature models are not part of it: the values
-    are the parameters' reference values.
+    ``sensor_id``, ``procedure``, ``model``; the values hold at T0. A result with temperature
+    models adds ``temperature_models`` (:func:`temperature_models_struct`), a struct with one
+    field per parameter that has a model; a result without any has no such field.
     """
     out: dict[str, Any] = {}
+    base = replace(cal, temperature_models=()) if cal.temperature_models else cal
     for triad in _triads(cal):
         s = _SUFFIX[triad]
-        tm = cal.triad_model(triad)  # type: ignore[arg-type]
+        tm = base.triad_model(triad)  # type: ignore[arg-type]
         out[f"b_{s}"] = np.asarray(tm.bias, dtype=np.float64).copy()
         out[f"M_{s}"] = np.asarray(tm.scale_misalignment, dtype=np.float64).copy()
         if triad == "accel":
@@ -115,7 +130,57 @@ def intrinsics_struct(cal: CalibrationResult) -> dict[str, Any]:
     out["sensor_id"] = cal.sensor_id
     out["procedure"] = cal.procedure
     out["model"] = cal.model
+    if cal.temperature_models:
+        out["temperature_models"] = temperature_models_struct(cal)
     return out
+
+
+def temperature_models_struct(cal: CalibrationResult) -> dict[str, dict[str, Any]]:
+    """Return the result's temperature models keyed by parameter name (docs/exports.md).
+
+    Each model of Eq. (T1), p(T, Ṫ, ℓ) = Σ_j c_j (T − T0)^j + d·Ṫ + h·ℓ, becomes a struct:
+    ``name``, ``reference_temperature_degc`` (T0), ``coefficients`` (c_0 … c_m, a column),
+    ``rate_coefficient`` (d) and ``leg_coefficient`` (h), NaN when the model has no such term,
+    ``covariance`` (q × q, in the order of ``covariance_terms``: ``c_0`` … ``c_m``, ``d``, ``h``
+    for the terms present), ``temperature_range_degc`` ([T_min T_max], NaN NaN when not
+    stated), ``chi2``, ``dof``, ``order_criterion``, and the held-out check ``held_out_max_abs_z``,
+    ``held_out_chi2``, ``held_out_dof``, ``held_out_p_value``, ``held_out_consistent`` (1 or 0;
+    all NaN without a check). The keys are the parameter names (``gyro_bias_x`` …), which are
+    MATLAB identifiers; a character that is not is replaced by ``_``.
+    """
+    nan = float("nan")
+    out: dict[str, dict[str, Any]] = {}
+    for tm in cal.temperature_models:
+        terms = [f"c_{j}" for j in range(len(tm.coefficients))]
+        terms += [t for t, v in (("d", tm.rate_coefficient), ("h", tm.leg_coefficient))
+                  if v is not None]
+        rng = tm.temperature_range_degc or (nan, nan)
+        ho = tm.held_out
+        out[_matlab_name(tm.name)] = {
+            "name": tm.name,
+            "reference_temperature_degc": float(tm.reference_temperature_degc),
+            "coefficients": np.array(tm.coefficients, dtype=np.float64),
+            "rate_coefficient": nan if tm.rate_coefficient is None else tm.rate_coefficient,
+            "leg_coefficient": nan if tm.leg_coefficient is None else tm.leg_coefficient,
+            "covariance": np.array(tm.covariance, dtype=np.float64),
+            "covariance_terms": terms,
+            "temperature_range_degc": np.array([rng], dtype=np.float64),
+            "chi2": float(tm.chi2),
+            "dof": float(tm.dof),
+            "order_criterion": tm.order_criterion,
+            "held_out_max_abs_z": nan if ho is None else ho.max_abs_z,
+            "held_out_chi2": nan if ho is None else ho.chi2,
+            "held_out_dof": nan if ho is None else float(ho.dof),
+            "held_out_p_value": nan if ho is None else ho.p_value,
+            "held_out_consistent": nan if ho is None else float(ho.consistent),
+        }
+    return out
+
+
+def _matlab_name(name: str) -> str:
+    """Return `name` as a MATLAB identifier: a letter first, then letters, digits and ``_``."""
+    text = "".join(c if (c.isascii() and c.isalnum()) or c == "_" else "_" for c in name)
+    return text if text[:1].isalpha() else f"p_{text}"
 
 
 def _char_matrix(strings: list[str]) -> NDArray[np.str_]:
@@ -123,17 +188,23 @@ def _char_matrix(strings: list[str]) -> NDArray[np.str_]:
     return np.array([s.ljust(width) for s in strings], dtype=f"<U{width}")
 
 
+def _char_matrices(struct: dict[str, Any]) -> dict[str, Any]:
+    """Return `struct` with every list of strings a char matrix, nested structs included."""
+    return {key: _char_matrix(value) if isinstance(value, list)
+            else _char_matrices(value) if isinstance(value, dict) else value
+            for key, value in struct.items()}
+
+
 def write_mat(cal: CalibrationResult, path: str | os.PathLike[str], *,
               name: str = "imucal") -> Path:
     """Write :func:`intrinsics_struct` as struct `name` of a MATLAB v5 file; return the path.
 
-    String lists (``param_names``, ``units``) become char matrices padded with blanks.
+    String lists (``param_names``, ``units``, ``covariance_terms``) become char matrices padded
+    with blanks; ``temperature_models`` (when the result has any) is a nested struct.
     """
     from scipy.io import savemat
 
-    struct = intrinsics_struct(cal)
-    for key in ("param_names", "units"):
-        struct[key] = _char_matrix(struct[key])
+    struct = _char_matrices(intrinsics_struct(cal))
     out = Path(path)
     savemat(out, {name: struct}, format="5", oned_as="column", long_field_names=True)
     return out
@@ -147,6 +218,32 @@ def _mat73_header() -> bytes:
     return head + b"\x00" * 8 + b"\x00\x02" + b"IM"
 
 
+def _h5_struct(group: Any, struct: dict[str, Any]) -> None:
+    """Write `struct` into the HDF5 `group` as MATLAB v7.3 does (see :func:`write_mat73`)."""
+    import h5py
+
+    group.attrs["MATLAB_class"] = np.bytes_("struct")
+    fields = np.empty(len(struct), dtype=object)  # the field order, as MATLAB writes it
+    fields[:] = [np.array(list(key), dtype="S1") for key in struct]
+    group.attrs.create("MATLAB_fields", data=fields, dtype=h5py.vlen_dtype(np.dtype("S1")))
+    for key, value in struct.items():
+        if isinstance(value, dict):
+            _h5_struct(group.create_group(key), value)
+        elif isinstance(value, str | list):
+            rows = [value] if isinstance(value, str) else value
+            width = max([len(s) for s in rows] + [1])
+            codes = np.array([[ord(c) for c in s.ljust(width)] for s in rows], dtype=np.uint16)
+            ds = group.create_dataset(key, data=codes.T)
+            ds.attrs["MATLAB_class"] = np.bytes_("char")
+            ds.attrs["MATLAB_int_decode"] = np.int32(2)
+        else:
+            arr = np.atleast_2d(np.asarray(value, dtype=np.float64))
+            if arr.shape[0] == 1 and np.ndim(value) == 1:
+                arr = arr.T  # a column vector, as v5's oned_as="column"
+            ds = group.create_dataset(key, data=arr.T)
+            ds.attrs["MATLAB_class"] = np.bytes_("double")
+
+
 def write_mat73(cal: CalibrationResult, path: str | os.PathLike[str], *,
                 name: str = "imucal") -> Path:
     """Write :func:`intrinsics_struct` as struct `name` of a MATLAB v7.3 (HDF5) file.
@@ -155,40 +252,31 @@ def write_mat73(cal: CalibrationResult, path: str | os.PathLike[str], *,
     group (``MATLAB_class`` ``struct``, ``MATLAB_fields`` its field names), each number array
     a dataset (``double``) stored transposed (MATLAB is column-major: h5py reads
     ``f[name][field][()].T``), each string a ``char`` dataset of UTF-16 code units
-    (``MATLAB_int_decode`` 2), string lists as blank-padded char matrices.
+    (``MATLAB_int_decode`` 2), string lists as blank-padded char matrices, a nested struct
+    (``temperature_models`` and each of its models) a nested group.
     """
     import h5py
 
     out = Path(path)
     struct = intrinsics_struct(cal)
     with h5py.File(out, "w", userblock_size=_USERBLOCK_BYTES) as fh:
-        group = fh.create_group(name)
-        group.attrs["MATLAB_class"] = np.bytes_("struct")
-        fields = np.empty(len(struct), dtype=object)  # the field order, as MATLAB writes it
-        fields[:] = [np.array(list(key), dtype="S1") for key in struct]
-        group.attrs.create("MATLAB_fields", data=fields, dtype=h5py.vlen_dtype(np.dtype("S1")))
-        for key, value in struct.items():
-            if isinstance(value, str | list):
-                rows = [value] if isinstance(value, str) else value
-                width = max([len(s) for s in rows] + [1])
-                codes = np.array([[ord(c) for c in s.ljust(width)] for s in rows],
-                                 dtype=np.uint16)
-                ds = group.create_dataset(key, data=codes.T)
-                ds.attrs["MATLAB_class"] = np.bytes_("char")
-                ds.attrs["MATLAB_int_decode"] = np.int32(2)
-            else:
-                arr = np.atleast_2d(np.asarray(value, dtype=np.float64))
-                if arr.shape[0] == 1 and np.ndim(value) == 1:
-                    arr = arr.T  # a column vector, as v5's oned_as="column"
-                ds = group.create_dataset(key, data=arr.T)
-                ds.attrs["MATLAB_class"] = np.bytes_("double")
+        _h5_struct(fh.create_group(name), struct)
     with open(out, "r+b") as fh:
         fh.write(_mat73_header())
     return out
 
 
+def _yfloat(value: float) -> str:
+    """Return ``repr(value)`` as a YAML 1.1 float: ``1e-05`` (a string to PyYAML) → ``1.0e-05``."""
+    text = repr(float(value))
+    if "e" in text and "." not in text:
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}.0e{exponent}"
+    return text
+
+
 def _flow(values: Any) -> str:
-    return "[" + ", ".join(repr(float(v)) for v in np.ravel(values)) + "]"
+    return "[" + ", ".join(_yfloat(v) for v in np.ravel(values)) + "]"
 
 
 def format_ros_yaml(cal: CalibrationResult) -> str:
@@ -197,7 +285,12 @@ def format_ros_yaml(cal: CalibrationResult) -> str:
     One namespace per calibrated triad (``accel``, ``gyro``): ``bias`` (3), ``scale_misalignment``
     (I + M of Eq. (X1), row-major, 9), ``g_sensitivity`` (gyro, row-major 9) and ``k2``
     (accel, 3); then ``parameters`` (names), ``values``, ``covariance`` (row-major, k²) and
-    ``units``. Floats are ``repr`` (round-trip exact).
+    ``units``; the values hold at T0. A result with temperature models adds
+    ``temperature_models``, one mapping per parameter with a model of Eq. (T1) (the fields of
+    :func:`temperature_models_struct`, ``null`` for a term or range the model has not, the
+    held-out check as a mapping or ``null``). Floats are ``repr`` with a ``.0`` put before an
+    exponent that lacks a point (``1.0e-05``: YAML 1.1 reads ``1e-05`` as a string); they
+    round-trip exactly.
     """
     s = intrinsics_struct(cal)
     unit = {"accel": "m/s^2", "gyro": "rad/s"}
@@ -222,7 +315,49 @@ def format_ros_yaml(cal: CalibrationResult) -> str:
               f"values: {_flow(s['values'])}",
               f"covariance: {_flow(s['covariance'])}  # row-major, k x k",
               "units: [" + ", ".join(_quote(u) for u in s["units"]) + "]"]
+    lines += _ros_temperature_models(cal)
     return "\n".join(lines) + "\n"
+
+
+def _ros_temperature_models(cal: CalibrationResult) -> list[str]:
+    """Return the ``temperature_models`` block of :func:`format_ros_yaml` (none without)."""
+    if not cal.temperature_models:
+        return []
+    lines = ["# temperature models, Eq. (T1): p(T, Tdot, l) = sum_j c_j*(T - T0)^j + d*Tdot + h*l",
+             "# (T degC, Tdot degC/s, l = +1 heating, -1 cooling, 0 the mean of both legs);",
+             "# the values above hold at T0; null = the model has no such term",
+             "temperature_models:"]
+    for tm in cal.temperature_models:
+        terms = [f"c_{j}" for j in range(len(tm.coefficients))]
+        terms += [t for t, v in (("d", tm.rate_coefficient), ("h", tm.leg_coefficient))
+                  if v is not None]
+        ho = tm.held_out
+        lines += [f"  {_quote(tm.name)}:",
+                  f"    reference_temperature_degc: {_yfloat(tm.reference_temperature_degc)}",
+                  f"    coefficients: {_flow(tm.coefficients)}",
+                  f"    rate_coefficient: {_scalar(tm.rate_coefficient)}",
+                  f"    leg_coefficient: {_scalar(tm.leg_coefficient)}",
+                  f"    covariance: {_flow(tm.covariance)}  # row-major, q x q",
+                  "    covariance_terms: [" + ", ".join(_quote(t) for t in terms) + "]",
+                  "    temperature_range_degc: " + ("null" if tm.temperature_range_degc is None
+                                                    else _flow(tm.temperature_range_degc)),
+                  f"    chi2: {_yfloat(tm.chi2)}",
+                  f"    dof: {tm.dof}",
+                  f"    order_criterion: {_quote(tm.order_criterion)}"]
+        if ho is None:
+            lines.append("    held_out: null")
+        else:
+            lines += ["    held_out:",
+                      f"      max_abs_z: {_yfloat(ho.max_abs_z)}",
+                      f"      chi2: {_yfloat(ho.chi2)}",
+                      f"      dof: {ho.dof}",
+                      f"      p_value: {_yfloat(ho.p_value)}",
+                      f"      consistent: {'true' if ho.consistent else 'false'}"]
+    return lines
+
+
+def _scalar(value: float | None) -> str:
+    return "null" if value is None else _yfloat(value)
 
 
 def _quote(text: str) -> str:
@@ -268,16 +403,62 @@ def _no_k2(s: dict[str, Any], tool: str) -> None:
                                 "has no quadratic scale factor (docs/exports.md)")
 
 
-def kalibr_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
-    """Return Kalibr's ``M_accel``, ``M_gyro``, ``A``, ``C_gyro_i`` and ``C_i_sensor`` (Eq. X5).
+def at_temperature(cal: CalibrationResult, temperature_degc: float | None, tool: str
+                   ) -> tuple[CalibrationResult, float | None]:
+    """Return the result with its values at `temperature_degc` for a tool without T models.
 
-    Needs both triads in the result.
+    Kalibr's and OpenVINS' IMU models hold constant intrinsics. A result with temperature
+    models (Eq. (T1)) is evaluated at `temperature_degc` with Ṫ = 0 and ℓ = 0 (the mean of both
+    legs; :meth:`~imucalib.models.result.CalibrationResult.values_at`) and returned without
+    its models, with that temperature. A result without models is returned unchanged, with
+    None (its values hold at every temperature; `temperature_degc` is not needed).
 
     Raises
     ------
     InvalidInputError
-        A triad missing, K2 ≠ 0 (not in Kalibr's model), or an I + M with determinant ≤ 0.
+        A result with temperature models and no `temperature_degc` (the message names the
+        parameters and the CLI option ``--temperature``), a temperature that is not a finite
+        number, or one outside the models' fitted range
+        (:attr:`~imucalib.models.result.CalibrationResult.temperature_range_degc`).
     """
+    if not cal.temperature_models:
+        return cal, None
+    names = ", ".join(tm.name for tm in cal.temperature_models)
+    if temperature_degc is None:
+        raise InvalidInputError(
+            f"the result has temperature models (Eq. (T1)) for {names}; {tool}'s IMU model "
+            "holds constant intrinsics, so they cannot be written without a temperature: pass "
+            "the temperature to evaluate them at (temperature_degc=…; CLI: --temperature DEGC), "
+            "or export mat, mat73 or ros-yaml, which carry the models")
+    if isinstance(temperature_degc, bool) or not isinstance(
+            temperature_degc, int | float | np.integer | np.floating) \
+            or not math.isfinite(float(temperature_degc)):
+        raise InvalidInputError(f"the temperature must be a finite number of °C; got "
+                                f"{temperature_degc!r}")
+    t = float(temperature_degc)
+    rng = cal.temperature_range_degc
+    if rng is not None and not rng[0] <= t <= rng[1]:
+        raise InvalidInputError(
+            f"the temperature {t!r} °C is outside the range the temperature models were fitted "
+            f"over, [{rng[0]!r}, {rng[1]!r}] °C; the models are not valid there")
+    values, _ = cal.values_at(t, 0.0, 0.0)
+    return replace(cal, values=values[0], temperature_models=()), t
+
+
+def kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
+                      ) -> dict[str, _F64]:
+    """Return Kalibr's ``M_accel``, ``M_gyro``, ``A``, ``C_gyro_i`` and ``C_i_sensor`` (Eq. X5).
+
+    Needs both triads in the result. A result with temperature models is evaluated at
+    `temperature_degc` (:func:`at_temperature`, Eq. (T1)).
+
+    Raises
+    ------
+    InvalidInputError
+        A triad missing, K2 ≠ 0 (not in Kalibr's model), an I + M with determinant ≤ 0, or a
+        temperature :func:`at_temperature` refuses (none given for a result with models).
+    """
+    cal, _ = at_temperature(cal, temperature_degc, "Kalibr")
     s = intrinsics_struct(cal)
     _no_k2(s, "Kalibr")
     if "M_a" not in s or "M_g" not in s:
@@ -290,8 +471,14 @@ def kalibr_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
             "C_i_sensor": c_i_s}
 
 
-def format_kalibr_intrinsics(cal: CalibrationResult) -> str:
-    """Return the intrinsics in the layout of Kalibr's ``scale-misalignment`` IMU result YAML."""
+def format_kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
+                             ) -> str:
+    """Return the intrinsics in the layout of Kalibr's ``scale-misalignment`` IMU result YAML.
+
+    A result with temperature models needs `temperature_degc` (:func:`at_temperature`); the
+    file then states it as ``imucalib_temperature_degc``.
+    """
+    cal, t = at_temperature(cal, temperature_degc, "Kalibr")
     k = kalibr_intrinsics(cal)
     s = intrinsics_struct(cal)
 
@@ -311,26 +498,42 @@ def format_kalibr_intrinsics(cal: CalibrationResult) -> str:
              "imucalib_C_i_sensor:", *block("  ", k["C_i_sensor"]),
              f"imucalib_bias_accel: {_flow(s['b_a'])}  # m/s^2, in the accelerometer's output",
              f"imucalib_bias_gyro: {_flow(s['b_g'])}  # rad/s, in the gyro's output"]
+    lines += _temperature_lines("", t)
     return "\n".join(lines) + "\n"
 
 
-def write_kalibr_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str]) -> Path:
+def _temperature_lines(indent: str, temperature_degc: float | None) -> list[str]:
+    """Return the lines stating the temperature the values hold at (none without models)."""
+    if temperature_degc is None:
+        return []
+    return [f"{indent}# the result's temperature models (Eq. (T1)) evaluated at this temperature",
+            f"{indent}# (rate 0, the mean of the heating and cooling legs), in degC",
+            f"{indent}imucalib_temperature_degc: {_yfloat(temperature_degc)}"]
+
+
+def write_kalibr_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str], *,
+                            temperature_degc: float | None = None) -> Path:
     """Write :func:`format_kalibr_intrinsics` to `path`; return the path."""
     out = Path(path)
-    out.write_text(format_kalibr_intrinsics(cal), encoding="utf-8")
+    out.write_text(format_kalibr_intrinsics(cal, temperature_degc=temperature_degc),
+                   encoding="utf-8")
     return out
 
 
-def openvins_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
+def openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
+                        ) -> dict[str, _F64]:
     """Return OpenVINS' ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` (Eq. X3).
 
-    A triad the result does not calibrate gets identity (``Tg`` zero).
+    A triad the result does not calibrate gets identity (``Tg`` zero). A result with
+    temperature models is evaluated at `temperature_degc` (:func:`at_temperature`, Eq. (T1)).
 
     Raises
     ------
     InvalidInputError
-        K2 ≠ 0 (not in OpenVINS' model), or an I + M with determinant ≤ 0.
+        K2 ≠ 0 (not in OpenVINS' model), an I + M with determinant ≤ 0, or a temperature
+        :func:`at_temperature` refuses (none given for a result with models).
     """
+    cal, _ = at_temperature(cal, temperature_degc, "OpenVINS")
     s = intrinsics_struct(cal)
     _no_k2(s, "OpenVINS")
     out: dict[str, _F64] = {}
@@ -346,13 +549,25 @@ def openvins_intrinsics(cal: CalibrationResult) -> dict[str, _F64]:
     return out
 
 
-def format_openvins_intrinsics(cal: CalibrationResult) -> str:
-    """Return the ``imu0`` intrinsics block of OpenVINS' ``kalibr_imu_chain.yaml`` (Eq. X3)."""
+def format_openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
+                               ) -> str:
+    """Return the ``imu0`` intrinsics block of OpenVINS' ``kalibr_imu_chain.yaml`` (Eq. X3).
+
+    A result with temperature models needs `temperature_degc` (:func:`at_temperature`); the
+    block then states it as ``imucalib_temperature_degc``. The header comment names the
+    ``estimator_config.yaml`` keys OpenVINS reads with it (docs/exports.md).
+    """
+    cal, t = at_temperature(cal, temperature_degc, "OpenVINS")
     mats = openvins_intrinsics(cal)
     s = intrinsics_struct(cal)
     lines = [f"# imucalib {__version__}: IMU intrinsics for OpenVINS (kalibr IMU model: lower-",
              "# triangular D = T^-1; docs/exports.md). Merge the noise keys of the "
              "openvins-yaml export into imu0.",
+             "# OpenVINS reads this file as the relative_config_imu of its estimator_config.yaml",
+             "# and takes the intrinsic model from imu0/model below. In estimator_config.yaml set",
+             "# calib_imu_intrinsics and calib_imu_g_sensitivity to false to apply these values",
+             "# as they are (OpenVINS applies Tw, Ta, R_IMUtoGYRO, R_IMUtoACC and Tg either way),",
+             "# or to true to refine them online starting from these values.",
              "imu0:",
              '  model: "kalibr"']
     for key in ("Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"):
@@ -362,11 +577,14 @@ def format_openvins_intrinsics(cal: CalibrationResult) -> str:
         unit = "rad/s" if triad == "gyro" else "m/s^2"
         lines.append(f"  imucalib_bias_{triad}: {_flow(s[f'b_{_SUFFIX[triad]}'])}  # {unit}, "
                      "b of (X2); OpenVINS estimates its own")
+    lines += _temperature_lines("  ", t)
     return "\n".join(lines) + "\n"
 
 
-def write_openvins_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str]) -> Path:
+def write_openvins_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str], *,
+                              temperature_degc: float | None = None) -> Path:
     """Write :func:`format_openvins_intrinsics` to `path`; return the path."""
     out = Path(path)
-    out.write_text(format_openvins_intrinsics(cal), encoding="utf-8")
+    out.write_text(format_openvins_intrinsics(cal, temperature_degc=temperature_degc),
+                   encoding="utf-8")
     return out

@@ -58,7 +58,7 @@ The record index ``.k`` appears only when the characterisation holds more than o
 
 Contents
 --------
-:func:`write_outputs`, :data:`OUTPUT_FORMATS`
+:func:`write_outputs`, :data:`OUTPUT_FORMATS`, :data:`TEMPERATURE_FORMATS`
 """
 
 from __future__ import annotations
@@ -68,12 +68,12 @@ import json
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.procedure import ProcedureResult
 
-__all__ = ["OUTPUT_FORMATS", "write_outputs"]
+__all__ = ["OUTPUT_FORMATS", "TEMPERATURE_FORMATS", "write_outputs"]
 
 _Writer = Callable[[Any, Path, str], list[Path]]
 
@@ -190,15 +190,30 @@ def _c_runtime(result: Any, folder: Path, stem: str) -> list[Path]:
     return write_c_runtime(_calibration(result, "c-runtime"), folder / f"{stem}.c")
 
 
-def _intrinsics(fmt: str, suffix: str) -> _Writer:
-    def writer(result: Any, folder: Path, stem: str) -> list[Path]:
+#: The formats that take a temperature (their tools hold constant intrinsics; docs/exports.md).
+TEMPERATURE_FORMATS = ("kalibr-imu", "openvins-imu")
+
+
+class _IntrinsicsWriter(Protocol):
+    def __call__(self, result: Any, folder: Path, stem: str, *,
+                 temperature_degc: float | None = None) -> list[Path]: ...
+
+
+def _intrinsics(fmt: str, suffix: str) -> _IntrinsicsWriter:
+    def writer(result: Any, folder: Path, stem: str, *,
+               temperature_degc: float | None = None) -> list[Path]:
         from imucalib.exports import intrinsics
 
+        cal, path = _calibration(result, fmt), folder / f"{stem}{suffix}"
+        if fmt == "kalibr-imu":
+            return [intrinsics.write_kalibr_intrinsics(cal, path,
+                                                       temperature_degc=temperature_degc)]
+        if fmt == "openvins-imu":
+            return [intrinsics.write_openvins_intrinsics(cal, path,
+                                                         temperature_degc=temperature_degc)]
         write = {"mat": intrinsics.write_mat, "mat73": intrinsics.write_mat73,
-                 "ros-yaml": intrinsics.write_ros_yaml,
-                 "kalibr-imu": intrinsics.write_kalibr_intrinsics,
-                 "openvins-imu": intrinsics.write_openvins_intrinsics}[fmt]
-        return [write(_calibration(result, fmt), folder / f"{stem}{suffix}")]
+                 "ros-yaml": intrinsics.write_ros_yaml}[fmt]
+        return [write(cal, path)]
 
     return writer
 
@@ -211,6 +226,13 @@ def _write_document(document: Any, fmt: str, path_stem: Path) -> Path:
     from imucalib.report.html import write_report_html
 
     return write_report_html(document, path_stem.with_name(path_stem.name + ".html"))
+
+
+#: The result exports of :mod:`imucalib.exports.intrinsics`, by format.
+_INTRINSICS: dict[str, _IntrinsicsWriter] = {
+    fmt: _intrinsics(fmt, suffix) for fmt, suffix in (
+        ("mat", ".intrinsics.mat"), ("mat73", ".intrinsics73.mat"), ("ros-yaml", ".ros.yaml"),
+        ("kalibr-imu", ".kalibr-imu.yaml"), ("openvins-imu", ".openvins-imu.yaml"))}
 
 
 def _report(fmt: str) -> _Writer:
@@ -292,18 +314,19 @@ OUTPUT_FORMATS: dict[str, _Writer] = {
     "residuals-png": _residuals_png,
     "temperature-png": _temperature_png,
     "c-runtime": _c_runtime,
-    "mat": _intrinsics("mat", ".intrinsics.mat"),
-    "mat73": _intrinsics("mat73", ".intrinsics73.mat"),
-    "ros-yaml": _intrinsics("ros-yaml", ".ros.yaml"),
-    "kalibr-imu": _intrinsics("kalibr-imu", ".kalibr-imu.yaml"),
-    "openvins-imu": _intrinsics("openvins-imu", ".openvins-imu.yaml"),
+    "mat": _INTRINSICS["mat"],
+    "mat73": _INTRINSICS["mat73"],
+    "ros-yaml": _INTRINSICS["ros-yaml"],
+    "kalibr-imu": _INTRINSICS["kalibr-imu"],
+    "openvins-imu": _INTRINSICS["openvins-imu"],
     "report-pdf": _report("report-pdf"),
     "report-html": _report("report-html"),
 }
 
 
 def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
-                  formats: Sequence[str] | None = None, *, name: str) -> list[Path]:
+                  formats: Sequence[str] | None = None, *, name: str,
+                  temperature_degc: float | None = None) -> list[Path]:
     """Name and write the output files of a procedure result (module docstring).
 
     Parameters
@@ -316,6 +339,10 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
         Formats of :data:`OUTPUT_FORMATS`; default: the procedure's ``outputs``.
     name : str
         First part of every file name, usually the recording's stem.
+    temperature_degc : float, optional
+        For :data:`TEMPERATURE_FORMATS` only (``kalibr-imu``, ``openvins-imu``): the temperature
+        at which a result's temperature models (Eq. (T1)) are evaluated; such a result is
+        refused without it (:func:`imucalib.exports.intrinsics.at_temperature`). [°C]
 
     Returns
     -------
@@ -325,7 +352,8 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
     Raises
     ------
     InvalidInputError
-        An unknown format, or one the result cannot give (a noise table of a calibration).
+        An unknown format, or one the result cannot give (a noise table of a calibration), or
+        a temperature with a format outside :data:`TEMPERATURE_FORMATS`.
     ConfigurationError
         The result names an unregistered procedure.
     """
@@ -337,12 +365,24 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
     if unknown:
         raise InvalidInputError(f"unknown output format(s) {unknown}; known: "
                                 f"{', '.join(OUTPUT_FORMATS)}")
+    if temperature_degc is not None:
+        other = [f for f in chosen if f not in TEMPERATURE_FORMATS]
+        if other:
+            raise InvalidInputError(
+                f"a temperature applies to the formats {', '.join(TEMPERATURE_FORMATS)} only "
+                f"(their tools hold constant intrinsics); not to {', '.join(other)}, which "
+                "carry the temperature models themselves or none")
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     if hasattr(result, "results"):
+        if temperature_degc is not None:
+            raise InvalidInputError("a temperature is for one result, not a batch")
         return _write_batch(result, out, chosen, name)
     stem = f"{name}.{_safe(result.unit)}.{result.procedure}"
     written: list[Path] = []
     for fmt in chosen:
-        written += OUTPUT_FORMATS[fmt](result, out, stem)
+        if temperature_degc is not None:  # only TEMPERATURE_FORMATS here (checked above)
+            written += _INTRINSICS[fmt](result, out, stem, temperature_degc=temperature_degc)
+        else:
+            written += OUTPUT_FORMATS[fmt](result, out, stem)
     return written
