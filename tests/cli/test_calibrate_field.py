@@ -38,6 +38,16 @@ def test_a_raw_count_log_is_calibrated_and_corrected_end_to_end(tmp_path: Path):
     assert report["accel_form"] == "gravity-norm" and len(report["poses"]) == 25
     assert (out / "mpu.IMU.field.parameters.csv").read_text(encoding="utf-8").startswith(
         "parameter,value,std_uncertainty,unit\n")
+    # its report (the default PDF): the field process with every fit's χ²/ν, field traceability
+    from pypdf import PdfReader
+
+    text = " ".join(" ".join(p.extract_text() for p in
+                             PdfReader(str(out / "mpu.IMU.field.report.pdf")).pages).split())
+    assert "Procedure field: calibration without equipment" in text and "(docs/field.md)" in text
+    for q in report["fit_quality"]:
+        assert f"{q['group']}: χ²/ν = {q['reduced_chi2']:.3g}" in text
+    assert "a field calibration by hand uses no rotation table" in text
+    assert "gyro_M_xy" in text and "U (k = 2)" in text
     # the C99 runtime of the result compiles as firmware would build it (docs/c-runtime.md)
     import shutil
     import subprocess

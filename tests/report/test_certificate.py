@@ -15,7 +15,6 @@ import os
 import re
 import shutil
 import subprocess
-from decimal import ROUND_HALF_UP, Decimal
 from html import escape
 from pathlib import Path
 from types import SimpleNamespace
@@ -32,29 +31,7 @@ from imucalib.report.document import SECTION_TITLES, build_report
 from imucalib.report.html import write_report_html
 from imucalib.report.pdf import write_report_pdf
 
-
-def _expected_cells(value: float, big_u: float) -> tuple[str, str]:
-    """GUM 7.2.6 (docs/reporting.md), written independently of imucalib.report.numbers."""
-    u = Decimal(f"{big_u:.12g}")
-    exp_u = u.adjusted()
-    q = Decimal(1).scaleb(exp_u - 1)  # two significant digits
-    u2 = u.quantize(q, rounding=ROUND_HALF_UP)
-    if u2 >= Decimal(100).scaleb(exp_u - 1):  # 9.96 -> 10
-        q = Decimal(1).scaleb(exp_u)
-        u2 = u.quantize(q, rounding=ROUND_HALF_UP)
-    v = Decimal(repr(value)).quantize(q, rounding=ROUND_HALF_UP)
-    place = q.as_tuple().exponent
-    assert isinstance(place, int)
-    lead = max(u2.adjusted(), v.adjusted() if v != 0 else u2.adjusted())
-    if place > 0 or lead < -3 or lead >= 6:
-        scale = Decimal(1).scaleb(-lead)
-        vm, um, decimals, suffix = v * scale, u2 * scale, max(0, lead - place), f"e{lead}"
-    else:
-        vm, um, decimals, suffix = v, u2, max(0, -place), ""
-    v_text = f"{abs(vm):.{decimals}f}"
-    if vm != 0:
-        v_text = ("-" if vm < 0 else "+") + v_text
-    return v_text + suffix, f"{um:.{decimals}f}" + suffix
+from ._gum import expected_cells as _expected_cells
 
 
 def _shown(name: str, value: float, sigma: float) -> tuple[float, float, str]:

@@ -241,8 +241,9 @@ def _report(fmt: str) -> _Writer:
 
         recording = None
         name = _recording_name(result)
-        if name and (folder / name).is_file():  # written beside the recording (the demo)
-            recording = folder / name
+        if (name and Path(name).suffix.lower() in (".h5", ".hdf5")
+                and (folder / name).is_file()):  # written beside the recording (the demo)
+            recording = folder / name  # (a user's CSV log is no Recording: not read again)
         document = build_report(result, recording=recording)
         return [_write_document(document, fmt, folder / f"{stem}.report")]
 
