@@ -187,3 +187,26 @@ def test_asking_for_what_four_positions_cannot_resolve(tmp_path: Path) -> None:
         analyze_tumble(path, options=TumbleOptions(
             coefficients=("K0", "K1", "delta", "K2", "Kip", "K3")))
     assert list(info.value.unobservable) == ["Kip", "K3"]
+
+
+def test_its_report_prints_every_row_with_its_expanded_uncertainty(
+        twin_run: tuple[Path, TumbleResult]) -> None:
+    """A procedure without a report module of its own: the generic content (docs/reporting.md)."""
+    from imucalib.report.console import display_unit
+    from imucalib.report.document import SECTION_TITLES, build_report
+
+    from ..report._gum import expected_cells
+
+    path, result = twin_run
+    doc = build_report(result, recording=path)
+    assert [s.title for s in doc.sections] == list(SECTION_TITLES)
+    (table,) = doc.section("5.").tables
+    rows = {r[0]: r[1:] for r in table.rows}
+    assert len(rows) == len(result.parameter_rows()) == 6 * 7 + 15
+    for name, value, std, unit in result.parameter_rows():
+        shown_unit, scale = (display_unit(name, unit) if name.startswith("accel_")
+                             else (unit, 1.0))
+        shown = value - 1.0 if name.split("_")[1] == "K" else value
+        assert rows[name] == (*expected_cells(shown / scale, 2.0 * std / scale), shown_unit)
+    assert "(docs/tumble.md)" in doc.section("4.").paragraphs[0]
+    assert doc.section("6.").paragraphs[0].startswith("Decision: no conformity decision")

@@ -26,6 +26,7 @@ from imucalib.report.sections import (
     expanded_cells,
     object_section,
     recommendations,
+    temperature_model_table,
     u_paragraph,
 )
 
@@ -92,13 +93,18 @@ def content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
     reasons = list(getattr(result, "reasons", ()) or ())
     process, misfit = _process(result, cal)
     details = dict(getattr(prov, "details", {}) or {})
+    tables = [table]
+    if getattr(cal, "temperature_models", None):
+        tables.append(temperature_model_table(cal))
+        process.append(f"The parameters hold at T0 = {cal.reference_temperature_degc:g} °C; "
+                       "each temperature model (T1) gives them at other temperatures.")
     sections = (
         object_section(details.get("unit", {"serial": result.unit}), str(result.unit)),
         equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
                           procedure=str(result.procedure)),
         environment_section(meta, {}),
         Section(SECTION_TITLES[3], tuple(process)),
-        Section(SECTION_TITLES[4], (u_paragraph(), *reasons), (table,)),
+        Section(SECTION_TITLES[4], (u_paragraph(), *reasons), tuple(tables)),
     )
     recs = recommendations(passed, reasons, (), misfit)
     return ReportContent(sections, decision, passed, tuple(recs), prov)

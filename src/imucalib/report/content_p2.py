@@ -17,17 +17,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
 from imucalib import units
 from imucalib.report.document import (
-    COVERAGE_FACTOR,
     SECTION_TITLES,
     ReportContent,
     ReportTable,
     Section,
 )
-from imucalib.report.numbers import round_pair
 from imucalib.report.sections import (
     environment_section,
     equipment_section,
@@ -35,37 +31,11 @@ from imucalib.report.sections import (
     object_section,
     parameter_table,
     recommendations,
+    temperature_model_table,
     u_paragraph,
 )
 
 __all__ = ["content"]
-
-
-def _model_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
-    """One row per temperature model: order, c₁ ± U per °C, χ²/ν, the held-out check."""
-    from imucalib.report.console import display_unit
-
-    cal = unit_result.result
-    rows = []
-    for name, fit in unit_result.models.items():
-        unit, scale = display_unit(name, cal.units.get(name, ""))
-        if fit.order >= 1:
-            std = np.asarray(fit.std(), dtype=float)
-            cells = round_pair(fit.model.coefficients[1] / scale,
-                               COVERAGE_FACTOR * float(std[1]) / scale, sign=True)
-            slope = f"{cells.value_text} ± {cells.uncertainty_text} {unit}/°C"
-        else:
-            slope = "— (constant)"
-        check = unit_result.held_out.get(name)
-        if check is None:
-            held = "not checked (no held-out point)"
-        else:
-            z = float(np.max(np.abs(check.normalised_residuals)))
-            held = (f"{'consistent' if check.consistent else 'NOT consistent'}: max|z| "
-                    f"{z:.2g}, p = {check.p_value:.2g} (ν = {check.dof})")
-        rows.append((name, f"{fit.order} ({fit.criterion.upper()})", slope,
-                     f"{fit.quality.reduced_chi2:.3g}", held))
-    return tuple(rows)
 
 
 def _error_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
@@ -105,9 +75,7 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
         *(q.summary() for q in cal.fit_quality),
         *(f"Note: {n}" for n in unit_result.notes)))
     tables = [parameter_table(cal, f"parameters of {unit_result.unit} at T0 = {t0:g} °C"),
-              ReportTable("temperature models (T1)",
-                          ("parameter", "order (criterion)", f"c₁ ± U (k = {COVERAGE_FACTOR:g})",
-                           "χ²/ν", "held-out check"), _model_rows(unit_result))]
+              temperature_model_table(cal)]
     errors = _error_rows(unit_result)
     if errors:
         tables.append(ReportTable("largest error after compensation (held-out points when there "

@@ -11,7 +11,7 @@ Contents
 :func:`recommendations`, :func:`conclusion_section`, :func:`appendix`, :func:`u_paragraph`,
 :func:`traceability`, :func:`reviews_of`, :func:`expanded_cells`, :func:`parameter_table`,
 :func:`figure_of`, :func:`yes_no`, :func:`recording_facts`, :func:`json_field`,
-:func:`plan_name`
+:func:`plan_name`, :func:`temperature_model_table`
 """
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ from imucalib.report.numbers import round_pair
 
 __all__ = ["appendix", "conclusion_section", "environment_section", "equipment_section",
            "expanded_cells", "figure_of", "json_field", "object_section", "parameter_table",
-           "plan_name", "recommendations", "recording_facts", "reviews_of", "traceability",
-           "u_paragraph", "yes_no"]
+           "plan_name", "recommendations", "recording_facts", "reviews_of",
+           "temperature_model_table", "traceability", "u_paragraph", "yes_no"]
 
 
 def reviews_of(review: Any) -> tuple[ReviewStatus, ...]:
@@ -303,3 +303,34 @@ def parameter_table(cal: Any, title: str) -> ReportTable:
                  for name in cal.param_names)
     return ReportTable(title, ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
                        rows)
+
+
+def temperature_model_table(cal: Any) -> ReportTable:
+    """One row per temperature model (T1) of a CalibrationResult (docs/reporting.md).
+
+    Order and how it was chosen, the linear coefficient c₁ with U = k·u per °C in the
+    parameter's display unit, χ²/ν of the model's fit, and the held-out check (max|z|, p, ν).
+    """
+    from imucalib.report.console import display_unit
+
+    rows = []
+    for tm in cal.temperature_models:
+        unit, scale = display_unit(tm.name, cal.units.get(tm.name, ""))
+        order = len(tm.coefficients) - 1
+        if order >= 1:
+            cells = round_pair(tm.coefficients[1] / scale,
+                               COVERAGE_FACTOR * float(np.sqrt(tm.covariance[1, 1])) / scale,
+                               sign=True)
+            slope = f"{cells.value_text} ± {cells.uncertainty_text} {unit}/°C"
+        else:
+            slope = "— (constant)"
+        check = tm.held_out
+        held = ("not checked (no held-out point)" if check is None else
+                f"{'consistent' if check.consistent else 'NOT consistent'}: max|z| "
+                f"{check.max_abs_z:.2g}, p = {check.p_value:.2g} (ν = {check.dof})")
+        reduced = tm.chi2 / tm.dof if tm.dof > 0 else float("nan")
+        rows.append((tm.name, f"{order} ({tm.order_criterion.upper()})", slope,
+                     f"{reduced:.3g}", held))
+    return ReportTable("temperature models (T1)",
+                       ("parameter", "order (criterion)", f"c₁ ± U (k = {COVERAGE_FACTOR:g})",
+                        "χ²/ν", "held-out check"), tuple(rows))
