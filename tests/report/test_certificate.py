@@ -241,3 +241,18 @@ def test_the_held_out_and_repeatability_checks_are_drawn(certificate):
     # this run has one repetition: repeatability is not assessed and has no rows to draw
     assert [c.name for c in checks if c.rows] == ["held-out accelerometer accuracy",
                                                   "held-out gyro accuracy"]
+
+
+def test_every_procedure_the_generic_content_reports_cites_an_existing_page():
+    from imucalib.report.document import REPORT_CONTENTS
+
+    root = Path(__file__).resolve().parents[2]
+    generic = [n for n in registry.BUILTIN if n not in REPORT_CONTENTS]
+    assert "field" in generic and "p3" in generic
+    for name in generic:
+        assert (root / "docs" / f"{name}.md").is_file(), name
+        rows = [("accel_bias_x", 1e-3, 1e-4, "m/s^2")]
+        doc = build_report(SimpleNamespace(procedure=name, unit="U", passed=None,
+                                           to_dict=lambda: {}, parameter_rows=lambda: rows))
+        assert f"(docs/{name}.md)." in doc.section("4.").paragraphs[0]
+        assert registry.get(name).description.rstrip(".")[:40] in doc.section("4.").paragraphs[0]

@@ -64,20 +64,14 @@ def _process(result: Any, cal: Any) -> tuple[list[str], bool]:
         text = f"Procedure {name}: {registry.get(name).description}"
     except CalibrationError:
         text = f"Procedure {name}"
-    doc = _DOCS.get(name, "docs/procedures.md")
+    # a built-in procedure's page is docs/<name>.md; a plug-in's is its own
+    doc = f"docs/{name}.md" if name in registry.BUILTIN else "its documentation"
     paragraphs = [f"{text.rstrip('.')} ({doc})."]
     quality = tuple(getattr(result, "quality", ()) or getattr(cal, "fit_quality", ()) or ())
     paragraphs += [q.summary() for q in quality if callable(getattr(q, "summary", None))]
     misfit = any(bool(getattr(q, "misfit", False)) for q in quality)
     paragraphs += [f"Note: {n}" for n in getattr(result, "notes", ()) or ()]
     return paragraphs, misfit
-
-
-#: Procedure → its documentation page (the process section cites it).
-_DOCS = {"p3": "docs/p3.md", "field": "docs/field.md", "tumble": "docs/tumble.md",
-         "installation": "docs/installation.md", "g_sensitivity": "docs/g-sensitivity.md",
-         "earth_rate_bias": "docs/earth-rate-bias.md", "random_drift": "docs/random-drift.md",
-         "rate_transfer": "docs/rate-transfer.md", "p1": "docs/p1.md", "p2": "docs/p2.md"}
 
 
 def content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
