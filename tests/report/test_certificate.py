@@ -249,9 +249,9 @@ def test_every_procedure_the_generic_content_reports_cites_an_existing_page():
     root = Path(__file__).resolve().parents[2]
     generic = [n for n in registry.BUILTIN if n not in REPORT_CONTENTS]
     assert "field" in generic and "p3" in generic
+    rows = [("accel_bias_x", 1e-3, 1e-4, "m/s^2")]
     for name in generic:
         assert (root / "docs" / f"{name}.md").is_file(), name
-        rows = [("accel_bias_x", 1e-3, 1e-4, "m/s^2")]
         doc = build_report(SimpleNamespace(procedure=name, unit="U", passed=None,
                                            to_dict=lambda: {}, parameter_rows=lambda: rows))
         assert f"(docs/{name}.md)." in doc.section("4.").paragraphs[0]
