@@ -49,6 +49,12 @@ def test_units_due_by_default_and_own_interval(records, make_result):
     assert {d.serial for d in records.due_units(date(2026, 3, 31))} == {"NEVER", "OLD"}
     assert {d.serial for d in records.due_units(date(2026, 4, 1), interval_days=30)} == {
         "NEVER", "SHORT", "OLD", "FRESH"}
+    # every unit, due or not (`imucalib records list`)
+    status = {d.serial: d for d in records.unit_status()}
+    assert set(status) == {"NEVER", "SHORT", "OLD", "FRESH"}
+    assert status["FRESH"].last_calibrated == date(2026, 2, 1)
+    assert status["FRESH"].due_on == date(2027, 2, 1)
+    assert status["NEVER"].due_on is None
 
 
 def test_equipment_due_follows_the_current_certificate(records):

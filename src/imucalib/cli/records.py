@@ -72,7 +72,7 @@ def list_units(db: Db = None, as_json: Json = False) -> None:
     """List the units and when each is due (the last calibration of each)."""
     try:
         with _open(db) as records:
-            rows = records.due_units(date(9999, 12, 31))
+            rows = records.unit_status()
     except CalibrationError as exc:
         raise fail(exc) from exc
     _print(rows, as_json, "units", ["serial", "model", "last_calibrated", "due_on",

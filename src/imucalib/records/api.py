@@ -552,6 +552,15 @@ class Records:
                   interval_days: int = DEFAULT_INTERVAL_DAYS) -> list[DueUnit]:
         """Return the units due for recalibration on `as_of` (default today), Eq. (R.4)."""
         day = as_of or datetime.now(UTC).date()
+        return [u for u in self.unit_status(interval_days)
+                if u.due_on is None or u.due_on <= day]
+
+    def unit_status(self, interval_days: int = DEFAULT_INTERVAL_DAYS) -> list[DueUnit]:
+        """Return every unit with its last good calibration and when it is due, Eq. (R.4).
+
+        A unit never calibrated (or only by failed results) has ``last_calibrated`` and
+        ``due_on`` None; amended results count by their current version.
+        """
         if interval_days <= 0:
             raise InvalidInputError(f"`interval_days` must be > 0; got {interval_days}")
 
@@ -578,9 +587,8 @@ class Records:
                     due.append(DueUnit(unit.serial, unit.model, None, None, interval, None))
                     continue
                 last = best[0].date()
-                due_on = last + timedelta(days=interval)
-                if due_on <= day:
-                    due.append(DueUnit(unit.serial, unit.model, last, due_on, interval, best[1]))
+                due.append(DueUnit(unit.serial, unit.model, last,
+                                   last + timedelta(days=interval), interval, best[1]))
             return due
         return self._run(work, write=False)
 

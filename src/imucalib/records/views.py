@@ -85,7 +85,7 @@ class DriftPoint:
 
 @dataclass(frozen=True)
 class DueUnit:
-    """A unit due for recalibration (`last_calibrated` None: never calibrated)."""
+    """A unit's last good calibration and its due date (`last_calibrated` None: never)."""
 
     serial: str
     model: str
