@@ -169,3 +169,17 @@ def test_the_cli_reports_an_array_and_a_records_run_with_its_review(small, tmp_p
     assert "Traceback" not in bad.output
     neither = runner.invoke(app, ["report"])
     assert neither.exit_code != 0 and "got neither" in neither.output
+
+
+def test_three_calibration_points_allow_only_constant_models_and_the_report_says_so(small):
+    """AICc (Eq. (6)) is infinite for a line through 3 points: every model is a constant, most
+    do not fit, and the analysis and the report say what to do."""
+    unit = small.batch.results[2]
+    misfits = [n for n, m in unit.models.items() if m.quality.misfit]
+    assert misfits and all(unit.models[n].order == 0 for n in misfits)
+    note = next(n for n in unit.notes if "do not fit their points" in n)
+    assert f"the temperature models of {len(misfits)} parameter(s)" in note
+    assert "with 3 calibration points AICc (Eq. (6)) allows no higher order" in note
+    doc = build_report(unit)
+    assert f"Note: {note}" in doc.section("4.").paragraphs
+    assert any("consider a fuller model" in p for p in doc.section("6.").paragraphs)

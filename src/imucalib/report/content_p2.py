@@ -95,7 +95,8 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     decision = ("Every assessed check passed." if passed else
                 "FAIL: " + "; ".join(reasons) + "." if passed is False else
                 "No conformity decision was made.")
-    misfit = any(q.misfit for q in cal.fit_quality)
+    misfit = (any(q.misfit for q in cal.fit_quality)
+              or any(m.quality.misfit for m in unit_result.models.values()))
     recs = recommendations(passed, reasons, (), misfit)
     details = dict(prov.details)
     sections = (object_section(details.get("unit", {"serial": unit_result.unit}),

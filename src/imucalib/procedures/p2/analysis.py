@@ -411,6 +411,16 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         "static gyro means are not used (their horizontal Earth-rate projection depends on the "
         "unit's heading on the fixture); gyro parameters come from the ±ω turns",
     ]
+    misfits = [n for n, m in models.items() if m.quality.misfit]
+    if misfits:
+        orders = sorted({models[n].order for n in misfits})
+        notes.append(
+            f"the temperature models of {len(misfits)} parameter(s) do not fit their points "
+            f"within the noise ({', '.join(misfits[:6])}{', …' if len(misfits) > 6 else ''}; "
+            f"order {'/'.join(map(str, orders))}): their σ are Birge-scaled by √(χ²/ν); "
+            + (f"with {len(cal)} calibration points AICc (Eq. (6)) allows no higher order: add "
+               "temperature points" if len(cal) <= 3 and opt.criterion == "aicc" and
+               opt.order is None else "add temperature points or raise --max-order"))
     inconsistent = [n for n, c in checks.items() if not c.consistent]
     if inconsistent:
         notes.append(f"held-out check: the models of {', '.join(inconsistent)} do not predict "
