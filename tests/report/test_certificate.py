@@ -9,6 +9,7 @@ the same numbers; the review status; the recording's SHA-256 in the appendix.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -137,9 +138,22 @@ def test_a_review_from_the_records_is_shown(certificate):
         build_report(certificate.analysis, review={"approved": True})
 
 
-def test_the_id_is_the_same_for_the_same_result_and_differs_for_another(certificate):
+def test_the_id_is_the_same_for_the_same_result_and_differs_for_another(certificate,
+                                                                        consumer_run):
     again = build_report(certificate.analysis)
     assert again.report_id == certificate.doc.report_id
+    # the same result analysed at another time: the same id
+    analysis = certificate.analysis
+    later = dataclasses.replace(analysis, result=dataclasses.replace(
+        analysis.result, provenance=dataclasses.replace(analysis.result.provenance,
+                                                        created_utc="2031-01-01T00:00:00Z")))
+    assert later.to_dict() != analysis.to_dict()
+    assert build_report(later).report_id == again.report_id
+    reanalysed = registry.get("p1").analyze(consumer_run)  # the recording analysed again
+    assert build_report(reanalysed).report_id == again.report_id
+    # another option, another result: another id
+    per_axis = registry.get("p1").analyze(consumer_run, options={"model": "per-axis"})
+    assert build_report(per_axis).report_id != again.report_id
     other = SimpleNamespace(procedure="earth-rate-bias", unit="IMU-0001", passed=None,
                             to_dict=lambda: {"x": 1},
                             parameter_rows=lambda: [("bias_x", 0.0, 1.0, "rad/s")])

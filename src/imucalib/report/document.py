@@ -23,9 +23,10 @@ report"):
 Appendix: the plan's name and hash, the recording's file name and SHA-256, the software version.
 
 The unique id (:func:`report_id`) is ``IMUCAL-<PROCEDURE>-<serial>-<hash>``, ``<hash>`` the first
-12 hex digits of the SHA-256 of the result's canonical JSON (so the same result always gets the
-same id, two results never one), followed by ``-R<id>`` when the result is in the records
-database.
+12 hex digits of the SHA-256 of the result's canonical JSON without the analysis time
+(``created_utc``), so the same result — the same recording analysed again by the same software
+with the same options — always gets the same id and two results never one, followed by
+``-R<id>`` when the result is in the records database.
 
 Each procedure's sections 1–5 come from its content module, ``report/content_<name>.py``
 (:data:`REPORT_CONTENTS`; a result no module claims gets :mod:`imucalib.report.content_generic`:
@@ -131,9 +132,19 @@ def _canonical_json(data: Any) -> str:
     return json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=True, default=str)
 
 
+def _without_analysis_time(data: Any) -> Any:
+    """Drop every ``created_utc`` of `data` (when the analysis ran is not what it found)."""
+    if isinstance(data, Mapping):
+        return {k: _without_analysis_time(v) for k, v in data.items() if k != "created_utc"}
+    if isinstance(data, list | tuple):
+        return [_without_analysis_time(v) for v in data]
+    return data
+
+
 def report_id(result: Any, *, result_id: int | None = None) -> str:
     """Return the report's unique id (module docstring): ``IMUCAL-P1-<serial>-<hash>[-R<id>]``."""
-    body = result.to_dict() if callable(getattr(result, "to_dict", None)) else repr(result)
+    body = (_without_analysis_time(result.to_dict())
+            if callable(getattr(result, "to_dict", None)) else repr(result))
     digest = hashlib.sha256(_canonical_json(body).encode("utf-8")).hexdigest()[:12]
     serial = re.sub(r"[^A-Za-z0-9]+", "-", str(getattr(result, "unit", "") or "unit")).strip("-")
     text = f"IMUCAL-{str(result.procedure).upper()}-{serial or 'unit'}-{digest}"
