@@ -133,3 +133,12 @@ def test_a_serial_with_a_slash_names_files_not_folders(tmp_path: Path):
     res = runner.invoke(app, ["export", str(result), "--format", "ros-yaml", "-o",
                               str(tmp_path / "x")])
     assert res.exit_code == 0, res.output
+
+
+def test_the_accelerometer_floor_option_takes_a_number_or_auto(tmp_path: Path):
+    res = runner.invoke(app, ["calibrate", "field", str(tmp_path / "none.csv"),
+                              "--accel-instability-ug", "lots"])
+    assert res.exit_code == 2 and "must be a number of µg or 'auto'; got 'lots'" in res.output
+    res = runner.invoke(app, ["calibrate", "field", str(tmp_path / "none.csv"),
+                              "--accel-instability-ug", "auto"])
+    assert res.exit_code == 2 and "no such file" in res.output  # 'auto' itself accepted

@@ -115,6 +115,20 @@ def _pairs(given: list[str] | None, flag: str) -> dict[str, tuple[float, float]]
     return out
 
 
+def _accel_instability(text: str | None) -> dict[str, Any]:
+    """``--accel-instability-ug`` as field options: a number of µg, or ``auto``."""
+    if text is None:
+        return {}
+    if text.strip().lower() == "auto":
+        return {"accel_instability_auto": True}
+    try:
+        value = float(text)
+    except ValueError:
+        raise InvalidInputError(f"--accel-instability-ug must be a number of µg or 'auto'; got "
+                                f"{text!r}") from None
+    return {"accel_instability_mps2": value * 1e-6 * G0_MPS2}
+
+
 @app.command()
 @with_import_options
 def calibrate(
@@ -173,9 +187,10 @@ def calibrate(
              "chosen by the smallest gravity-norm χ²/ν).")] = None,
     init_static_s: Annotated[float | None, typer.Option(
         help="field: the initial rest at the start of the log [s] (default 2).")] = None,
-    accel_instability_ug: Annotated[float | None, typer.Option(
+    accel_instability_ug: Annotated[str | None, typer.Option(
         help="field: the accelerometer's bias instability from its datasheet [µg], added to "
-             "each pose's noise.")] = None,
+             "each pose's noise; 'auto': estimated from the poses' scatter (Paule–Mandel, "
+             "docs/field.md).")] = None,
     gyro_instability_dph: Annotated[float | None, typer.Option(
         help="field: the gyro's bias instability from its datasheet [°/h].")] = None,
     db: Annotated[str | None, typer.Option(
@@ -215,8 +230,7 @@ def calibrate(
             "k2_target_g_per_g2": k2_target, "latitude_deg": latitude, "height_m": height,
             "gravity_mps2": gravity, "accel_form": accel_form, "gyro_form": gyro_form,
             "static_threshold": static_threshold, "init_static_s": init_static_s,
-            "accel_instability_mps2": None if accel_instability_ug is None
-            else accel_instability_ug * 1e-6 * G0_MPS2,
+            **_accel_instability(accel_instability_ug),
             "gyro_instability_rps": None if gyro_instability_dph is None
             else gyro_instability_dph * DEG_PER_H}
         if procedure_name is not None and recording.suffix.lower() not in (".h5", ".hdf5"):

@@ -46,6 +46,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 import numpy as np
+import scipy.stats
 from numpy.typing import NDArray
 
 from imucalib import __version__
@@ -64,7 +65,7 @@ from imucalib.procedures.field.result import (
     calibration_result,
     triad_from_field,
 )
-from imucalib.units import EARTH_RATE_RPS
+from imucalib.units import EARTH_RATE_RPS, UG
 
 __all__ = ["FieldOptions", "analyze_field"]
 
@@ -78,6 +79,9 @@ _FULL_TURN_TOL = 0.10
 _K2_MIN_POSES = 16
 #: Fewest poses with which "auto" fits the accelerometer's bias drift (15 unknowns).
 _DRIFT_MIN_POSES = 20
+#: A note suggests a pose-noise floor (and its size) when the accelerometer fit's χ² exceeds
+#: this quantile of χ²_ν (white noise alone: one session in twenty).
+_SUGGEST_FLOOR_QUANTILE = 0.95
 _TURN_GRAVITY_DEG = 5.0
 #: Poses closer than this are the same pose (a face visited twice). [°]
 _SAME_POSE_DEG = 1.0
@@ -102,7 +106,11 @@ class FieldOptions:
     accel_instability_mps2, gyro_instability_rps : float
         A datasheet's bias instability, added in quadrature to each pose mean's standard error
         (a flicker floor the poses' white noise does not show: without it the accelerometer's
-        σ understate the error by about 1.4 on the twin's grade noise). [m/s²], [rad/s]
+        σ understate the error by about 1.5 on the twin's grade noise). [m/s²], [rad/s]
+    accel_instability_auto : bool
+        Estimate the accelerometer's floor from the poses' own scatter instead (Paule–Mandel,
+        :func:`~imucalib.estimation.dark_uncertainty.paule_mandel_floor`: the floor that makes
+        the accelerometer fit's χ²/ν one); not with `accel_instability_mps2`.
     gyro_g_sensitivity : {"auto", "yes", "no"}
         Fit the gyro's g-sensitivity G from the static poses ("auto": when the poses cover
         every axis direction and there are at least six).
@@ -128,6 +136,7 @@ class FieldOptions:
     accel_drift: str = "auto"
     accel_instability_mps2: float = 0.0
     gyro_instability_rps: float = 0.0
+    accel_instability_auto: bool = False
     gravity_mps2: float | None = None
     gravity_std_mps2: float | None = None
     latitude_deg: float | None = None
@@ -166,6 +175,9 @@ class FieldOptions:
             raise InvalidInputError("the bias instabilities must be ≥ 0; got "
                                     f"{self.accel_instability_mps2!r}, "
                                     f"{self.gyro_instability_rps!r}")
+        if self.accel_instability_auto and self.accel_instability_mps2 > 0:
+            raise InvalidInputError("give the accelerometer's bias instability or ask for it to "
+                                    "be estimated (auto), not both")
         if self.latitude_deg is not None and not -90.0 <= self.latitude_deg <= 90.0:
             raise InvalidInputError(f"`latitude_deg` must be in [−90, 90]; got "
                                     f"{self.latitude_deg!r}")
@@ -251,6 +263,28 @@ def _accel_fit(y: _F64, sy: _F64, g: float, choice: str, times: _F64 | None
         return fit(), f"K2 not fitted: {exc}"
 
 
+def _accel_floor(y: _F64, sy: _F64, g: float, form: str, opt: FieldOptions,
+                 times: _F64 | None, gravity_std_mps2: float) -> float:
+    """Return the accelerometer's pose-noise floor by Paule–Mandel (Eq. (PM.1)) for the form."""
+    from imucalib.estimation.dark_uncertainty import paule_mandel_floor
+    from imucalib.estimation.six_position import fit_six_position, nominal_directions
+
+    if form == "gravity-norm":
+        def chi2_of(s: float) -> tuple[float, int]:
+            q = _accel_fit(y, np.hypot(sy, s), g, opt.accel_k2, times)[0].quality
+            return float(q.chi2), int(q.dof)
+    else:
+        directions = nominal_directions(y)
+        k2 = opt.accel_k2 == "yes" or (opt.accel_k2 == "auto" and len(
+            {tuple(d) for d in directions.tolist()}) == 6 and len(y) >= 7)
+
+        def chi2_of(s: float) -> tuple[float, int]:
+            q = fit_six_position(y, np.hypot(sy, s), directions, g,
+                                 gravity_std_mps2=gravity_std_mps2, k2=k2).quality
+            return float(q.chi2), int(q.dof)
+    return paule_mandel_floor(chi2_of, scale=float(np.median(sy)))
+
+
 def _on_faces(y: _F64) -> bool:
     """Whether the poses are a fixture's faces (step 3).
 
@@ -313,10 +347,20 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     notes = [g_note]
     six = None
     drift_rows: list[tuple[str, float, float, str]] = []
+    drift = form == "gravity-norm" and (opt.accel_drift == "yes" or (
+        opt.accel_drift == "auto" and len(poses) >= _DRIFT_MIN_POSES))
+    times = np.array([0.5 * (p.start_time_s + p.end_time_s) for p in poses])
+    floor = None
+    if opt.accel_instability_auto:
+        floor = _accel_floor(y, sy, g, form, opt, times if drift else None, sg)
+        poses = [dataclasses.replace(p, accel_se=np.hypot(p.accel_se, floor)) for p in poses]
+        sy = np.array([p.accel_se for p in poses])
+        notes.append(f"accelerometer pose-noise floor {floor / UG:.3g} µg estimated from the "
+                     "poses' scatter (Paule–Mandel: the floor that makes the fit's χ²/ν one), "
+                     "added in quadrature to each pose's white-noise σ" if floor > 0 else
+                     "accelerometer pose-noise floor: none (auto): the poses scatter no more "
+                     "than their white noise says")
     if form == "gravity-norm":
-        drift = opt.accel_drift == "yes" or (opt.accel_drift == "auto"
-                                             and len(poses) >= _DRIFT_MIN_POSES)
-        times = np.array([0.5 * (p.start_time_s + p.end_time_s) for p in poses])
         fit, k2_note = _accel_fit(y, sy, g, opt.accel_k2, times if drift else None)
         if k2_note:
             notes.append(k2_note)
@@ -352,6 +396,16 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
             notes.append("K2 not fitted in the six-position form (it needs all six faces and "
                          "a seventh pose): a quadratic term biases the biases")
     accel_cov = accel_cov_noise * accel_quality.sigma_scale**2
+    if (floor is None and opt.accel_instability_mps2 == 0.0 and accel_quality.dof > 0
+            and accel_quality.chi2 > scipy.stats.chi2.ppf(_SUGGEST_FLOOR_QUANTILE,
+                                                           accel_quality.dof)):
+        suggested = _accel_floor(y, sy, g, form, opt, times if drift else None, sg)
+        notes.append(
+            f"the poses scatter more than their white noise (accelerometer χ²/ν = "
+            f"{accel_quality.reduced_chi2:.3g}): a bias instability of about "
+            f"{suggested / UG:.2g} µg between poses would explain it (Paule–Mandel); if the "
+            "datasheet agrees, give it (--accel-instability-ug) or let it be estimated "
+            "(--accel-instability-ug auto), else look for a model misfit (docs/field.md)")
     up = corrected / np.linalg.norm(corrected, axis=1, keepdims=True)
     report(0.5)
     missing, needed = pose_coverage(

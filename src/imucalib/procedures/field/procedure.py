@@ -44,7 +44,8 @@ class FieldProcedure:
                                   "target_accel_bias_mps2", "target_scale",
                                   "target_angle_rad", "accel_k2", "accel_drift",
                                   "gyro_g_sensitivity", "accel_instability_mps2",
-                                  "gyro_instability_rps", "import_spec"})
+                                  "gyro_instability_rps", "accel_instability_auto",
+                                  "import_spec"})
     outputs = ("result-json", "report-json", "parameters-csv", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:
