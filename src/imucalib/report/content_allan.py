@@ -42,9 +42,9 @@ def content(result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
                 convention = block.strip()
         for sensor in ("gyro", "accel"):
             if any(c.sensor == sensor for c in seg.channels):
-                fig = figure_of(lambda p, seg=seg, sensor=sensor: plot_allan_triad(seg, sensor,
-                                                                                 path=p),
-                              f"Allan deviation of the {sensor} axes, record {i} ({seg.label}).")
+                fig = figure_of(lambda p, seg=seg, sensor=sensor: plot_allan_triad(
+                    seg, sensor, path=p),
+                    f"Allan deviation of the {sensor} axes, record {i} ({seg.label}).")
                 if fig is not None:
                     figures.append(fig)
     temps = [s.temperature_degc for s in result.segments if s.temperature_degc is not None]

@@ -12,7 +12,6 @@ from collections.abc import Mapping
 from typing import Any
 
 from imucalib.report.document import (
-    COVERAGE_FACTOR,
     SECTION_TITLES,
     ReportContent,
     ReportTable,
@@ -23,6 +22,7 @@ from imucalib.report.sections import (
     equipment_section,
     figure_of,
     object_section,
+    parameter_table,
     recommendations,
     u_paragraph,
     yes_no,
@@ -35,7 +35,6 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return P1's sections 1–5 (None for a result without its observations)."""
     if not hasattr(analysis, "observations"):
         return None
-    from imucalib.report.console import display_parameter
     from imucalib.report.residual_figure import save_residual_figure
 
     result, obs = analysis.result, analysis.observations
@@ -55,16 +54,8 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
         + (f", low-pass cut-off {obs.cutoff_hz:g} Hz" if obs.cutoff_hz else "")
         + f"; outliers removed: {details.get('outliers_removed', 0)}.",
         *(f"Note: {n}" for n in result.notes)))
-    std = result.std(scaled=True)
-    rows = []
-    for name in result.param_names:
-        value, big_u, shown_unit = display_parameter(name, result.value(name),
-                                                     COVERAGE_FACTOR * std[name],
-                                                     result.units[name])
-        rows.append((name, value, big_u, shown_unit))
-    params = ReportTable(f"calibrated parameters of {result.sensor_id} ({result.model} model)",
-                         ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
-                         tuple(rows))
+    params = parameter_table(result, f"calibrated parameters of {result.sensor_id} "
+                                     f"({result.model} model)")
     checks = ReportTable("verification", ("check", "verdict", "summary"),
                          tuple((c.name, yes_no(c.passed), c.summary) for c in analysis.checks))
     spec = next((c for c in analysis.checks if c.name == "specification"), None)
@@ -82,19 +73,19 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
                    "pass" if r.passed else "FAIL") for r in spec.rows)))
     fit_text = [q.summary() for q in result.fit_quality]
     fig = figure_of(lambda p: save_residual_figure(analysis, p),
-                  "Residual mean of each window and axis with ±2 standard-error bars "
-                  "(top: accelerometer [µg]; bottom: gyro [°/h]).")
+                    "Residual mean of each window and axis with ±2 standard-error bars "
+                    "(top: accelerometer [µg]; bottom: gyro [°/h]).")
     from imucalib.report.checks_figure import save_checks_figure
 
     verified = [c for c in analysis.checks if c.name.startswith("held-out")
                 or c.name == "repeatability"]
     checks_fig = figure_of(lambda p: save_checks_figure(verified, p),
-                         "Held-out verification and repeatability: each quantity's |value| "
-                         "over its limit (the dashed line); green passes, red fails.")
+                           "Held-out verification and repeatability: each quantity's |value| "
+                           "over its limit (the dashed line); green passes, red fails.")
     results = Section(SECTION_TITLES[4], (u_paragraph(), *fit_text, *rule_par),
                       tuple(tables), tuple(f for f in (fig, checks_fig) if f is not None))
     recs = recommendations(analysis.decision.passed, analysis.decision.failed,
-                            analysis.decision.not_assessed, bool(result.misfit))
+                           analysis.decision.not_assessed, bool(result.misfit))
     sections = [object_section(unit, result.sensor_id),
                 equipment_section(meta, plan, prov.software_version),
                 environment_section(meta, site), process, results]

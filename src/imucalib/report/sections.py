@@ -173,7 +173,7 @@ def traceability(station_kind: str, *, reference: bool = True, procedure: str = 
 
 
 def equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
-                       reference: bool = True, procedure: str = "") -> Section:
+                      reference: bool = True, procedure: str = "") -> Section:
     """Section 2: station, table, the plan's equipment, software, traceability."""
     station = json_field(meta, "station_json")
     kind = str(station.get("kind") or meta.get("source") or "—")
@@ -190,7 +190,7 @@ def equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
                          else str(value)))
     rows.append(("software", f"imucalib {software}"))
     return Section(SECTION_TITLES[1], (traceability(kind, reference=reference,
-                                                     procedure=procedure),),
+                                                    procedure=procedure),),
                    (ReportTable("equipment", ("item", "value"), tuple(rows)),))
 
 
@@ -226,7 +226,7 @@ def environment_section(meta: Mapping[str, Any], site: Mapping[str, str]) -> Sec
 
 
 def recommendations(passed: bool | None, failed: Iterable[str], not_assessed: Iterable[str],
-                     misfit: bool) -> list[str]:
+                    misfit: bool) -> list[str]:
     """Return the conclusion's recommendations from the decision and the checks not assessed."""
     out = []
     failed, not_assessed = list(failed), list(not_assessed)
@@ -250,7 +250,7 @@ def recommendations(passed: bool | None, failed: Iterable[str], not_assessed: It
 
 
 def conclusion_section(decision_text: str, passed: bool | None, recs: list[str],
-                        reviews: tuple[ReviewStatus, ...], result_id: int | None) -> Section:
+                       reviews: tuple[ReviewStatus, ...], result_id: int | None) -> Section:
     """Section 6: the decision, recommendations, review and authorisation status."""
     verdict = {None: "no conformity decision", True: "PASS", False: "FAIL"}[passed]
     text = decision_text if decision_text.startswith(verdict) else f"{verdict}. {decision_text}"
@@ -270,7 +270,7 @@ def conclusion_section(decision_text: str, passed: bool | None, recs: list[str],
 
 
 def appendix(meta: Mapping[str, Any], plan: Any, prov: Any, extra: Sequence[tuple[str, str]]
-              ) -> Section:
+             ) -> Section:
     """Build the appendix: plan name and hash, recording and its SHA-256, software, extras."""
     plan_hash = getattr(prov, "plan_hash", "") or str(meta.get("plan_hash", "")) or "—"
     rows = [("plan name", plan_name(meta, plan)), ("plan hash (SHA-256)", plan_hash),
