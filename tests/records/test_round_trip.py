@@ -112,3 +112,22 @@ def test_a_parameter_that_was_not_estimated_is_left_out_of_the_rows(tmp_path):
         with pytest.raises(RecordsError, match="carries parameter 'nominal_radius'; they carry K2"):
             records.drift("T-1", "nominal_radius")
         assert records.verify() == []
+
+
+def test_a_misfit_result_is_recorded_with_its_birge_scaled_sigma(records, make_result):
+    """The records keep the σ the result reports: Birge-scaled where a fit is a misfit."""
+    import dataclasses
+
+    from imucalib.models.fit_quality import assess_fit
+
+    res = dataclasses.replace(make_result("IMU-9"),
+                              fit_quality=(assess_fit("accel", 90.0, 10),))
+    assert res.misfit
+    rid = records.record_result(records.record_run(plan_name="p1"), res)
+    scaled, noise = res.std(scaled=True), res.std()
+    for p in records.result(rid).parameters:
+        assert p.std == scaled[p.name]
+        if p.name.startswith("accel"):
+            assert p.std == pytest.approx(noise[p.name] * 3.0)  # √(90/10)
+        else:
+            assert p.std == noise[p.name]

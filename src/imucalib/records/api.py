@@ -102,7 +102,9 @@ def parameter_rows(result: Any) -> list[ParameterRow]:
     """Return a result's parameters: its ``parameter_rows()`` or a CalibrationResult's fields.
 
     ``parameter_rows()`` may yield :class:`ParameterRow`, ``(name, value, std, unit)`` tuples or
-    mappings with those keys. A row whose value or standard uncertainty is not a finite number
+    mappings with those keys; a CalibrationResult gives its standard uncertainties as reported,
+    Birge-scaled by √(χ²/ν) for a group whose fit is a misfit (its noise-only σ stay in the
+    stored document's covariance). A row whose value or standard uncertainty is not a finite number
     (a quantity a procedure reports as not estimated: P3's nominal radii, say) is left out of
     the parameter rows; the result's stored document keeps it.
     """
@@ -124,7 +126,7 @@ def _parameter_rows(result: Any) -> list[ParameterRow]:
                 rows.append(ParameterRow(str(name), float(value), float(std), str(unit)))
         return rows
     if hasattr(result, "param_names") and hasattr(result, "std"):
-        std = result.std()
+        std = result.std(scaled=True)  # Birge-scaled where its group's fit is a misfit
         return [ParameterRow(n, float(v), float(std[n]), str(result.units.get(n, "")))
                 for n, v in zip(result.param_names, result.values, strict=True)]
     raise InvalidInputError("a result must have `parameter_rows()` or be a CalibrationResult; "
