@@ -9,6 +9,7 @@ Commands
 ``inspect FILE``                   summarise a Recording: streams, units, steps, rates, gaps
 ``recover FILE``                   copy out what a crashed writer left in an open Recording
 ``export FILE --stream DEV/UNIT``  write a stream (or one step of it) as CSV or MAT
+``export RESULT --format FMT``     a result for firmware (c-runtime) or other tools (mat, ros-yaml…)
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 ``calibrate RECORDING``            estimate, verify and decide; write the result JSON
@@ -16,7 +17,8 @@ Commands
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 ``records list|show|history|…``    the calibration records database (docs/records.md)
-``report RESULT|RECORDING``        the calibration report (certificate) as PDF or HTML
+``report RESULT|RECORDING``        the calibration report (certificate) as PDF or HTML; an
+                                   array's units and summary; ``--run N`` from the records
 """
 
 from __future__ import annotations
