@@ -11,6 +11,7 @@ own report id; the CLI writes them from a recording and from a records run (with
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 from pathlib import Path
@@ -100,7 +101,14 @@ def test_a_unit_report_states_each_temperature_model_and_draws_them(small):
         assert f"p = {check.p_value:.2g}" in row[4]
     (figure,) = results.figures
     assert figure.png.startswith(b"\x89PNG") and "internal temperature" in figure.caption
-    assert any("largest error after compensation" in t.title for t in results.tables)
+    errors = next(t for t in results.tables if "largest error after compensation" in t.title)
+    # the plan's accuracy for the consumer grade (docs/p2.md): 0.01 g and 0.5 °/s
+    assert unit.error_limits == pytest.approx({"accel_mps2": 0.01 * 9.80665,
+                                               "gyro_rps": math.radians(0.5)})
+    assert errors.rows[0][2] == "10 mg" and errors.rows[1][2] == "0.5 °/s"
+    for row, key in zip(errors.rows, ("accel_mps2", "gyro_rps"), strict=True):
+        ok = unit.compensated_error[key] <= unit.error_limits[key]
+        assert row[3] == ("pass" if ok else "FAIL")
     # the unit's result file alone (imucalib report RESULT) states the same models
     cal = CalibrationResult.load(small.out / "small.U1.p2.result.json")
     bare = build_report(SimpleNamespace(result=cal, procedure="p2", unit="U1", passed=None))

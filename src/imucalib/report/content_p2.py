@@ -39,12 +39,17 @@ __all__ = ["content"]
 
 
 def _error_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
-    err = unit_result.compensated_error
+    """(triad, error, limit, verdict): the errors left after compensation against the plan's."""
+    err, limits = unit_result.compensated_error, unit_result.error_limits
     rows = []
-    if err.get("accel_mps2") is not None:
-        rows.append(("accelerometer", f"{err['accel_mps2'] / units.G0_MPS2 * 1e3:.3g} mg"))
-    if err.get("gyro_rps") is not None:
-        rows.append(("gyro", f"{err['gyro_rps'] / units.DEG:.3g} °/s"))
+    for key, triad, scale, unit in (("accel_mps2", "accelerometer", units.G0_MPS2 * 1e-3, "mg"),
+                                    ("gyro_rps", "gyro", units.DEG, "°/s")):
+        if err.get(key) is None:
+            continue
+        limit = limits.get(key)
+        rows.append((triad, f"{err[key] / scale:.3g} {unit}",
+                     "—" if limit is None else f"{limit / scale:.3g} {unit}",
+                     "—" if limit is None else "pass" if err[key] <= limit else "FAIL"))
     return tuple(rows)
 
 
@@ -79,7 +84,8 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     errors = _error_rows(unit_result)
     if errors:
         tables.append(ReportTable("largest error after compensation (held-out points when there "
-                                  "are any)", ("triad", "error"), errors))
+                                  "are any)", ("triad", "error", "limit (plan)", "verdict"),
+                                  errors))
     fig = figure_of(lambda p: save_temperature_figure(unit_result, p),
                     "Every parameter against the unit's internal temperature: the estimate at "
                     "each point with 2σ bars (open: held out), the model with its 2σ band, per "

@@ -199,6 +199,7 @@ class P2UnitResult:
     held_out: Mapping[str, HeldOutCheck] = field(default_factory=dict)
     result: CalibrationResult | None = None
     compensated_error: Mapping[str, float] = field(default_factory=dict)
+    error_limits: Mapping[str, float] = field(default_factory=dict)
     reasons: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
     error: str = ""
@@ -212,6 +213,7 @@ class P2UnitResult:
             "error": self.error, "error_type": self.error_type,
             "reasons": list(self.reasons), "notes": list(self.notes),
             "compensated_error": dict(self.compensated_error),
+            "error_limits": dict(self.error_limits),
             "points": [p.to_dict() for p in self.points],
             "temperature_models": {
                 n: {"order": m.order, "criterion": m.criterion,
@@ -447,6 +449,8 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     )
     return P2UnitResult(unit=obs.unit, passed=not reasons, points=points, models=models,
                         held_out=checks, result=result, compensated_error=errors,
+                        error_limits={"accel_mps2": accel_lim * u.G0_MPS2,
+                                      "gyro_rps": gyro_lim * u.DEG},
                         reasons=tuple(reasons), notes=tuple(notes))
 
 
