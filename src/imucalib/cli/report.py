@@ -109,8 +109,11 @@ def report(
             recording = path
         else:
             result = _from_result_file(path)
+        from imucalib.exports.outputs import file_stem
+
         units = list(result.results) if hasattr(result, "results") else [result]
         folder = out if out is not None and (len(units) > 1 or run is not None) else None
+        stem = path.name.split(".")[0]
         written = []
         ids: dict[str, str] = {}
         for unit_result in units:
@@ -128,8 +131,7 @@ def report(
                     reviews = records.result(rid).reviews
             document = build_report(unit_result, recording=recording, review=reviews,
                                     result_id=rid)
-            stem = path.name.split(".")[0]
-            name = (f"{stem}.{unit_result.unit}.{unit_result.procedure}.report.{fmt}"
+            name = (f"{file_stem(stem, unit_result.unit, unit_result.procedure)}.report.{fmt}"
                     if len(units) > 1 or run is not None else f"{stem}.report.{fmt}")
             target = (folder / name if folder is not None else
                       out if out is not None else path.with_name(name))
@@ -138,9 +140,8 @@ def report(
             ids[str(unit_result.unit)] = document.report_id
         if len(units) > 1:
             document = build_summary_report(result, recordings=[path], report_ids=ids)
-            stem = path.name.split(".")[0]
             target = ((folder or path.parent)
-                      / f"{stem}.{result.unit}.{result.procedure}.summary.report.{fmt}")
+                      / f"{file_stem(stem, result.unit, result.procedure)}.summary.report.{fmt}")
             written.append((_write(document, fmt, target), document.report_id))
     except CalibrationError as exc:
         raise fail(exc) from exc

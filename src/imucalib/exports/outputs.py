@@ -58,7 +58,7 @@ The record index ``.k`` appears only when the characterisation holds more than o
 
 Contents
 --------
-:func:`write_outputs`, :data:`OUTPUT_FORMATS`, :data:`TEMPERATURE_FORMATS`
+:func:`write_outputs`, :func:`file_stem`, :data:`OUTPUT_FORMATS`, :data:`TEMPERATURE_FORMATS`
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ from typing import Any, Protocol
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.procedure import ProcedureResult
 
-__all__ = ["OUTPUT_FORMATS", "TEMPERATURE_FORMATS", "write_outputs"]
+__all__ = ["OUTPUT_FORMATS", "TEMPERATURE_FORMATS", "file_stem", "write_outputs"]
 
 _Writer = Callable[[Any, Path, str], list[Path]]
 
@@ -257,6 +257,11 @@ def _recording_name(result: Any) -> str:
     return Path(str(name)).name if name else ""
 
 
+def file_stem(name: str, unit: Any, procedure: str) -> str:
+    """Return ``<name>.<unit>.<procedure>``: the unit as a file-name part ("SN/42" → "SN_42")."""
+    return f"{name}.{_safe(unit)}.{procedure}"
+
+
 def _safe(unit: Any) -> str:
     """Return a unit's name as a file-name part ('SN/42' → 'SN_42': not a folder)."""
     return "".join("_" if c in "/\\\0" else c for c in str(unit))
@@ -268,11 +273,11 @@ def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> lis
 
     written: list[Path] = []
     for unit_result in batch.results:
-        stem = f"{name}.{_safe(unit_result.unit)}.{batch.procedure}"
+        stem = file_stem(name, unit_result.unit, batch.procedure)
         formats = chosen if unit_result.error == "" else ("report-json",)
         for fmt in formats:
             written += OUTPUT_FORMATS[fmt](unit_result, out, stem)
-    stem = f"{name}.{_safe(batch.unit)}.{batch.procedure}"
+    stem = file_stem(name, batch.unit, batch.procedure)
     rows = summary_rows(batch)
     summary = out / f"{stem}.summary.json"
     summary.write_text(json.dumps({"procedure": batch.procedure, "passed": batch.passed,
@@ -379,7 +384,7 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
         if temperature_degc is not None:
             raise InvalidInputError("a temperature is for one result, not a batch")
         return _write_batch(result, out, chosen, name)
-    stem = f"{name}.{_safe(result.unit)}.{result.procedure}"
+    stem = file_stem(name, result.unit, result.procedure)
     written: list[Path] = []
     for fmt in chosen:
         if temperature_degc is not None:  # only TEMPERATURE_FORMATS here (checked above)
