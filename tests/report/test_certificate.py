@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import os
 import re
 import shutil
@@ -247,7 +248,8 @@ if shutil.which("pdftoppm") or os.environ.get("IMUCALIB_TEST_PDFTOPPM"):
 def test_the_held_out_and_repeatability_checks_are_drawn(certificate):
     results = certificate.doc.section("5")
     captions = [f.caption for f in results.figures]
-    assert len(captions) == 2 and captions[1].startswith("Held-out verification")
+    assert len(captions) == 3 and captions[1].startswith("Held-out verification")
+    assert captions[2].startswith("Allan deviation of the noise model")
     assert all(f.png[:8] == b"\x89PNG\r\n\x1a\n" for f in results.figures)
     assert "Held-out verification and repeatability" in certificate.text
     checks = [c for c in certificate.analysis.checks if c.name.startswith("held-out")
@@ -270,3 +272,24 @@ def test_every_procedure_the_generic_content_reports_cites_an_existing_page():
                                            to_dict=lambda: {}, parameter_rows=lambda: rows))
         assert f"(docs/{name}.md)." in doc.section("4.").paragraphs[0]
         assert registry.get(name).description.rstrip(".")[:40] in doc.section("4.").paragraphs[0]
+
+
+def test_the_noise_model_behind_the_weights_is_stated_and_drawn(certificate):
+    """P1's window standard errors come from the static record's noise model (docs/p1.md)."""
+    noise = certificate.analysis.observations.noise
+    assert set(noise) == {"gyro", "accel"}
+    results = certificate.doc.section("5.")
+    table = next(t for t in results.tables if t.title.startswith("noise model"))
+    rows = {r[0]: r[1:] for r in table.rows}
+    assert len(rows) == 6
+    for i, axis in enumerate("xyz"):
+        gyro, accel = noise["gyro"], noise["accel"]
+        # N in °/√h: rad/√s × (180/π) × 60; B in °/h; accelerometer N in µg/√Hz, B in µg
+        assert rows[f"gyro {axis}"][0] == f"{gyro.white_density[i] * 180 / math.pi * 60:.3g} °/√h"
+        assert rows[f"gyro {axis}"][1] == (
+            f"{gyro.bias_instability[i] * 180 / math.pi * 3600:.3g} °/h")
+        assert rows[f"accel {axis}"][0] == f"{accel.white_density[i] / 9.80665e-6:.3g} µg/√Hz"
+        assert rows[f"accel {axis}"][1] == f"{accel.bias_instability[i] / 9.80665e-6:.3g} µg"
+    assert any("noise model fitted to the longest static record" in f.caption
+               for f in results.figures)
+    assert "noise model of the longest static record" in certificate.text

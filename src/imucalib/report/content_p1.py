@@ -2,8 +2,9 @@
 
 The results section holds every parameter with U = k·u (R.1 of :mod:`imucalib.report.document`),
 the verification checks, the conformity table against the plan's acceptance limits, the
-residual figure (per position and rate) and the held-out/repeatability figure (docs/p1.md,
-docs/reporting.md).
+residual figure (per position and rate), the held-out/repeatability figure, and the noise model
+of the longest static record that gave the window means' standard errors, as a table and as
+Allan deviation curves (docs/p1.md, docs/reporting.md).
 """
 
 from __future__ import annotations
@@ -82,8 +83,24 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     checks_fig = figure_of(lambda p: save_checks_figure(verified, p),
                            "Held-out verification and repeatability: each quantity's |value| "
                            "over its limit (the dashed line); green passes, red fails.")
+    noise_fig = None
+    if obs.noise:
+        from imucalib.report.noise_model_figure import noise_model_rows, save_noise_model_figure
+
+        tables.append(ReportTable(
+            "noise model of the longest static record (the window means' standard errors)",
+            ("axis", "white noise N", "bias instability B", "random walk K"),
+            noise_model_rows(obs.noise)))
+        noise_fig = figure_of(
+            lambda p: save_noise_model_figure(
+                obs.noise, [w.duration_s for w in obs.windows], p,
+                tau_min_s=1.0 / obs.sample_rate_hz,
+                tau_max_s=max(10.0 * max(w.duration_s for w in obs.windows), 100.0)),
+            "Allan deviation of the noise model fitted to the longest static record; each "
+            "window mean's standard error is its value at τ = the window's length (dotted).")
     results = Section(SECTION_TITLES[4], (u_paragraph(), *fit_text, *rule_par),
-                      tuple(tables), tuple(f for f in (fig, checks_fig) if f is not None))
+                      tuple(tables), tuple(f for f in (fig, checks_fig, noise_fig)
+                                           if f is not None))
     recs = recommendations(analysis.decision.passed, analysis.decision.failed,
                            analysis.decision.not_assessed, bool(result.misfit))
     sections = [object_section(unit, result.sensor_id),
