@@ -190,4 +190,12 @@ def test_three_calibration_points_allow_only_constant_models_and_the_report_says
     assert "with 3 calibration points AICc (Eq. (6)) allows no higher order" in note
     doc = build_report(unit)
     assert f"Note: {note}" in doc.section("4.").paragraphs
+    # the terminal says it too (`imucalib calibrate`)
+    from rich.console import Console
+
+    from imucalib.report.console import render_p2
+
+    console = Console(record=True, width=200)
+    render_p2(console, small.batch, [])
+    assert f"note (U2): {note}" in " ".join(console.export_text().split())
     assert any("consider a fuller model" in p for p in doc.section("6.").paragraphs)

@@ -149,7 +149,10 @@ def _render_other(console: Console, result: Any, written: Sequence[Path]) -> Non
 
 
 def render_p2(console: Console, batch: Any, written: Sequence[Path]) -> None:
-    """Print a P2 batch: one row per unit (decision, errors after compensation, lever arm)."""
+    """Print a P2 batch: a row per unit (decision, errors after compensation, lever arm).
+
+    Then each unit's warning notes: temperature models that do not fit or do not predict.
+    """
     table = Table("unit", "decision", Column("accel error [mg]", justify="right"),
                   Column("gyro error [°/h]", justify="right"),
                   Column("lever arm [cm]", justify="right"), "points", "note",
@@ -169,6 +172,11 @@ def render_p2(console: Console, batch: Any, written: Sequence[Path]) -> None:
             f"{sum(not p.held_out for p in r.points)} + {sum(p.held_out for p in r.points)}"
             " held out", "; ".join(r.reasons))
     console.print(table)
+    for r in batch.results:  # the warnings among the analysis notes: models that do not fit
+        for note in r.notes:
+            if note.startswith(("the temperature models of", "held-out check:")):
+                console.print(f"note ({escape(r.unit)}): {escape(note)}", highlight=False,
+                              soft_wrap=True)
     verdict = "PASS" if batch.passed else "FAIL"
     n_ok = sum(bool(r.passed) for r in batch.results)
     console.print(f"decision: {verdict} ({n_ok} of {len(batch.results)} unit(s) passed)",
