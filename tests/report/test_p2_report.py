@@ -145,6 +145,7 @@ def test_the_summary_has_one_row_per_unit_with_its_report_id(small):
         build_report(failed)
     text = " ".join(_text(small.out / "small.array.p2.summary.report.pdf").split())
     assert "IMUs of an array calibrated together by procedure P2" in text
+    assert "1. Object: the units calibrated" in text
 
 
 def test_the_cli_reports_an_array_and_a_records_run_with_its_review(small, tmp_path):

@@ -77,9 +77,9 @@ def summary_document(batch: Any, *, recordings: Sequence[Any] | None = None,
                               tuple((r.unit, _recording_of(r)) for r in batch.results))
     prov = done[0].result.provenance if done else None
     sections = [
-        Section(SECTION_TITLES[0], (f"The items are the {len(batch.results)} IMUs of {article} "
-                                    f"{kind} calibrated together by procedure "
-                                    f"{batch.procedure.upper()}; each has its own report.",),
+        Section("1. Object: the units calibrated",
+                (f"The items are the {len(batch.results)} IMUs of {article} {kind} calibrated "
+                 f"together by procedure {batch.procedure.upper()}; each has its own report.",),
                 (units_table,)),
         equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
                           procedure=str(batch.procedure)),
