@@ -57,16 +57,6 @@ def _run_recording(run_id: int, db: str | None) -> tuple[Path, dict[str, Any]]:
     return path, by_unit
 
 
-def _write(document: Any, fmt: str, target: Path) -> Path:
-    if fmt == "pdf":
-        from imucalib.report.pdf import write_report_pdf
-
-        return write_report_pdf(document, target)
-    from imucalib.report.html import write_report_html
-
-    return write_report_html(document, target)
-
-
 @app.command()
 def report(
     path: Annotated[Path | None, typer.Argument(
@@ -90,7 +80,7 @@ def report(
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
 ) -> None:
     """Write the calibration report: six sections, U = 2u, decision rule, review status."""
-    from imucalib.report.document import build_report, build_summary_report
+    from imucalib.report.document import build_report, build_summary_report, write_report
 
     try:
         if fmt not in ("pdf", "html"):
@@ -136,13 +126,13 @@ def report(
             target = (folder / name if folder is not None else
                       out if out is not None else path.with_name(name))
             target.parent.mkdir(parents=True, exist_ok=True)
-            written.append((_write(document, fmt, target), document.report_id))
+            written.append((write_report(document, target, fmt), document.report_id))
             ids[str(unit_result.unit)] = document.report_id
         if len(units) > 1:
             document = build_summary_report(result, recordings=[path], report_ids=ids)
             target = ((folder or path.parent)
                       / f"{file_stem(stem, result.unit, result.procedure)}.summary.report.{fmt}")
-            written.append((_write(document, fmt, target), document.report_id))
+            written.append((write_report(document, target, fmt), document.report_id))
     except CalibrationError as exc:
         raise fail(exc) from exc
     except OSError as exc:

@@ -219,13 +219,11 @@ def _intrinsics(fmt: str, suffix: str) -> _IntrinsicsWriter:
 
 
 def _write_document(document: Any, fmt: str, path_stem: Path) -> Path:
-    if fmt == "report-pdf":
-        from imucalib.report.pdf import write_report_pdf
+    """Write a report as ``<path_stem>.pdf`` or ``.html`` (`fmt` "report-pdf"/"report-html")."""
+    from imucalib.report.document import write_report
 
-        return write_report_pdf(document, path_stem.with_name(path_stem.name + ".pdf"))
-    from imucalib.report.html import write_report_html
-
-    return write_report_html(document, path_stem.with_name(path_stem.name + ".html"))
+    ext = fmt.removeprefix("report-")
+    return write_report(document, path_stem.with_name(f"{path_stem.name}.{ext}"), ext)
 
 
 #: The result exports of :mod:`imucalib.exports.intrinsics`, by format.

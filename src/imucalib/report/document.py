@@ -38,7 +38,8 @@ Contents
 --------
 :func:`build_report`, :func:`build_summary_report`, :func:`report_id`, :class:`ReportDocument`,
 :class:`ReportContent`, :class:`Section`, :class:`ReportTable`, :class:`ReportFigure`,
-:class:`ReviewStatus`, :data:`SECTION_TITLES`, :data:`COVERAGE_FACTOR`, :data:`REPORT_CONTENTS`
+:class:`ReviewStatus`, :data:`SECTION_TITLES`, :data:`COVERAGE_FACTOR`, :data:`REPORT_CONTENTS`,
+:func:`write_report`
 """
 
 from __future__ import annotations
@@ -46,15 +47,17 @@ from __future__ import annotations
 import hashlib
 import importlib
 import json
+import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any, Final
 
 __all__ = ["COVERAGE_FACTOR", "REPORT_CONTENTS", "SECTION_TITLES", "ReportContent",
            "ReportDocument", "ReportFigure", "ReportTable", "ReviewStatus", "Section",
-           "build_report", "build_summary_report", "report_id"]
+           "build_report", "build_summary_report", "report_id", "write_report"]
 
 #: k of the expanded uncertainty U = k·u (R.1).
 COVERAGE_FACTOR = 2.0
@@ -278,3 +281,18 @@ def build_summary_report(batch: Any, *, recordings: Any = None,
 
     return summary_document(batch, recordings=recordings, issued_utc=_issued(),
                             report_ids=report_ids)
+
+
+def write_report(document: ReportDocument, path: str | os.PathLike[str], fmt: str) -> Path:
+    """Write `document` to `path` as ``fmt`` "pdf" (:mod:`imucalib.report.pdf`) or "html"."""
+    if fmt == "pdf":
+        from imucalib.report.pdf import write_report_pdf
+
+        return write_report_pdf(document, path)
+    if fmt == "html":
+        from imucalib.report.html import write_report_html
+
+        return write_report_html(document, path)
+    from imucalib.errors import InvalidInputError
+
+    raise InvalidInputError(f"a report is written as pdf or html; got {fmt!r}")

@@ -275,14 +275,19 @@ def _accel_floor(y: _F64, sy: _F64, g: float, form: str, opt: FieldOptions,
             return float(q.chi2), int(q.dof)
     else:
         directions = nominal_directions(y)
-        k2 = opt.accel_k2 == "yes" or (opt.accel_k2 == "auto" and len(
-            {tuple(d) for d in directions.tolist()}) == 6 and len(y) >= 7)
+        k2 = _six_position_k2(opt.accel_k2, directions)
 
         def chi2_of(s: float) -> tuple[float, int]:
             q = fit_six_position(y, np.hypot(sy, s), directions, g,
                                  gravity_std_mps2=gravity_std_mps2, k2=k2).quality
             return float(q.chi2), int(q.dof)
     return paule_mandel_floor(chi2_of, scale=float(np.median(sy)))
+
+
+def _six_position_k2(choice: str, directions: _F64) -> bool:
+    """Return whether the six-position form fits K2 (F.12′): asked, or all six faces + one."""
+    return choice == "yes" or (choice == "auto" and len(
+        {tuple(d) for d in directions.tolist()}) == 6 and len(directions) >= 7)
 
 
 def _on_faces(y: _F64) -> bool:
@@ -383,8 +388,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         corrected = correct_accel(accel_values, y)
     else:
         directions = nominal_directions(y)
-        six_k2 = opt.accel_k2 == "yes" or (opt.accel_k2 == "auto" and len(
-            {tuple(d) for d in directions.tolist()}) == 6 and len(poses) >= 7)
+        six_k2 = _six_position_k2(opt.accel_k2, directions)
         six = fit_six_position(y, sy, directions, g, gravity_std_mps2=sg, k2=six_k2)
         accel_values = six.values
         accel_cov_noise = np.asarray(six.covariance_noise, dtype=np.float64)
