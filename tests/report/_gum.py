@@ -1,8 +1,10 @@
-"""GUM 7.2.6 rounding written independently of imucalib.report.numbers, for the report tests."""
+"""GUM 7.2.6 rounding and P1 display units written independently of imucalib.report, for tests."""
 
 from __future__ import annotations
 
 from decimal import ROUND_HALF_UP, Decimal
+
+from imucalib import units
 
 
 def expected_cells(value: float, big_u: float) -> tuple[str, str]:
@@ -27,3 +29,15 @@ def expected_cells(value: float, big_u: float) -> tuple[str, str]:
     if vm != 0:
         v_text = ("-" if vm < 0 else "+") + v_text
     return v_text + suffix, f"{um:.{decimals}f}" + suffix
+
+
+def shown_p1(name: str, value: float, sigma: float) -> tuple[float, float, str]:
+    """A P1 parameter in its display unit (docs/reporting.md, "Units in the P1 table")."""
+    triad, symbol, axes = name.split("_")
+    if symbol == "bias":
+        scale, unit = (units.UG, "µg") if triad == "accel" else (units.DEG_PER_H, "°/h")
+    elif symbol == "M":
+        scale, unit = (units.PPM, "ppm") if axes[0] == axes[1] else (units.URAD, "µrad")
+    else:
+        scale, unit = units.DEG_PER_H / units.G0_MPS2, "(°/h)/g"
+    return value / scale, sigma / scale, unit

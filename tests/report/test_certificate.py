@@ -25,7 +25,6 @@ import numpy as np
 import pytest
 from pypdf import PdfReader
 
-from imucalib import units
 from imucalib.errors import InvalidInputError
 from imucalib.exports.outputs import write_outputs
 from imucalib.procedures import registry
@@ -34,18 +33,7 @@ from imucalib.report.html import write_report_html
 from imucalib.report.pdf import write_report_pdf
 
 from ._gum import expected_cells as _expected_cells
-
-
-def _shown(name: str, value: float, sigma: float) -> tuple[float, float, str]:
-    """A P1 parameter in its display unit (docs/reporting.md, "Units in the P1 table")."""
-    triad, symbol, axes = name.split("_")
-    if symbol == "bias":
-        scale, unit = (units.UG, "µg") if triad == "accel" else (units.DEG_PER_H, "°/h")
-    elif symbol == "M":
-        scale, unit = (units.PPM, "ppm") if axes[0] == axes[1] else (units.URAD, "µrad")
-    else:
-        scale, unit = units.DEG_PER_H / units.G0_MPS2, "(°/h)/g"
-    return value / scale, sigma / scale, unit
+from ._gum import shown_p1 as _shown
 
 
 @pytest.mark.parametrize(("value", "big_u", "cells"), [
