@@ -70,3 +70,14 @@ def test_refuses_unknown_and_impossible_formats(tmp_path):
     with pytest.raises(InvalidInputError, match="'kalibr-yaml' needs a noise characterisation"):
         write_outputs(result, tmp_path, ["kalibr-yaml"], name="run")
     assert set(OUTPUT_FORMATS) >= {"result-json", "report-json", "noise-json", "figures"}
+
+
+def test_parameters_csv_round_trips_every_value_exactly(tmp_path):
+    result = _p1_like()
+    (path,) = write_outputs(result, tmp_path, ["parameters-csv"], name="run")
+    cal, std = result.result, result.result.std()
+    rows = list(csv.reader(path.open()))[1:]
+    assert [r[0] for r in rows] == list(cal.param_names)
+    for name, value, sigma, unit in rows:
+        assert float(value) == cal.value(name) and float(sigma) == std[name]  # repr: exact
+        assert unit == cal.units[name]
