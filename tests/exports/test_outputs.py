@@ -81,3 +81,18 @@ def test_parameters_csv_round_trips_every_value_exactly(tmp_path):
     for name, value, sigma, unit in rows:
         assert float(value) == cal.value(name) and float(sigma) == std[name]  # repr: exact
         assert unit == cal.units[name]
+
+
+def test_parameters_csv_gives_the_birge_scaled_sigma_of_a_misfit(tmp_path):
+    """The σ a result reports (docs/processing-estimation.md): scaled where its fit is a misfit."""
+    import dataclasses
+
+    from imucalib.models.fit_quality import assess_fit
+
+    cal = dataclasses.replace(_p1_like().result, fit_quality=(assess_fit("gyro", 40.0, 10),))
+    (path,) = write_outputs(_P1Like(cal), tmp_path, ["parameters-csv"], name="run")
+    rows = {r[0]: float(r[2]) for r in list(csv.reader(path.open()))[1:]}
+    noise = cal.std()
+    for name, sigma in rows.items():
+        factor = 2.0 if name.startswith("gyro") else 1.0  # √(40/10)
+        assert sigma == pytest.approx(factor * noise[name], rel=1e-12), name

@@ -14,7 +14,8 @@ format             file                           content
 ``report-json``    ``….report.json``              the whole result: checks, decision, per
                                                   repetition (``result.to_dict()``)
 ``parameters-csv`` ``….parameters.csv``           one row per parameter: value, standard
-                                                  uncertainty, SI unit (a result with
+                                                  uncertainty (Birge-scaled where a fit is a
+                                                  misfit), SI unit (a result with
                                                   ``parameter_rows()``, P3, gives its own)
 ``noise-json``     ``….json``                     the versioned noise characterisation
 ``kalibr-yaml``    ``…[.k].kalibr.yaml``          Kalibr ``imu.yaml``, per static record k
@@ -116,7 +117,7 @@ def _parameters_csv(result: Any, folder: Path, stem: str) -> list[Path]:
         rows = [(n, repr(v), repr(s), u) for n, v, s, u in rows_of()]
     else:
         cal = _calibration(result, "parameters-csv")
-        std = cal.std()
+        std = cal.std(scaled=True)  # as reported: Birge-scaled where a fit is a misfit
         rows = [(n, repr(cal.value(n)), repr(std[n]), cal.units.get(n, ""))
                 for n in cal.param_names]
     path = folder / f"{stem}.parameters.csv"
