@@ -200,3 +200,13 @@ def test_three_calibration_points_allow_only_constant_models_and_the_report_says
     render_p2(console, small.batch, [])
     assert f"note (U2): {note}" in " ".join(console.export_text().split())
     assert any("consider a fuller model" in p for p in doc.section("6.").paragraphs)
+
+
+def test_the_p2_sigma_are_scaled_once(small):
+    """The P2 covariance holds its Birge ratios already: no fit quality rescales it (docs/p2.md)."""
+    for unit in small.batch.results:
+        cal = unit.result
+        assert cal.fit_quality == () and cal.std(scaled=True) == cal.std()
+        worst = [p for p in build_report(unit).section("4.").paragraphs
+                 if p.startswith("worst point fit, ")]
+        assert [w.split(", ")[1].split(":")[0] for w in worst] == ["gyro", "accel"]

@@ -38,6 +38,13 @@ from imucalib.report.sections import (
 __all__ = ["content"]
 
 
+def _worst_point_fits(points: Any) -> list[Any]:
+    """Return the largest-χ²/ν fit quality of each triad over the calibration points."""
+    fits = [q for p in points if not p.held_out for q in p.least_squares.fit_quality]
+    return [max((q for q in fits if q.group == g), key=lambda q: q.reduced_chi2)
+            for g in ("gyro", "accel") if any(q.group == g for q in fits)]
+
+
 def _error_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
     """(triad, error, limit, verdict): the errors left after compensation against the plan's."""
     err, limits = unit_result.compensated_error, unit_result.error_limits
@@ -77,7 +84,7 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
         "chosen by AICc or cross-validation; held-out temperature points check the models.",
         f"{len(points) - held} calibration and {held} held-out temperature point(s); the "
         f"parameters hold at T0 = {t0:g} °C.",
-        *(q.summary() for q in cal.fit_quality),
+        *(f"worst point fit, {q.summary()}" for q in _worst_point_fits(points)),
         *(f"Note: {n}" for n in unit_result.notes)))
     tables = [parameter_table(cal, f"parameters of {unit_result.unit} at T0 = {t0:g} °C"),
               temperature_model_table(cal)]
@@ -101,7 +108,7 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     decision = ("Every assessed check passed." if passed else
                 "FAIL: " + "; ".join(reasons) + "." if passed is False else
                 "No conformity decision was made.")
-    misfit = (any(q.misfit for q in cal.fit_quality)
+    misfit = (any(q.misfit for q in _worst_point_fits(points))
               or any(m.quality.misfit for m in unit_result.models.values()))
     recs = recommendations(passed, reasons, (), misfit)
     details = dict(prov.details)

@@ -427,8 +427,9 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     if inconsistent:
         notes.append(f"held-out check: the models of {', '.join(inconsistent)} do not predict "
                      "the held-out points within their uncertainty")
-    quality = tuple(max((q for p in cal for q in p.least_squares.fit_quality if q.group == g),
-                        key=lambda q: q.reduced_chi2) for g in ("gyro", "accel"))
+    # no fit_quality in the result: its covariance already holds the Birge ratios of misfit
+    # point fits and models (Eq. (P2.12)); a fit quality would scale the σ a second time
+    # (CalibrationResult.std(scaled=True)). Each point's χ²/ν is in the unit's report.
     result = CalibrationResult(
         sensor_id=obs.unit, procedure="p2", model="triad", param_names=PARAM_NAMES,
         values=values0, covariance=0.5 * (cov0 + cov0.T),
@@ -441,8 +442,9 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
                                        "lever_arm_m": _mean_lever_arm(cal)}),
         notes=(f"parameters at T0 = {opt.reference_temperature_degc:g} °C, the c_0 of each "
                "temperature model; `imucalib apply` corrects each sample at the unit's "
-               "internal temperature with the models (docs/p2.md)",),
-        fit_quality=quality,
+               "internal temperature with the models (docs/p2.md)",
+               "the covariance holds the Birge ratios of misfit point fits and temperature "
+               "models already (Eq. (P2.12))"),
         temperature_models=tuple(
             to_parameter_record(models[n], temperature_range_degc=t_range,
                                 held_out=checks.get(n)) for n in PARAM_NAMES),
