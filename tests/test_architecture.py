@@ -89,3 +89,44 @@ def test_importing_one_module_loads_no_unrelated_layer(module, must_not_load):
                           timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]", f"importing {module} loaded {done.stdout.strip()}"
+
+
+def _imported_modules(path: Path) -> list[tuple[str, int]]:
+    """(full imucalib module imported, line) for every import in `path` (the walk of `_imports`).
+
+    Relative imports are resolved against `path`'s package; ``from imucalib.procedures import X``
+    names the module ``imucalib.procedures.X``.
+    """
+    package = list(path.relative_to(SRC.parent).with_suffix("").parts[:-1])
+    out: list[tuple[str, int]] = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            module = ".".join([*base, *([node.module] if node.module else [])])
+            if module in ("imucalib", "imucalib.procedures") or not node.module:
+                out += [(f"{module}.{alias.name}", node.lineno) for alias in node.names]
+            if module.startswith("imucalib."):
+                out.append((module, node.lineno))
+        elif isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names if a.name.startswith("imucalib.")]
+    return out
+
+
+def test_no_procedure_folder_imports_another():
+    """A procedure folder imports only itself, ``common`` and lower layers (docs/procedures.md)."""
+    procedures = SRC / "procedures"
+    folders = {p.name for p in procedures.iterdir() if (p / "__init__.py").exists()}
+    crossing = []
+    for path in sorted(procedures.glob("*/**/*.py")):
+        me = path.relative_to(procedures).parts[0]
+        if me == "common":
+            continue
+        for module, line in _imported_modules(path):
+            parts = module.split(".")
+            if len(parts) < 3 or parts[:2] != ["imucalib", "procedures"]:
+                continue
+            other = parts[2]
+            if other in folders and other not in (me, "common", "registry"):
+                crossing.append(f"{path.relative_to(SRC.parent)}:{line}: {me} imports {module}")
+    assert crossing == [], ("a procedure folder imports another; move the shared piece to "
+                            "procedures/common/:\n" + "\n".join(crossing))

@@ -23,7 +23,7 @@ def test_version_prints_the_version_and_exits_0():
     assert __version__ in result.output
 
 
-@pytest.mark.parametrize("option", ["--temperatures=-10,20,60", "--record-s=60"])
+@pytest.mark.parametrize("option", ["--temperatures=-10,20,60", "--n-imus=4"])
 def test_plan_new_p1_refuses_an_option_its_plan_does_not_take(tmp_path, option):
     out = tmp_path / "p1.toml"
     result = runner.invoke(app, ["plan", "new", "p1", "--out", str(out), option])

@@ -93,7 +93,7 @@ def test_cli_refuses_p2_options_on_other_procedures_and_bad_p2_options(tmp_path,
     assert res.exit_code == 2 and "plan new p2 --n-imus" in res.output
     res = CliRunner().invoke(app, ["plan", "new", "p2", "-o", str(tmp_path / "p2.toml"),
                                    "--held-out", "ten"])
-    assert res.exit_code == 2 and "--held-out must be numbers" in res.output
+    assert res.exit_code == 2 and "--held-out takes numbers" in res.output
     assert Path(tmp_path / "p2.toml").exists() is False
 
 

@@ -103,7 +103,7 @@ def test_cli_writes_a_p3_plan_and_refuses_p3_options_elsewhere(tmp_path):
     assert [s.centrifuge_load_kg for s in plan.steps if s.role == "p3.load"] == [5.0]
     res = CliRunner().invoke(app, ["plan", "new", "p3", "-o", str(tmp_path / "x.toml"),
                                    "--n-rates", "3"])
-    assert res.exit_code == 2 and "at least 4 rate points" in res.output
+    assert res.exit_code == 2 and "--n-rates takes an integer in [4, 10000]; got '3'" in res.output
     res = CliRunner().invoke(app, ["plan", "new", "p1", "-o", str(tmp_path / "y.toml"),
                                    "--test-load-kg", "3"])
     assert res.exit_code == 2 and "plan new p3 --test-load-kg" in res.output

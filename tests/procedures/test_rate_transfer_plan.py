@@ -85,5 +85,5 @@ def test_cli_writes_a_rate_transfer_plan_with_its_rates(tmp_path):
     rates = {abs(s.rate_dps) for s in plan.steps if s.role == "rate-transfer.rate"}
     assert rates == {5.0, 10.0, 20.0, 40.0}
     res = CliRunner().invoke(app, ["plan", "new", "p1", "-o", str(tmp_path / "x.toml"),
-                                   "--rates", "5,6"])
-    assert res.exit_code == 2 and "plan new rate-transfer --rates" in res.output
+                                   "--log-spaced", "5,50,4"])
+    assert res.exit_code == 2 and "plan new rate-transfer --log-spaced" in res.output

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 from types import SimpleNamespace
@@ -34,9 +35,15 @@ def test_importing_the_registry_imports_no_analysis():
     assert out.stdout.strip() == "False"
 
 
+@dataclasses.dataclass(frozen=True)
+class _DummyPlanOptions:
+    pass
+
+
 class _Dummy:
     name = "p-test"
     description = "a test procedure"
+    plan_options_type = _DummyPlanOptions
     plan_options: frozenset[str] = frozenset()
     analysis_options: frozenset[str] = frozenset()
     outputs = ("report-json",)

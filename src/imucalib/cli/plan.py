@@ -1,32 +1,36 @@
-"""Commands on plan files: ``plan validate``, ``plan show`` and ``plan schema``."""
+"""Commands on plan files: ``plan new NAME``, ``plan validate``, ``plan show``, ``plan schema``.
+
+``plan new`` has one subcommand per registered procedure, whose flags are built from the
+procedure's plan-options dataclass (:mod:`imucalib.cli.options_cli`): a procedure added to the
+registry gets its ``plan new`` with no edit here.
+"""
 
 from __future__ import annotations
 
+import inspect
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from pydantic import ValidationError
 from rich.table import Table
+from typer.core import TyperGroup
 
 from imucalib.cli._app import app, console, fail, typer_app
-from imucalib.errors import CalibrationError, ConfigurationError
-from imucalib.plan.bounds import (
-    MAX_IMUS,
-    MAX_RECORD_S,
-    MAX_SAMPLE_RATE_HZ,
-    MAX_TABLE_RATE_DPS,
-    MIN_SAMPLE_RATE_HZ,
-    format_validation_error,
+from imucalib.cli.options_cli import (
+    GroupedHelpCommand,
+    flags_of,
+    given_values,
+    spec_parameters,
 )
+from imucalib.errors import CalibrationError, ConfigurationError
+from imucalib.plan.bounds import format_validation_error
 from imucalib.plan.budget import format_bytes
 from imucalib.plan.schema import Plan
+from imucalib.procedures.common.options import option_specs
 
 __all__ = ["plan_app"]
-
-#: Most repetitions `plan new p1` writes (each adds 36 steps and the static record).
-MAX_REPETITIONS = 50
 
 plan_app = typer_app(help="Validate, show and describe test plans.", no_args_is_help=True)
 app.add_typer(plan_app, name="plan")
@@ -85,146 +89,15 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
     console.print(_estimate_line(plan), highlight=False, soft_wrap=True)
 
 
-#: The options of `plan new` and the generator keyword each sets.
-_PLAN_OPTIONS = {"grade": "grade", "repetitions": "repetitions", "static_s": "static_s",
-                 "sample_rate_hz": "sample_rate_hz", "seed": "seed", "record_s": "record_s",
-                 "temperatures": "temperatures_degc", "serial": "serial", "model": "model",
-                 "maker": "maker", "acceptance": "acceptance", "n_imus": "n_imus",
-                 "held_out": "held_out_degc", "hysteresis": "hysteresis",
-                 "rate_dps": "rate_dps", "revolutions": "revolutions",
-                 "pose_order": "pose_order", "radius_m": "static_radius_m",
-                 "test_range_g": "test_range_g", "n_rates": "n_rates",
-                 "test_load_kg": "test_load_kg", "unbalance_um": "unbalance_um",
-                 "tumble": "tumble", "both_directions": "both_directions",
-                 "rates": "rates_dps", "n_poses": "n_poses", "full_turns": "full_turns",
-                 "tilt_deg": "tilt_deg"}
-
-
-def _refuse_foreign_options(ctx: typer.Context, procedure: str, plan_options: frozenset[str]
-                            ) -> None:
-    """Refuse an option given on the command line that `procedure`'s plan generator does not take.
-
-    An option the generator does not take would otherwise be dropped without a word (P1
-    calibrates at one temperature: ``plan new p1 --temperatures=…`` would write the same plan).
-    The message names the procedures whose plans do take it.
-    """
-    from imucalib.procedures import registry
-
-    for param, keyword in _PLAN_OPTIONS.items():
-        source = ctx.get_parameter_source(param)  # click's ParameterSource (typer vendors it)
-        if keyword in plan_options or source is None or source.name == "DEFAULT":
-            continue
-        flag = "--" + param.replace("_", "-")
-        takers = [n for n in registry.names() if keyword in registry.get(n).plan_options]
-        where = (f"; the plan of {', '.join(f'`plan new {n} {flag}`' for n in takers)} takes it"
-                 if takers else "")
-        raise ConfigurationError(f"the {procedure} plan takes no {flag}{where}")
-
-
-def _numbers(text: str | None, flag: str) -> list[float] | None:
-    """Parse '-10,20,60' into numbers (None stays None)."""
-    if text is None:
-        return None
-    try:
-        return [float(t) for t in text.split(",") if t.strip()]
-    except ValueError as exc:
-        raise ConfigurationError(f"{flag} must be numbers separated by commas; got "
-                                 f"{text!r}") from exc
-
-
-@plan_app.command("new")
-def new(
-    ctx: typer.Context,
-    procedure: Annotated[str, typer.Argument(
-        help="Procedure: p1, allan, p2, p3, rate-transfer, installation, … (the registry's).")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
-    grade: Annotated[str, typer.Option(help="IMU grade: consumer, tactical, navigation.")] =
-    "tactical",
-    repetitions: Annotated[int, typer.Option(help="Complete calibrations.", min=1,
-                                             max=MAX_REPETITIONS)] = 3,
-    static_s: Annotated[float, typer.Option(help="Level static record [s].", min=0.0,
-                                            max=MAX_RECORD_S)] = 3600.0,
-    sample_rate_hz: Annotated[float, typer.Option(help="Twin IMU output rate [Hz].",
-                                                  min=MIN_SAMPLE_RATE_HZ,
-                                                  max=MAX_SAMPLE_RATE_HZ)] = 1000.0,
-    seed: Annotated[int, typer.Option(help="Seed of the twin.", min=-(2**63),
-                                      max=2**63 - 1)] = 1,
-    record_s: Annotated[float, typer.Option(help="Allan: each static record [s].", min=0.0,
-                                            max=MAX_RECORD_S)] = 7200.0,
-    temperatures: Annotated[str | None, typer.Option(
-        help="Allan: record at these chamber temperatures, e.g. '-10,20,60' [°C].")] = None,
-    serial: Annotated[str, typer.Option(help="P1: the unit's serial number.")] = "",
-    model: Annotated[str, typer.Option(help="P1: the unit's model.")] = "",
-    maker: Annotated[str, typer.Option(help="P1: the unit's maker.")] = "",
-    acceptance: Annotated[str, typer.Option(
-        help="P1: decision rule, simple or guarded (|value| + 2u within the limit).")] = "simple",
-    n_imus: Annotated[int, typer.Option(help="P2: units on the cube (the twin's).", min=1,
-                                        max=MAX_IMUS)] = 8,
-    held_out: Annotated[str | None, typer.Option(
-        help="P2: temperature points held out of the models, e.g. '-10,55' [°C].")] = None,
-    hysteresis: Annotated[bool, typer.Option(
-        help="P2: visit the points heating then cooling (a hysteresis term).")] = False,
-    rate_dps: Annotated[float, typer.Option(help="P2: |ω| of the turns [°/s].", min=1.0,
-                                            max=MAX_TABLE_RATE_DPS)] = 60.0,
-    revolutions: Annotated[int, typer.Option(help="P2: whole revolutions per turn.", min=1,
-                                             max=1000)] = 2,
-    pose_order: Annotated[str, typer.Option(
-        help="P2: temperature-major (six remounts per point) or pose-major (six sweeps).")]
-    = "temperature-major",
-    radius_m: Annotated[float, typer.Option(
-        help="P3: static radius r_t of the test position [m].", min=0.01, max=20.0)] = 1.0,
-    test_range_g: Annotated[float, typer.Option(
-        help="P3: specific force at r_t at the top rate [g].", min=0.1, max=1000.0)] = 20.0,
-    n_rates: Annotated[int, typer.Option(help="P3: rate points (at least 4).", min=1,
-                                         max=100)] = 5,
-    test_load_kg: Annotated[float, typer.Option(
-        help="P3: the test load mounted for the last configuration [kg].", min=0.0,
-        max=1000.0)] = 2.0,
-    unbalance_um: Annotated[float, typer.Option(
-        help="P3: the twin's rotor-centre shift at the top rate, loaded [µm].", min=0.0,
-        max=1000.0)] = 10.0,
-    tumble: Annotated[bool, typer.Option(
-        help="P3: record the 1 g tumble (K1, K0 of each accelerometer).")] = True,
-    both_directions: Annotated[bool, typer.Option(
-        help="P3: run every rate at +ω and −ω.")] = False,
-    rates: Annotated[str | None, typer.Option(
-        help="P3, rate-transfer: the rates, e.g. '5,12.5,18,27' [°/s].")] = None,
-    n_poses: Annotated[int, typer.Option(
-        help="field: static poses after the initial rest (at least 6).", min=1, max=200)]
-    = 12,
-    full_turns: Annotated[bool, typer.Option(
-        help="field: ± full turns flat on the desk about each axis (the gyro's scale).")]
-    = True,
-    tilt_deg: Annotated[float, typer.Option(
-        help="field: how far the second round of poses leans [°].", min=0.0, max=60.0)]
-    = 20.0,
-) -> None:
-    """Write a procedure's default plan (with a [twin] table to run it on the twin)."""
+def _write_new_plan(procedure: str, out: Path, given: dict[str, Any]) -> None:
+    """Generate `procedure`'s plan from the options `given`, write it to `out`, say so."""
     from imucalib.plan import describe_plan, write_plan
     from imucalib.procedures import registry
 
     try:
-        proc = registry.get(procedure)
-        _refuse_foreign_options(ctx, procedure, proc.plan_options)
-        given = {"grade": grade, "repetitions": repetitions, "static_s": static_s,
-                 "sample_rate_hz": sample_rate_hz, "seed": seed, "record_s": record_s,
-                 "temperatures_degc": _numbers(temperatures, "--temperatures"),
-                 "serial": serial, "model": model, "maker": maker, "acceptance": acceptance,
-                 "n_imus": n_imus, "held_out_degc": _numbers(held_out, "--held-out"),
-                 "hysteresis": hysteresis, "rate_dps": rate_dps, "revolutions": revolutions,
-                 "pose_order": pose_order, "static_radius_m": radius_m,
-                 "test_range_g": test_range_g, "n_rates": n_rates,
-                 "test_load_kg": test_load_kg, "unbalance_um": unbalance_um, "tumble": tumble,
-                 "both_directions": both_directions, "rates_dps": _numbers(rates, "--rates"),
-                 "n_poses": n_poses, "full_turns": full_turns, "tilt_deg": tilt_deg}
-        # only what the command line gave: each generator keeps its own defaults
-        explicit = {keyword for param, keyword in _PLAN_OPTIONS.items()
-                    if (src := ctx.get_parameter_source(param)) is not None
-                    and src.name != "DEFAULT"}
-        plan = proc.generate_plan(**{k: v for k, v in given.items()
-                                     if k in proc.plan_options and k in explicit})
+        plan = registry.get(procedure).generate_plan(**given)
         write_plan(plan, out)
-    except ValidationError as exc:  # options the plan's bounds refuse (NaN passes a range)
+    except ValidationError as exc:  # options the plan's bounds refuse
         raise fail(ConfigurationError(format_validation_error(
             exc, f"from `plan new {procedure}` (check the options)", "plan"))) from exc
     except CalibrationError as exc:
@@ -234,6 +107,95 @@ def new(
     total = sum(r.min_duration_s for r in describe_plan(plan))
     console.print(f"wrote {out}: plan {plan.name!r}, {len(plan.steps)} steps, at least "
                   f"{total / 3600:.2f} h", highlight=False)
+
+
+def _plan_command(name: str) -> Any:
+    """Return the ``plan new NAME`` command, its flags built from the procedure's options."""
+    from imucalib.procedures import registry
+
+    proc = registry.get(name)
+    specs = option_specs(proc.plan_options_type)
+    known = flags_of(specs) | {"--out", "-o", "--help"}
+
+    class Command(GroupedHelpCommand):
+        """``plan new NAME``: a flag this plan does not take names the plans that do."""
+
+        def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
+            """Refuse a flag of another procedure's plan in one line, then parse."""
+            for arg in args:
+                flag = arg.split("=", 1)[0]
+                if flag.startswith("--") and flag not in known:
+                    raise fail(ConfigurationError(_foreign_flag(name, flag)))
+            return list(super().parse_args(ctx, args))
+
+    Command.specs = specs
+
+    def callback(ctx: typer.Context, out: Path, **_: Any) -> None:
+        try:
+            given = given_values(ctx, specs)
+        except CalibrationError as exc:
+            raise fail(exc) from exc
+        _write_new_plan(name, out, given)
+
+    out_param = inspect.Parameter(
+        "out", inspect.Parameter.KEYWORD_ONLY,
+        annotation=Annotated[Path, typer.Option("--out", "-o", help="Plan file to write "
+                                                                     "(.toml).")])
+    ctx_param = inspect.Parameter("ctx", inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                  annotation=typer.Context)
+    callback.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+        [ctx_param, out_param, *spec_parameters(specs)])
+    one = typer_app(add_completion=False)
+    one.command(name=name, cls=Command, short_help=proc.description,
+                help=f"Write the {name} plan: {proc.description}. The plan carries a [twin] "
+                     "table to run it on the twin (docs/procedures.md).")(callback)
+    return typer.main.get_command(one)
+
+
+def _foreign_flag(name: str, flag: str) -> str:
+    """Return the error line for `flag` given to `name`'s plan: which plans take it."""
+    from imucalib.procedures import registry
+
+    takers = [n for n in registry.names() if n != name and
+              flag in flags_of(option_specs(registry.get(n).plan_options_type))]
+    where = (f"; the plan of {', '.join(f'`plan new {n} {flag}`' for n in takers)} takes it"
+             if takers else "")
+    return f"the {name} plan takes no {flag}{where}"
+
+
+class _PlanNewGroup(TyperGroup):
+    """``plan new``: one subcommand per registered procedure, built when asked for."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        """Return the registered procedures."""
+        from imucalib.procedures import registry
+
+        return list(registry.names())
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        """Return the procedure's ``plan new`` command; an unknown name is one error line."""
+        from imucalib.procedures import registry
+
+        try:
+            registry.get(cmd_name)
+        except ConfigurationError as exc:
+            if ctx.resilient_parsing:
+                return None
+            raise fail(exc) from exc
+        return _plan_command(cmd_name)
+
+
+plan_new_app = typer_app(
+    cls=_PlanNewGroup, no_args_is_help=True,
+    help="Write a procedure's default plan: `imucalib plan new NAME --out FILE [options]`; "
+         "`imucalib plan new NAME --help` lists that procedure's options with units and "
+         "defaults.")
+plan_app.add_typer(plan_new_app, name="new")
+
+
+@plan_new_app.callback()
+def _plan_new() -> None:
+    """Write a procedure's default plan (`plan new NAME --help`: its options)."""
 
 
 @plan_app.command("schema")

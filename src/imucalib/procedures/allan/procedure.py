@@ -13,6 +13,8 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.allan.options import AllanPlanOptions
+from imucalib.procedures.common.options import option_names
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -28,8 +30,8 @@ class AllanProcedure:
     name = "allan"
     description = ("noise characterisation: Allan deviations and noise terms of long static "
                    "records, optionally at several temperatures")
-    plan_options = frozenset({"grade", "record_s", "temperatures_degc", "sample_rate_hz",
-                              "seed"})
+    plan_options_type = AllanPlanOptions
+    plan_options = option_names(AllanPlanOptions)
     analysis_options: frozenset[str] = frozenset()
     outputs = ("noise-json", "kalibr-yaml", "openvins-yaml", "noise-table", "figures")
 

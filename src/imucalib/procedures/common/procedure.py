@@ -73,8 +73,14 @@ class Procedure(Protocol):
         (``"p1.accel-position"``).
     description : str
         One line for listings.
+    plan_options_type : type
+        The frozen dataclass whose fields are :meth:`generate_plan`'s keywords, each made by
+        :func:`~imucalib.procedures.common.options.option` (help, unit, range, help section,
+        or why the command line cannot give it); ``imucalib plan new NAME`` builds its flags
+        and its ``--help`` from it.
     plan_options : frozenset of str
-        The ``imucalib plan new`` options :meth:`generate_plan` takes (``grade``, ``seed``, …).
+        The keywords :meth:`generate_plan` takes: the fields of :attr:`plan_options_type`
+        (:func:`~imucalib.procedures.common.options.option_names`).
     analysis_options : frozenset of str
         The keys :meth:`analyze` accepts in `options` (P1: ``model``).
     outputs : tuple of str
@@ -93,8 +99,13 @@ class Procedure(Protocol):
         ...
 
     @property
+    def plan_options_type(self) -> type:
+        """The dataclass of :meth:`generate_plan`'s keywords."""
+        ...
+
+    @property
     def plan_options(self) -> frozenset[str]:
-        """``plan new`` options of :meth:`generate_plan`."""
+        """Keywords of :meth:`generate_plan` (the fields of :attr:`plan_options_type`)."""
         ...
 
     @property

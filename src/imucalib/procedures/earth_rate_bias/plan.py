@@ -26,7 +26,7 @@ from imucalib.plan.schema import (
     PositionStep,
     WarmUpStep,
 )
-from imucalib.procedures.g_sensitivity.plan import check_grade
+from imucalib.procedures.common.grade import WARM_UP_S, check_grade
 
 __all__ = ["EARTH_RATE_AZIMUTHS_DEG", "EARTH_RATE_POSES", "generate_earth_rate_bias_plan"]
 
@@ -34,7 +34,6 @@ __all__ = ["EARTH_RATE_AZIMUTHS_DEG", "EARTH_RATE_POSES", "generate_earth_rate_b
 EARTH_RATE_POSES: tuple[str, ...] = ("+z", "-z", "+x", "-x", "+y", "-y")
 #: Table azimuths of each pose [°].
 EARTH_RATE_AZIMUTHS_DEG: tuple[float, ...] = (0.0, 90.0, 180.0, 270.0)
-_WARM_UP_S = {"consumer": 900.0, "tactical": 1800.0, "navigation": 3600.0}
 
 
 def generate_earth_rate_bias_plan(*, name: str = "earth-rate-bias", grade: str = "navigation",
@@ -78,7 +77,7 @@ def generate_earth_rate_bias_plan(*, name: str = "earth-rate-bias", grade: str =
                           item="fixture on the single-axis table, table levelled and its zero "
                                "azimuth pointing north"),
         WarmUpStep(kind="warm-up", label="warm-up",
-                   duration_s=_WARM_UP_S[grade] if warm_up_s is None else warm_up_s),
+                   duration_s=WARM_UP_S[grade] if warm_up_s is None else warm_up_s),
     ]
     for pose in poses:
         steps.append(OperatorCheckStep(kind="operator-check", label=f"remount {pose} up",

@@ -10,7 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.earth_rate_bias.options import EarthRateBiasPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -26,8 +28,8 @@ class EarthRateBiasProcedure:
     name = "earth-rate-bias"
     description = ("gyro bias against Earth rate (navigation grade): 4-position (N, E, S, W) and "
                    "up/down methods on a single-axis table with remounts, compared")
-    plan_options = frozenset({"grade", "poses", "record_s", "settle_s", "warm_up_s",
-                              "sample_rate_hz", "latitude_deg", "noise", "errors", "seed"})
+    plan_options_type = EarthRateBiasPlanOptions
+    plan_options = option_names(EarthRateBiasPlanOptions)
     analysis_options = frozenset({"gravity_mps2", "noise_block_s"})
     outputs = ("report-json", "parameters-csv")
 

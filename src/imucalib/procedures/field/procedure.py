@@ -15,7 +15,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.field.options import FieldPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -35,8 +37,8 @@ class FieldProcedure:
     description = ("calibration without equipment from a hand-held log: the accelerometer "
                    "from static poses of unknown orientation (gravity norm) or a fixture's "
                    "faces, the gyro from the rotations between them")
-    plan_options = frozenset({"grade", "n_poses", "static_s", "init_static_s", "full_turns",
-                              "tilt_deg", "sample_rate_hz", "latitude_deg", "seed"})
+    plan_options_type = FieldPlanOptions
+    plan_options = option_names(FieldPlanOptions)
     analysis_options = frozenset({"accel_form", "gyro_form", "gravity_mps2",
                                   "gravity_std_mps2", "latitude_deg", "height_m",
                                   "static_threshold", "window_s", "init_static_s",

@@ -2,8 +2,10 @@
 
 Static window means of every ``g-sensitivity.position`` step
 (:func:`~imucalib.procedures.common.static_windows.extract_static_windows`), then the drift
-model fitted by :func:`~imucalib.procedures.g_sensitivity.fit.fit_drift_model`
-(docs/g-sensitivity.md, equations (1)–(4)). The gyro scale-misalignment acting on the Earth rate
+model fitted by :func:`~imucalib.procedures.common.drift_model.fit_windows`
+(docs/g-sensitivity.md, equations (1)–(4)); the options, the fit and the parameter names are
+those of :mod:`~imucalib.procedures.common.drift_model` (shared with the random-drift test,
+re-exported here). The gyro scale-misalignment acting on the Earth rate
 is taken as known (:attr:`GSensitivityOptions.scale_misalignment`, nominal zero) with a Type B
 standard uncertainty per element (:attr:`GSensitivityOptions.scale_misalignment_std`, 1e-3 by
 default, a rate test's worst case), propagated through the full covariance (2).
@@ -23,57 +25,25 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.errors import InvalidInputError
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import G_SENSITIVITY_POSITION
+from imucalib.procedures.common.drift_model import (
+    DriftFit,
+    GSensitivityOptions,
+    drift_parameter_names,
+    fit_windows,
+)
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
     json_safe,
     require_recorded,
 )
-from imucalib.procedures.g_sensitivity.fit import DriftFit, fit_drift_model
 
 __all__ = ["GSensitivityOptions", "GSensitivityResult", "analyze_g_sensitivity",
-           "drift_parameter_names"]
+           "drift_parameter_names", "fit_windows"]
 
 _F64 = NDArray[np.float64]
-_AXES = "xyz"
-
-
-def drift_parameter_names() -> list[str]:
-    """Return the 12 triad names, row-major: gyro_bias_i, gyro_G_ix, gyro_G_iy, gyro_G_iz."""
-    return [n for i in _AXES for n in (f"gyro_bias_{i}", *(f"gyro_G_{i}{j}" for j in _AXES))]
-
-
-@dataclass(frozen=True)
-class GSensitivityOptions:
-    """Analysis options (module docstring).
-
-    Attributes
-    ----------
-    gravity_mps2 : float, optional
-        Local g; normal gravity at the recorded latitude when omitted. [m/s²]
-    scale_misalignment : 3×3 nested sequence, optional
-        The gyro M (y = (I + M)·ω, rows sensor axes) taken as known; zero when omitted.
-    scale_misalignment_std : float
-        Type B standard uncertainty of each element of M. [1]
-    noise_block_s : float
-        Block length of the white-noise estimate. [s]
-    """
-
-    gravity_mps2: float | None = None
-    scale_misalignment: Any = None
-    scale_misalignment_std: float = 1e-3
-    noise_block_s: float = 1.0
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.scale_misalignment_std) and self.scale_misalignment_std >= 0):
-            raise InvalidInputError(f"`scale_misalignment_std` must be ≥ 0; got "
-                                    f"{self.scale_misalignment_std!r}")
-        if self.scale_misalignment is not None and np.shape(self.scale_misalignment) != (3, 3):
-            raise InvalidInputError(f"`scale_misalignment` must be 3×3; got shape "
-                                    f"{np.shape(self.scale_misalignment)}")
 
 
 @dataclass(frozen=True)
@@ -146,17 +116,6 @@ class GSensitivityResult:
             "notes": list(self.notes),
         }
         return dict(json_safe(out))  # type: ignore[call-overload]
-
-
-def fit_windows(windows: list[StaticWindow], opt: GSensitivityOptions) -> DriftFit:
-    """Fit the drift model (1)–(4) to static windows."""
-    return fit_drift_model(np.array([w.omega_ref_b_rps for w in windows]),
-                           np.array([w.force_ref_b_mps2 for w in windows]),
-                           np.array([w.mean[:3] for w in windows]),
-                           np.array([w.se[:3] for w in windows]),
-                           scale_misalignment=None if opt.scale_misalignment is None
-                           else np.asarray(opt.scale_misalignment, dtype=np.float64),
-                           scale_misalignment_std=opt.scale_misalignment_std)
 
 
 def analyze_g_sensitivity(recording: Recording | str | os.PathLike[str], *,

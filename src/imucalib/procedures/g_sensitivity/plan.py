@@ -5,6 +5,10 @@ the static positions of :data:`G_SENSITIVITY_POSITIONS_DEG` on a dual-axis table
 gravity along +z, −z, +x, −x, +y, −y and eight 45° positions for redundancy, each a long static
 record with role ``"g-sensitivity.position"``. The plan carries a twin (a high-grade dual-axis
 table and one IMU) so that ``imucalib run PLAN --station sim`` runs it.
+
+The positions, their steps and the twin are those of
+:mod:`~imucalib.procedures.common.static_positions`, the grades and their warm-ups those of
+:mod:`~imucalib.procedures.common.grade` (both re-exported here).
 """
 
 from __future__ import annotations
@@ -14,51 +18,22 @@ from typing import Any
 
 from imucalib.errors import ConfigurationError
 from imucalib.io.step_roles import G_SENSITIVITY_POSITION
-from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
     ImuSpecConfig,
     OperatorCheckStep,
     Plan,
     PlanStep,
-    PositionStep,
     WarmUpStep,
 )
-
-__all__ = ["G_SENSITIVITY_POSITIONS_DEG", "generate_g_sensitivity_plan", "position_steps"]
-
-#: (pitch, roll) [°]: the six axis-up positions, then eight 45° positions (redundancy).
-G_SENSITIVITY_POSITIONS_DEG: tuple[tuple[float, float], ...] = (
-    (0.0, 0.0), (0.0, 180.0), (90.0, 0.0), (-90.0, 0.0), (0.0, 90.0), (0.0, 270.0),
-    (45.0, 0.0), (-45.0, 0.0), (135.0, 0.0), (-135.0, 0.0),
-    (0.0, 45.0), (0.0, 135.0), (0.0, 225.0), (0.0, 315.0),
+from imucalib.procedures.common.grade import WARM_UP_S, check_grade
+from imucalib.procedures.common.static_positions import (
+    G_SENSITIVITY_POSITIONS_DEG,
+    dual_axis_twin,
+    position_steps,
 )
-_WARM_UP_S = {"consumer": 900.0, "tactical": 1800.0, "navigation": 3600.0}
 
-
-def position_steps(positions_deg: Sequence[tuple[float, float]], role: str, *, settle_s: float,
-                   record_s: float, extra_tags: tuple[str, ...] = ()) -> list[PlanStep]:
-    """Return one static position step per (pitch, roll), tagged ``position=<k>``."""
-    return [PositionStep(kind="position", angles_deg=(float(p), float(r)), settle_s=settle_s,
-                         record_s=record_s, role=role,
-                         label=f"position {k} (pitch {p:g}°, roll {r:g}°)",
-                         tags=(f"position={k}", *extra_tags))
-            for k, (p, r) in enumerate(positions_deg)]
-
-
-def check_grade(grade: str) -> None:
-    """Raise ConfigurationError for an unknown grade."""
-    if grade not in _WARM_UP_S:
-        raise ConfigurationError(f"`grade` must be one of {sorted(_WARM_UP_S)}; got {grade!r}")
-
-
-def dual_axis_twin(grade: str, sample_rate_hz: float, latitude_deg: float, seed: int,
-                   noise: str, errors: Mapping[str, Any] | None) -> TwinEquipment:
-    """Return a twin: a high-grade dual-axis table and one IMU ``IMU-0001``."""
-    return TwinEquipment(
-        seed=seed, site=SiteConfig(latitude_deg=latitude_deg),
-        table=TableConfig(kind="dual-axis", grade="high"),
-        imus=(ImuConfig(name="IMU-0001", grade=grade, sample_rate_hz=sample_rate_hz,
-                        noise=noise, errors=dict(errors or {})),))
+__all__ = ["G_SENSITIVITY_POSITIONS_DEG", "check_grade", "dual_axis_twin",
+           "generate_g_sensitivity_plan", "position_steps"]
 
 
 def generate_g_sensitivity_plan(*, name: str = "g-sensitivity", grade: str = "tactical",
@@ -112,7 +87,7 @@ def generate_g_sensitivity_plan(*, name: str = "g-sensitivity", grade: str = "ta
                           item="IMU fixed on the dual-axis table platform, its axes along the "
                                "platform's; table levelled; cables strain-relieved"),
         WarmUpStep(kind="warm-up", label="warm-up",
-                   duration_s=_WARM_UP_S[grade] if warm_up_s is None else warm_up_s),
+                   duration_s=WARM_UP_S[grade] if warm_up_s is None else warm_up_s),
         *position_steps(positions, G_SENSITIVITY_POSITION, settle_s=settle_s,
                         record_s=record_s),
     ]

@@ -10,7 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.g_sensitivity.options import GSensitivityPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -26,8 +28,8 @@ class GSensitivityProcedure:
     name = "g-sensitivity"
     description = ("gyro g-sensitivity: drift D0 + D1·a_x + D2·a_y + D3·a_z of each gyro axis "
                    "from static positions on a dual-axis table, Earth rate subtracted")
-    plan_options = frozenset({"grade", "positions_deg", "record_s", "settle_s", "warm_up_s",
-                              "sample_rate_hz", "latitude_deg", "noise", "errors", "seed"})
+    plan_options_type = GSensitivityPlanOptions
+    plan_options = option_names(GSensitivityPlanOptions)
     analysis_options = frozenset({"gravity_mps2", "scale_misalignment",
                                   "scale_misalignment_std", "noise_block_s"})
     outputs = ("report-json", "parameters-csv")

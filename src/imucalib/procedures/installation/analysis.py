@@ -1,7 +1,7 @@
 """The installation-error analysis of one unit (docs/installation.md, "Analysis").
 
 The turns (role ``installation.rate``) reduced to whole-revolution means
-(:func:`~imucalib.procedures.rate_transfer.observations.extract_rate_windows`), then M by the
+(:func:`~imucalib.procedures.common.rate_windows.extract_rate_windows`), then M by the
 chapter's closed form (IN-2) and by the general least-squares form (IN-3)
 (:mod:`~imucalib.procedures.installation.misalignment`); their largest difference in units of
 the closed form's σ is reported (``agreement_sigma``).
@@ -26,12 +26,12 @@ from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import INSTALLATION_RATE
+from imucalib.procedures.common.rate_windows import RateProcessing, extract_rate_windows
 from imucalib.procedures.installation.misalignment import (
     Misalignment,
     closed_form_misalignment,
     lsq_misalignment,
 )
-from imucalib.procedures.rate_transfer.observations import RateProcessing, extract_rate_windows
 
 __all__ = ["InstallationResult", "analyze_installation"]
 

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError, MissingSegmentError
 from imucalib.models.fit_quality import FitQuality, assess_fit
-from imucalib.procedures.rate_transfer.observations import RateWindow
+from imucalib.procedures.common.rate_windows import RateWindow
 
 __all__ = ["Misalignment", "closed_form_misalignment", "lsq_misalignment"]
 

@@ -6,7 +6,7 @@ turn over `revolutions` whole revolutions each (the P4 source chapter's one revo
 per direction; two by default, the analysis accepting one fewer at the window edges), at each
 rate of `rate_dps`. Roles ``installation.remount`` and ``installation.rate``, tags
 ``axis=<k>`` and ``rate=<°/s>``. The twin is that of the rate-transfer test
-(:func:`~imucalib.procedures.rate_transfer.plan.rate_table_twin`).
+(:func:`~imucalib.procedures.common.rate_table_plan.rate_table_twin`).
 
 Contents
 --------
@@ -21,7 +21,7 @@ from imucalib.errors import ConfigurationError
 from imucalib.io.step_roles import INSTALLATION_RATE, INSTALLATION_REMOUNT
 from imucalib.plan.equipment import TwinEquipment
 from imucalib.plan.schema import Plan
-from imucalib.procedures.rate_transfer.plan import (
+from imucalib.procedures.common.rate_table_plan import (
     AXES,
     rate_table_twin,
     remounted_turns_plan,

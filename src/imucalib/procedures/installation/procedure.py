@@ -13,7 +13,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.installation.options import InstallationPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -30,8 +32,8 @@ class InstallationProcedure:
     description = ("installation (misalignment) errors of the gyro triad on a single-axis "
                    "table: each axis up in turn, a +ω and a −ω turn over whole revolutions; "
                    "the chapter's closed form and the least-squares triad model")
-    plan_options = frozenset({"rate_dps", "axes", "revolutions", "settle_s", "grade",
-                              "sample_rate_hz", "seed"})
+    plan_options_type = InstallationPlanOptions
+    plan_options = option_names(InstallationPlanOptions)
     analysis_options = frozenset({"max_lost_fraction", "max_gap_s", "noise_block_s",
                                   "common_bias"})
     outputs = ("report-json", "parameters-csv")
@@ -52,8 +54,8 @@ class InstallationProcedure:
         InvalidInputError
             An unknown option.
         """
+        from imucalib.procedures.common.rate_windows import RateProcessing
         from imucalib.procedures.installation.analysis import analyze_installation
-        from imucalib.procedures.rate_transfer.observations import RateProcessing
 
         opts = accepted_options(self.name, options, self.analysis_options)
         common = bool(opts.pop("common_bias", False))

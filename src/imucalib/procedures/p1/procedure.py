@@ -14,7 +14,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.p1.options import P1PlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -33,8 +35,8 @@ class P1Procedure:
     name = "p1"
     description = ("two-dimensional calibration on a dual-axis table: six positions, a static "
                    "record, rate points, held-out checks, repetitions")
-    plan_options = frozenset({"grade", "repetitions", "static_s", "sample_rate_hz", "seed",
-                              "serial", "model", "maker", "acceptance"})
+    plan_options_type = P1PlanOptions
+    plan_options = option_names(P1PlanOptions)
     analysis_options = frozenset({"model"})
     outputs = ("result-json", "report-json", "residuals-png", "report-pdf")
 

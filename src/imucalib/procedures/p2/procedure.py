@@ -15,7 +15,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.p2.options import P2PlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -32,10 +34,8 @@ class P2Procedure:
     description = ("array full-temperature calibration: IMUs on a cube in a thermal chamber on "
                    "a single-axis table, six orientations × static and ±ω at every "
                    "temperature, temperature models of every parameter")
-    plan_options = frozenset({"n_imus", "grade", "temperatures_degc", "held_out_degc",
-                              "hysteresis", "rate_dps", "revolutions", "static_s", "settle_s",
-                              "stable_for_s", "resoak_s", "pose_order", "sample_rate_hz",
-                              "seed", "half_edge_m", "ramp_degc_per_min"})
+    plan_options_type = P2PlanOptions
+    plan_options = option_names(P2PlanOptions)
     analysis_options = frozenset({"lever_arm", "max_order", "criterion", "rate_term",
                                   "hysteresis", "reference_temperature_degc", "workers",
                                   "scheduler"})

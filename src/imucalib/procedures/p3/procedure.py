@@ -12,7 +12,9 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.p3.options import P3PlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -29,11 +31,8 @@ class P3Procedure:
     description = ("accelerometer K2 on a precision centrifuge: two reference accelerometers "
                    "in a round-robin measure the rotor's dynamic unbalance, which is removed "
                    "from the test accelerometer's ω⁴ term")
-    plan_options = frozenset({"static_radius_m", "reference_radius_m", "test_range_g",
-                              "n_rates", "rates_dps", "both_directions", "rate_record_s",
-                              "rest_record_s", "settle_s", "arm_positions_deg",
-                              "test_load_kg", "tumble", "tumble_record_s", "unbalance_um",
-                              "grade", "sample_rate_hz", "seed"})
+    plan_options_type = P3PlanOptions
+    plan_options = option_names(P3PlanOptions)
     analysis_options = frozenset({"reference_a", "reference_b", "test", "k1", "k0",
                                   "gravity_mps2", "gravity_rel_std", "radii", "nominal_radii_m",
                                   "k2_target_g_per_g2", "input_axis"})

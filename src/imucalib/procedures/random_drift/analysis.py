@@ -3,11 +3,11 @@
 Static window means of every ``random-drift.position`` step
 (:func:`~imucalib.procedures.common.static_windows.extract_static_windows`), grouped by
 repetition (tag ``rep=<k>``); per repetition the gyro drift model D0 + D1·f_x + D2·f_y + D3·f_z
-(docs/g-sensitivity.md, Eqs. (1)–(4)) and the accelerometer bias (the same design: each
-accelerometer's output minus the reference force against [1, f_x, f_y, f_z], weighted by the
-windows' standard errors); then over the repetitions the scatter of every coefficient, the
-gyro random drift 2.7·√Σσ² and the accelerometer zero stability (docs/random-drift.md,
-Eqs. (1)–(5)).
+(docs/g-sensitivity.md, Eqs. (1)–(4); :mod:`~imucalib.procedures.common.drift_model`) and the
+accelerometer bias (the same design: each accelerometer's output minus the reference force
+against [1, f_x, f_y, f_z], weighted by the windows' standard errors); then over the repetitions
+the scatter of every coefficient, the gyro random drift 2.7·√Σσ² and the accelerometer zero
+stability (docs/random-drift.md, Eqs. (1)–(5)).
 
 Contents
 --------
@@ -27,16 +27,16 @@ from numpy.typing import NDArray
 from imucalib.errors import InsufficientExcitationError, RecordingError
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import RANDOM_DRIFT_POSITION
+from imucalib.procedures.common.drift_model import (
+    GSensitivityOptions,
+    drift_parameter_names,
+    fit_windows,
+)
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
     json_safe,
     require_recorded,
-)
-from imucalib.procedures.g_sensitivity.analysis import (
-    GSensitivityOptions,
-    drift_parameter_names,
-    fit_windows,
 )
 from imucalib.procedures.random_drift.plan import MIN_REPETITIONS
 from imucalib.procedures.random_drift.scatter import (

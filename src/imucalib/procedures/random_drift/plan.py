@@ -24,9 +24,9 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
-from imucalib.procedures.g_sensitivity.plan import (
+from imucalib.procedures.common.grade import WARM_UP_S, check_grade
+from imucalib.procedures.common.static_positions import (
     G_SENSITIVITY_POSITIONS_DEG,
-    check_grade,
     dual_axis_twin,
     position_steps,
 )
@@ -35,7 +35,6 @@ __all__ = ["MIN_REPETITIONS", "generate_random_drift_plan"]
 
 #: Fewest repetitions whose scatter means anything (the analysis refuses fewer).
 MIN_REPETITIONS = 3
-_WARM_UP_S = {"consumer": 900.0, "tactical": 1800.0, "navigation": 3600.0}
 
 
 def generate_random_drift_plan(*, name: str = "random-drift", grade: str = "tactical",
@@ -85,7 +84,7 @@ def generate_random_drift_plan(*, name: str = "random-drift", grade: str = "tact
         OperatorCheckStep(kind="operator-check", label="mounting",
                           item="IMU fixed on the dual-axis table platform; table levelled"),
         WarmUpStep(kind="warm-up", label="warm-up",
-                   duration_s=_WARM_UP_S[grade] if warm_up_s is None else warm_up_s),
+                   duration_s=WARM_UP_S[grade] if warm_up_s is None else warm_up_s),
     ]
     for rep in range(1, repetitions + 1):
         steps += [s.model_copy(update={"label": f"rep {rep}, {s.label}"})

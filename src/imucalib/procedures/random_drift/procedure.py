@@ -10,7 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.random_drift.options import RandomDriftPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -26,9 +28,8 @@ class RandomDriftProcedure:
     name = "random-drift"
     description = ("gyro random drift 2.7·√(σ_D0² + σ_D1² + σ_D2² + σ_D3²) and accelerometer "
                    "zero stability from multi-position runs repeated over hours")
-    plan_options = frozenset({"grade", "repetitions", "span_s", "positions_deg", "record_s",
-                              "settle_s", "warm_up_s",
-                              "sample_rate_hz", "latitude_deg", "noise", "errors", "seed"})
+    plan_options_type = RandomDriftPlanOptions
+    plan_options = option_names(RandomDriftPlanOptions)
     analysis_options = frozenset({"gravity_mps2", "scale_misalignment",
                                   "scale_misalignment_std", "noise_block_s"})
     outputs = ("report-json", "parameters-csv")
@@ -49,7 +50,7 @@ class RandomDriftProcedure:
         InvalidInputError
             An unknown option.
         """
-        from imucalib.procedures.g_sensitivity.analysis import GSensitivityOptions
+        from imucalib.procedures.common.drift_model import GSensitivityOptions
         from imucalib.procedures.random_drift.analysis import analyze_random_drift
 
         opts = accepted_options(self.name, options, self.analysis_options)

@@ -2,7 +2,7 @@
 
 For each body axis tested (the turns tagged ``axis=<k>``, the unit with that axis up): the
 input rates x_j = ω_table,j + Ω_U (RT-1), the gyro k means y_j and their σ_j
-(:mod:`~imucalib.procedures.rate_transfer.observations`), the straight line and the
+(:mod:`~imucalib.procedures.common.rate_windows`), the straight line and the
 nonlinearity (RT-5)–(RT-6), and the second fit with the asymmetry and the quadratic term
 (RT-7)–(RT-8) (:mod:`~imucalib.procedures.rate_transfer.fit`).
 
@@ -30,16 +30,16 @@ from numpy.typing import NDArray
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import RATE_TRANSFER_RATE
+from imucalib.procedures.common.rate_windows import (
+    RateProcessing,
+    RateWindow,
+    extract_rate_windows,
+)
 from imucalib.procedures.rate_transfer.fit import (
     LineFit,
     TransferFit,
     fit_line,
     fit_rate_transfer,
-)
-from imucalib.procedures.rate_transfer.observations import (
-    RateProcessing,
-    RateWindow,
-    extract_rate_windows,
 )
 
 __all__ = ["AxisTransfer", "RateTransferResult", "analyze_rate_transfer", "transfer_of_axis"]
@@ -227,7 +227,7 @@ def analyze_rate_transfer(recording: Recording | str | os.PathLike[str], *,
     RecordingError
         Not a rate-transfer recording, no such unit, no table or latitude.
     MissingSegmentError, SaturationError, InvalidInputError
-        A turn that cannot be used (:func:`~imucalib.procedures.rate_transfer.observations.
+        A turn that cannot be used (:func:`~imucalib.procedures.common.rate_windows.
         extract_rate_windows`).
     InsufficientExcitationError
         An axis with fewer than two distinct rates.

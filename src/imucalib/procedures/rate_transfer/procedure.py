@@ -13,7 +13,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.rate_transfer.options import RateTransferPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -30,8 +32,8 @@ class RateTransferProcedure:
     description = ("gyro rate transfer on a single-axis table: each axis up in turn, turns at "
                    "±ω over whole revolutions; scale factor, bias, nonlinearity (ppm of full "
                    "scale), asymmetry and quadratic term per axis")
-    plan_options = frozenset({"rates_dps", "log_spaced", "axes", "revolutions", "settle_s",
-                              "grade", "sample_rate_hz", "seed"})
+    plan_options_type = RateTransferPlanOptions
+    plan_options = option_names(RateTransferPlanOptions)
     analysis_options = frozenset({"max_lost_fraction", "max_gap_s", "noise_block_s"})
     outputs = ("report-json", "parameters-csv")
 

@@ -10,7 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.tumble.options import TumblePlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -27,8 +29,8 @@ class TumbleProcedure:
     description = ("accelerometer multi-position tumble on a dividing head (IEEE Std 1293): "
                    "K0, K1, misalignment, K2 − Kpp, Kip, K3 and Koq from the Fourier "
                    "coefficients of N equally spaced positions")
-    plan_options = frozenset({"n_positions", "axes", "record_s", "settle_s", "both_directions",
-                              "grade", "sample_rate_hz", "seed"})
+    plan_options_type = TumblePlanOptions
+    plan_options = option_names(TumblePlanOptions)
     analysis_options = frozenset({"coefficients", "method", "gravity_mps2", "gravity_rel_std",
                                   "angle_std_arcsec"})
     outputs = ("report-json", "parameters-csv")

@@ -1,0 +1,75 @@
+"""P1's plan options (:func:`~imucalib.procedures.p1.plan.generate_p1_plan`).
+
+Each field is one keyword of the generator with its help, unit, range and help section
+(:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new p1`` builds its
+flags from them (docs/plugins.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from imucalib.plan.bounds import (
+    MAX_RECORD_S,
+    MAX_REVOLUTIONS,
+    MAX_SAMPLE_RATE_HZ,
+    MAX_SETTLE_S,
+    MAX_STEPS,
+    MAX_TABLE_RATE_DPS,
+    MAX_WAIT_S,
+    MIN_SAMPLE_RATE_HZ,
+)
+from imucalib.procedures.common.options import option
+
+__all__ = ["P1PlanOptions"]
+
+
+@dataclass(frozen=True)
+class P1PlanOptions:
+    """Keywords of :func:`~imucalib.procedures.p1.plan.generate_p1_plan`."""
+
+    rates_dps: tuple[float, ...] = option(
+        (-100.0, -50.0, 0.0, 50.0, 100.0),
+        help="Rate points per axis (5–7 points, both signs and 0; docs/p1.md, step 3).",
+        unit="°/s", min=-MAX_TABLE_RATE_DPS, max=MAX_TABLE_RATE_DPS, flag="rates")
+    held_out_rates_dps: tuple[float, ...] = option(
+        (-75.0, 25.0), help="Rate points per axis kept out of the fit for verification.",
+        unit="°/s", min=-MAX_TABLE_RATE_DPS, max=MAX_TABLE_RATE_DPS)
+    revolutions: int = option(3, help="Whole turns recorded at each non-zero rate.", min=1,
+                              max=MAX_REVOLUTIONS)
+    repetitions: int = option(3, help="Complete calibrations (three, for the repeatability "
+                                      "check; docs/p1.md, rule 6).", min=1, max=MAX_STEPS)
+    z_rates: bool = option(True, help="Add rate points about pitch with roll at 90° (about the "
+                                      "IMU's Z axis: the Z gyro's scale and misalignments).")
+    acceptance: Literal["simple", "guarded"] = option(
+        "simple", help="The decision rule: simple, or guarded (|value| + 2u within the limit).")
+    static_s: float = option(3600.0, help="Level static record for the gyro bias (≥ 60 min; "
+                                          "docs/p1.md, step 2).", unit="s", min=0.0,
+                             max=MAX_RECORD_S, group="timing")
+    settle_s: float = option(30.0, help="Settling at each position (≥ 30 s).", unit="s",
+                             min=0.0, max=MAX_SETTLE_S, group="timing")
+    record_s: float = option(10.0, help="Record at each position (≥ 10 s).", unit="s", min=0.0,
+                             max=MAX_RECORD_S, group="timing")
+    rate_settle_s: float = option(20.0, help="Settling at each rate (≥ 20 s).", unit="s",
+                                  min=0.0, max=MAX_SETTLE_S, group="timing")
+    warm_up_s: float | None = option(None, help="Warm-up duration (the grade's when omitted).",
+                                     unit="s", min=0.0, max=MAX_WAIT_S, group="timing")
+    serial: str = option("", help="The unit's serial number, carried into the result.",
+                         group="unit")
+    model: str = option("", help="The unit's model, carried into the result.", group="unit")
+    maker: str = option("", help="The unit's maker, carried into the result.", group="unit")
+    grade: Literal["consumer", "tactical", "navigation"] = option(
+        "tactical", help="The IMU's grade (the twin's IMU, the warm-up and the specification "
+                         "checked).", group="twin")
+    sample_rate_hz: float = option(1000.0, help="The twin IMU's output rate (≥ 100 Hz).",
+                                   unit="Hz", min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
+                                   group="twin")
+    latitude_deg: float = option(45.0, help="Latitude of the twin station.", unit="°",
+                                 min=-90.0, max=90.0, group="twin")
+    heading_deg: float = option(0.0, help="Heading of the twin station.", unit="°",
+                                min=-360.0, max=360.0, group="twin")
+    seed: int = option(1, help="Seed of the twin (the IMU's truth and noise).", min=-(2**63),
+                       max=2**63 - 1, group="twin")
+    name: str = option("p1-dual-axis", help="The plan's name (the recording's file name "
+                                            "starts with it).", group="plan")

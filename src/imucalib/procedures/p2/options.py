@@ -1,0 +1,92 @@
+"""P2's plan options (:func:`~imucalib.procedures.p2.plan.generate_p2_plan`).
+
+Each field is one keyword of the generator with its help, unit, range and help section
+(:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new p2`` builds its
+flags from them (docs/plugins.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from imucalib.plan.bounds import (
+    MAX_IMUS,
+    MAX_RAMP_DEGC_PER_MIN,
+    MAX_RECORD_S,
+    MAX_REVOLUTIONS,
+    MAX_SAMPLE_RATE_HZ,
+    MAX_SETTLE_S,
+    MAX_TABLE_RATE_DPS,
+    MAX_TEMPERATURE_DEGC,
+    MAX_WAIT_S,
+    MIN_RAMP_DEGC_PER_MIN,
+    MIN_SAMPLE_RATE_HZ,
+    MIN_TEMPERATURE_DEGC,
+)
+from imucalib.plan.schema import TwinEquipment
+from imucalib.procedures.common.options import option
+from imucalib.procedures.p2.plan import DEFAULT_HELD_OUT_DEGC, DEFAULT_TEMPERATURES_DEGC
+
+__all__ = ["P2PlanOptions"]
+
+
+@dataclass(frozen=True)
+class P2PlanOptions:
+    """Keywords of :func:`~imucalib.procedures.p2.plan.generate_p2_plan`."""
+
+    temperatures_degc: tuple[float, ...] = option(
+        DEFAULT_TEMPERATURES_DEGC, help="Calibration temperature points (at least two).",
+        unit="°C", min=MIN_TEMPERATURE_DEGC, max=MAX_TEMPERATURE_DEGC, flag="temperatures")
+    held_out_degc: tuple[float, ...] = option(
+        DEFAULT_HELD_OUT_DEGC, help="Temperature points held out of the models, to check "
+                                    "their predictions.", unit="°C",
+        min=MIN_TEMPERATURE_DEGC, max=MAX_TEMPERATURE_DEGC, flag="held-out")
+    hysteresis: bool = option(False, help="Visit the points heating then cooling (the models "
+                                          "get a hysteresis term).")
+    rate_dps: float = option(60.0, help="The turns' rate |ω| (each turn at +ω and −ω).",
+                             unit="°/s", min=0.0, max=MAX_TABLE_RATE_DPS)
+    revolutions: int = option(2, help="Whole revolutions recorded per turn.", min=1,
+                              max=MAX_REVOLUTIONS)
+    pose_order: Literal["temperature-major", "pose-major"] = option(
+        "temperature-major", help="Six remounts at every temperature (temperature-major) or "
+                                  "six temperature sweeps (pose-major).")
+    ramp_degc_per_min: float = option(2.0, help="The chamber's ramp to each point.",
+                                      unit="°C/min", min=MIN_RAMP_DEGC_PER_MIN,
+                                      max=MAX_RAMP_DEGC_PER_MIN)
+    band_degc: float = option(0.5, help="The chamber air's band around the setpoint for a "
+                                        "soak to end.", unit="°C", min=0.0, max=50.0)
+    imu_band_degc: float = option(0.2, help="The band every IMU's internal temperature must "
+                                            "stay within for a soak to end.", unit="°C",
+                                  min=0.0, max=50.0)
+    start_degc: float = option(25.0, help="The chamber's temperature before the run (the "
+                                          "first point's leg).", unit="°C",
+                               min=MIN_TEMPERATURE_DEGC, max=MAX_TEMPERATURE_DEGC)
+    static_s: float = option(10.0, help="Record length of each static window.", unit="s",
+                             min=0.0, max=MAX_RECORD_S, group="timing")
+    settle_s: float = option(10.0, help="Settling before each record.", unit="s", min=0.0,
+                             max=MAX_SETTLE_S, group="timing")
+    stable_for_s: float = option(900.0, help="How long the temperatures must stay stable to "
+                                             "end a soak.", unit="s", min=0.0, max=MAX_WAIT_S,
+                                 group="timing")
+    resoak_s: float = option(120.0, help="The re-soak after each remount (the chamber was "
+                                         "opened).", unit="s", min=0.0, max=MAX_WAIT_S,
+                             group="timing")
+    soak_timeout_s: float = option(14400.0, help="Time-out of each soak.", unit="s", min=0.0,
+                                   max=MAX_WAIT_S, group="timing")
+    n_imus: int = option(8, help="Units on the cube (the twin's).", min=1, max=MAX_IMUS,
+                         group="twin")
+    grade: Literal["consumer", "tactical", "navigation"] = option(
+        "consumer", help="The units' grade (the twin's IMUs and the held-out accuracy "
+                         "limits).", group="twin")
+    sample_rate_hz: float = option(100.0, help="The twin IMUs' output rate.", unit="Hz",
+                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
+                                   group="twin")
+    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
+    half_edge_m: float = option(0.06, help="Half edge of the twin's cube.", unit="m", min=0.0,
+                                max=1.0, group="twin")
+    twin: TwinEquipment | None = option(
+        None, help="Another twin station (its IMUs replace n_imus).", group="twin",
+        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
+    name: str = option("p2-array-temperature", help="The plan's name (the recording's file "
+                                                    "name starts with it).", group="plan")

@@ -1,0 +1,82 @@
+"""P3's plan options (:func:`~imucalib.procedures.p3.plan.generate_p3_plan`).
+
+Each field is one keyword of the generator with its help, unit, range and help section
+(:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new p3`` builds its
+flags from them (docs/plugins.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from imucalib.plan.bounds import (
+    MAX_ANGLE_DEG,
+    MAX_CENTRIFUGE_RATE_DPS,
+    MAX_RECORD_S,
+    MAX_SAMPLE_RATE_HZ,
+    MAX_SETTLE_S,
+    MAX_STEPS,
+    MIN_SAMPLE_RATE_HZ,
+)
+from imucalib.plan.schema import TwinEquipment
+from imucalib.procedures.common.options import option
+from imucalib.procedures.p3.plan import ARM_POSITIONS_DEG, MIN_RATES
+
+__all__ = ["P3PlanOptions"]
+
+#: Largest static radius of a centrifuge (:class:`~imucalib.plan.equipment.CentrifugeConfig`).
+_MAX_RADIUS_M = 20.0
+#: Largest unbalance the twin's imbalance alarm (4× it, at most 10 000 µm) admits. [µm]
+_MAX_UNBALANCE_UM = 2500.0
+
+
+@dataclass(frozen=True)
+class P3PlanOptions:
+    """Keywords of :func:`~imucalib.procedures.p3.plan.generate_p3_plan`."""
+
+    static_radius_m: float = option(1.0, help="Static radius r_t of the test position.",
+                                    unit="m", min=0.0, max=_MAX_RADIUS_M, flag="radius-m")
+    reference_radius_m: float | None = option(
+        None, help="Radius of the reference accelerometers (r_t/3 when omitted).", unit="m",
+        min=0.0, max=_MAX_RADIUS_M)
+    test_range_g: float = option(20.0, help="Specific force at r_t at the top rate.", unit="g",
+                                 min=0.0)
+    n_rates: int = option(5, help="Rate points (≥ 4), equally spaced in specific force.",
+                          min=MIN_RATES, max=MAX_STEPS)
+    rates_dps: tuple[float, ...] | None = option(
+        None, help="Explicit rates instead (≥ 4 distinct, taken positive).", unit="°/s",
+        min=-MAX_CENTRIFUGE_RATE_DPS, max=MAX_CENTRIFUGE_RATE_DPS, flag="rates")
+    both_directions: bool = option(False, help="Run every rate at +ω and −ω.")
+    arm_positions_deg: tuple[float, ...] = option(
+        ARM_POSITIONS_DEG, help="The arm positions at rest (spread evenly around the circle).",
+        unit="°", min=-MAX_ANGLE_DEG, max=MAX_ANGLE_DEG)
+    test_load_kg: float = option(2.0, help="The test load mounted for configuration 3 (the "
+                                           "twin's c′ grows with it).", unit="kg", min=0.0,
+                                 max=1000.0)
+    tumble: bool = option(True, help="Record the 1 g tumble (K1, K0 of each accelerometer; "
+                                     "without it the analysis needs them as inputs).")
+    rate_record_s: float = option(60.0, help="Least record at each rate (whole revolutions).",
+                                  unit="s", min=0.0, max=MAX_RECORD_S, group="timing")
+    rest_record_s: float = option(30.0, help="Record at each arm position at rest.", unit="s",
+                                  min=0.0, max=MAX_RECORD_S, group="timing")
+    settle_s: float = option(20.0, help="Settling before each record (a rate step's ramp "
+                                        "included).", unit="s", min=0.0, max=MAX_SETTLE_S,
+                             group="timing")
+    tumble_record_s: float = option(30.0, help="Record in each tumble pose.", unit="s",
+                                    min=0.0, max=MAX_RECORD_S, group="timing")
+    unbalance_um: float = option(10.0, help="The twin's rotor-centre shift at the top rate "
+                                            "with the test load.", unit="µm",
+                                 min=-_MAX_UNBALANCE_UM, max=_MAX_UNBALANCE_UM, group="twin")
+    grade: Literal["consumer", "tactical", "navigation"] = option(
+        "navigation", help="The grade of the twin's units.", group="twin")
+    sample_rate_hz: float = option(100.0, help="The twin units' output rate.", unit="Hz",
+                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
+                                   group="twin")
+    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
+    twin: TwinEquipment | None = option(
+        None, help="Another twin station (its units named REF-A, REF-B and TEST).",
+        group="twin",
+        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
+    name: str = option("p3-centrifuge-k2", help="The plan's name (the recording's file name "
+                                                "starts with it).", group="plan")

@@ -1,0 +1,44 @@
+"""The tumble's plan options (:func:`~imucalib.procedures.tumble.plan.generate_tumble_plan`).
+
+Each field is one keyword of the generator with its help, unit, range and help section
+(:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new tumble`` builds its
+flags from them (docs/plugins.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from imucalib.plan.bounds import MAX_RECORD_S, MAX_SAMPLE_RATE_HZ, MAX_SETTLE_S, MIN_SAMPLE_RATE_HZ
+from imucalib.plan.schema import TwinEquipment
+from imucalib.procedures.common.options import option
+
+__all__ = ["TumblePlanOptions"]
+
+
+@dataclass(frozen=True)
+class TumblePlanOptions:
+    """Keywords of :func:`~imucalib.procedures.tumble.plan.generate_tumble_plan`."""
+
+    n_positions: int = option(12, help="Head positions per sequence (≥ 4, dividing 360: 4, 8, "
+                                       "12, 24 …).", min=4, max=360)
+    axes: tuple[Literal["x", "y", "z"], ...] = option(
+        ("x", "y", "z"), help="Body axes put along the head axis, in order.")
+    both_directions: bool = option(False, help="Each sequence also in reverse (hysteresis "
+                                               "shows as the passes' difference).")
+    record_s: float = option(30.0, help="Record at each position.", unit="s", min=0.0,
+                             max=MAX_RECORD_S, group="timing")
+    settle_s: float = option(10.0, help="Settling before each record.", unit="s", min=0.0,
+                             max=MAX_SETTLE_S, group="timing")
+    grade: Literal["consumer", "tactical", "navigation"] = option(
+        "navigation", help="The IMU's grade (the twin's IMU).", group="twin")
+    sample_rate_hz: float = option(100.0, help="The twin IMU's output rate.", unit="Hz",
+                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
+                                   group="twin")
+    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
+    twin: TwinEquipment | None = option(
+        None, help="Another twin station (a dual-axis table).", group="twin",
+        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
+    name: str = option("tumble", help="The plan's name (the recording's file name starts "
+                                      "with it).", group="plan")
