@@ -19,12 +19,12 @@ demo: venv
 	$(BIN)/python -m imucalib.demo --out $(OUT)
 
 test: venv
-	$(BIN)/python -m ruff check src tests bench
+	$(BIN)/python -m ruff check src tests bench examples
 	$(BIN)/python -m mypy
 	$(BIN)/python -m pytest -n 2 -q
 
 lint: venv
-	$(BIN)/python -m ruff check src tests bench
+	$(BIN)/python -m ruff check src tests bench examples
 	$(BIN)/python -m ruff format --check src tests bench || true
 	$(BIN)/python -m mypy
 

@@ -40,11 +40,17 @@ class _DummyPlanOptions:
     pass
 
 
+@dataclasses.dataclass(frozen=True)
+class _DummyAnalysisOptions:
+    pass
+
+
 class _Dummy:
     name = "p-test"
     description = "a test procedure"
     plan_options_type = _DummyPlanOptions
     plan_options: frozenset[str] = frozenset()
+    analysis_options_type = _DummyAnalysisOptions
     analysis_options: frozenset[str] = frozenset()
     outputs = ("report-json",)
 

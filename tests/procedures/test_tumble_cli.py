@@ -10,8 +10,6 @@ from typer.testing import CliRunner
 
 from imucalib.cli import app
 from imucalib.plan import load_plan
-from imucalib.plan.io import write_plan
-from imucalib.procedures.tumble.plan import generate_tumble_plan
 
 runner = CliRunner()
 
@@ -22,8 +20,10 @@ def test_plan_new_run_and_calibrate(tmp_path: Path) -> None:
     plan = load_plan(tmp_path / "t.toml")
     assert plan.procedure == "tumble" and len(plan.steps) == 42
     # a short plan of the same kind through run and calibrate (8 positions about z, 5 s each)
-    write_plan(generate_tumble_plan(n_positions=8, axes=("z",), record_s=5.0, settle_s=2.0,
-                                    sample_rate_hz=50.0), tmp_path / "short.toml")
+    result = runner.invoke(app, ["plan", "new", "tumble", "--out", str(tmp_path / "short.toml"),
+                                 "--n-positions", "8", "--axes", "z", "--record-s", "5",
+                                 "--settle-s", "2", "--sample-rate-hz", "50"])
+    assert result.exit_code == 0, result.output
     result = runner.invoke(app, ["run", str(tmp_path / "short.toml"), "--station", "sim",
                                  "--out", str(tmp_path / "t.h5"), "--yes"])
     assert result.exit_code == 0, result.output

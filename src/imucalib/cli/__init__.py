@@ -10,6 +10,8 @@ Commands
 ``recover FILE``                   copy out what a crashed writer left in an open Recording
 ``export FILE --stream DEV/UNIT``  write a stream (or one step of it) as CSV or MAT
 ``export RESULT --format FMT``     a result for firmware (c-runtime) or other tools (mat, ros-yaml…)
+``procedures [NAME]``              list the procedures; a procedure's options, units, defaults
+``plan new NAME --out FILE``       a procedure's default plan (``plan new NAME --help``: options)
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 ``calibrate RECORDING``            estimate, verify and decide; write the result JSON
@@ -31,6 +33,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     allan,
     calibrate,
     plan,
+    procedures,
     recording,
     records,
     report,

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+from typer.core import TyperCommand
 
 from imucalib.cli._app import app, console, err_console, fail
 from imucalib.cli._import_options import ImportOptions, with_import_options
@@ -24,13 +25,16 @@ __all__ = ["apply", "calibrate", "run_calibration"]
 def run_calibration(recording: Path, imu: str | None, model: str, out: Path | None, *,
                     progress: Callable[[float], None] | None = None,
                     extra: dict[str, Any] | None = None,
-                    more: Sequence[Path] = (), procedure_name: str | None = None
+                    more: Sequence[Path] = (), procedure_name: str | None = None,
+                    settings: Sequence[str] = ()
                     ) -> tuple[ProcedureResult, list[Path]]:
     """Analyse a recording with its procedure (the registry's choice); write its outputs.
 
     `progress` is given the fraction of the analysis done (the procedure's own measure).
     `extra` holds procedure options given on the command line (refused by a procedure that
-    does not take them); `more` further recordings of a lot (P2 only). `procedure_name`
+    does not take them); `settings` the ``--set NAME=VALUE`` texts, read by the procedure's
+    analysis options (:func:`~imucalib.procedures.common.options.parse_assignment`); `more`
+    further recordings of a lot (P2 only). `procedure_name`
     names the procedure instead of the recording's roles; a log that is not a Recording (a
     CSV) is then analysed directly by a procedure that takes ``import_spec`` (the field
     calibration).
@@ -38,6 +42,7 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
     from imucalib.exports.outputs import write_outputs
     from imucalib.io.reader import open_recording
     from imucalib.procedures import registry
+    from imucalib.procedures.common.options import parse_assignment
 
     if procedure_name is None:
         with open_recording(recording) as rec:
@@ -58,6 +63,12 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
             f"{recording} is a {name} recording; its analysis does not take "
             f"{', '.join('--' + k.replace('_', '-') for k in refused)}")
     options.update(given)
+    for text in settings:
+        key, value = parse_assignment(procedure.analysis_options_type, text,
+                                      what=f"the {name} analysis")
+        if key in given:
+            raise InvalidInputError(f"--set {key} repeats an option given by its own flag")
+        options[key] = value
     if more:
         if name != "p2":
             raise InvalidInputError(f"several recordings are calibrated together only by P2 "
@@ -129,7 +140,37 @@ def _accel_instability(text: str | None) -> dict[str, Any]:
     return {"accel_instability_mps2": value * 1e-6 * G0_MPS2}
 
 
-@app.command()
+class _CalibrateCommand(TyperCommand):
+    """``calibrate``: ``calibrate PROCEDURE --help`` adds that procedure's analysis options."""
+
+    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
+        """Keep the raw arguments for the help text, then parse as usual."""
+        ctx.meta["imucalib.calibrate.args"] = list(args)
+        return list(super().parse_args(ctx, args))
+
+    def format_options(self, ctx: Any, formatter: Any) -> None:
+        """Write the command's options, then the named procedure's analysis options."""
+        super().format_options(ctx, formatter)
+        from imucalib.procedures import registry
+        from imucalib.procedures.common.options import option_specs
+
+        names = [a for a in ctx.meta.get("imucalib.calibrate.args", ())
+                 if a in registry.names()]
+        if not names:
+            with formatter.section("A procedure's analysis options"):
+                formatter.write_text("`imucalib calibrate PROCEDURE --help` lists them (given "
+                                     "with --set NAME=VALUE); `imucalib procedures` lists "
+                                     "the procedures.")
+            return
+        specs = option_specs(registry.get(names[0]).analysis_options_type)
+        rows = [(f"--set {s.flag[2:]}={s.metavar()}",
+                 s.help_with_default()) for s in specs if s.cli]
+        rows += [(s.name, f"Python only: {s.info.python_only}") for s in specs if not s.cli]
+        with formatter.section(f"Options of the {names[0]} analysis"):
+            formatter.write_dl(rows or [("(none)", "this analysis takes no options")])
+
+
+@app.command(cls=_CalibrateCommand)
 @with_import_options
 def calibrate(
     recording: Annotated[Path, typer.Argument(
@@ -193,6 +234,11 @@ def calibrate(
              "docs/field.md).")] = None,
     gyro_instability_dph: Annotated[float | None, typer.Option(
         help="field: the gyro's bias instability from its datasheet [°/h].")] = None,
+    settings: Annotated[list[str] | None, typer.Option(
+        "--set", metavar="NAME=VALUE",
+        help="Any option of the recording's analysis, e.g. --set noise-block-s=20; repeat it "
+             "for several (`imucalib calibrate PROCEDURE --help` lists a procedure's).")]
+    = None,
     db: Annotated[str | None, typer.Option(
         "--db", help="Records database (default: $IMUCALIB_DB, else records.db in the user's "
                      "data directory; docs/records.md).")] = None,
@@ -251,7 +297,7 @@ def calibrate(
         with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
             result, written = run_calibration(
                 recording, imu, model, out, progress=update, more=tuple(more or ()),
-                extra=extra, procedure_name=procedure_name)
+                extra=extra, procedure_name=procedure_name, settings=tuple(settings or ()))
     except CalibrationError as exc:
         raise fail(exc) from exc
     render_result(console, result, written)

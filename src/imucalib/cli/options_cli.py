@@ -37,10 +37,6 @@ def _is_flag(spec: OptionSpec) -> bool:
     return spec.kind is bool and spec.shape == "scalar" and not spec.optional
 
 
-def _help(spec: OptionSpec) -> str:
-    return f"{spec.help_text()}  (default: {spec.default_text()})"
-
-
 def spec_parameters(specs: Sequence[OptionSpec]) -> list[inspect.Parameter]:
     """Return keyword parameters (Typer options) for the specs the command line can give.
 
@@ -53,12 +49,12 @@ def spec_parameters(specs: Sequence[OptionSpec]) -> list[inspect.Parameter]:
             continue
         panel = GROUP_TITLES[spec.info.group]
         if _is_flag(spec):
-            opt = typer.Option(f"{spec.flag}/--no-{spec.flag[2:]}", help=_help(spec),
+            opt = typer.Option(f"{spec.flag}/--no-{spec.flag[2:]}", help=spec.help_with_default(),
                                show_default=False, rich_help_panel=panel)
             annotation: Any = Annotated[bool, opt]
             default: Any = spec.default
         else:
-            opt = typer.Option(spec.flag, help=_help(spec), metavar=spec.metavar(),
+            opt = typer.Option(spec.flag, help=spec.help_with_default(), metavar=spec.metavar(),
                                show_default=False, rich_help_panel=panel)
             annotation, default = Annotated[str | None, opt], None
         out.append(inspect.Parameter(spec.name, inspect.Parameter.KEYWORD_ONLY,

@@ -152,11 +152,25 @@ def _plan_command(name: str) -> Any:
     return typer.main.get_command(one)
 
 
+def _loadable() -> list[str]:
+    """Return the registered procedures that load; a broken plug-in is left out of listings."""
+    from imucalib.procedures import registry
+
+    out = []
+    for n in registry.names():
+        try:
+            registry.get(n)
+        except CalibrationError:
+            continue
+        out.append(n)
+    return out
+
+
 def _foreign_flag(name: str, flag: str) -> str:
     """Return the error line for `flag` given to `name`'s plan: which plans take it."""
     from imucalib.procedures import registry
 
-    takers = [n for n in registry.names() if n != name and
+    takers = [n for n in _loadable() if n != name and
               flag in flags_of(option_specs(registry.get(n).plan_options_type))]
     where = (f"; the plan of {', '.join(f'`plan new {n} {flag}`' for n in takers)} takes it"
              if takers else "")
@@ -167,10 +181,8 @@ class _PlanNewGroup(TyperGroup):
     """``plan new``: one subcommand per registered procedure, built when asked for."""
 
     def list_commands(self, ctx: Any) -> list[str]:
-        """Return the registered procedures."""
-        from imucalib.procedures import registry
-
-        return list(registry.names())
+        """Return the registered procedures that load (`imucalib procedures` names the rest)."""
+        return _loadable()
 
     def get_command(self, ctx: Any, cmd_name: str) -> Any:
         """Return the procedure's ``plan new`` command; an unknown name is one error line."""

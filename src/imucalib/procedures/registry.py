@@ -1,9 +1,22 @@
 """The procedures by name, and which one a recording belongs to.
 
 ``imucalib plan new NAME``, ``imucalib calibrate``, the demo and the tests find a procedure here.
-The built-in ones are listed in :data:`BUILTIN` (name → the module holding its ``PROCEDURE``)
-and imported on first use, so that importing the registry imports no analysis; a new procedure
-folder adds one line there, or calls :func:`register` with its object.
+Procedures are discovered in the entry-point group ``imucalib.procedures``
+(:data:`ENTRY_POINT_GROUP`, the packaging convention for plug-ins): each entry point's name is
+the procedure's name and its value ``module:OBJECT`` the object implementing
+:class:`~imucalib.procedures.common.procedure.Procedure`. imucalib declares its own procedures
+there (``pyproject.toml``); another distribution adds one by declaring an entry point in the same
+group (docs/plugins.md). :data:`BUILTIN` (name → the module holding its ``PROCEDURE``) is the
+fallback for the built-in ones when imucalib's own metadata is missing (running from a source
+tree), and fixes their order; :func:`register` adds an object at run time.
+
+Loading is lazy: listing (:func:`names`) reads the metadata only, and an entry point is loaded
+when its procedure is first asked for (:func:`get`), so importing the registry imports no
+analysis. An entry point that fails to load, or whose object is not a ``Procedure`` named as the
+entry point, is refused when asked for by name (:class:`~imucalib.errors.ConfigurationError`
+naming the entry point and its distribution) and affects no other procedure. An outside
+distribution may not declare a built-in name: that entry point is refused and the built-in is
+kept (:func:`problems` says so; ``imucalib procedures`` lists it).
 
 Which procedure a recording belongs to (:func:`identify`): its steps' roles when they carry
 them (a role ``"p1.accel-position"`` names procedure ``p1``: the part before the first dot), else
@@ -11,14 +24,17 @@ the ``procedure`` field of the plan stored in its metadata.
 
 Contents
 --------
-:func:`get`, :func:`names`, :func:`register`, :func:`identify`, :func:`procedure_of_roles`,
-:data:`BUILTIN`
+:func:`get`, :func:`names`, :func:`origin`, :func:`problems`, :func:`refresh`, :func:`register`,
+:func:`identify`, :func:`procedure_of_roles`, :data:`BUILTIN`, :data:`ENTRY_POINT_GROUP`
 """
 
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Iterable
+from dataclasses import dataclass, field
+from importlib.metadata import EntryPoint, entry_points
 from typing import TYPE_CHECKING
 
 from imucalib.errors import ConfigurationError
@@ -27,9 +43,16 @@ from imucalib.procedures.common.procedure import Procedure
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
 
-__all__ = ["BUILTIN", "get", "identify", "names", "procedure_of_roles", "register"]
+__all__ = ["BUILTIN", "ENTRY_POINT_GROUP", "get", "identify", "names", "origin", "problems",
+           "procedure_of_roles", "refresh", "register"]
 
-#: Built-in procedures: name → module whose ``PROCEDURE`` implements it.
+#: The entry-point group procedures are declared in: the table
+#: ``[project.entry-points."imucalib.procedures"]`` of a ``pyproject.toml`` (docs/plugins.md).
+ENTRY_POINT_GROUP = "imucalib.procedures"
+
+#: Built-in procedures: name → module whose ``PROCEDURE`` implements it. The same names are
+#: declared as entry points in imucalib's ``pyproject.toml``; this table is used when that
+#: metadata is missing, and gives the built-ins' order.
 BUILTIN: dict[str, str] = {
     "p1": "imucalib.procedures.p1.procedure",
     "allan": "imucalib.procedures.allan.procedure",
@@ -44,7 +67,93 @@ BUILTIN: dict[str, str] = {
     "field": "imucalib.procedures.field.procedure",
 }
 
+#: The distribution whose entry points may carry the built-in names.
+_OWN_DISTRIBUTION = "imucalib"
+#: The members :class:`Procedure` asks for (named when an object lacks some).
+_MEMBERS = tuple(n for n in vars(Procedure) if not n.startswith("_"))
+
 _registered: dict[str, Procedure] = {}
+
+
+@dataclass
+class _Discovery:
+    """What the metadata of the installed distributions declares in :data:`ENTRY_POINT_GROUP`."""
+
+    builtin: dict[str, EntryPoint] = field(default_factory=dict)
+    outside: dict[str, list[EntryPoint]] = field(default_factory=dict)
+    refused: list[str] = field(default_factory=list)
+
+
+_discovered: _Discovery | None = None
+
+
+def _normalised(name: str) -> str:
+    """Return a distribution name as packaging compares it (PEP 503)."""
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def _distribution(ep: EntryPoint) -> str:
+    """Return "the distribution <name> <version>" declaring `ep` (or that it is unknown)."""
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return "an unknown distribution"
+    name = getattr(dist, "name", None) or dist.metadata["Name"] or "?"
+    return f"the distribution {name} {dist.version}"
+
+
+def _is_own(ep: EntryPoint) -> bool:
+    dist = getattr(ep, "dist", None)
+    name = getattr(dist, "name", None) or (dist.metadata["Name"] if dist is not None else "")
+    return _normalised(str(name or "")) == _OWN_DISTRIBUTION
+
+
+def _describe(ep: EntryPoint) -> str:
+    """Return how an entry point is named in messages: its line and its distribution."""
+    return (f"entry point '{ep.name} = {ep.value}' (group {ENTRY_POINT_GROUP}) of "
+            f"{_distribution(ep)}")
+
+
+def _discover() -> _Discovery:
+    """Read the entry points of :data:`ENTRY_POINT_GROUP` once (:func:`refresh` reads again)."""
+    global _discovered
+    if _discovered is not None:
+        return _discovered
+    found = _Discovery()
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name in BUILTIN:
+            if _is_own(ep):
+                found.builtin[ep.name] = ep
+            else:
+                found.refused.append(
+                    f"the {_describe(ep)} is refused: a plug-in may not shadow the built-in "
+                    f"procedure {ep.name!r} (the built-in is used); rename the plug-in's "
+                    "procedure")
+        elif not ep.name or "." in ep.name:
+            found.refused.append(f"the {_describe(ep)} is refused: a procedure name must be "
+                                 "non-empty and hold no dot (step roles are "
+                                 "'<procedure>.<role>')")
+        else:
+            found.outside.setdefault(ep.name, []).append(ep)
+    _discovered = found  # the refusals are listed by problems() (`imucalib procedures`)
+    return found
+
+
+def refresh() -> None:
+    """Forget the entry points read so far; the next lookup reads the metadata again.
+
+    For a distribution installed while the process runs. Procedures already loaded stay.
+    """
+    global _discovered
+    _discovered = None
+
+
+def problems() -> tuple[str, ...]:
+    """Return why entry points of :data:`ENTRY_POINT_GROUP` were refused (one line each).
+
+    A plug-in that declares a built-in name, or a name holding a dot; an entry point that fails
+    to load is said by :func:`get` when its procedure is asked for.
+    """
+    return tuple(_discover().refused)
 
 
 def register(procedure: Procedure, *, replace: bool = False) -> Procedure:
@@ -57,9 +166,7 @@ def register(procedure: Procedure, *, replace: bool = False) -> Procedure:
         name is taken and `replace` is false.
     """
     if not isinstance(procedure, Procedure):
-        raise ConfigurationError(f"{procedure!r} is not a Procedure (name, description, "
-                                 "plan_options, analysis_options, outputs, generate_plan, "
-                                 "analyze)")
+        raise ConfigurationError(f"{procedure!r} is not a Procedure ({', '.join(_MEMBERS)})")
     name = procedure.name
     if not name or "." in name:
         raise ConfigurationError(f"procedure name {name!r} must be non-empty and hold no dot "
@@ -70,32 +177,92 @@ def register(procedure: Procedure, *, replace: bool = False) -> Procedure:
     return procedure
 
 
+def _checked(obj: object, name: str, where: str) -> Procedure:
+    """Return `obj` if it is a Procedure named `name`; else refuse it naming `where`."""
+    if not isinstance(obj, Procedure):
+        missing = [m for m in _MEMBERS if not hasattr(obj, m)]
+        lacks = f"it lacks {', '.join(missing)}; " if missing else ""
+        raise ConfigurationError(f"procedure {name!r}: the object of the {where} is not a "
+                                 f"Procedure ({lacks}docs/plugins.md)")
+    if obj.name != name:
+        raise ConfigurationError(f"procedure {name!r}: the object of the {where} is named "
+                                 f"{obj.name!r}; the entry point's name must be the "
+                                 "procedure's name")
+    return obj
+
+
+def _load(ep: EntryPoint) -> Procedure:
+    """Load an entry point's object and check it (module docstring)."""
+    try:
+        obj = ep.load()
+    except Exception as exc:  # any failure of a plug-in's import is reported, not raised
+        raise ConfigurationError(f"procedure {ep.name!r}: the {_describe(ep)} failed to load "
+                                 f"({type(exc).__name__}: {exc})") from exc
+    return _checked(obj, ep.name, _describe(ep))
+
+
 def _builtin(name: str) -> Procedure:
-    module = importlib.import_module(BUILTIN[name])
-    proc = module.PROCEDURE
-    assert isinstance(proc, Procedure), BUILTIN[name]
-    return proc
+    ep = _discover().builtin.get(name)
+    if ep is not None:
+        return _load(ep)
+    module = importlib.import_module(BUILTIN[name])  # no metadata: a source tree
+    return _checked(getattr(module, "PROCEDURE", None), name, f"module {BUILTIN[name]}")
 
 
 def names() -> tuple[str, ...]:
-    """Return the registered procedure names, built-ins first."""
-    return (*BUILTIN, *(n for n in _registered if n not in BUILTIN))
+    """Return the procedure names: the built-ins first, then the others sorted by name.
+
+    The others are the outside entry points and the procedures given to :func:`register`;
+    nothing is loaded to list them.
+    """
+    others = (set(_discover().outside) | set(_registered)) - set(BUILTIN)
+    return (*BUILTIN, *sorted(others))
 
 
-def get(name: str) -> Procedure:
-    """Return the procedure registered as `name`.
+def origin(name: str) -> str:
+    """Return where procedure `name` comes from, in words (for a listing).
+
+    ``"built-in"``, ``"registered at run time"``, or the entry point and its distribution.
 
     Raises
     ------
     ConfigurationError
-        If no procedure has that name (the message lists the known ones).
+        If no procedure has that name.
+    """
+    if name in BUILTIN:
+        return "built-in"
+    eps = _discover().outside.get(name)
+    if eps:
+        return "; ".join(_describe(ep) for ep in eps)
+    if name in _registered:
+        return "registered at run time"
+    raise ConfigurationError(f"unknown procedure {name!r}; known: {', '.join(names())}")
+
+
+def get(name: str) -> Procedure:
+    """Return the procedure named `name`, loading it on first use (module docstring).
+
+    Raises
+    ------
+    ConfigurationError
+        If no procedure has that name (the message lists the known ones); if its entry point
+        fails to load, or its object is not a Procedure of that name (the message names the
+        entry point and its distribution); if several distributions declare the name.
     """
     if name in _registered:
         return _registered[name]
     if name in BUILTIN:
         _registered[name] = _builtin(name)
         return _registered[name]
-    raise ConfigurationError(f"unknown procedure {name!r}; known: {', '.join(names())}")
+    eps = _discover().outside.get(name)
+    if not eps:
+        raise ConfigurationError(f"unknown procedure {name!r}; known: {', '.join(names())}")
+    if len(eps) > 1:
+        raise ConfigurationError(
+            f"procedure {name!r} is declared by several entry points: "
+            f"{'; '.join(_describe(ep) for ep in eps)}; uninstall all but one")
+    _registered[name] = _load(eps[0])
+    return _registered[name]
 
 
 def procedure_of_roles(roles: Iterable[str | None]) -> str | None:

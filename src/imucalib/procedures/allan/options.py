@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new allan`` builds its
 flags from them (docs/plugins.md).
+
+:class:`AllanAnalysisOptions` holds, the same way, the keys
+:func:`~imucalib.procedures.allan.analysis.analyze_allan_recording` takes as ``options`` (none);
+``imucalib calibrate`` reads them with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from imucalib.plan.bounds import (
 )
 from imucalib.procedures.common.options import option
 
-__all__ = ["AllanPlanOptions"]
+__all__ = ["AllanAnalysisOptions", "AllanPlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -51,3 +55,8 @@ class AllanPlanOptions:
     seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
     name: str = option("allan", help="The plan's name (the recording's file name starts with "
                                      "it).", group="plan")
+
+
+@dataclass(frozen=True)
+class AllanAnalysisOptions:
+    """The keys :func:`~.analysis.analyze_allan_recording` takes as ``options``: none."""

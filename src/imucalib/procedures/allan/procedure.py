@@ -13,7 +13,7 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
-from imucalib.procedures.allan.options import AllanPlanOptions
+from imucalib.procedures.allan.options import AllanAnalysisOptions, AllanPlanOptions
 from imucalib.procedures.common.options import option_names
 
 if TYPE_CHECKING:
@@ -32,7 +32,8 @@ class AllanProcedure:
                    "records, optionally at several temperatures")
     plan_options_type = AllanPlanOptions
     plan_options = option_names(AllanPlanOptions)
-    analysis_options: frozenset[str] = frozenset()
+    analysis_options_type = AllanAnalysisOptions
+    analysis_options = option_names(AllanAnalysisOptions)
     outputs = ("noise-json", "kalibr-yaml", "openvins-yaml", "noise-table", "figures")
 
     def generate_plan(self, **options: Any) -> Plan:

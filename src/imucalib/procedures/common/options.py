@@ -17,7 +17,7 @@ Values given on the command line arrive as text and are parsed by the field's ty
 Contents
 --------
 :func:`option`, :class:`OptionInfo`, :class:`OptionSpec`, :func:`option_specs`,
-:func:`option_names`, :func:`parse_text`, :func:`defaults`
+:func:`option_names`, :func:`parse_text`, :func:`parse_assignment`, :func:`defaults`
 """
 
 from __future__ import annotations
@@ -26,14 +26,14 @@ import dataclasses
 import math
 import types
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
 from imucalib.errors import ConfigurationError
 
 __all__ = ["OptionInfo", "OptionSpec", "defaults", "option", "option_names", "option_specs",
-           "parse_text"]
+           "parse_assignment", "parse_text"]
 
 #: The key of :class:`OptionInfo` in a field's metadata.
 METADATA_KEY = "imucalib.option"
@@ -180,6 +180,12 @@ class OptionSpec:
     def help_text(self) -> str:
         """Return the help line with its unit in brackets."""
         return f"{self.info.help} [{self.info.unit}]" if self.info.unit else self.info.help
+
+    def help_with_default(self) -> str:
+        """Return the help line, its unit and its default (unless the help says the default)."""
+        if self.default is None and "(default" in self.info.help:
+            return self.help_text()
+        return f"{self.help_text()}  (default: {self.default_text()})"
 
 
 def _strip_optional(tp: Any) -> tuple[Any, bool]:
@@ -337,16 +343,30 @@ def parse_text(spec: OptionSpec, text: str) -> Any:
         raise ConfigurationError(f"{spec.flag} takes {_expected(spec)}; got {text!r}") from None
 
 
-def given_options(options_type: type, given: Mapping[str, Any]) -> dict[str, Any]:
-    """Return `given` checked against `options_type`'s keywords (no unknown key).
+def parse_assignment(options_type: type, text: str, *, what: str) -> tuple[str, Any]:
+    """Return (keyword, value) of ``NAME=VALUE`` for the options of `options_type`.
+
+    NAME is the option's flag without dashes (``noise-block-s``) or its keyword
+    (``noise_block_s``); VALUE is read by the option's type (:func:`parse_text`). `what` names
+    whose options they are in messages (``"the tumble analysis"``).
 
     Raises
     ------
     ConfigurationError
-        A keyword `options_type` does not declare (the message lists those it does).
+        No ``=``, an unknown or Python-only NAME (the message lists the names it takes), or a
+        VALUE the option does not take.
     """
-    unknown = sorted(set(given) - option_names(options_type))
-    if unknown:
-        raise ConfigurationError(f"unknown option(s) {unknown}; known: "
-                                 f"{sorted(option_names(options_type))}")
-    return dict(given)
+    name, sep, value = text.partition("=")
+    specs = {s.name: s for s in option_specs(options_type)}
+    by_flag = {s.flag[2:]: s for s in specs.values()}
+    spec = specs.get(name.strip()) or by_flag.get(name.strip())
+    takes = ", ".join(s.flag[2:] for s in specs.values() if s.cli) or "no options"
+    if not sep or not name.strip():
+        raise ConfigurationError(f"--set wants NAME=VALUE (an option of {what}: {takes}); "
+                                 f"got {text!r}")
+    if spec is None:
+        raise ConfigurationError(f"{what} takes no option {name.strip()!r}; it takes: {takes}")
+    if not spec.cli:
+        raise ConfigurationError(f"{what}'s option {spec.name!r} cannot be given on the command "
+                                 f"line: {spec.info.python_only}")
+    return spec.name, parse_text(spec, value)

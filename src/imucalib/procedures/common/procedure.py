@@ -81,8 +81,14 @@ class Procedure(Protocol):
     plan_options : frozenset of str
         The keywords :meth:`generate_plan` takes: the fields of :attr:`plan_options_type`
         (:func:`~imucalib.procedures.common.options.option_names`).
+    analysis_options_type : type
+        The frozen dataclass whose fields are the keys :meth:`analyze` accepts in `options`,
+        each made by :func:`~imucalib.procedures.common.options.option` (help, unit, range,
+        help section, or why the command line cannot give it); ``imucalib calibrate`` reads them
+        with ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
     analysis_options : frozenset of str
-        The keys :meth:`analyze` accepts in `options` (P1: ``model``).
+        The keys :meth:`analyze` accepts in `options` (P1: ``model``): the fields of
+        :attr:`analysis_options_type` (:func:`~imucalib.procedures.common.options.option_names`).
     outputs : tuple of str
         The output formats of its result that :func:`~imucalib.exports.outputs.write_outputs`
         writes by default, in order (:data:`~imucalib.exports.outputs.OUTPUT_FORMATS`).
@@ -109,8 +115,13 @@ class Procedure(Protocol):
         ...
 
     @property
+    def analysis_options_type(self) -> type:
+        """The dataclass of the keys :meth:`analyze` accepts."""
+        ...
+
+    @property
     def analysis_options(self) -> frozenset[str]:
-        """Keys :meth:`analyze` accepts."""
+        """Keys :meth:`analyze` accepts (the fields of :attr:`analysis_options_type`)."""
         ...
 
     @property

@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new earth-rate-bias``
 builds its flags from them (docs/plugins.md).
+
+:class:`EarthRateBiasAnalysisOptions` holds, the same way, the keys
+:func:`~.analysis.analyze_earth_rate_bias` takes as ``options``; ``imucalib calibrate`` reads them
+with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from imucalib.plan.bounds import (
 from imucalib.procedures.common.options import option
 from imucalib.procedures.earth_rate_bias.plan import EARTH_RATE_POSES
 
-__all__ = ["EarthRateBiasPlanOptions"]
+__all__ = ["EarthRateBiasAnalysisOptions", "EarthRateBiasPlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -56,3 +60,18 @@ class EarthRateBiasPlanOptions:
     seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
     name: str = option("earth-rate-bias", help="The plan's name (the recording's file name "
                                                "starts with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class EarthRateBiasAnalysisOptions:
+    """The keys :func:`~.analysis.analyze_earth_rate_bias` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    gravity_mps2: float | None = option(
+        None, help="Local gravity (default: normal gravity at the recorded latitude).",
+        unit="m/s²", min=0.0)
+    noise_block_s: float = option(1.0, help="The block length of the white-noise estimate.",
+                                  unit="s", min=0.0, group="timing")

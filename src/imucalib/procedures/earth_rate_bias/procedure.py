@@ -12,7 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.earth_rate_bias.options import EarthRateBiasPlanOptions
+from imucalib.procedures.earth_rate_bias.options import (
+    EarthRateBiasAnalysisOptions,
+    EarthRateBiasPlanOptions,
+)
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -30,7 +33,8 @@ class EarthRateBiasProcedure:
                    "up/down methods on a single-axis table with remounts, compared")
     plan_options_type = EarthRateBiasPlanOptions
     plan_options = option_names(EarthRateBiasPlanOptions)
-    analysis_options = frozenset({"gravity_mps2", "noise_block_s"})
+    analysis_options_type = EarthRateBiasAnalysisOptions
+    analysis_options = option_names(EarthRateBiasAnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

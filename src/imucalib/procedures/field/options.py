@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new field`` builds its
 flags from them (docs/plugins.md).
+
+:class:`FieldAnalysisOptions` holds, the same way, the keys
+:func:`~imucalib.procedures.field.analysis.analyze_field` takes as ``options``; ``imucalib
+calibrate`` reads them with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -10,10 +14,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from imucalib.io.import_spec import ImportSpec
 from imucalib.plan.bounds import MAX_RECORD_S, MAX_SAMPLE_RATE_HZ, MAX_STEPS, MIN_SAMPLE_RATE_HZ
 from imucalib.procedures.common.options import option
 
-__all__ = ["FieldPlanOptions"]
+__all__ = ["FieldAnalysisOptions", "FieldPlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -41,3 +46,70 @@ class FieldPlanOptions:
     seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
     name: str = option("field", help="The plan's name (the recording's file name starts with "
                                      "it).", group="plan")
+
+
+@dataclass(frozen=True)
+class FieldAnalysisOptions:
+    """The keys :func:`~.analysis.analyze_field` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    accel_form: Literal["auto", "gravity-norm", "six-position"] = option(
+        "auto", help="The accelerometer's form: from the gravity norm of free poses, or a "
+                     "fixture's six faces.")
+    gyro_form: Literal["auto", "gravity", "turns", "none"] = option(
+        "auto", help="The gyro's form: from the gravity directions, from the turns, or none.")
+    accel_k2: Literal["auto", "yes", "no"] = option(
+        "auto", help="Fit the accelerometer's quadratic terms in the gravity-norm form (auto: "
+                     "with at least 16 poses).")
+    accel_drift: Literal["auto", "yes", "no"] = option(
+        "auto", help="Fit a linear drift of the accelerometer's bias over the session (auto: "
+                     "with at least 20 poses).")
+    gyro_g_sensitivity: Literal["auto", "yes", "no"] = option(
+        "auto", help="Fit the gyro's g-sensitivity from the static poses (auto: when they cover "
+                     "every axis direction and number six or more).")
+    gravity_mps2: float | None = option(
+        None, help="Local gravity (default: normal gravity at the latitude).", unit="m/s²",
+        min=0.0)
+    gravity_std_mps2: float | None = option(
+        None, help="The standard uncertainty of local gravity (default: from the latitude).",
+        unit="m/s²", min=0.0)
+    latitude_deg: float | None = option(
+        None, help="The site's latitude (default: the recording's).", unit="°", min=-90.0,
+        max=90.0)
+    height_m: float | None = option(None, help="The site's height (default: the recording's).",
+                                    unit="m")
+    static_threshold: float | None = option(
+        None, help="The static detector's threshold k (default: chosen from the log).", min=0.0)
+    window_s: float = option(0.5, help="The static detector's window.", unit="s", min=0.0,
+                             group="timing")
+    init_static_s: float = option(2.0, help="The static start the detector learns its noise "
+                                            "from.", unit="s", min=0.0, group="timing")
+    min_static_s: float = option(1.0, help="The shortest still interval taken as a pose.",
+                                 unit="s", min=0.0, group="timing")
+    min_rotation_deg: float = option(5.0, help="The smallest rotation between poses counted.",
+                                     unit="°", min=0.0)
+    noise_block_s: float = option(0.25, help="The block length of the pooled white-noise "
+                                             "estimate.", unit="s", min=0.0, group="timing")
+    target_accel_bias_mps2: float = option(
+        1e-3, help="The accelerometer-bias σ the coverage check counts poses for.",
+        unit="m/s²", min=0.0)
+    target_scale: float = option(1e-4, help="The scale-factor σ the coverage check counts "
+                                            "poses for.", min=0.0)
+    target_angle_rad: float = option(1e-4, help="The misalignment σ the coverage check counts "
+                                                "poses for.", unit="rad", min=0.0)
+    accel_instability_mps2: float = option(
+        0.0, help="A datasheet's accelerometer bias instability, added in quadrature to each "
+                  "pose mean's standard error.", unit="m/s²", min=0.0)
+    gyro_instability_rps: float = option(
+        0.0, help="A datasheet's gyro bias instability, added in quadrature to each pose "
+                  "mean's standard error.", unit="rad/s", min=0.0)
+    accel_instability_auto: bool = option(
+        False, help="Estimate the accelerometer's instability floor from the poses' own "
+                    "scatter (not with accel_instability_mps2).")
+    import_spec: ImportSpec | None = option(
+        None, help="How to read a log file that is not a recording (default: its layout "
+                   "detected from the header).",
+        python_only="given by the import options of `imucalib calibrate field DATA`")

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.field.options import FieldPlanOptions
+from imucalib.procedures.field.options import FieldAnalysisOptions, FieldPlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -39,15 +39,8 @@ class FieldProcedure:
                    "faces, the gyro from the rotations between them")
     plan_options_type = FieldPlanOptions
     plan_options = option_names(FieldPlanOptions)
-    analysis_options = frozenset({"accel_form", "gyro_form", "gravity_mps2",
-                                  "gravity_std_mps2", "latitude_deg", "height_m",
-                                  "static_threshold", "window_s", "init_static_s",
-                                  "min_static_s", "min_rotation_deg", "noise_block_s",
-                                  "target_accel_bias_mps2", "target_scale",
-                                  "target_angle_rad", "accel_k2", "accel_drift",
-                                  "gyro_g_sensitivity", "accel_instability_mps2",
-                                  "gyro_instability_rps", "accel_instability_auto",
-                                  "import_spec"})
+    analysis_options_type = FieldAnalysisOptions
+    analysis_options = option_names(FieldAnalysisOptions)
     outputs = ("result-json", "report-json", "parameters-csv", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:

@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new g-sensitivity`` builds
 its flags from them (docs/plugins.md).
+
+:class:`GSensitivityAnalysisOptions` holds, the same way, the keys
+:func:`~.analysis.analyze_g_sensitivity` takes as ``options``; ``imucalib calibrate`` reads them
+with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from imucalib.plan.bounds import (
 )
 from imucalib.procedures.common.options import option
 
-__all__ = ["GSensitivityPlanOptions"]
+__all__ = ["GSensitivityAnalysisOptions", "GSensitivityPlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -57,3 +61,25 @@ class GSensitivityPlanOptions:
     seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
     name: str = option("g-sensitivity", help="The plan's name (the recording's file name "
                                              "starts with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class GSensitivityAnalysisOptions:
+    """The keys :func:`~.analysis.analyze_g_sensitivity` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    gravity_mps2: float | None = option(
+        None, help="Local gravity (default: normal gravity at the recorded latitude).",
+        unit="m/s²", min=0.0)
+    scale_misalignment: Any = option(
+        None, help="The gyro's scale-factor and misalignment matrix M (y = (I + M)·ω), taken as "
+                   "known (default: zero).",
+        python_only="a 3×3 matrix; pass it from Python "
+                    "(analyze(..., options={'scale_misalignment': M}))")
+    scale_misalignment_std: float = option(
+        1e-3, help="The Type B standard uncertainty of each element of M.", min=0.0)
+    noise_block_s: float = option(1.0, help="The block length of the white-noise estimate.",
+                                  unit="s", min=0.0, group="timing")

@@ -12,7 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.g_sensitivity.options import GSensitivityPlanOptions
+from imucalib.procedures.g_sensitivity.options import (
+    GSensitivityAnalysisOptions,
+    GSensitivityPlanOptions,
+)
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -30,8 +33,8 @@ class GSensitivityProcedure:
                    "from static positions on a dual-axis table, Earth rate subtracted")
     plan_options_type = GSensitivityPlanOptions
     plan_options = option_names(GSensitivityPlanOptions)
-    analysis_options = frozenset({"gravity_mps2", "scale_misalignment",
-                                  "scale_misalignment_std", "noise_block_s"})
+    analysis_options_type = GSensitivityAnalysisOptions
+    analysis_options = option_names(GSensitivityAnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new installation`` builds
 its flags from them (docs/plugins.md).
+
+:class:`InstallationAnalysisOptions` holds, the same way, the keys
+:func:`~.analysis.analyze_installation` takes as ``options``; ``imucalib calibrate`` reads them
+with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from imucalib.plan.equipment import TwinEquipment
 from imucalib.procedures.common.options import option
 from imucalib.procedures.installation.plan import AXES
 
-__all__ = ["InstallationPlanOptions"]
+__all__ = ["InstallationAnalysisOptions", "InstallationPlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -54,3 +58,23 @@ class InstallationPlanOptions:
         python_only="a TwinEquipment object; edit the plan's [twin] table instead")
     name: str = option("installation", help="The plan's name (the recording's file name "
                                             "starts with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class InstallationAnalysisOptions:
+    """The keys :func:`~.analysis.analyze_installation` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    max_lost_fraction: float = option(
+        0.01, help="The fraction of a window's expected samples that dropouts may take.",
+        min=0.0, max=1.0)
+    max_gap_s: float = option(0.5, help="The longest single dropout in a window.", unit="s",
+                              min=0.0, group="timing")
+    noise_block_s: float = option(
+        1.0, help="The length of the blocks whose means' scatter gives the white-noise density.",
+        unit="s", min=0.0, group="timing")
+    common_bias: bool = option(
+        False, help="Fit one gyro bias common to every turn in the least-squares triad model.")

@@ -15,7 +15,10 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.installation.options import InstallationPlanOptions
+from imucalib.procedures.installation.options import (
+    InstallationAnalysisOptions,
+    InstallationPlanOptions,
+)
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -34,8 +37,8 @@ class InstallationProcedure:
                    "the chapter's closed form and the least-squares triad model")
     plan_options_type = InstallationPlanOptions
     plan_options = option_names(InstallationPlanOptions)
-    analysis_options = frozenset({"max_lost_fraction", "max_gap_s", "noise_block_s",
-                                  "common_bias"})
+    analysis_options_type = InstallationAnalysisOptions
+    analysis_options = option_names(InstallationAnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new p1`` builds its
 flags from them (docs/plugins.md).
+
+:class:`P1AnalysisOptions` holds, the same way, the keys
+:func:`~imucalib.procedures.p1.analysis.analyze_p1` takes as ``options``; ``imucalib calibrate``
+reads them with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from imucalib.plan.bounds import (
 )
 from imucalib.procedures.common.options import option
 
-__all__ = ["P1PlanOptions"]
+__all__ = ["P1AnalysisOptions", "P1PlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -73,3 +77,15 @@ class P1PlanOptions:
                        max=2**63 - 1, group="twin")
     name: str = option("p1-dual-axis", help="The plan's name (the recording's file name "
                                             "starts with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class P1AnalysisOptions:
+    """The keys :func:`~.analysis.analyze_p1` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    model: Literal["triad", "per-axis"] = option(
+        "triad", help="The model fitted: the full triad model or the procedure's per-axis one.")

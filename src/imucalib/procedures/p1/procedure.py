@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.p1.options import P1PlanOptions
+from imucalib.procedures.p1.options import P1AnalysisOptions, P1PlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -37,7 +37,8 @@ class P1Procedure:
                    "record, rate points, held-out checks, repetitions")
     plan_options_type = P1PlanOptions
     plan_options = option_names(P1PlanOptions)
-    analysis_options = frozenset({"model"})
+    analysis_options_type = P1AnalysisOptions
+    analysis_options = option_names(P1AnalysisOptions)
     outputs = ("result-json", "report-json", "residuals-png", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:

@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new p2`` builds its
 flags from them (docs/plugins.md).
+
+:class:`P2AnalysisOptions` holds, the same way, the keys
+:func:`~imucalib.procedures.p2.batch.analyze_p2` takes as ``options``; ``imucalib calibrate`` reads
+them with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from imucalib.plan.schema import TwinEquipment
 from imucalib.procedures.common.options import option
 from imucalib.procedures.p2.plan import DEFAULT_HELD_OUT_DEGC, DEFAULT_TEMPERATURES_DEGC
 
-__all__ = ["P2PlanOptions"]
+__all__ = ["P2AnalysisOptions", "P2PlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -90,3 +94,30 @@ class P2PlanOptions:
         python_only="a TwinEquipment object; edit the plan's [twin] table instead")
     name: str = option("p2-array-temperature", help="The plan's name (the recording's file "
                                                     "name starts with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class P2AnalysisOptions:
+    """The keys :func:`~.batch.analyze_p2` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    lever_arm: Literal["estimate", "cancel", "ignore"] = option(
+        "estimate", help="How the centripetal (lever-arm) term is treated.")
+    max_order: int = option(3, help="The highest polynomial order of a temperature model.",
+                            min=0, max=5)
+    criterion: Literal["aicc", "cv"] = option(
+        "aicc", help="How the order of a temperature model is chosen: AICc or cross-validation.")
+    rate_term: bool = option(False, help="Add a dT/dt term to every temperature model.")
+    hysteresis: Literal["auto", "on", "off"] = option(
+        "auto", help="A heating/cooling term (auto: when each leg holds two calibration points "
+                     "or more).")
+    reference_temperature_degc: float = option(
+        25.0, help="The temperature T0 of the models and of the result's values.", unit="°C")
+    workers: int = option(1, help="Local processes the units are calibrated in (1: this one).",
+                          min=1)
+    scheduler: str | None = option(
+        None, help="A Dask scheduler address (tcp://host:8786; from Python also a Client) to "
+                   "run the units on instead of local processes (default: none).")

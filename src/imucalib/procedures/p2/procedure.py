@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.p2.options import P2PlanOptions
+from imucalib.procedures.p2.options import P2AnalysisOptions, P2PlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -36,9 +36,8 @@ class P2Procedure:
                    "temperature, temperature models of every parameter")
     plan_options_type = P2PlanOptions
     plan_options = option_names(P2PlanOptions)
-    analysis_options = frozenset({"lever_arm", "max_order", "criterion", "rate_term",
-                                  "hysteresis", "reference_temperature_degc", "workers",
-                                  "scheduler"})
+    analysis_options_type = P2AnalysisOptions
+    analysis_options = option_names(P2AnalysisOptions)
     outputs = ("result-json", "report-json", "temperature-png", "report-pdf")
 
     def generate_plan(self, **options: Any) -> Plan:

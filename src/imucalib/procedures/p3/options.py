@@ -3,10 +3,15 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new p3`` builds its
 flags from them (docs/plugins.md).
+
+:class:`P3AnalysisOptions` holds, the same way, the keys
+:func:`~imucalib.procedures.p3.analysis.analyze_p3` takes as ``options``; ``imucalib calibrate``
+reads them with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
@@ -23,7 +28,7 @@ from imucalib.plan.schema import TwinEquipment
 from imucalib.procedures.common.options import option
 from imucalib.procedures.p3.plan import ARM_POSITIONS_DEG, MIN_RATES
 
-__all__ = ["P3PlanOptions"]
+__all__ = ["P3AnalysisOptions", "P3PlanOptions"]
 
 #: Largest static radius of a centrifuge (:class:`~imucalib.plan.equipment.CentrifugeConfig`).
 _MAX_RADIUS_M = 20.0
@@ -80,3 +85,50 @@ class P3PlanOptions:
         python_only="a TwinEquipment object; edit the plan's [twin] table instead")
     name: str = option("p3-centrifuge-k2", help="The plan's name (the recording's file name "
                                                 "starts with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class P3AnalysisOptions:
+    """The keys :func:`~.analysis.analyze_p3` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    reference_a: str | None = option(
+        None, help="The unit (IMU stream) of reference accelerometer A (default: from the "
+                   "recording's mounting check).", group="unit")
+    reference_b: str | None = option(
+        None, help="The unit (IMU stream) of reference accelerometer B (default: from the "
+                   "recording's mounting check).", group="unit")
+    test: str | None = option(
+        None, help="The unit (IMU stream) of the test accelerometer (default: from the "
+                   "recording's mounting check).", group="unit")
+    k1: Mapping[str, tuple[float, float]] | None = option(
+        None, help="K1 (output per m/s²) and its standard uncertainty per unit, instead of the "
+                   "tumble's (default: none, the tumble's).",
+        python_only="a mapping of unit to (K1, σ): `imucalib calibrate --k1 UNIT=VALUE,STD` "
+                    "(repeat per unit), or from Python")
+    k0: Mapping[str, tuple[float, float]] | None = option(
+        None, help="K0 (output) and its standard uncertainty per unit, reported with the result "
+                   "(default: none, the tumble's).",
+        python_only="a mapping of unit to (K0, σ); pass it from Python "
+                    "(analyze(..., options={'k0': {...}}))")
+    gravity_mps2: float | None = option(
+        None, help="Local gravity for the tumble (default: normal gravity at the recorded "
+                   "latitude).", unit="m/s²", min=0.0)
+    gravity_rel_std: float | None = option(
+        None, help="The relative standard uncertainty of gravity (default: 2e-5 for normal "
+                   "gravity, 0 for a given value).", min=0.0)
+    radii: Literal["fitted", "nominal"] = option(
+        "fitted", help="The radius of each series: its own fitted effective radius or the "
+                       "nominal ones.")
+    nominal_radii_m: tuple[float, ...] | None = option(
+        None, help="The nominal reference and test radii (two values) for radii=nominal.",
+        unit="m", min=0.0)
+    k2_target_g_per_g2: float = option(
+        1e-7, help="The expanded uncertainty (k = 2) the test accelerometer's K2 must reach.",
+        unit="g/g²", min=0.0)
+    input_axis: Literal["x", "y", "z"] = option(
+        "x", help="The accelerometer of each unit that is the instrument (its input axis "
+                  "radial).", group="unit")

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.p3.options import P3PlanOptions
+from imucalib.procedures.p3.options import P3AnalysisOptions, P3PlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -33,9 +33,8 @@ class P3Procedure:
                    "from the test accelerometer's ω⁴ term")
     plan_options_type = P3PlanOptions
     plan_options = option_names(P3PlanOptions)
-    analysis_options = frozenset({"reference_a", "reference_b", "test", "k1", "k0",
-                                  "gravity_mps2", "gravity_rel_std", "radii", "nominal_radii_m",
-                                  "k2_target_g_per_g2", "input_axis"})
+    analysis_options_type = P3AnalysisOptions
+    analysis_options = option_names(P3AnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

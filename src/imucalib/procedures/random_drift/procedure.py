@@ -12,7 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.random_drift.options import RandomDriftPlanOptions
+from imucalib.procedures.random_drift.options import (
+    RandomDriftAnalysisOptions,
+    RandomDriftPlanOptions,
+)
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -30,8 +33,8 @@ class RandomDriftProcedure:
                    "zero stability from multi-position runs repeated over hours")
     plan_options_type = RandomDriftPlanOptions
     plan_options = option_names(RandomDriftPlanOptions)
-    analysis_options = frozenset({"gravity_mps2", "scale_misalignment",
-                                  "scale_misalignment_std", "noise_block_s"})
+    analysis_options_type = RandomDriftAnalysisOptions
+    analysis_options = option_names(RandomDriftAnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

@@ -15,7 +15,10 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.rate_transfer.options import RateTransferPlanOptions
+from imucalib.procedures.rate_transfer.options import (
+    RateTransferAnalysisOptions,
+    RateTransferPlanOptions,
+)
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -34,7 +37,8 @@ class RateTransferProcedure:
                    "scale), asymmetry and quadratic term per axis")
     plan_options_type = RateTransferPlanOptions
     plan_options = option_names(RateTransferPlanOptions)
-    analysis_options = frozenset({"max_lost_fraction", "max_gap_s", "noise_block_s"})
+    analysis_options_type = RateTransferAnalysisOptions
+    analysis_options = option_names(RateTransferAnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

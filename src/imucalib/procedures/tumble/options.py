@@ -3,6 +3,10 @@
 Each field is one keyword of the generator with its help, unit, range and help section
 (:func:`~imucalib.procedures.common.options.option`); ``imucalib plan new tumble`` builds its
 flags from them (docs/plugins.md).
+
+:class:`TumbleAnalysisOptions` holds, the same way, the keys
+:func:`~imucalib.procedures.tumble.analysis.analyze_tumble` takes as ``options``; ``imucalib
+calibrate`` reads them with ``--set NAME=VALUE``.
 """
 
 from __future__ import annotations
@@ -14,7 +18,7 @@ from imucalib.plan.bounds import MAX_RECORD_S, MAX_SAMPLE_RATE_HZ, MAX_SETTLE_S,
 from imucalib.plan.schema import TwinEquipment
 from imucalib.procedures.common.options import option
 
-__all__ = ["TumblePlanOptions"]
+__all__ = ["TumbleAnalysisOptions", "TumblePlanOptions"]
 
 
 @dataclass(frozen=True)
@@ -42,3 +46,28 @@ class TumblePlanOptions:
         python_only="a TwinEquipment object; edit the plan's [twin] table instead")
     name: str = option("tumble", help="The plan's name (the recording's file name starts "
                                       "with it).", group="plan")
+
+
+@dataclass(frozen=True)
+class TumbleAnalysisOptions:
+    """The keys :func:`~.analysis.analyze_tumble` takes as ``options``.
+
+    They are the procedure's ``analysis_options``; ``imucalib calibrate`` reads them with
+    ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
+    """
+
+    coefficients: tuple[Literal["K0", "K1", "delta", "K2", "Kip", "K3", "Koq"], ...] | None = (
+        option(None, help="The coefficients to estimate (default: all that the positions "
+                          "resolve)."))
+    method: Literal["lsq", "dft"] = option(
+        "lsq", help="The Fourier stage: least squares at the measured angles, or the DFT at the "
+                    "commanded ones.")
+    gravity_mps2: float | None = option(
+        None, help="Local gravity (default: normal gravity at the recorded latitude).",
+        unit="m/s²", min=0.0)
+    gravity_rel_std: float | None = option(
+        None, help="The relative standard uncertainty of gravity (default: 2e-5 for normal "
+                   "gravity, 0 for a given value).", min=0.0)
+    angle_std_arcsec: float = option(
+        1.0, help="The RMS over a revolution of the head's angle error (Type B).", unit="″",
+        min=0.0)

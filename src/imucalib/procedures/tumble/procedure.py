@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.tumble.options import TumblePlanOptions
+from imucalib.procedures.tumble.options import TumbleAnalysisOptions, TumblePlanOptions
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -31,8 +31,8 @@ class TumbleProcedure:
                    "coefficients of N equally spaced positions")
     plan_options_type = TumblePlanOptions
     plan_options = option_names(TumblePlanOptions)
-    analysis_options = frozenset({"coefficients", "method", "gravity_mps2", "gravity_rel_std",
-                                  "angle_std_arcsec"})
+    analysis_options_type = TumbleAnalysisOptions
+    analysis_options = option_names(TumbleAnalysisOptions)
     outputs = ("report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:

@@ -1,0 +1,77 @@
+"""The scale-factor test as an imucalib procedure: the object the entry point names.
+
+:data:`PROCEDURE` satisfies imucalib's ``Procedure`` protocol
+(:class:`imucalib.procedures.common.procedure.Procedure`); the distribution declares it as
+
+.. code-block:: toml
+
+    [project.entry-points."imucalib.procedures"]
+    scale-factor = "imucalib_scale_factor.procedure:PROCEDURE"
+
+Importing this module imports neither the plan nor the analysis: each is imported when first
+used, so that listing the procedures stays cheap.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from imucalib.procedures.common.options import option_names
+from imucalib.procedures.common.procedure import accepted_options
+from imucalib_scale_factor.options import (
+    ScaleFactorAnalysisOptions,
+    ScaleFactorPlanOptions,
+)
+
+if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
+    from imucalib.plan.schema import Plan
+    from imucalib_scale_factor.analysis import ScaleFactorResult
+
+__all__ = ["PROCEDURE", "ScaleFactorProcedure"]
+
+
+class ScaleFactorProcedure:
+    """One-axis gyro scale factor: turns about z at ±ω, y = K1·ω + b by weighted least squares."""
+
+    name = "scale-factor"
+    description = ("one-axis gyro scale factor (plug-in example): turns about the unit's z axis "
+                   "at ±ω on a single-axis table; K1 and bias by weighted least squares")
+    plan_options_type = ScaleFactorPlanOptions
+    plan_options = option_names(ScaleFactorPlanOptions)
+    analysis_options_type = ScaleFactorAnalysisOptions
+    analysis_options = option_names(ScaleFactorAnalysisOptions)
+    outputs = ("report-json", "parameters-csv", "report-pdf")
+
+    def generate_plan(self, **options: Any) -> Plan:
+        """Return :func:`~imucalib_scale_factor.plan.generate_scale_factor_plan` of `options`."""
+        from imucalib_scale_factor.plan import generate_scale_factor_plan
+
+        return generate_scale_factor_plan(**options)
+
+    def analyze(self, recording: Recording | str | os.PathLike[str], *,
+                unit: str | None = None, options: Mapping[str, Any] | None = None,
+                progress: Callable[[float], None] | None = None) -> ScaleFactorResult:
+        """Run :func:`~imucalib_scale_factor.analysis.analyze_scale_factor`.
+
+        `options` are those of the turn reduction (:attr:`analysis_options`).
+
+        Raises
+        ------
+        InvalidInputError
+            An option the analysis does not take.
+        """
+        from imucalib.procedures.common.rate_windows import RateProcessing
+        from imucalib_scale_factor.analysis import analyze_scale_factor
+
+        opts = accepted_options(self.name, options, self.analysis_options)
+        result = analyze_scale_factor(recording, unit=unit, processing=RateProcessing(**opts))
+        if progress is not None:
+            progress(1.0)
+        return result
+
+
+#: The procedure the entry point ``scale-factor`` names.
+PROCEDURE = ScaleFactorProcedure()
