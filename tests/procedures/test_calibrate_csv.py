@@ -107,3 +107,33 @@ def test_a_step_outside_the_data_is_refused_and_nothing_is_written(planned, tmp_
     assert "step 29 (late, 1e+06–1.00001e+06 s) is not inside the data" in text, text
     assert "Traceback" not in done.output
     assert not list(tmp_path.glob("*.result.json"))
+
+
+def test_calibrate_steps_applies_the_import_options_and_maps_a_temperature(planned):
+    """`calibrate CSV --steps` reads the CSV through the import options (header lines, column
+    map, units) like `import` and `segments` do, a vendor temperature column included."""
+    tmp, reference = planned
+    df = pd.read_csv(tmp / "run.csv")
+    g0, deg = 9.80665, np.pi / 180.0
+    vendor = pd.DataFrame({"Time": df["time_s [s]"]})
+    for axis in "xyz":
+        vendor[f"Gyro{axis.upper()}"] = df[f"gyro_{axis}_rps [rad/s]"] / deg
+    for axis in "xyz":
+        vendor[f"Acc{axis.upper()}"] = df[f"accel_{axis}_mps2 [m/s^2]"] / g0
+    vendor["Temp"] = 24.0 + 0.001 * np.arange(len(vendor))
+    path = tmp / "vendor-preamble.csv"
+    with path.open("w", encoding="utf-8") as fh:
+        fh.write("# Vendor IMU logger v2\n# serial 4711\n# rate 1000 Hz\n")
+        vendor.to_csv(fh, index=False, float_format="%.17g")
+    out = tmp / "from-preamble"
+    done = CliRunner().invoke(app, [
+        "calibrate", str(path), "--steps", str(tmp / "steps.toml"), "--out", str(out),
+        "--no-record", "--skip-rows", "3", "--gyro-unit", "deg/s", "--accel-unit", "g",
+        "--column-map", "t=Time,gx=GyroX,gy=GyroY,gz=GyroZ,ax=AccX,ay=AccY,az=AccZ,temp=Temp"])
+    assert done.exit_code == 0, done.output
+    _agree(CalibrationResult.load(out / "vendor-preamble.imported.IMU-0001.p1.result.json"),
+           reference)
+    with open_recording(out / "vendor-preamble.imported.h5") as rec:
+        temps = np.concatenate([c.columns["temperature_degc"]
+                                for c in rec.iter_stream("imu", "IMU-0001")])
+    assert temps[0] == pytest.approx(24.0) and temps[-1] == pytest.approx(vendor["Temp"].iloc[-1])

@@ -17,6 +17,7 @@ from imucalib.errors import CalibrationError, InvalidInputError
 from imucalib.units import DEG_PER_H, G0_MPS2
 
 if TYPE_CHECKING:
+    from imucalib.io.import_spec import ImportSpec
     from imucalib.procedures.common.procedure import ProcedureResult
 
 __all__ = ["apply", "calibrate", "run_calibration"]
@@ -91,10 +92,15 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
                                 f"{exc.strerror or exc}") from exc
 
 
-def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path | None
-                           ) -> Path:
-    """Import a CSV and its step file into ``<out>/<stem>.imported.h5`` (replaced if there)."""
+def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path | None,
+                           spec: ImportSpec | None = None) -> Path:
+    """Import a CSV and its step file into ``<out>/<stem>.imported.h5`` (replaced if there).
+
+    `spec` (the import options: column map, units, counts, time column, header rows …) says how
+    to read the CSV; None or an empty one reads it by its detected layout.
+    """
     from imucalib.io.csv_recording import recording_from_csv
+    from imucalib.io.import_spec import ImportSpec
     from imucalib.io.step_file import load_step_file
 
     step_file = load_step_file(steps)
@@ -105,6 +111,7 @@ def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path |
         raise InvalidInputError(f"cannot create {folder}: {exc.strerror or exc}") from exc
     target = folder / f"{data.stem}.imported.h5"
     return recording_from_csv(data, step_file, target, unit=imu, overwrite=True,
+                              spec=None if spec is None or spec == ImportSpec() else spec,
                               step_file_text=steps.read_text(encoding="utf-8"))
 
 
@@ -291,7 +298,8 @@ def calibrate(
                                     "complete; a hand-held log is calibrated by `imucalib "
                                     "calibrate field DATA` (docs/field.md)")
         if steps is not None:
-            recording = import_for_calibration(recording, steps, imu, out)
+            recording = import_for_calibration(recording, steps, imu, out,
+                                               spec=import_options.spec())
             console.print(f"imported into {recording} (table stream reconstructed from the "
                           "step file)", highlight=False)
         with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:

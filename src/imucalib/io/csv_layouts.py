@@ -39,7 +39,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TIME_COLUMN
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN, TIME_COLUMN
 from imucalib.errors import InvalidInputError
 
 __all__ = ["IMUCAL_FIELDS", "LAYOUTS", "ROS_IMU_FIELDS", "SHORT_NAMES", "CsvMapping",
@@ -53,8 +53,9 @@ SHORT_NAMES: dict[str, str] = {
     "t": TIME_COLUMN, "time": TIME_COLUMN,
     **{f"g{a}": c for a, c in zip("xyz", GYRO_COLUMNS, strict=True)},
     **{f"a{a}": c for a, c in zip("xyz", ACCEL_COLUMNS, strict=True)},
+    "temp": TEMPERATURE_COLUMN, "temperature": TEMPERATURE_COLUMN,
 }
-_CANONICAL = frozenset((TIME_COLUMN, *GYRO_COLUMNS, *ACCEL_COLUMNS))
+_CANONICAL = frozenset((TIME_COLUMN, *GYRO_COLUMNS, *ACCEL_COLUMNS, TEMPERATURE_COLUMN))
 _TIME_NAMES = ("t", "time", "timestamp", "time_s")
 #: imucal's column → (canonical column, unit).
 IMUCAL_FIELDS: dict[str, tuple[str, str]] = {
