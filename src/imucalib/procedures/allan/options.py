@@ -12,15 +12,21 @@ flags from them (docs/plugins.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 from imucalib.plan.bounds import (
     MAX_RECORD_S,
-    MAX_SAMPLE_RATE_HZ,
     MAX_TEMPERATURE_DEGC,
     MAX_WAIT_S,
-    MIN_SAMPLE_RATE_HZ,
     MIN_TEMPERATURE_DEGC,
+)
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    grade_field,
+    latitude_field,
+    plan_name_field,
+    sample_rate_field,
+    seed_field,
+    warm_up_field,
 )
 from imucalib.procedures.common.options import option
 
@@ -41,20 +47,13 @@ class AllanPlanOptions:
     soak_stable_s: float = option(1800.0, help="How long chamber and IMU temperatures must "
                                                "stay stable before a record.", unit="s",
                                   min=0.0, max=MAX_WAIT_S, group="timing")
-    warm_up_s: float | None = option(None, help="Warm-up duration (the grade's 15/30/60 min "
-                                                "when omitted).", unit="s", min=0.0,
-                                     max=MAX_WAIT_S, group="timing")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "tactical", help="The IMU's grade (the twin's IMU and the default warm-up).",
-        group="twin")
-    sample_rate_hz: float = option(1000.0, help="The twin IMU's output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    latitude_deg: float = option(45.0, help="Latitude of the twin station.", unit="°",
-                                 min=-90.0, max=90.0, group="twin")
-    seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
-    name: str = option("allan", help="The plan's name (the recording's file name starts with "
-                                     "it).", group="plan")
+    warm_up_s: float | None = warm_up_field(
+        help="Warm-up duration (the grade's 15/30/60 min when omitted).")
+    grade: Grade = grade_field("tactical")
+    sample_rate_hz: float = sample_rate_field(1000.0)
+    latitude_deg: float = latitude_field()
+    seed: int = seed_field(1)
+    name: str = plan_name_field("allan")
 
 
 @dataclass(frozen=True)

@@ -15,12 +15,21 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from imucalib.plan.bounds import (
-    MAX_RECORD_S,
-    MAX_SAMPLE_RATE_HZ,
-    MAX_SETTLE_S,
-    MAX_WAIT_S,
-    MIN_SAMPLE_RATE_HZ,
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    TwinNoise,
+    errors_field,
+    grade_field,
+    gravity_field,
+    latitude_field,
+    noise_block_field,
+    plan_name_field,
+    record_field,
+    sample_rate_field,
+    seed_field,
+    settle_field,
+    twin_noise_field,
+    warm_up_field,
 )
 from imucalib.procedures.common.options import option
 from imucalib.procedures.earth_rate_bias.plan import EARTH_RATE_POSES
@@ -35,31 +44,16 @@ class EarthRateBiasPlanOptions:
     poses: tuple[Literal["+z", "-z", "+x", "-x", "+y", "-y"], ...] = option(
         EARTH_RATE_POSES, help="Fixture axes up in turn, distinct (each recorded at azimuths "
                                "0°, 90°, 180° and 270°).")
-    record_s: float = option(1800.0, help="Static record at each azimuth (≥ 3 s).", unit="s",
-                             min=3.0, max=MAX_RECORD_S, group="timing")
-    settle_s: float = option(60.0, help="Settling before each record.", unit="s", min=0.0,
-                             max=MAX_SETTLE_S, group="timing")
-    warm_up_s: float | None = option(
-        None, help="Warm-up (the grade's 15, 30 or 60 min when omitted).", unit="s", min=0.0,
-        max=MAX_WAIT_S, group="timing")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "navigation", help="The IMU's grade (the twin's IMU and the default warm-up).",
-        group="twin")
-    sample_rate_hz: float = option(100.0, help="The twin IMU's output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    latitude_deg: float = option(45.0, help="Latitude of the twin's site.", unit="°",
-                                 min=-90.0, max=90.0, group="twin")
-    noise: Literal["grade", "white"] = option(
-        "grade", help="The twin IMU's noise (the grade's full model, or white only).",
-        group="twin")
-    errors: Mapping[str, Any] | None = option(
-        None, help="Known truth values of the twin IMU (SI).", group="twin",
-        python_only="a mapping of truth values; pass it from Python or edit the errors of the "
-                    "plan's [twin] IMU")
-    seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
-    name: str = option("earth-rate-bias", help="The plan's name (the recording's file name "
-                                               "starts with it).", group="plan")
+    record_s: float = record_field(1800.0, help="Static record at each azimuth (≥ 3 s).", min=3.0)
+    settle_s: float = settle_field(60.0)
+    warm_up_s: float | None = warm_up_field()
+    grade: Grade = grade_field("navigation")
+    sample_rate_hz: float = sample_rate_field(100.0)
+    latitude_deg: float = latitude_field()
+    noise: TwinNoise = twin_noise_field()
+    errors: Mapping[str, Any] | None = errors_field()
+    seed: int = seed_field(1)
+    name: str = plan_name_field("earth-rate-bias")
 
 
 @dataclass(frozen=True)
@@ -70,8 +64,5 @@ class EarthRateBiasAnalysisOptions:
     ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
     """
 
-    gravity_mps2: float | None = option(
-        None, help="Local gravity (default: normal gravity at the recorded latitude).",
-        unit="m/s²", min=0.0)
-    noise_block_s: float = option(1.0, help="The block length of the white-noise estimate.",
-                                  unit="s", min=0.0, group="timing")
+    gravity_mps2: float | None = gravity_field()
+    noise_block_s: float = noise_block_field(1.0)

@@ -15,7 +15,17 @@ from dataclasses import dataclass
 from typing import Literal
 
 from imucalib.io.import_spec import ImportSpec
-from imucalib.plan.bounds import MAX_RECORD_S, MAX_SAMPLE_RATE_HZ, MAX_STEPS, MIN_SAMPLE_RATE_HZ
+from imucalib.plan.bounds import MAX_RECORD_S, MAX_STEPS
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    grade_field,
+    gravity_field,
+    latitude_field,
+    noise_block_field,
+    plan_name_field,
+    sample_rate_field,
+    seed_field,
+)
 from imucalib.procedures.common.options import option
 
 __all__ = ["FieldAnalysisOptions", "FieldPlanOptions"]
@@ -36,16 +46,11 @@ class FieldPlanOptions:
                              max=MAX_RECORD_S, group="timing")
     init_static_s: float = option(10.0, help="The initial rest (≥ 4 s).", unit="s", min=4.0,
                                   max=MAX_RECORD_S, group="timing")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "consumer", help="The IMU's grade (the twin's IMU).", group="twin")
-    sample_rate_hz: float = option(200.0, help="The twin IMU's output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    latitude_deg: float = option(45.0, help="Latitude of the twin station.", unit="°",
-                                 min=-90.0, max=90.0, group="twin")
-    seed: int = option(1, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
-    name: str = option("field", help="The plan's name (the recording's file name starts with "
-                                     "it).", group="plan")
+    grade: Grade = grade_field("consumer")
+    sample_rate_hz: float = sample_rate_field(200.0)
+    latitude_deg: float = latitude_field()
+    seed: int = seed_field(1)
+    name: str = plan_name_field("field")
 
 
 @dataclass(frozen=True)
@@ -70,9 +75,8 @@ class FieldAnalysisOptions:
     gyro_g_sensitivity: Literal["auto", "yes", "no"] = option(
         "auto", help="Fit the gyro's g-sensitivity from the static poses (auto: when they cover "
                      "every axis direction and number six or more).")
-    gravity_mps2: float | None = option(
-        None, help="Local gravity (default: normal gravity at the latitude).", unit="m/s²",
-        min=0.0)
+    gravity_mps2: float | None = gravity_field(
+        help="Local gravity (default: normal gravity at the latitude).")
     gravity_std_mps2: float | None = option(
         None, help="The standard uncertainty of local gravity (default: from the latitude).",
         unit="m/s²", min=0.0)
@@ -91,8 +95,8 @@ class FieldAnalysisOptions:
                                  unit="s", min=0.0, group="timing")
     min_rotation_deg: float = option(5.0, help="The smallest rotation between poses counted.",
                                      unit="°", min=0.0)
-    noise_block_s: float = option(0.25, help="The block length of the pooled white-noise "
-                                             "estimate.", unit="s", min=0.0, group="timing")
+    noise_block_s: float = noise_block_field(
+        0.25, help="The block length of the pooled white-noise estimate.")
     target_accel_bias_mps2: float = option(
         1e-3, help="The accelerometer-bias σ the coverage check counts poses for.",
         unit="m/s²", min=0.0)

@@ -16,12 +16,21 @@ from typing import Literal
 
 from imucalib.plan.bounds import (
     MAX_REVOLUTIONS,
-    MAX_SAMPLE_RATE_HZ,
-    MAX_SETTLE_S,
     MAX_TABLE_RATE_DPS,
-    MIN_SAMPLE_RATE_HZ,
 )
 from imucalib.plan.equipment import TwinEquipment
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    grade_field,
+    max_gap_field,
+    max_lost_fraction_field,
+    noise_block_field,
+    plan_name_field,
+    sample_rate_field,
+    seed_field,
+    settle_field,
+    twin_field,
+)
 from imucalib.procedures.common.options import option
 from imucalib.procedures.installation.plan import AXES
 
@@ -43,21 +52,13 @@ class InstallationPlanOptions:
     revolutions: int = option(2, help="Whole revolutions per turn (≥ 2: the analysis accepts "
                                       "one fewer at the window edges).", min=2,
                               max=MAX_REVOLUTIONS)
-    settle_s: float = option(5.0, help="Settling before each record (the table reaching its "
-                                       "rate).", unit="s", min=0.0, max=MAX_SETTLE_S,
-                             group="timing")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "tactical", help="The unit's grade (the twin's unit and the gyro range the rate must "
-                         "stay below).", group="twin")
-    sample_rate_hz: float = option(100.0, help="The twin unit's output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
-    twin: TwinEquipment | None = option(
-        None, help="Another twin station (a single-axis table).", group="twin",
-        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
-    name: str = option("installation", help="The plan's name (the recording's file name "
-                                            "starts with it).", group="plan")
+    settle_s: float = settle_field(
+        5.0, help="Settling before each record (the table reaching its rate).")
+    grade: Grade = grade_field("tactical")
+    sample_rate_hz: float = sample_rate_field(100.0)
+    seed: int = seed_field(0)
+    twin: TwinEquipment | None = twin_field(help="Another twin station (a single-axis table).")
+    name: str = plan_name_field("installation")
 
 
 @dataclass(frozen=True)
@@ -68,13 +69,9 @@ class InstallationAnalysisOptions:
     ``--set NAME=VALUE`` and shows them in ``calibrate NAME --help``.
     """
 
-    max_lost_fraction: float = option(
-        0.01, help="The fraction of a window's expected samples that dropouts may take.",
-        min=0.0, max=1.0)
-    max_gap_s: float = option(0.5, help="The longest single dropout in a window.", unit="s",
-                              min=0.0, group="timing")
-    noise_block_s: float = option(
-        1.0, help="The length of the blocks whose means' scatter gives the white-noise density.",
-        unit="s", min=0.0, group="timing")
+    max_lost_fraction: float = max_lost_fraction_field(0.01)
+    max_gap_s: float = max_gap_field(0.5)
+    noise_block_s: float = noise_block_field(
+        1.0, help="The length of the blocks whose means' scatter gives the white-noise density.")
     common_bias: bool = option(
         False, help="Fit one gyro bias common to every turn in the least-squares triad model.")

@@ -17,12 +17,18 @@ from typing import Literal
 from imucalib.plan.bounds import (
     MAX_RECORD_S,
     MAX_REVOLUTIONS,
-    MAX_SAMPLE_RATE_HZ,
     MAX_SETTLE_S,
     MAX_STEPS,
     MAX_TABLE_RATE_DPS,
-    MAX_WAIT_S,
-    MIN_SAMPLE_RATE_HZ,
+)
+from imucalib.procedures.common.option_fields import (
+    latitude_field,
+    plan_name_field,
+    record_field,
+    sample_rate_field,
+    seed_field,
+    settle_field,
+    warm_up_field,
 )
 from imucalib.procedures.common.options import option
 
@@ -51,14 +57,11 @@ class P1PlanOptions:
     static_s: float = option(3600.0, help="Level static record for the gyro bias (≥ 60 min; "
                                           "docs/p1.md, step 2).", unit="s", min=0.0,
                              max=MAX_RECORD_S, group="timing")
-    settle_s: float = option(30.0, help="Settling at each position (≥ 30 s).", unit="s",
-                             min=0.0, max=MAX_SETTLE_S, group="timing")
-    record_s: float = option(10.0, help="Record at each position (≥ 10 s).", unit="s", min=0.0,
-                             max=MAX_RECORD_S, group="timing")
+    settle_s: float = settle_field(30.0, help="Settling at each position (≥ 30 s).")
+    record_s: float = record_field(10.0, help="Record at each position (≥ 10 s).")
     rate_settle_s: float = option(20.0, help="Settling at each rate (≥ 20 s).", unit="s",
                                   min=0.0, max=MAX_SETTLE_S, group="timing")
-    warm_up_s: float | None = option(None, help="Warm-up duration (the grade's when omitted).",
-                                     unit="s", min=0.0, max=MAX_WAIT_S, group="timing")
+    warm_up_s: float | None = warm_up_field(help="Warm-up duration (the grade's when omitted).")
     serial: str = option("", help="The unit's serial number, carried into the result.",
                          group="unit")
     model: str = option("", help="The unit's model, carried into the result.", group="unit")
@@ -66,17 +69,12 @@ class P1PlanOptions:
     grade: Literal["consumer", "tactical", "navigation"] = option(
         "tactical", help="The IMU's grade (the twin's IMU, the warm-up and the specification "
                          "checked).", group="twin")
-    sample_rate_hz: float = option(1000.0, help="The twin IMU's output rate (≥ 100 Hz).",
-                                   unit="Hz", min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    latitude_deg: float = option(45.0, help="Latitude of the twin station.", unit="°",
-                                 min=-90.0, max=90.0, group="twin")
+    sample_rate_hz: float = sample_rate_field(1000.0, help="The twin IMU's output rate (≥ 100 Hz).")
+    latitude_deg: float = latitude_field()
     heading_deg: float = option(0.0, help="Heading of the twin station.", unit="°",
                                 min=-360.0, max=360.0, group="twin")
-    seed: int = option(1, help="Seed of the twin (the IMU's truth and noise).", min=-(2**63),
-                       max=2**63 - 1, group="twin")
-    name: str = option("p1-dual-axis", help="The plan's name (the recording's file name "
-                                            "starts with it).", group="plan")
+    seed: int = seed_field(1)
+    name: str = plan_name_field("p1-dual-axis")
 
 
 @dataclass(frozen=True)

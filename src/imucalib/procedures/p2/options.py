@@ -19,16 +19,22 @@ from imucalib.plan.bounds import (
     MAX_RAMP_DEGC_PER_MIN,
     MAX_RECORD_S,
     MAX_REVOLUTIONS,
-    MAX_SAMPLE_RATE_HZ,
-    MAX_SETTLE_S,
     MAX_TABLE_RATE_DPS,
     MAX_TEMPERATURE_DEGC,
     MAX_WAIT_S,
     MIN_RAMP_DEGC_PER_MIN,
-    MIN_SAMPLE_RATE_HZ,
     MIN_TEMPERATURE_DEGC,
 )
 from imucalib.plan.schema import TwinEquipment
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    grade_field,
+    plan_name_field,
+    sample_rate_field,
+    seed_field,
+    settle_field,
+    twin_field,
+)
 from imucalib.procedures.common.options import option
 from imucalib.procedures.p2.plan import DEFAULT_HELD_OUT_DEGC, DEFAULT_TEMPERATURES_DEGC
 
@@ -68,8 +74,7 @@ class P2PlanOptions:
                                min=MIN_TEMPERATURE_DEGC, max=MAX_TEMPERATURE_DEGC)
     static_s: float = option(10.0, help="Record length of each static window.", unit="s",
                              min=0.0, max=MAX_RECORD_S, group="timing")
-    settle_s: float = option(10.0, help="Settling before each record.", unit="s", min=0.0,
-                             max=MAX_SETTLE_S, group="timing")
+    settle_s: float = settle_field(10.0)
     stable_for_s: float = option(900.0, help="How long the temperatures must stay stable to "
                                              "end a soak.", unit="s", min=0.0, max=MAX_WAIT_S,
                                  group="timing")
@@ -80,20 +85,16 @@ class P2PlanOptions:
                                    max=MAX_WAIT_S, group="timing")
     n_imus: int = option(8, help="Units on the cube (the twin's).", min=1, max=MAX_IMUS,
                          group="twin")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "consumer", help="The units' grade (the twin's IMUs and the held-out accuracy "
-                         "limits).", group="twin")
-    sample_rate_hz: float = option(100.0, help="The twin IMUs' output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
+    grade: Grade = grade_field(
+        "consumer",
+        help="The units' grade (the twin's IMUs and the held-out accuracy limits).")
+    sample_rate_hz: float = sample_rate_field(100.0)
+    seed: int = seed_field(0)
     half_edge_m: float = option(0.06, help="Half edge of the twin's cube.", unit="m", min=0.0,
                                 max=1.0, group="twin")
-    twin: TwinEquipment | None = option(
-        None, help="Another twin station (its IMUs replace n_imus).", group="twin",
-        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
-    name: str = option("p2-array-temperature", help="The plan's name (the recording's file "
-                                                    "name starts with it).", group="plan")
+    twin: TwinEquipment | None = twin_field(
+        help="Another twin station (its IMUs replace n_imus).")
+    name: str = plan_name_field("p2-array-temperature")
 
 
 @dataclass(frozen=True)

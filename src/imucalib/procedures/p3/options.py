@@ -19,12 +19,19 @@ from imucalib.plan.bounds import (
     MAX_ANGLE_DEG,
     MAX_CENTRIFUGE_RATE_DPS,
     MAX_RECORD_S,
-    MAX_SAMPLE_RATE_HZ,
-    MAX_SETTLE_S,
     MAX_STEPS,
-    MIN_SAMPLE_RATE_HZ,
 )
 from imucalib.plan.schema import TwinEquipment
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    grade_field,
+    gravity_field,
+    plan_name_field,
+    sample_rate_field,
+    seed_field,
+    settle_field,
+    twin_field,
+)
 from imucalib.procedures.common.options import option
 from imucalib.procedures.p3.plan import ARM_POSITIONS_DEG, MIN_RATES
 
@@ -65,26 +72,19 @@ class P3PlanOptions:
                                   unit="s", min=0.0, max=MAX_RECORD_S, group="timing")
     rest_record_s: float = option(30.0, help="Record at each arm position at rest.", unit="s",
                                   min=0.0, max=MAX_RECORD_S, group="timing")
-    settle_s: float = option(20.0, help="Settling before each record (a rate step's ramp "
-                                        "included).", unit="s", min=0.0, max=MAX_SETTLE_S,
-                             group="timing")
+    settle_s: float = settle_field(
+        20.0, help="Settling before each record (a rate step's ramp included).")
     tumble_record_s: float = option(30.0, help="Record in each tumble pose.", unit="s",
                                     min=0.0, max=MAX_RECORD_S, group="timing")
     unbalance_um: float = option(10.0, help="The twin's rotor-centre shift at the top rate "
                                             "with the test load.", unit="µm",
                                  min=-_MAX_UNBALANCE_UM, max=_MAX_UNBALANCE_UM, group="twin")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "navigation", help="The grade of the twin's units.", group="twin")
-    sample_rate_hz: float = option(100.0, help="The twin units' output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
-    twin: TwinEquipment | None = option(
-        None, help="Another twin station (its units named REF-A, REF-B and TEST).",
-        group="twin",
-        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
-    name: str = option("p3-centrifuge-k2", help="The plan's name (the recording's file name "
-                                                "starts with it).", group="plan")
+    grade: Grade = grade_field("navigation")
+    sample_rate_hz: float = sample_rate_field(100.0)
+    seed: int = seed_field(0)
+    twin: TwinEquipment | None = twin_field(
+        help="Another twin station (its units named REF-A, REF-B and TEST).")
+    name: str = plan_name_field("p3-centrifuge-k2")
 
 
 @dataclass(frozen=True)
@@ -114,9 +114,8 @@ class P3AnalysisOptions:
                    "(default: none, the tumble's).",
         python_only="a mapping of unit to (K0, σ); pass it from Python "
                     "(analyze(..., options={'k0': {...}}))")
-    gravity_mps2: float | None = option(
-        None, help="Local gravity for the tumble (default: normal gravity at the recorded "
-                   "latitude).", unit="m/s²", min=0.0)
+    gravity_mps2: float | None = gravity_field(
+        help="Local gravity for the tumble (default: normal gravity at the recorded latitude).")
     gravity_rel_std: float | None = option(
         None, help="The relative standard uncertainty of gravity (default: 2e-5 for normal "
                    "gravity, 0 for a given value).", min=0.0)

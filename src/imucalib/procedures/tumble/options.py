@@ -14,8 +14,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from imucalib.plan.bounds import MAX_RECORD_S, MAX_SAMPLE_RATE_HZ, MAX_SETTLE_S, MIN_SAMPLE_RATE_HZ
 from imucalib.plan.schema import TwinEquipment
+from imucalib.procedures.common.option_fields import (
+    Grade,
+    grade_field,
+    gravity_field,
+    plan_name_field,
+    record_field,
+    sample_rate_field,
+    seed_field,
+    settle_field,
+    twin_field,
+)
 from imucalib.procedures.common.options import option
 
 __all__ = ["TumbleAnalysisOptions", "TumblePlanOptions"]
@@ -31,21 +41,13 @@ class TumblePlanOptions:
         ("x", "y", "z"), help="Body axes put along the head axis, in order.")
     both_directions: bool = option(False, help="Each sequence also in reverse (hysteresis "
                                                "shows as the passes' difference).")
-    record_s: float = option(30.0, help="Record at each position.", unit="s", min=0.0,
-                             max=MAX_RECORD_S, group="timing")
-    settle_s: float = option(10.0, help="Settling before each record.", unit="s", min=0.0,
-                             max=MAX_SETTLE_S, group="timing")
-    grade: Literal["consumer", "tactical", "navigation"] = option(
-        "navigation", help="The IMU's grade (the twin's IMU).", group="twin")
-    sample_rate_hz: float = option(100.0, help="The twin IMU's output rate.", unit="Hz",
-                                   min=MIN_SAMPLE_RATE_HZ, max=MAX_SAMPLE_RATE_HZ,
-                                   group="twin")
-    seed: int = option(0, help="Seed of the twin.", min=-(2**63), max=2**63 - 1, group="twin")
-    twin: TwinEquipment | None = option(
-        None, help="Another twin station (a dual-axis table).", group="twin",
-        python_only="a TwinEquipment object; edit the plan's [twin] table instead")
-    name: str = option("tumble", help="The plan's name (the recording's file name starts "
-                                      "with it).", group="plan")
+    record_s: float = record_field(30.0)
+    settle_s: float = settle_field(10.0)
+    grade: Grade = grade_field("navigation")
+    sample_rate_hz: float = sample_rate_field(100.0)
+    seed: int = seed_field(0)
+    twin: TwinEquipment | None = twin_field(help="Another twin station (a dual-axis table).")
+    name: str = plan_name_field("tumble")
 
 
 @dataclass(frozen=True)
@@ -62,9 +64,7 @@ class TumbleAnalysisOptions:
     method: Literal["lsq", "dft"] = option(
         "lsq", help="The Fourier stage: least squares at the measured angles, or the DFT at the "
                     "commanded ones.")
-    gravity_mps2: float | None = option(
-        None, help="Local gravity (default: normal gravity at the recorded latitude).",
-        unit="m/s²", min=0.0)
+    gravity_mps2: float | None = gravity_field()
     gravity_rel_std: float | None = option(
         None, help="The relative standard uncertainty of gravity (default: 2e-5 for normal "
                    "gravity, 0 for a given value).", min=0.0)
