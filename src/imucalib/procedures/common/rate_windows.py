@@ -37,15 +37,18 @@ from numpy.typing import NDArray
 
 from imucalib.conventions import GYRO_COLUMNS
 from imucalib.errors import (
-    InvalidInputError,
     MissingSegmentError,
     RecordingError,
-    SaturationError,
 )
 from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
-from imucalib.procedures.common.noise import block_variance, pooled_white_density
+from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.reference import site_vectors
+from imucalib.procedures.common.window_checks import (
+    WindowLimits,
+    checked_samples,
+    pooled_white_se,
+)
 from imucalib.procedures.common.windows import counter_times, whole_revolutions
 
 __all__ = ["RateProcessing", "RateWindow", "extract_rate_windows", "pooled_se"]
@@ -55,27 +58,8 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 
 
 @dataclass(frozen=True)
-class RateProcessing:
-    """Options of the turn reduction (module docstring).
-
-    Attributes
-    ----------
-    max_lost_fraction : float
-        Samples lost to dropouts a window may miss (fraction of those expected).
-    max_gap_s : float
-        Longest single dropout in a window. [s]
-    noise_block_s : float
-        Length of the blocks whose means' scatter gives the white-noise density. [s]
-    """
-
-    max_lost_fraction: float = 0.01
-    max_gap_s: float = 0.5
-    noise_block_s: float = 1.0
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.noise_block_s) and self.noise_block_s > 0):
-            raise InvalidInputError(f"`noise_block_s` must be positive; got "
-                                    f"{self.noise_block_s!r}")
+class RateProcessing(WindowLimits):
+    """Options of the turn reduction (module docstring): the window limits, as they are."""
 
 
 @dataclass(frozen=True)
@@ -130,18 +114,9 @@ def _reduce(unit: str, step: StepRecord, data: StreamData, fb: StreamData, angle
     if axis not in _AXES:
         raise RecordingError(f"{where}: tag axis={axis!r}; expected axis=x, y or z (the body "
                              "axis up)")
-    if len(data) < 10:
-        raise MissingSegmentError(f"{where}: only {len(data)} samples in its valid window")
-    values = np.column_stack([np.asarray(data.columns[c], dtype=np.float64)
-                              for c in GYRO_COLUMNS])
-    if not np.all(np.isfinite(values)):
-        raise InvalidInputError(f"{where}: the window holds NaN or infinite samples")
-    saturated = int(np.count_nonzero(np.asarray(data.columns["saturated"])))
-    if saturated:
-        raise SaturationError(
-            f"{where}: {saturated} of {len(data)} samples flagged saturated (largest gyro "
-            f"output {np.degrees(np.max(np.abs(values))):.6g} °/s): a clipped mean biases the "
-            "scale factor — keep the rates below the gyro's full scale")
+    values = checked_samples(where, data, GYRO_COLUMNS, saturation_note=lambda v: (
+        f" (largest gyro output {np.degrees(np.max(np.abs(v))):.6g} °/s): a clipped mean "
+        "biases the scale factor — keep the rates below the gyro's full scale"))
     t, period, _ = counter_times(where, np.asarray(data.columns["counter"]), data.time_s,
                                  max_lost_fraction=opt.max_lost_fraction,
                                  max_gap_s=opt.max_gap_s, reconstruct=True)
@@ -169,12 +144,9 @@ def pooled_se(windows: Sequence[RateWindow], unit: str = "?") -> list[RateWindow
     MissingSegmentError
         No window is long enough for three noise blocks.
     """
-    white = pooled_white_density([w.block_variance for w in windows])
-    if white is None:
-        raise MissingSegmentError(f"unit {unit}: no turn is long enough for the noise estimate "
-                                  "(three blocks of noise_block_s)")
-    return [dataclasses.replace(w, gyro_se_rps=white / math.sqrt(max(w.duration_s, 1e-3)))
-            for w in windows]
+    se = pooled_white_se([w.block_variance for w in windows], [w.duration_s for w in windows],
+                         unit=unit, what="turn")
+    return [dataclasses.replace(w, gyro_se_rps=e) for w, e in zip(windows, se, strict=True)]
 
 
 def extract_rate_windows(rec: Recording, unit: str | None, roles: Sequence[str], *,

@@ -38,8 +38,9 @@ from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingErr
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE
 from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
-from imucalib.procedures.common.noise import block_variance, pooled_white_density
+from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.reference import site_vectors, static_inputs_b
+from imucalib.procedures.common.window_checks import pooled_white_se
 
 __all__ = ["StaticSite", "StaticWindow", "extract_static_windows", "json_safe", "read_site",
            "require_recorded"]
@@ -185,12 +186,9 @@ def _reduce(unit: str, step: StepRecord, values: _F64, counter: NDArray[np.int64
 
 
 def _pooled(windows: list[StaticWindow], unit: str) -> list[StaticWindow]:
-    white = pooled_white_density([(w.block_dof, w.block_var) for w in windows])
-    if white is None:
-        raise MissingSegmentError(f"unit {unit}: no window is long enough for the noise "
-                                  "estimate (three blocks of noise_block_s)")
-    return [dataclasses.replace(w, se=white / math.sqrt(max(w.duration_s, 1e-3)))
-            for w in windows]
+    se = pooled_white_se([(w.block_dof, w.block_var) for w in windows],
+                         [w.duration_s for w in windows], unit=unit, what="window")
+    return [dataclasses.replace(w, se=e) for w, e in zip(windows, se, strict=True)]
 
 
 def extract_static_windows(rec: Recording, unit: str | None, roles: Sequence[str], *,

@@ -43,14 +43,17 @@ from numpy.typing import NDArray
 from imucalib.conventions import ACCEL_COLUMNS
 from imucalib.errors import (
     InvalidInputError,
-    MissingSegmentError,
     RecordingError,
-    SaturationError,
 )
 from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
-from imucalib.procedures.common.noise import block_variance, pooled_white_density
+from imucalib.procedures.common.noise import block_variance
+from imucalib.procedures.common.window_checks import (
+    WindowLimits,
+    checked_samples,
+    pooled_white_se,
+)
 from imucalib.procedures.common.windows import counter_times, whole_revolutions
 
 __all__ = ["P3Processing", "P3Window", "extract_p3_windows", "p3_unit_names"]
@@ -62,31 +65,22 @@ WINDOW_ROLES = (P3_TUMBLE, P3_REST, P3_RATE)
 
 
 @dataclass(frozen=True)
-class P3Processing:
+class P3Processing(WindowLimits):
     """Processing options of P3's window reduction (module docstring).
+
+    The window limits (:class:`~imucalib.procedures.common.window_checks.WindowLimits`) and
 
     Attributes
     ----------
     input_axis : {"x", "y", "z"}
         The accelerometer of each unit that is the instrument (its input axis radial,
         pointing towards the spin axis).
-    max_lost_fraction : float
-        Samples lost to dropouts a window may miss (fraction of those expected).
-    max_gap_s : float
-        Longest single dropout in a window. [s]
-    noise_block_s : float
-        Length of the blocks whose means' scatter gives the white-noise density. [s]
     """
 
     input_axis: str = "x"
-    max_lost_fraction: float = 0.01
-    max_gap_s: float = 0.5
-    noise_block_s: float = 1.0
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.noise_block_s) and self.noise_block_s > 0):
-            raise InvalidInputError(f"`noise_block_s` must be positive; got "
-                                    f"{self.noise_block_s!r}")
+        super().__post_init__()
         if self.input_axis not in _AXES:
             raise InvalidInputError(f"`input_axis` must be 'x', 'y' or 'z'; got "
                                     f"{self.input_axis!r}")
@@ -190,18 +184,10 @@ class _Reducer:
 
     def reduce(self, step: StepRecord, data: StreamData, fb: StreamData | None) -> P3Window:
         where = _where(self.unit, step)
-        if len(data) < 10:
-            raise MissingSegmentError(f"{where}: only {len(data)} samples in its valid window")
-        values = np.asarray(data.columns[self.column], dtype=np.float64)
-        if not np.all(np.isfinite(values)):
-            raise InvalidInputError(f"{where}: the window holds NaN or infinite samples")
-        saturated = int(np.count_nonzero(np.asarray(data.columns["saturated"])))
-        if saturated:
-            raise SaturationError(
-                f"{where}: {saturated} of {len(data)} samples flagged saturated (the output "
-                f"reached its range, e.g. {np.max(np.abs(values)):.6g} m/s² on "
-                f"{self.column}); a clipped mean would bias K2 — lower the top rate or use "
-                "an accelerometer of a larger range")
+        values = checked_samples(where, data, (self.column,), saturation_note=lambda v: (
+            f" (the output reached its range, e.g. {np.max(np.abs(v)):.6g} m/s² on "
+            f"{self.column}); a clipped mean would bias K2 — lower the top rate or use "
+            "an accelerometer of a larger range"))[:, 0]
         spinning = step.role == P3_RATE
         t, period, lost = counter_times(
             where, np.asarray(data.columns["counter"]), data.time_s,
@@ -233,14 +219,11 @@ class _Reducer:
 
 def _pooled(windows: list[P3Window]) -> list[P3Window]:
     """Give each window the white-noise standard error N/√T of the unit (module docstring)."""
-    white = pooled_white_density([(w.block_variance[0], np.array([w.block_variance[1]]))
-                                  for w in windows])
-    if white is None:
-        raise MissingSegmentError(
-            f"unit {windows[0].unit if windows else '?'}: no record is long enough for the "
-            "noise estimate (three blocks of noise_block_s)")
-    return [dataclasses.replace(w, se=float(white[0]) / math.sqrt(max(w.duration_s, 1e-3)))
-            for w in windows]
+    unit = windows[0].unit if windows else "?"
+    se = pooled_white_se([(w.block_variance[0], np.array([w.block_variance[1]]))
+                          for w in windows], [w.duration_s for w in windows], unit=unit,
+                         what="record")
+    return [dataclasses.replace(w, se=float(e[0])) for w, e in zip(windows, se, strict=True)]
 
 
 def extract_p3_windows(rec: Recording, unit: str, *, processing: P3Processing | None = None,

@@ -36,14 +36,18 @@ from imucalib.errors import (
     InvalidInputError,
     MissingSegmentError,
     RecordingError,
-    SaturationError,
 )
 from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_POSITION
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
-from imucalib.procedures.common.noise import block_variance, pooled_white_density
+from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.reference import static_inputs_b
+from imucalib.procedures.common.window_checks import (
+    WindowLimits,
+    checked_samples,
+    pooled_white_se,
+)
 
 __all__ = ["TumbleProcessing", "TumbleWindow", "extract_tumble_windows"]
 
@@ -53,24 +57,16 @@ WINDOW_ROLES = (TUMBLE_POSITION, TUMBLE_DRIFT)
 
 
 @dataclass(frozen=True)
-class TumbleProcessing:
+class TumbleProcessing(WindowLimits):
     """Options of the window reduction (module docstring).
 
-    Attributes
-    ----------
-    max_lost_fraction : float
-        Samples lost to dropouts a window may miss (fraction of those expected).
-    noise_block_s : float
-        Length of the blocks whose means' scatter gives the white-noise density. [s]
+    The window limits (:class:`~imucalib.procedures.common.window_checks.WindowLimits`; a
+    static record's dropouts are limited by their fraction, not by the longest gap), with
+    `max_lost_fraction` in [0, 1).
     """
 
-    max_lost_fraction: float = 0.01
-    noise_block_s: float = 1.0
-
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.noise_block_s) and self.noise_block_s > 0):
-            raise InvalidInputError(f"`noise_block_s` must be positive; got "
-                                    f"{self.noise_block_s!r}")
+        super().__post_init__()
         if not 0 <= self.max_lost_fraction < 1:
             raise InvalidInputError(f"`max_lost_fraction` must be in [0, 1); got "
                                     f"{self.max_lost_fraction!r}")
@@ -155,14 +151,8 @@ class _Reducer:
         if len(data) < 10 or len(fb) < 1:
             raise MissingSegmentError(f"{where}: only {len(data)} samples and {len(fb)} table "
                                       "feedback samples in its valid window")
-        values = np.column_stack([np.asarray(data.columns[c], dtype=np.float64)
-                                  for c in ACCEL_COLUMNS])
-        if not np.all(np.isfinite(values)):
-            raise InvalidInputError(f"{where}: the window holds NaN or infinite samples")
-        saturated = int(np.count_nonzero(np.asarray(data.columns["saturated"])))
-        if saturated:
-            raise SaturationError(f"{where}: {saturated} of {len(data)} samples flagged "
-                                  "saturated (the output reached its range)")
+        values = checked_samples(where, data, ACCEL_COLUMNS,
+                                 saturation_note=lambda _: " (the output reached its range)")
         counter = np.asarray(data.columns["counter"], dtype=np.int64)
         steps = np.diff(counter)
         if np.any(steps <= 0):
@@ -199,12 +189,9 @@ class _Reducer:
 
 def _pooled(unit: str, windows: list[TumbleWindow]) -> list[TumbleWindow]:
     """Give each window the white-noise standard errors N/√T of the unit (module docstring)."""
-    white = pooled_white_density([w.block_variance for w in windows])
-    if white is None:
-        raise MissingSegmentError(f"unit {unit}: no record is long enough for the noise "
-                                  "estimate (three blocks of noise_block_s)")
-    return [dataclasses.replace(w, se=white / math.sqrt(max(w.duration_s, 1e-3)))
-            for w in windows]
+    se = pooled_white_se([w.block_variance for w in windows], [w.duration_s for w in windows],
+                         unit=unit, what="record")
+    return [dataclasses.replace(w, se=e) for w, e in zip(windows, se, strict=True)]
 
 
 def extract_tumble_windows(rec: Recording, unit: str, gravity_mps2: float, earth_rate_t_rps: _F64,
