@@ -25,9 +25,8 @@ RANK = {
     "io": 3, "processing": 3, "estimation": 3, "analysis": 3,
     "plan": 4,
     "sim": 5,
-    "station": 6,
+    "station": 6, "report": 6,
     "drivers": 7, "procedures": 7,
-    "report": 8,
     "exports": 9, "records": 9,
     "demo": 10, "cli": 10,
     "__main__": 11, "__init__": 11,
@@ -130,3 +129,53 @@ def test_no_procedure_folder_imports_another():
                 crossing.append(f"{path.relative_to(SRC.parent)}:{line}: {me} imports {module}")
     assert crossing == [], ("a procedure folder imports another; move the shared piece to "
                             "procedures/common/:\n" + "\n".join(crossing))
+
+
+#: The packages that know procedures only through the registry and the hooks of ``Procedure``
+#: (docs/architecture.md, "Where a new thing goes"): none imports a procedure's folder.
+_PROCEDURE_FREE = ("report", "exports", "records", "cli", "io")
+
+#: (module, procedure module) imports that remain, each with its reason; the list shrinks as
+#: a procedure hook takes each over. A stale entry fails the test as much as a new import does.
+KNOWN_EXCEPTIONS = {
+    # the noise formats (noise-json, Kalibr/OpenVINS YAML, tables, figures) are Allan's output
+    # writers; OUTPUT_FORMATS is one table of every format, not yet filled by the procedures
+    ("exports/outputs.py", "imucalib.procedures.allan.analysis"),
+    ("exports/outputs.py", "imucalib.procedures.allan.figures"),
+    # P2's temperature-png writer and a batch's summary files (.summary.json/.csv, .lot.png):
+    # written by write_outputs, not yet by a hook of the procedure
+    ("exports/outputs.py", "imucalib.procedures.p2.figures"),
+    ("exports/outputs.py", "imucalib.procedures.p2.batch"),
+    # `imucalib allan LOG`: the Allan analysis of a log without a plan is its own command
+    ("cli/allan.py", "imucalib.procedures.allan.analysis"),
+    # `imucalib calibrate A.h5 B.h5`: several recordings calibrated together (P2's lot) call
+    # analyze_p2 on the list; the Procedure protocol analyses one recording
+    ("cli/calibrate.py", "imucalib.procedures.p2.analysis"),
+    ("cli/calibrate.py", "imucalib.procedures.p2.batch"),
+    # `imucalib segments --detector variance`: the field calibration's interval detector
+    ("cli/recording.py", "imucalib.procedures.field.observations"),
+}
+
+
+def test_the_frameworks_import_no_procedure():
+    """``report/`` (the report and terminal frameworks), ``exports/``, ``records/``, ``cli/`` and
+    ``io/`` import no procedure's folder (``imucalib.procedures.<name>`` other than ``common``
+    and ``registry``), deferred imports included: they reach a procedure through
+    ``registry.get(name)`` and its hooks (``report_content``, ``render_console``,
+    ``summary_report``), save for :data:`KNOWN_EXCEPTIONS`."""
+    procedures = SRC / "procedures"
+    folders = {p.name for p in procedures.iterdir() if (p / "__init__.py").exists()} - {"common"}
+    found = set()
+    for package in _PROCEDURE_FREE:
+        for path in sorted((SRC / package).rglob("*.py")):
+            for module, _line in _imported_modules(path):
+                parts = module.split(".")
+                if len(parts) >= 3 and parts[:2] == ["imucalib", "procedures"] \
+                        and parts[2] in folders:
+                    found.add((path.relative_to(SRC).as_posix(), ".".join(parts[:4])))
+    assert found - KNOWN_EXCEPTIONS == set(), (
+        "a framework imports a procedure; give the procedure a hook (procedures/common/"
+        "procedure.py) instead:\n" + "\n".join(sorted(map(str, found - KNOWN_EXCEPTIONS))))
+    assert KNOWN_EXCEPTIONS - found == set(), (
+        "no longer imported: remove from KNOWN_EXCEPTIONS:\n"
+        + "\n".join(sorted(map(str, KNOWN_EXCEPTIONS - found))))

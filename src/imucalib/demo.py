@@ -71,7 +71,6 @@ def main(argv: list[str] | None = None) -> int:
     from imucalib.plan import describe_plan, write_plan
     from imucalib.procedures import registry
     from imucalib.procedures.p1.analysis import P1Analysis
-    from imucalib.report.console import render_result
     from imucalib.station.runner import RunOptions, run_plan
     from imucalib.station.sim import SimStation
 
@@ -103,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
         analysis = p1.analyze(path, options={"model": "triad"})
         assert isinstance(analysis, P1Analysis)
         written = write_outputs(analysis, args.out, name=path.stem)
-        render_result(console, analysis, written)
+        p1.render_console(console, analysis, written)
         console.rule("[bold]4. Against the truth")
         with open_recording(path) as rec:
             truth = rec.truth

@@ -61,6 +61,15 @@ class _Dummy:
         return SimpleNamespace(procedure=self.name, unit=unit or "IMU-1", passed=None,
                                to_dict=lambda: {"ok": 1})
 
+    def report_content(self, result, meta):
+        raise NotImplementedError
+
+    def render_console(self, console, result, written):
+        raise NotImplementedError
+
+    def summary_report(self, batch, *, recordings=None, report_ids=None):
+        raise NotImplementedError
+
 
 def test_register_a_new_procedure(monkeypatch):
     monkeypatch.setattr(registry, "_registered", dict(registry._registered))

@@ -45,6 +45,15 @@ class Good:
     def analyze(self, recording, *, unit=None, options=None, progress=None):
         raise NotImplementedError
 
+    def report_content(self, result, meta):
+        raise NotImplementedError
+
+    def render_console(self, console, result, written):
+        raise NotImplementedError
+
+    def summary_report(self, batch, *, recordings=None, report_ids=None):
+        raise NotImplementedError
+
 ALPHA = Good("alpha-test")
 ZETA = Good("zeta-test")
 MISNAMED = Good("something-else")

@@ -192,8 +192,9 @@ def test_asking_for_what_four_positions_cannot_resolve(tmp_path: Path) -> None:
 def test_its_report_prints_every_row_with_its_expanded_uncertainty(
         twin_run: tuple[Path, TumbleResult]) -> None:
     """A procedure without a report module of its own: the generic content (docs/reporting.md)."""
+    from imucalib.exports.report import build_report
     from imucalib.report.console import display_unit
-    from imucalib.report.document import SECTION_TITLES, build_report
+    from imucalib.report.document import SECTION_TITLES
 
     from ..report._gum import expected_cells
 

@@ -14,7 +14,7 @@ from imucalib.analysis import compute_oadev, fit_noise_terms
 from imucalib.errors import InvalidInputError
 from imucalib.models.noise import NoiseModel, simulate_noise
 from imucalib.procedures import ChannelNoise, NoiseCharacterization, SegmentNoise
-from imucalib.report import plot_allan_triad, save_allan_figures
+from imucalib.procedures.allan.figures import plot_allan_triad, save_allan_figures
 
 
 def segment() -> SegmentNoise:

@@ -17,7 +17,7 @@ from rich.console import Console
 
 from imucalib import units
 from imucalib.models.result import CalibrationResult
-from imucalib.report.console import render_calibration
+from imucalib.procedures.p1.console import render_calibration
 
 AXES = "xyz"
 

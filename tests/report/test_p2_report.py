@@ -24,12 +24,13 @@ from typer.testing import CliRunner
 from imucalib.cli import app
 from imucalib.errors import MissingSegmentError
 from imucalib.exports.outputs import write_outputs
+from imucalib.exports.report import build_report, build_summary_report
 from imucalib.models.result import CalibrationResult
 from imucalib.procedures.p2.analysis import failed_unit
 from imucalib.procedures.p2.batch import P2BatchResult, analyze_p2
 from imucalib.records.calibrations import record_calibration
 from imucalib.report.console import display_unit
-from imucalib.report.document import SECTION_TITLES, build_report, build_summary_report
+from imucalib.report.document import SECTION_TITLES
 
 from ..procedures._p2_twin import run_twin_p2, shared_run, twin_equipment, twin_plan
 from ._gum import expected_cells
@@ -194,7 +195,7 @@ def test_three_calibration_points_allow_only_constant_models_and_the_report_says
     # the terminal says it too (`imucalib calibrate`)
     from rich.console import Console
 
-    from imucalib.report.console import render_p2
+    from imucalib.procedures.p2.console import render_p2
 
     console = Console(record=True, width=200)
     render_p2(console, small.batch, [])

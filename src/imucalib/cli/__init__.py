@@ -10,11 +10,19 @@ Commands
 ``recover FILE``                   copy out what a crashed writer left in an open Recording
 ``export FILE --stream DEV/UNIT``  write a stream (or one step of it) as CSV or MAT
 ``export RESULT --format FMT``     a result for firmware (c-runtime) or other tools (mat, ros-yaml…)
-``procedures [NAME]``              list the procedures; a procedure's options, units, defaults
-``plan new NAME --out FILE``       a procedure's default plan (``plan new NAME --help``: options)
+``import DATA --steps FILE``       a CSV and its step file as a Recording (docs/import.md)
+``segments DATA``                  the static and rotating intervals of data without steps
+``procedures [NAME]``              list the procedures (built-in and installed: the
+                                   ``imucalib.procedures`` entry points, docs/plugins.md);
+                                   with NAME, its plan and analysis options with units, defaults
+``plan new NAME --out FILE``       a procedure's default plan; ``plan new NAME --help`` lists
+                                   its options, grouped, each a flag
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
-``calibrate RECORDING``            estimate, verify and decide; write the result JSON
+``calibrate [PROCEDURE] DATA``     estimate, verify and decide; write the result JSON. DATA is a
+                                   Recording, a CSV with ``--steps``, or (``calibrate field``) a
+                                   hand-held log; ``--set NAME=VALUE`` sets any analysis option,
+                                   ``calibrate PROCEDURE --help`` lists them
 ``allan DATA``                     noise terms of a bare static log (CSV, ROS CSV or .h5)
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing

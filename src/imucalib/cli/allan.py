@@ -32,8 +32,8 @@ def allan(
 ) -> None:
     """Allan deviations and noise terms of a static log, without a plan (docs/noise.md)."""
     from imucalib.exports.outputs import write_outputs
+    from imucalib.procedures import registry
     from imucalib.procedures.allan.analysis import analyze_allan_arrays, analyze_allan_recording
-    from imucalib.report.console import render_result
 
     try:
         if data.suffix.lower() in (".h5", ".hdf5"):
@@ -60,4 +60,4 @@ def allan(
                                     f"{exc.strerror or exc}") from exc
     except CalibrationError as exc:
         raise fail(exc) from exc
-    render_result(console, result, written)
+    registry.get(result.procedure).render_console(console, result, written)

@@ -265,7 +265,6 @@ def calibrate(
     recorded in the records database (docs/records.md; ``--no-record`` skips it).
     """
     from imucalib.procedures import registry
-    from imucalib.report.console import render_result
 
     try:
         procedure_name = None
@@ -308,7 +307,7 @@ def calibrate(
                 extra=extra, procedure_name=procedure_name, settings=tuple(settings or ()))
     except CalibrationError as exc:
         raise fail(exc) from exc
-    render_result(console, result, written)
+    registry.get(result.procedure).render_console(console, result, written)
     if not no_record:
         from imucalib.records.calibrations import record_calibration
 

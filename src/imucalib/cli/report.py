@@ -80,7 +80,8 @@ def report(
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
 ) -> None:
     """Write the calibration report: six sections, U = 2u, decision rule, review status."""
-    from imucalib.report.document import build_report, build_summary_report, write_report
+    from imucalib.exports.report import build_report, build_summary_report
+    from imucalib.report.document import write_report
 
     try:
         if fmt not in ("pdf", "html"):

@@ -53,7 +53,8 @@ gets its ``report.json`` only, which holds the error), then the batch's own file
 compensated errors, the parameters furthest from the lot, the error), for two or more
 calibrated units ``.lot.png`` (every parameter's spread across the units), and with
 ``report-pdf``/``report-html`` the summary report ``.summary.report.pdf``/``.html``
-(:func:`~imucalib.report.document.build_summary_report`) beside each unit's own report.
+(:func:`~imucalib.exports.report.build_summary_report`: its procedure's ``summary_report``)
+beside each unit's own report (:func:`~imucalib.exports.report.build_report`).
 
 The record index ``.k`` appears only when the characterisation holds more than one record.
 
@@ -164,7 +165,7 @@ def _table(path: Path, seg: Any) -> Path:
 
 
 def _figures(result: Any, folder: Path, stem: str) -> list[Path]:
-    from imucalib.report.allan_figure import save_allan_figures
+    from imucalib.procedures.allan.figures import save_allan_figures
 
     return list(save_allan_figures(_noise(result, "figures"), folder / f"{stem}.figures"))
 
@@ -177,7 +178,7 @@ def _residuals_png(result: Any, folder: Path, stem: str) -> list[Path]:
 
 
 def _temperature_png(result: Any, folder: Path, stem: str) -> list[Path]:
-    from imucalib.report.p2_figures import save_temperature_figure
+    from imucalib.procedures.p2.figures import save_temperature_figure
 
     if not getattr(result, "models", None):
         raise InvalidInputError(f"output 'temperature-png' needs temperature models; a "
@@ -236,7 +237,7 @@ _INTRINSICS: dict[str, _IntrinsicsWriter] = {
 
 def _report(fmt: str) -> _Writer:
     def writer(result: Any, folder: Path, stem: str) -> list[Path]:
-        from imucalib.report.document import build_report
+        from imucalib.exports.report import build_report
 
         recording = None
         name = _recording_name(result)
@@ -293,12 +294,12 @@ def _write_batch(batch: Any, out: Path, chosen: Sequence[str], name: str) -> lis
                              row["error"]])
     written += [summary, table]
     if sum(r.result is not None for r in batch.results) >= 2:
-        from imucalib.report.p2_figures import save_lot_figure
+        from imucalib.procedures.p2.figures import save_lot_figure
 
         written.append(save_lot_figure(batch, out / f"{stem}.lot.png"))
     reports = [f for f in chosen if f in ("report-pdf", "report-html")]
     if reports:
-        from imucalib.report.document import build_summary_report
+        from imucalib.exports.report import build_summary_report
 
         document = build_summary_report(batch)
         written += [_write_document(document, f, out / f"{stem}.summary.report")

@@ -64,7 +64,8 @@ class StreamSummary:
         return 1.0 / self.median_interval_s if self.median_interval_s > 0 else float("nan")
 
 
-#: How a station run's log says that the fixture was remounted (:mod:`imucalib.station.session`).
+#: How a station run's log says that the fixture was remounted
+#: (:mod:`imucalib.station.executors.operator_check`).
 REMOUNT_EVENT_PREFIX = "fixture remounted"
 #: How a station run's log says that two units were exchanged on the fixture.
 SWAP_EVENT_PREFIX = "units swapped"

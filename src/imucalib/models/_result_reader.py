@@ -1,9 +1,12 @@
 """The strict reader of a calibration result's JSON (docs in :mod:`imucalib.models.result`).
 
 :class:`ResultReader` checks a decoded result document field by field (every defect one
-:class:`~imucalib.errors.InvalidInputError` naming the file and the field) and builds the
-:class:`~imucalib.models.result.CalibrationResult`; ``CalibrationResult.from_dict`` is its only
-caller. Kept apart from the result itself, whose module holds the data and its writing.
+:class:`~imucalib.errors.InvalidInputError` naming the file and the field) and returns the
+checked fields as plain data, from which ``CalibrationResult.from_dict`` (its only caller)
+builds the :class:`~imucalib.models.result.CalibrationResult`. Kept apart from the result
+itself, whose module holds the data and its writing; what both need (the format's name and
+version, the models, the parameter names) is in :mod:`imucalib.models._result_format`, so this
+module does not import the result's.
 """
 
 from __future__ import annotations
@@ -16,16 +19,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.errors import InvalidInputError
-from imucalib.models.fit_quality import FitQuality
-from imucalib.models.result import (
+from imucalib.models._result_format import (
     MODELS,
     RESULT_FORMAT,
     RESULT_FORMAT_VERSION,
-    CalibrationResult,
-    Provenance,
-    ResidualStats,
+    RTOL,
     triad_parameter_names,
 )
+from imucalib.models.fit_quality import FitQuality
 from imucalib.models.temperature_record import (
     ORDER_CRITERIA,
     HeldOutOutcome,
@@ -34,8 +35,6 @@ from imucalib.models.temperature_record import (
 from imucalib.units import parse_unit
 
 __all__ = ["ResultReader"]
-
-_RTOL: Final = 1e-9
 
 _FIELDS_V1: Final = ("format", "format_version", "sensor_id", "procedure", "model",
                      "parameters", "covariance", "input_units", "residuals", "provenance",
@@ -189,14 +188,14 @@ class ResultReader:
             i = int(np.argmax(diag < 0))
             self.fail(f"covariance[{i}][{i}]",
                       f"a variance must be ≥ 0; got {float(diag[i])!r}")
-        asym = np.abs(cov - cov.T) > _RTOL * np.maximum(np.abs(cov), np.abs(cov.T))
+        asym = np.abs(cov - cov.T) > RTOL * np.maximum(np.abs(cov), np.abs(cov.T))
         if asym.any():
             i, j = (int(v) for v in np.argwhere(asym)[0])
             self.fail("covariance", f"must be symmetric; [{i}][{j}] = {float(cov[i, j])!r} but "
                       f"[{j}][{i}] = {float(cov[j, i])!r}")
         for i in range(k):
             root = math.sqrt(diag[i])
-            if abs(std[i] - root) > _RTOL * max(root, abs(std[i])):
+            if abs(std[i] - root) > RTOL * max(root, abs(std[i])):
                 self.fail(f"parameters[{i}].std", f"{std[i]!r} disagrees with "
                           f"√covariance[{i}][{i}] = {root!r} (a hand-edited file?)")
         scale = np.sqrt(diag)
@@ -235,7 +234,7 @@ class ResultReader:
                              ("sigma_scale", out.sigma_scale)):
             given = optional(key)
             if not (math.isnan(derived) and math.isnan(given)) and not math.isclose(
-                    given, derived, rel_tol=_RTOL):
+                    given, derived, rel_tol=RTOL):
                 self.fail(f"{where}.{key}", f"{given!r} disagrees with χ² and ν "
                           f"({derived!r}; a hand-edited file?)")
         return out
@@ -316,14 +315,20 @@ class ResultReader:
                           f"{out[0].reference_temperature_degc!r} of temperature_models[0] "
                           "(one T0 per result)")
             value0 = values[names.index(tm.name)]
-            if not math.isclose(tm.coefficients[0], value0, rel_tol=_RTOL, abs_tol=0.0):
+            if not math.isclose(tm.coefficients[0], value0, rel_tol=RTOL, abs_tol=0.0):
                 self.fail(f"{where}.coefficients[0]",
                           f"c_0 = {tm.coefficients[0]!r} differs from the value {value0!r} of "
                           f"{tm.name!r} (the values hold at T0)")
             out.append(tm)
         return tuple(out)
 
-    def read(self, cls: type[CalibrationResult], data: object) -> CalibrationResult:
+    def read(self, data: object) -> dict[str, Any]:
+        """Check a whole document; return the keyword arguments of a ``CalibrationResult``.
+
+        ``residuals`` maps each group to the keyword arguments of a ``ResidualStats`` and
+        ``provenance`` holds those of a ``Provenance`` (the caller builds both); every other
+        value is the field as the result holds it.
+        """
         version = self.header(data)
         doc = self.obj(data, "(top level)", {1: _FIELDS_V1, 2: _FIELDS_V2}.get(version, _FIELDS))
         sensor_id = self.text(doc["sensor_id"], "sensor_id", nonempty=True)
@@ -350,7 +355,7 @@ class ResultReader:
             if key not in ("gyro", "accel"):
                 self.fail(f"input_units.{key}", "expected only the keys 'gyro' and 'accel'")
             self.unit(unit, f"input_units.{key}")
-        residuals = {}
+        residuals: dict[str, dict[str, Any]] = {}
         for group, r in self.obj(doc["residuals"], "residuals", None).items():
             where = f"residuals.{group}"
             r = self.obj(r, where, _RESIDUAL_FIELDS)
@@ -359,8 +364,8 @@ class ResultReader:
             n = r["n"]
             if isinstance(n, bool) or not isinstance(n, int) or n < 0:
                 self.fail(f"{where}.n", f"expected a count (an integer ≥ 0); got {_kind(n)}")
-            residuals[group] = ResidualStats(tuple(mean), tuple(spread), n,
-                                             self.text(r["unit"], f"{where}.unit"))
+            residuals[group] = {"mean": tuple(mean), "std": tuple(spread), "n": n,
+                                "unit": self.text(r["unit"], f"{where}.unit")}
         prov = self.obj(doc["provenance"], "provenance", _PROVENANCE_FIELDS)
         texts = {f: self.text(prov[f], f"provenance.{f}") for f in _PROVENANCE_FIELDS[:-1]}
         details = self.obj(prov["details"], "provenance.details", None)
@@ -374,12 +379,9 @@ class ResultReader:
             self.fail("fit_quality", f"a group appears twice: {groups}")
         temperature_models = self.temperature_models(
             doc["temperature_models"], names, values) if version >= 3 else ()
-        try:
-            return cls(sensor_id=sensor_id, procedure=procedure, model=model,
-                       param_names=tuple(names), values=np.array(values, dtype=np.float64),
-                       covariance=cov, units=units, input_units=dict(input_units),
-                       residuals=residuals, provenance=Provenance(**texts, details=details),
-                       notes=notes, fit_quality=fit_quality,
-                       temperature_models=temperature_models, format_version=version)
-        except InvalidInputError as exc:  # pragma: no cover - the checks above come first
-            raise InvalidInputError(f"calibration result {self.source}: {exc}") from exc
+        return {"sensor_id": sensor_id, "procedure": procedure, "model": model,
+                "param_names": tuple(names), "values": np.array(values, dtype=np.float64),
+                "covariance": cov, "units": units, "input_units": dict(input_units),
+                "residuals": residuals, "provenance": {**texts, "details": details},
+                "notes": notes, "fit_quality": fit_quality,
+                "temperature_models": temperature_models, "format_version": version}

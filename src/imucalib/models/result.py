@@ -71,6 +71,15 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
+from imucalib.models._result_format import (
+    MODELS,
+    RESULT_FORMAT,
+    RESULT_FORMAT_VERSION,
+    RTOL,
+    triad_parameter_names,
+    triad_parameter_unit,
+)
+from imucalib.models._result_reader import ResultReader
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.temperature import TemperatureDependence
 from imucalib.models.temperature_record import (
@@ -93,36 +102,8 @@ __all__ = [
     "triad_parameter_unit",
 ]
 
-RESULT_FORMAT: Final = "imucalib-calibration-result"
-#: Version 2 adds ``fit_quality`` (χ²/ν, expected range, misfit flag per fitted triad); version 3
-#: adds ``temperature_models`` (one per temperature-dependent parameter). Files of versions 1 and
-#: 2 are read with none of what they lack.
-RESULT_FORMAT_VERSION: Final = 3
-MODELS: Final = ("triad", "per-axis")
 #: Largest result file :meth:`CalibrationResult.load` reads (a P1 result is about 40 kB). [B]
 MAX_RESULT_BYTES: Final = 16 * 2**20
-
-
-def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False,
-                          k2: bool = False) -> tuple[str, ...]:
-    """Return the parameter names of one triad under `model` (module docstring)."""
-    if model == "per-axis":
-        return (*(f"{triad}_K_{a}" for a in AXES), *(f"{triad}_b_{a}" for a in AXES))
-    names = [*(f"{triad}_bias_{a}" for a in AXES),
-             *(f"{triad}_M_{i}{j}" for i in AXES for j in AXES)]
-    if g_sensitivity:
-        names += [f"{triad}_G_{i}{j}" for i in AXES for j in AXES]
-    if k2:
-        names += [f"{triad}_K2_{a}" for a in AXES]
-    return tuple(names)
-
-
-def triad_parameter_unit(name: str) -> str:
-    """Return the SI unit of a parameter name (``gyro_bias_x`` → ``rad/s``; module docstring)."""
-    triad, _, rest = name.partition("_")
-    symbol = rest.split("_")[0]
-    si = "m/s^2" if triad == "accel" else "rad/s"
-    return {"bias": si, "b": si, "G": "rad/s/(m/s^2)", "K2": "1/(m/s^2)"}.get(symbol, "1")
 
 
 @dataclass(frozen=True)
@@ -287,7 +268,7 @@ class CalibrationResult:
                     f"{t0!r} °C of temperature_models[0] (one T0 per result: its values hold "
                     "there)")
             value = float(self.values[self.param_names.index(tm.name)])
-            if not math.isclose(tm.coefficients[0], value, rel_tol=_RTOL, abs_tol=0.0):
+            if not math.isclose(tm.coefficients[0], value, rel_tol=RTOL, abs_tol=0.0):
                 raise InvalidInputError(
                     f"{where}: c_0 = {tm.coefficients[0]!r} of {tm.name!r} differs from its "
                     f"value {value!r} (the values hold at T0)")
@@ -536,9 +517,13 @@ class CalibrationResult:
             of the wrong type or value (see the module docstring); the message names `source`
             and the field.
         """
-        from imucalib.models._result_reader import ResultReader  # the reader needs this module
-
-        return ResultReader(source).read(cls, data)
+        fields = ResultReader(source).read(data)
+        residuals = {group: ResidualStats(**r) for group, r in fields.pop("residuals").items()}
+        provenance = Provenance(**fields.pop("provenance"))
+        try:
+            return cls(**fields, residuals=residuals, provenance=provenance)
+        except InvalidInputError as exc:  # pragma: no cover - the reader's checks come first
+            raise InvalidInputError(f"calibration result {source}: {exc}") from exc
 
     @classmethod
     def from_json(cls, text: str | bytes, source: str = "<text>") -> CalibrationResult:
@@ -617,8 +602,3 @@ def _fit_quality_dict(q: FitQuality) -> dict[str, Any]:
             "birge_ratio": None if q.dof == 0 else q.birge_ratio,
             "sigma_scale": q.sigma_scale}
 
-
-# --- the reading side: every field of a result document checked, naming the file and field ---
-
-
-_RTOL: Final = 1e-9

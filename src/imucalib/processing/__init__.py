@@ -1,7 +1,11 @@
-"""Signal processing between a Recording and the solvers (P1 processing rules 1–3, docs/p1.md).
+"""Signal processing between the data and the solvers: samples in, window values out.
 
 Pure functions on arrays (no Recording access) returning frozen dataclasses. Algorithms,
-equations and choices: ``docs/processing-estimation.md``.
+equations and choices: ``docs/processing-estimation.md``. The outlier, low-pass and
+synchronisation modules are P1's processing rules 1–3 (docs/p1.md); the window statistics serve
+every procedure (``procedures/common/windows.py``); segmentation and the static detector find
+intervals in data without step records (``imucalib segments``, docs/import.md; the ``field``
+procedure, docs/field.md).
 
 Contents
 --------
@@ -14,16 +18,20 @@ Contents
     :data:`SPEC_CUTOFF_FRACTION_RANGE`.
 :mod:`imucalib.processing.sync`
     :func:`synchronize` (→ :class:`SyncResult`), :func:`reconstruct_time_base`
-    (→ :class:`TimeBase`), :func:`estimate_timestamp_jitter_s`,
-    :data:`DEFAULT_MAX_ALIGNMENT_ERROR_S`.
+    (→ :class:`TimeBase`: device time on the host clock from the sample counter),
+    :func:`estimate_timestamp_jitter_s`, :data:`DEFAULT_MAX_ALIGNMENT_ERROR_S`.
 :mod:`imucalib.processing.statistics`
-    :func:`compute_window_statistics` (→ :class:`WindowStatistics`),
-    :func:`compute_integer_revolution_window` (→ :class:`RevolutionWindow`).
+    :func:`compute_window_statistics` (→ :class:`WindowStatistics`: the standard error of a
+    window mean with correlated noise), :func:`compute_integer_revolution_window`
+    (→ :class:`RevolutionWindow`).
 :mod:`imucalib.processing.segmentation`
-    :func:`detect_segments` (→ :class:`SegmentationResult` of :class:`Segment`).
+    :func:`detect_segments` (→ :class:`SegmentationResult` of :class:`Segment`;
+    :data:`SEGMENT_LABELS`): static and constant-rate intervals of a table run
+    (``imucalib segments --detector table``).
 :mod:`imucalib.processing.static_detector`
     :func:`detect_static_and_rotations` (→ :class:`StaticDetection`, with :class:`Rotation`):
-    the variance detector of hand-held logs.
+    the variance detector of hand-held logs (``--detector variance``; the ``field``
+    procedure).
 """
 
 from __future__ import annotations

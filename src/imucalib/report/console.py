@@ -1,17 +1,24 @@
-"""A procedure result on the terminal (rich tables), for ``imucalib calibrate`` and the demo.
+"""The terminal's shared pieces (rich): display units, the generic result table, the files written.
+
+A procedure prints its result through its ``render_console`` hook
+(:class:`~imucalib.procedures.common.procedure.Procedure`), called by ``imucalib calibrate`` and
+the demo: a procedure with a table of its own keeps it in its folder
+(``procedures/<name>/console.py``), built from these pieces; every other delegates to
+:func:`render_generic`. This module names no procedure.
 
 Contents
 --------
-:func:`render_result`
-    Dispatch on the result's procedure: :func:`render_calibration` (P1: the parameters, the
-    checks, the decision) or :func:`render_noise_characterization` (Allan: each record's noise
-    terms); a procedure without a renderer gets its decision and the files written.
+:func:`render_generic`
+    A result's ``parameter_rows()`` as a table, its decision and the files written.
+:func:`print_written`
+    The files written, one a line.
+:func:`display_parameter`, :func:`display_unit`
+    A triad parameter in its display unit (docs/reporting.md), GUM 7.2.6 rounding.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -22,9 +29,7 @@ from rich.table import Column, Table
 from imucalib import units
 from imucalib.report.numbers import round_pair
 
-__all__ = ["display_parameter", "display_unit", "render_calibration",
-           "render_noise_characterization", "render_p3",
-           "render_result"]
+__all__ = ["display_parameter", "display_unit", "print_written", "render_generic"]
 
 # display unit of each parameter symbol: (unit text, SI value of one display unit); M's
 # off-diagonal (misalignment) elements are in _OFF_DIAGONAL instead (docs/reporting.md)
@@ -68,71 +73,19 @@ def display_unit(name: str, si_unit: str) -> tuple[str, float]:
     return unit, scale
 
 
-def _wrote(console: Console, written: Sequence[Path]) -> None:
+def print_written(console: Console, written: Sequence[Path]) -> None:
+    """Print the files written (``wrote a`` then one a line); nothing when none."""
     if not written:
         return
     console.print("wrote " + "\n      ".join(str(p) for p in written), highlight=False)
 
 
-def render_calibration(console: Console, analysis: Any, written: Sequence[Path]) -> None:
-    """Print a P1 analysis: the parameters, the checks, the decision and the files written."""
-    result = analysis.result
-    repeat = {r.name: r for c in analysis.checks if c.name == "repeatability" for r in c.rows}
-    misfit = getattr(result, "misfit", False)
-    columns: list[str | Column] = ["parameter", Column("value", justify="right"),
-                                   Column("std. uncertainty", justify="right"), "unit",
-                                   "repeatability"]
-    if misfit:  # the Birge-scaled σ beside the noise-only σ (docs/processing-estimation.md)
-        columns.insert(3, Column("σ × √(χ²/ν)", justify="right"))
-    table = Table(*columns,
-                  title=f"{result.sensor_id}: {result.procedure.upper()} {result.model} model")
-    std = result.std()
-    for name in result.param_names:
-        value, sigma, unit = display_parameter(name, result.value(name), std[name],
-                                      result.units[name])
-        row = repeat.get(name)
-        rep = "—" if row is None else ("[green]pass[/]" if row.passed else "[red]FAIL[/]")
-        cells = [name, value, sigma, unit, rep]
-        if misfit:
-            scale = result.sigma_scale(name)
-            cells.insert(3, display_parameter(name, result.value(name), std[name] * scale,
-                                     result.units[name])[1] if scale != 1.0 else "")
-        table.add_row(*cells)
-    console.print(table)
-    for q in getattr(result, "fit_quality", ()):
-        console.print(("[bold red]" if q.misfit else "") + escape(q.summary())
-                      + ("[/]" if q.misfit else ""), highlight=False)
-    checks = Table("check", "verdict", "summary", title="verification")
-    for c in analysis.checks:
-        verdict = ("not assessed" if c.passed is None
-                   else "[green]pass[/]" if c.passed else "[red]FAIL[/]")
-        checks.add_row(c.name, verdict, c.summary)
-    console.print(checks)
-    if not math.isnan(analysis.kalman_max_difference_sigma):
-        console.print(f"Kalman refinement agrees with least squares to "
-                      f"{analysis.kalman_max_difference_sigma:.2g} σ; reported σ / Cramér–Rao "
-                      f"bound: {max(analysis.crlb_ratio.values()):.4f}", highlight=False)
-    colour = "green" if analysis.decision.passed else "red"
-    console.print(f"[bold {colour}]{analysis.decision.summary()}[/]", highlight=False)
-    _wrote(console, written)
+def render_generic(console: Console, result: Any, written: Sequence[Path]) -> None:
+    """Print a result's ``parameter_rows()`` (one row per estimate), its decision, the files.
 
-
-def render_noise_characterization(console: Console, result: Any, written: Sequence[Path]
-                                  ) -> None:
-    """Print each record's noise-term table and the files written."""
-    from imucalib.report.noise_table import format_noise_table
-
-    for seg in result.segments:
-        temp = "" if seg.temperature_degc is None else f", {seg.temperature_degc:.1f} °C"
-        console.print(f"[bold]{seg.label}[/]: {seg.n_samples:,} samples at "
-                      f"{seg.sample_rate_hz:g} Hz{temp}", highlight=False)
-        console.print(format_noise_table(seg.fits(), fmt="text"), highlight=False,
-                      soft_wrap=True)
-    _wrote(console, written)
-
-
-def _render_other(console: Console, result: Any, written: Sequence[Path]) -> None:
-    """Print a result with ``parameter_rows()`` (the classical tests): one row per estimate."""
+    The ``render_console`` of a procedure without a table of its own (the classical tests, a
+    plug-in): without ``parameter_rows()`` only the decision and the files written.
+    """
     rows = getattr(result, "parameter_rows", None)
     if callable(rows):
         table = Table("parameter", Column("value", justify="right"),
@@ -145,110 +98,4 @@ def _render_other(console: Console, result: Any, written: Sequence[Path]) -> Non
         console.print(table)
     verdict = {None: "no decision", True: "PASS", False: "FAIL"}[result.passed]
     console.print(f"{result.procedure} result for {result.unit}: {verdict}", highlight=False)
-    _wrote(console, written)
-
-
-def render_p2(console: Console, batch: Any, written: Sequence[Path]) -> None:
-    """Print a P2 batch: a row per unit (decision, errors after compensation, lever arm).
-
-    Then each unit's warning notes: temperature models that do not fit or do not predict.
-    """
-    table = Table("unit", "decision", Column("accel error [mg]", justify="right"),
-                  Column("gyro error [°/h]", justify="right"),
-                  Column("lever arm [cm]", justify="right"), "points", "note",
-                  title=f"P2 {batch.unit}: temperature-compensated calibration of "
-                        f"{len(batch.results)} unit(s)")
-    for r in batch.results:
-        if r.error:
-            table.add_row(r.unit, "[red]FAIL[/]", "", "", "", "", r.error)
-            continue
-        arm = r.result.provenance.details.get("lever_arm_m", [0.0, 0.0, 0.0])
-        err = r.compensated_error
-        table.add_row(
-            r.unit, "[green]PASS[/]" if r.passed else "[red]FAIL[/]",
-            f"{err['accel_mps2'] / (1e-3 * units.G0_MPS2):.3g}",
-            f"{err['gyro_rps'] / units.DEG_PER_H:.3g}",
-            ", ".join(f"{100 * a:+.1f}" for a in arm),
-            f"{sum(not p.held_out for p in r.points)} + {sum(p.held_out for p in r.points)}"
-            " held out", "; ".join(r.reasons))
-    console.print(table)
-    for r in batch.results:  # the warnings among the analysis notes: models that do not fit
-        for note in r.notes:
-            if note.startswith(("the temperature models of", "held-out check:")):
-                console.print(f"note ({escape(r.unit)}): {escape(note)}", highlight=False,
-                              soft_wrap=True)
-    verdict = "PASS" if batch.passed else "FAIL"
-    n_ok = sum(bool(r.passed) for r in batch.results)
-    console.print(f"decision: {verdict} ({n_ok} of {len(batch.results)} unit(s) passed)",
-                  highlight=False)
-    _wrote(console, written)
-
-
-def render_p3(console: Console, result: Any, written: Sequence[Path]) -> None:
-    """Print a P3 result: K2 of the three accelerometers, c and c′, the naive K2, the decision."""
-    est = result.estimate
-    g = units.G0_MPS2 * 1e6  # K2 [1/(m/s²)] → µg/g²
-    table = Table("quantity", Column("value", justify="right"),
-                  Column("std. uncertainty", justify="right"), "unit",
-                  title=f"P3 {result.unit}: K2 on the centrifuge, dynamic unbalance compensated")
-    rows = [(f"K2 of {result.roles['test']} (test)", est.value("K2_T") * g,
-             est.std("K2_T") * g, "µg/g²"),
-            (f"K2 of {result.roles['ref-a']} (reference A)", est.value("K2_A") * g,
-             est.std("K2_A") * g, "µg/g²"),
-            (f"K2 of {result.roles['ref-b']} (reference B)", est.value("K2_B") * g,
-             est.std("K2_B") * g, "µg/g²"),
-            ("c (unbalance, no test load)", est.value("c") * 1e9, est.std("c") * 1e9,
-             "nm/(rad/s)²"),
-            ("c′ (with the test load)", est.value("c_loaded") * 1e9,
-             est.std("c_loaded") * 1e9, "nm/(rad/s)²"),
-            ("K2 of the test, unbalance ignored", est.naive_k2_t * g, est.naive_k2_t_std * g,
-             "µg/g²")]
-    for name, value, sigma, unit in rows:
-        cells = round_pair(value, sigma, sign=True)
-        table.add_row(escape(name), cells.value_text, cells.uncertainty_text, unit)
-    console.print(table)
-    console.print(est.quality.summary(), highlight=False)
-    k2_std = est.std("K2_T") * units.G0_MPS2
-    verdict = "[green]PASS[/]" if result.passed else "[red]FAIL[/]"
-    console.print(f"decision: {verdict} (U(K2) = 2σ = {2 * k2_std:.2g} g/g², target "
-                  f"{result.k2_target_g_per_g2:.2g} g/g²)")
-    _wrote(console, written)
-
-
-def render_field(console: Console, result: Any, written: Sequence[Path]) -> None:
-    """Print a field calibration: the parameters, each fit's χ²/ν, the session, the notes."""
-    _render_other(console, result, [])
-    for q in result.quality:
-        flag = (f"[yellow]misfit: σ × {q.sigma_scale:.3g} (Birge)[/]" if q.misfit
-                else "consistent with the noise")
-        console.print(f"  {escape(q.group)}: χ²/ν = {q.reduced_chi2:.3g} (ν = {q.dof}), {flag}",
-                      highlight=False)
-    turns = sum(1 for r in result.rotations if r["kind"] == "turn")
-    console.print(f"  {len(result.poses)} static poses (detector k = {result.threshold_factor:g}),"
-                  f" {len(result.rotations)} rotations ({turns} full turns); accelerometer "
-                  f"{result.accel_form}, gyro {result.gyro_form}", highlight=False,
-                  soft_wrap=True)
-    need = {n: k for n, k in result.coverage.get("poses_needed", {}).items() if k > 0}
-    if need:
-        worst = max(need.values())
-        more = f"more than {worst - 1}" if worst > 50 else str(worst)
-        console.print(f"  to bring every accelerometer σ under its target: {more} more pose(s) "
-                      f"({', '.join(sorted(need))}); the report's coverage says where",
-                      highlight=False, soft_wrap=True)
-    for note in result.notes:
-        console.print(f"  [yellow]note:[/] {escape(note)}", highlight=False, soft_wrap=True)
-    _wrote(console, written)
-
-
-_RENDERERS: dict[str, Callable[[Console, Any, Sequence[Path]], None]] = {
-    "field": render_field,
-    "p1": render_calibration,
-    "p2": render_p2,
-    "p3": render_p3,
-    "allan": render_noise_characterization,
-}
-
-
-def render_result(console: Console, result: Any, written: Sequence[Path]) -> None:
-    """Print a procedure result (module docstring)."""
-    _RENDERERS.get(result.procedure, _render_other)(console, result, written)
+    print_written(console, written)

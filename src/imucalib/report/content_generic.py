@@ -1,7 +1,9 @@
 """The report of any result with parameters: every parameter with its U, the checks, the decision.
 
-Used for the procedures without a content module of their own (the classical tests, P3, field)
-and for a calibration result read back from its JSON file. The rows come from the result's
+The ``report_content`` hook of a procedure without content of its own delegates here, and so
+does one with its own for a calibration result read back from its JSON file; the procedure
+passes its description, its documentation page and, when its references are its own, its
+traceability statement (this module names no procedure). The rows come from the result's
 ``parameter_rows()`` (name, value, u, unit) or, for a bare
 :class:`~imucalib.models.result.CalibrationResult`, from its parameters (u Birge-scaled under a
 misfit).
@@ -12,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from imucalib.errors import CalibrationError, InvalidInputError
+from imucalib.errors import InvalidInputError
 from imucalib.report.document import (
     COVERAGE_FACTOR,
     SECTION_TITLES,
@@ -55,18 +57,12 @@ def _rows(result: Any, cal: Any) -> list[tuple[str, str, str, str]]:
     return rows
 
 
-def _process(result: Any, cal: Any) -> tuple[list[str], bool]:
+def _process(result: Any, cal: Any, description: str | None, documentation: str
+             ) -> tuple[list[str], bool]:
     """Return the process paragraphs (the procedure, each fit's χ²/ν) and the misfit flag."""
-    from imucalib.procedures import registry
-
     name = str(result.procedure)
-    try:
-        text = f"Procedure {name}: {registry.get(name).description}"
-    except CalibrationError:
-        text = f"Procedure {name}"
-    # a built-in procedure's page is docs/<name>.md; a plug-in's is its own
-    doc = f"docs/{name}.md" if name in registry.BUILTIN else "its documentation"
-    paragraphs = [f"{text.rstrip('.')} ({doc})."]
+    text = f"Procedure {name}: {description}" if description is not None else f"Procedure {name}"
+    paragraphs = [f"{text.rstrip('.')} ({documentation})."]
     quality = tuple(getattr(result, "quality", ()) or getattr(cal, "fit_quality", ()) or ())
     paragraphs += [q.summary() for q in quality if callable(getattr(q, "summary", None))]
     misfit = any(bool(getattr(q, "misfit", False)) for q in quality)
@@ -74,8 +70,31 @@ def _process(result: Any, cal: Any) -> tuple[list[str], bool]:
     return paragraphs, misfit
 
 
-def content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
-    """Return sections 1–5 of any result with parameters (module docstring)."""
+def content(result: Any, meta: Mapping[str, Any], *, description: str | None = None,
+            documentation: str = "its documentation",
+            traceability: str | None = None) -> ReportContent:
+    """Return sections 1–5 of any result with parameters (module docstring).
+
+    Parameters
+    ----------
+    result : ProcedureResult
+        With ``parameter_rows()``, or a ``CalibrationResult`` as ``result``.
+    meta : mapping
+        The recording's facts (:func:`~imucalib.report.sections.recording_facts`).
+    description : str, optional
+        The procedure's one-line description, quoted in the process section (None: the
+        procedure's name only, e.g. a result of a procedure not installed here).
+    documentation : str
+        Where its method is described: ``"docs/<name>.md"`` for a built-in.
+    traceability : str, optional
+        The traceability statement of a procedure whose references are its own (default: the
+        station's, :func:`~imucalib.report.sections.traceability`).
+
+    Raises
+    ------
+    InvalidInputError
+        A result without parameter rows.
+    """
     cal: Any = getattr(result, "result", None)
     prov = getattr(cal, "provenance", None) or getattr(result, "provenance", None)
     table = ReportTable(f"{result.procedure} results of {result.unit}",
@@ -85,7 +104,7 @@ def content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
     decision = {None: "No conformity decision was made.",
                 True: "Every assessed check passed.", False: "A check failed."}[passed]
     reasons = list(getattr(result, "reasons", ()) or ())
-    process, misfit = _process(result, cal)
+    process, misfit = _process(result, cal, description, documentation)
     details = dict(getattr(prov, "details", {}) or {})
     tables = [table]
     if getattr(cal, "temperature_models", None):
@@ -95,7 +114,7 @@ def content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
     sections = (
         object_section(details.get("unit", {"serial": result.unit}), str(result.unit)),
         equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
-                          procedure=str(result.procedure)),
+                          statement=traceability),
         environment_section(meta, {}),
         Section(SECTION_TITLES[3], tuple(process)),
         Section(SECTION_TITLES[4], (u_paragraph(), *reasons), tuple(tables)),

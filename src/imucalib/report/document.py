@@ -28,36 +28,38 @@ The unique id (:func:`report_id`) is ``IMUCAL-<PROCEDURE>-<serial>-<hash>``, ``<
 with the same options — always gets the same id and two results never one, followed by
 ``-R<id>`` when the result is in the records database.
 
-Each procedure's sections 1–5 come from its content module, ``report/content_<name>.py``
-(:data:`REPORT_CONTENTS`; a result no module claims gets :mod:`imucalib.report.content_generic`:
-every parameter with its U, the checks and decision the result carries); the shared sections
-are in :mod:`imucalib.report.sections`. A batch of units (an array or a production lot, P2)
-gets one report per unit and a summary (:func:`build_summary_report`).
+Each procedure's sections 1–5 are its :class:`ReportContent`, made by the procedure's
+``report_content`` hook (:class:`~imucalib.procedures.common.procedure.Procedure`; a procedure
+without content of its own delegates to :mod:`imucalib.report.content_generic`: every parameter
+with its U, the checks and decision the result carries); :func:`assemble_report` adds the shared
+conclusion and appendix (:mod:`imucalib.report.sections`). This module names no procedure: the
+registry lookup that finds a result's procedure is :func:`imucalib.exports.report.build_report`.
+A batch of units (an array or a production lot, P2) gets one report per unit and a summary
+(its procedure's ``summary_report`` hook).
 
 Contents
 --------
-:func:`build_report`, :func:`build_summary_report`, :func:`report_id`, :class:`ReportDocument`,
-:class:`ReportContent`, :class:`Section`, :class:`ReportTable`, :class:`ReportFigure`,
-:class:`ReviewStatus`, :data:`SECTION_TITLES`, :data:`COVERAGE_FACTOR`, :data:`REPORT_CONTENTS`,
-:func:`write_report`
+:func:`assemble_report`, :func:`report_id`, :func:`issued_now`, :func:`no_summary_report`,
+:class:`ReportDocument`, :class:`ReportContent`, :data:`ContentBuilder`, :class:`Section`,
+:class:`ReportTable`, :class:`ReportFigure`, :class:`ReviewStatus`, :data:`SECTION_TITLES`,
+:data:`COVERAGE_FACTOR`, :func:`write_report`
 """
 
 from __future__ import annotations
 
 import hashlib
-import importlib
 import json
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Final
+from typing import Any, NoReturn, TypeAlias
 
-__all__ = ["COVERAGE_FACTOR", "REPORT_CONTENTS", "SECTION_TITLES", "ReportContent",
+__all__ = ["COVERAGE_FACTOR", "SECTION_TITLES", "ContentBuilder", "ReportContent",
            "ReportDocument", "ReportFigure", "ReportTable", "ReviewStatus", "Section",
-           "build_report", "build_summary_report", "report_id", "write_report"]
+           "assemble_report", "issued_now", "no_summary_report", "report_id", "write_report"]
 
 #: k of the expanded uncertainty U = k·u (R.1).
 COVERAGE_FACTOR = 2.0
@@ -183,40 +185,28 @@ class ReportContent:
     plan: Any = None
 
 
-#: Procedure name → the module whose ``content(result, meta) -> ReportContent | None`` builds
-#: its sections 1–5 (None: not a result it describes, e.g. a P1 result read back from JSON
-#: without its observations; the generic content is used then). A new procedure adds a line.
-REPORT_CONTENTS: Final[dict[str, str]] = {
-    "p1": "imucalib.report.content_p1",
-    "allan": "imucalib.report.content_allan",
-    "p2": "imucalib.report.content_p2",
-}
-_GENERIC: Final = "imucalib.report.content_generic"
+#: A procedure's ``report_content(result, meta) -> ReportContent`` hook: `meta` the facts of the
+#: recording (:func:`~imucalib.report.sections.recording_facts`).
+ContentBuilder: TypeAlias = Callable[[Any, Mapping[str, Any]], ReportContent]
 
 
-def _content(result: Any, meta: Mapping[str, Any]) -> ReportContent:
-    name = REPORT_CONTENTS.get(str(getattr(result, "procedure", "")))
-    if name is not None:
-        made = importlib.import_module(name).content(result, meta)
-        if made is not None:
-            return made
-    return importlib.import_module(_GENERIC).content(result, meta)
-
-
-def _issued() -> str:
+def issued_now() -> str:
+    """Return the issue time of a report made now: ``"2026-01-02 10:00 UTC"``."""
     return datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
 
 
-def build_report(result: Any, *, recording: Any = None, review: Any = None,
-                 result_id: int | None = None) -> ReportDocument:
-    """Build the report of a procedure result (module docstring).
+def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = None,
+                    review: Any = None, result_id: int | None = None) -> ReportDocument:
+    """Assemble the report of a procedure result from its procedure's content (module docstring).
 
     Parameters
     ----------
     result : ProcedureResult
         One unit's result: a P1 analysis, a P2 unit, a noise characterisation (Allan), a field
         calibration, or any result with ``parameter_rows()`` or a ``CalibrationResult``.
-        A batch (``results``): use :func:`build_summary_report` and one report per unit.
+        A batch (``results``): its procedure's ``summary_report`` and one report per unit.
+    content : callable
+        Its procedure's ``report_content`` hook (:data:`ContentBuilder`): sections 1–5.
     recording : Recording or path, optional
         The recording analysed: its metadata and temperature column fill the environment
         section. Without it the conditions during the run are said to be unstated.
@@ -245,7 +235,7 @@ def build_report(result: Any, *, recording: Any = None, review: Any = None,
         raise InvalidInputError(f"unit {result.unit} could not be calibrated ({result.error}): "
                                 "there is no result to report")
     meta = common.recording_facts(recording)
-    made = _content(result, meta)
+    made = content(result, meta)
     reviews = common.reviews_of(review)
     sections = [*made.sections,
                 common.conclusion_section(made.decision, made.passed,
@@ -253,34 +243,24 @@ def build_report(result: Any, *, recording: Any = None, review: Any = None,
                 common.appendix(meta, made.plan, made.provenance, ())]
     rid = report_id(result, result_id=result_id)
     title = f"Calibration report {rid}: {str(result.procedure).upper()} of {result.unit}"
-    return ReportDocument(title=title, report_id=rid, issued_utc=_issued(),
+    return ReportDocument(title=title, report_id=rid, issued_utc=issued_now(),
                           sections=tuple(sections), passed=made.passed)
 
 
-def build_summary_report(batch: Any, *, recordings: Any = None,
-                         report_ids: Mapping[str, str] | None = None) -> ReportDocument:
-    """Build the summary report of an array or a production lot (one line per unit).
+def no_summary_report(procedure: str) -> NoReturn:
+    """Refuse a summary report: procedure `procedure`'s analysis returns no batch.
 
-    Parameters
-    ----------
-    batch : P2BatchResult
-        Every unit's result (``results``), with ``recordings`` and ``unit`` ("array"/"lot").
-    recordings : sequence of Recording or path, optional
-        The recordings analysed, for the environment section (the first one's conditions).
-    report_ids : mapping of str to str, optional
-        Each unit's report id as issued (with its records id); default: :func:`report_id` of
-        the unit's result.
+    The ``summary_report`` hook of a procedure whose ``analyze`` returns one unit's result.
 
-    Returns
-    -------
-    ReportDocument
-        Sections: the units, equipment, environment, process, the per-unit table with each
-        unit's report id, the lot figure, and the conclusion (docs/reporting.md).
+    Raises
+    ------
+    InvalidInputError
+        Always.
     """
-    from imucalib.report.content_summary import summary_document
+    from imucalib.errors import InvalidInputError
 
-    return summary_document(batch, recordings=recordings, issued_utc=_issued(),
-                            report_ids=report_ids)
+    raise InvalidInputError(f"procedure {procedure} returns one unit's result, not a batch: "
+                            "there is no summary report; build_report makes its report")
 
 
 def write_report(document: ReportDocument, path: str | os.PathLike[str], fmt: str) -> Path:

@@ -83,7 +83,7 @@ def write_report_pdf(document: ReportDocument, path: str | os.PathLike[str]) -> 
     Parameters
     ----------
     document : ReportDocument
-        From :func:`~imucalib.report.document.build_report`.
+        From :func:`~imucalib.exports.report.build_report`.
     path : str or Path
         The file to write.
 

@@ -149,14 +149,8 @@ def object_section(unit: Mapping[str, Any], serial: str) -> Section:
                    (ReportTable("identification", ("item", "value"), rows),))
 
 
-def traceability(station_kind: str, *, reference: bool = True, procedure: str = "") -> str:
+def traceability(station_kind: str, *, reference: bool = True) -> str:
     """Return the traceability statement of a station kind (an honest line for the twin)."""
-    if procedure == "field":
-        return ("Traceability: a field calibration by hand uses no rotation table. Its references "
-                "are local gravity (normal gravity at the stated latitude and height with a Type "
-                "B for the local anomaly, or the value given), the known angle of whole turns "
-                "flat on a surface, and the Earth rate as a defined constant (15.041 °/h); the "
-                "orientations of the poses are not references (docs/field.md).")
     if not reference:
         return ("Traceability: a noise characterisation uses no reference quantity; its values "
                 "come from the unit's own output and the recording's time base, whose accuracy "
@@ -173,8 +167,13 @@ def traceability(station_kind: str, *, reference: bool = True, procedure: str = 
 
 
 def equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
-                      reference: bool = True, procedure: str = "") -> Section:
-    """Section 2: station, table, the plan's equipment, software, traceability."""
+                      reference: bool = True, statement: str | None = None) -> Section:
+    """Section 2: station, table, the plan's equipment, software, traceability.
+
+    The traceability statement is that of the station kind (:func:`traceability`; `reference`
+    false: a measurement without a reference quantity), or `statement` when the procedure's
+    references are its own (a field calibration by hand: gravity and whole turns).
+    """
     station = json_field(meta, "station_json")
     kind = str(station.get("kind") or meta.get("source") or "—")
     rows: list[tuple[str, str]] = [("station", kind)]
@@ -189,8 +188,8 @@ def equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
             rows.append((key.replace("_", " "), f"{value:g}" if isinstance(value, float)
                          else str(value)))
     rows.append(("software", f"imucalib {software}"))
-    return Section(SECTION_TITLES[1], (traceability(kind, reference=reference,
-                                                    procedure=procedure),),
+    text = statement if statement is not None else traceability(kind, reference=reference)
+    return Section(SECTION_TITLES[1], (text,),
                    (ReportTable("equipment", ("item", "value"), tuple(rows)),))
 
 

@@ -11,8 +11,13 @@ Contents
     :func:`run_plan`, :func:`resume_run`, :func:`find_resume_point`,
     :func:`check_plan_against_station`, :class:`RunSummary`.
 :mod:`imucalib.station.session`
-    :class:`RunSession` (acquisition, guards, step execution), :class:`RunOptions`,
-    :class:`RunStatus`.
+    :class:`RunSession` (acquisition, guards, settling, recording, the step loop),
+    :class:`RunOptions`, :class:`RunStatus`.
+:mod:`imucalib.station.executors`
+    The executor of each step kind, one module per kind (motion, static, soak, warm-up,
+    operator check); :data:`~imucalib.station.executors.EXECUTORS`.
+:mod:`imucalib.station.signals`
+    :class:`~imucalib.station.signals.StepTrip`, :class:`~imucalib.station.signals.StepStop`.
 :mod:`imucalib.station.guards`
     Pure guard checks and settling criteria.
 :mod:`imucalib.station.operator`

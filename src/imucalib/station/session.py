@@ -1,10 +1,14 @@
-"""One session of a run: acquisition, guards, settling and the execution of each step kind.
+"""One session of a run: acquisition, guards, settling, recording and the step loop.
 
 :class:`RunSession` is what :func:`~imucalib.station.runner.run_plan` and
 :func:`~imucalib.station.runner.resume_run` drive: every tick it polls the station's devices,
-writes their rows to the Recording and checks the guards; its ``run_*`` methods execute one plan
-step each (see :mod:`imucalib.station.runner` for the rules). :class:`RunOptions` and
-:class:`RunStatus` are the options of a run and the status a live view shows.
+writes their rows to the Recording and checks the guards. :meth:`RunSession.execute` runs one
+plan step through the executor of its kind (:mod:`imucalib.station.executors`, one module per
+kind), which builds on the session's ``settle``, ``record_for`` and ``record_revolutions``;
+:meth:`RunSession.run_steps` retries a step after a trip (see :mod:`imucalib.station.runner` for
+the rules). :class:`RunOptions` and :class:`RunStatus` are the options of a run and the status a
+live view shows; :class:`StepTrip` and :class:`StepStop` (:mod:`imucalib.station.signals`) the
+signals a step raises.
 """
 
 from __future__ import annotations
@@ -20,7 +24,6 @@ import numpy as np
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import DeviceError, RecordingError, StorageFullError
-from imucalib.io.inspect import LOAD_EVENT_PREFIX, REMOUNT_EVENT_PREFIX, SWAP_EVENT_PREFIX
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.storage import format_bytes
 from imucalib.io.streams import (
@@ -30,17 +33,9 @@ from imucalib.io.streams import (
     DEVICE_TABLE,
     axis_columns,
 )
-from imucalib.plan.schema import (
-    CentrifugeStep,
-    OperatorCheckStep,
-    Plan,
-    PositionStep,
-    RateStep,
-    SoakStep,
-    StaticStep,
-    WarmUpStep,
-)
-from imucalib.station.devices import ImuIdentity, MotionDevice, Station
+from imucalib.plan.schema import Plan
+from imucalib.station.devices import ImuIdentity, Station
+from imucalib.station.executors import EXECUTORS
 from imucalib.station.guards import (
     RollingWindow,
     accel_fluctuation_g,
@@ -48,11 +43,10 @@ from imucalib.station.guards import (
     check_counter,
     check_jumps,
     check_overspeed,
-    check_position_hold,
-    check_rate_hold,
     check_saturation,
 )
 from imucalib.station.operator import AutoOperator, Operator
+from imucalib.station.signals import StepStop, StepTrip
 
 __all__ = ["RunOptions", "RunSession", "RunStatus", "StepStop", "StepTrip"]
 
@@ -121,14 +115,6 @@ class RunOptions:
     station_toml: str = ""
     min_free_bytes: int = 128 << 20
     idle_tick_s: float | None = None
-
-
-class StepTrip(Exception):  # noqa: N818 - a signal between the session and the runner
-    """A guard tripped inside a step (the runner stops safely, marks it invalid, retries)."""
-
-
-class StepStop(Exception):  # noqa: N818 - a signal between the session and the runner
-    """The run stops without a retry (operator declined, retries exhausted)."""
 
 
 class RunSession:
@@ -342,7 +328,7 @@ class RunSession:
         finally:
             self.recording = False
 
-    # --- step kinds -------------------------------------------------------------------------
+    # --- what the step executors build on ---------------------------------------------------
     def settle(self, t_cmd: float, settle_s: float, criterion: Callable[[], str | None],
                correct: Callable[[str], bool] | None = None) -> None:
         """Tick until `settle_s` has passed and `criterion` holds; trip after the time-out.
@@ -422,77 +408,8 @@ class RunSession:
         finally:
             self.recording = False
 
-    def run_motion(self, step: PositionStep | RateStep | CentrifugeStep
-                   ) -> tuple[float, float]:
-        """Execute a position, rate or centrifuge step; return its valid window."""
-        fuge = isinstance(step, CentrifugeStep)
-        dev: MotionDevice | None = self.station.centrifuge if fuge else self.station.table
-        assert dev is not None  # checked against the station before the run
-        names = dev.axis_names
-        pos_tol = self.g.position_tolerance_arcsec * units.ARCSEC
-        hold_tol = self.g.hold_rate_tolerance_dps * units.DEG
-        rate_tol = self.g.rate_tolerance_dps * units.DEG
-        t_cmd = self.now()
-        if isinstance(step, PositionStep) or (isinstance(step, CentrifugeStep)
-                                              and step.arm_position_deg is not None):
-            angles = (list(step.angles_deg) if isinstance(step, PositionStep)
-                      else [step.arm_position_deg or 0.0])
-            targets = [a * units.DEG for a in angles]
-            if fuge:
-                dev.set_rate(0, 0.0)
-                self.settle(t_cmd, 0.0, lambda: check_rate_hold(
-                    self.motion_rows(True)[2], 0.0, 0, names[0], hold_tol))
-            for i, target in enumerate(targets):
-                dev.move_to(i, target)
-            if not fuge:
-                self.held_targets = targets
-
-            def hold() -> str | None:
-                _, angle, rate = self.motion_rows(fuge)
-                return (check_position_hold(angle, targets, names, pos_tol)
-                        or next((r for i in range(len(targets))
-                                 if (r := check_rate_hold(rate, 0.0, i, names[i], hold_tol))),
-                                None))
-
-            def correct(reason: str) -> bool:
-                """Re-command the axes when, at rest over the last tick, one is off target."""
-                angle, rate = self._latest(fuge)
-                if rate.size == 0 or np.abs(rate).max() > hold_tol:
-                    return False  # still moving: the move is not over yet
-                if check_position_hold(angle, targets, names, pos_tol) is None:
-                    return False  # arrived; the settling span has yet to pass
-                for i, target in enumerate(targets):
-                    dev.move_to(i, target)
-                return True
-
-            self.settle(t_cmd, step.settle_s, lambda: hold() or self.accel_settled(), correct)
-
-            def guard() -> None:
-                angle, _ = self._latest(fuge)
-                reason = check_position_hold(angle, targets, names, pos_tol)
-                if reason:
-                    raise StepTrip(reason)
-
-            assert step.record_s is not None  # an arm position records for a duration
-            return self.record_for(step.record_s, guard)
-        axis = 0 if fuge else step.axis  # type: ignore[union-attr]
-        rate = step.rate_dps * units.DEG
-        dev.set_rate(axis, rate)
-        self.settle(t_cmd, step.settle_s, lambda: check_rate_hold(
-            self.motion_rows(fuge)[2], rate, axis, names[axis], rate_tol))
-
-        def rate_guard() -> None:
-            reason = check_rate_hold(self._latest(fuge)[1], rate, axis, names[axis], rate_tol)
-            if reason:
-                raise StepTrip(reason)
-
-        if step.revolutions is not None:
-            return self.record_revolutions(fuge, axis, step.revolutions, rate_guard)
-        assert step.record_s is not None
-        return self.record_for(step.record_s, rate_guard)
-
-    def _latest(self, fuge: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        """Measured angles and rates of the last tick."""
+    def latest_motion(self, fuge: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Return the measured angles and rates of the table (or centrifuge) in the last tick."""
         t, angle, rate = self.motion_rows(fuge)
         recent = t > self._last_tick_start() - 1e-9
         return angle[recent], rate[recent]
@@ -501,134 +418,8 @@ class RunSession:
         """Station time from which rows belong to the last tick (at least `tick_s` back)."""
         return min(self.tick_from_s, self.now() - self.opt.tick_s)
 
-    def run_static(self, step: StaticStep, attempt: int) -> tuple[float, float]:
-        """Execute a static step; return its valid window."""
-        table = self.station.table
-        names = table.axis_names if table is not None else ()
-        tol = self.g.position_tolerance_arcsec * units.ARCSEC
-        if table is not None and attempt > 0 and self.held_targets is not None:
-            # a retry after a safe stop: back to the position the record was made at
-            targets = self.held_targets
-            t_cmd = self.now()
-            for i, target in enumerate(targets):
-                table.move_to(i, target)
-            self.settle(t_cmd, 0.0, lambda: check_position_hold(
-                self.motion_rows()[1], targets, names, tol) or self.accel_settled())
-        held: list[float] | None = None
-        if table is not None:
-            _, angle, _ = self.motion_rows()
-            held = list(angle[-1]) if angle.size else None
-
-        def guard() -> None:
-            if held is not None:
-                angle, _ = self._latest()
-                reason = check_position_hold(angle, held, names, tol)
-                if reason:
-                    raise StepTrip(reason)
-
-        return self.record_for(step.duration_s, guard)
-
-    def run_soak(self, step: SoakStep) -> tuple[float, float]:
-        """Execute a soak: set the chamber, wait for stability; return the stable span."""
-        chamber = self.station.chamber
-        assert chamber is not None
-        ramp = None if step.ramp_degc_per_min is None else step.ramp_degc_per_min / 60.0
-        chamber.set_temperature(step.temperature_degc, ramp_degc_ps=ramp)
-        self.chamber_setpoint = None  # no band guard while the temperature changes
-        t_cmd = self.now()
-        for win in self.temps.values():
-            win.clear()
-
-        def stable() -> str | None:
-            t0 = self.now() - step.stable_for_s
-            _, air = self.chamber_rows.rows(t0)
-            if air.size == 0 or not self.chamber_rows.covers(t0):
-                return "chamber: not enough history"
-            reason = check_chamber_band(air[:, 0], step.temperature_degc, step.band_degc)
-            if reason:
-                return reason
-            for name, win in self.temps.items():
-                if not win.covers(t0):
-                    return f"IMU {name}: not enough history"
-                _, temp = win.rows(t0)
-                span = float(temp.max() - temp.min())
-                if span > step.imu_band_degc:
-                    return (f"IMU {name} temperature varied {span:.3g} °C over "
-                            f"{step.stable_for_s:g} s (limit {step.imu_band_degc:g} °C)")
-            return None
-
-        deadline = t_cmd + step.timeout_s
-        while True:
-            self.tick()
-            if self.now() - t_cmd >= step.stable_for_s and stable() is None:
-                self.chamber_setpoint = step.temperature_degc
-                return self.now() - step.stable_for_s, self.now()
-            if self.now() >= deadline:
-                raise StepTrip(f"soak at {step.temperature_degc:g} °C not stable within "
-                            f"{step.timeout_s:g} s: {stable()}")
-
-    def run_warm_up(self, step: WarmUpStep) -> None:
-        """Execute a warm-up: at least its duration, then until the output stops drifting."""
-        t_cmd = self.now()
-        limits = np.r_[np.full(3, step.max_gyro_drift_dps * units.DEG),
-                       np.full(3, step.max_accel_drift_g * units.G0_MPS2)]
-
-        def drift() -> str | None:
-            now = self.now()
-            for name, win in self.gyro_means.items():
-                t, means = win.rows(now - 2 * step.window_s)
-                last, prev = means[t >= now - step.window_s], means[t < now - step.window_s]
-                if last.size == 0 or prev.size == 0:
-                    return f"IMU {name}: not enough history"
-                change = np.abs(last.mean(axis=0) - prev.mean(axis=0))
-                if np.any(change > limits):
-                    return f"IMU {name}: output still drifting (change {change.max():.3g} SI)"
-            return None
-
-        while True:
-            self.tick()
-            if self.now() - t_cmd >= step.duration_s and drift() is None:
-                return
-            if self.now() - t_cmd >= step.timeout_s:
-                raise StepTrip(f"warm-up: output still drifting after {step.timeout_s:g} s: "
-                            f"{drift()}")
-
-    def remount(self, up: str, yaw_deg: float, why: str = "") -> None:
-        """Put the fixture in pose (`up`, `yaw_deg`) on a twin; log the remount in any case.
-
-        A station with a ``remount`` method (the twin, :class:`~imucalib.station.sim.SimStation`)
-        moves its fixture; on a real station the operator has done it.
-        """
-        remount = getattr(self.station, "remount", None)
-        if callable(remount):
-            remount(up, yaw_deg)
-        message = f"{REMOUNT_EVENT_PREFIX}: {up} up, yaw {yaw_deg:g}°{why}"
-        self.writer.log_event(self.now(), "info", "runner", message)
-        self.status.last_event = message
-
-    def swap_units(self, first: str, second: str, why: str = "") -> None:
-        """Exchange units `first` and `second` on a twin's fixture; log the swap in any case.
-
-        A station with a ``swap_units`` method (the twin) moves its units; on a real station
-        the operator has done it.
-        """
-        swap = getattr(self.station, "swap_units", None)
-        if callable(swap):
-            swap(first, second)
-        self._log_info(f"{SWAP_EVENT_PREFIX}: {first} ↔ {second}{why}")
-
-    def set_centrifuge_load(self, load_kg: float, why: str = "") -> None:
-        """Set the test load on a twin's centrifuge arm; log the load in any case. [kg]
-
-        A station with a ``set_centrifuge_load`` method (the twin) changes its unbalance; on a
-        real station the operator has loaded the arm.
-        """
-        load = getattr(self.station, "set_centrifuge_load", None)
-        if callable(load):
-            load(load_kg)
-        self._log_info(f"{LOAD_EVENT_PREFIX}: {load_kg:g} kg{why}")
-
-    def _log_info(self, message: str) -> None:
+    def log_info(self, message: str) -> None:
+        """Log `message` as the runner's in the Recording and show it as the last event."""
         self.writer.log_event(self.now(), "info", "runner", message)
         self.status.last_event = message
 
@@ -644,31 +435,8 @@ class RunSession:
         self.writer.log_event(self.now(), "info", "runner",
                               f"step {index} ({label}) started, attempt {attempt + 1}")
         try:
-            window: tuple[float, float] | None = None
-            note = ""
-            if isinstance(step, OperatorCheckStep):
-                answer = self.opt.operator.confirm(step.item)
-                note = (f"{'confirmed' if answer.confirmed else 'declined'} by {answer.who} at "
-                        f"{answer.when_utc}" + (f": {answer.note}" if answer.note else ""))
-                self.writer.log_event(self.now(), "info" if answer.confirmed else "warning",
-                                      f"operator:{answer.who}", f"{step.item} — {note}")
-                if not answer.confirmed:
-                    self.writer.update_step(row, t_end_s=self.now(), status="aborted", note=note)
-                    raise StepStop(f"operator {answer.who} did not confirm: {step.item}")
-                if step.remount is not None:
-                    self.remount(step.remount, step.remount_yaw_deg)
-                if step.swap_units is not None:
-                    self.swap_units(*step.swap_units)
-                if step.centrifuge_load_kg is not None:
-                    self.set_centrifuge_load(step.centrifuge_load_kg)
-            elif isinstance(step, PositionStep | RateStep | CentrifugeStep):
-                window = self.run_motion(step)
-            elif isinstance(step, StaticStep):
-                window = self.run_static(step, attempt)
-            elif isinstance(step, SoakStep):
-                window = self.run_soak(step)
-            elif isinstance(step, WarmUpStep):
-                self.run_warm_up(step)
+            outcome = EXECUTORS[step.kind](self, step, attempt, row)
+            window, note = outcome.window, outcome.note
             if window is not None:
                 self.await_samples(window[1])
             fields: dict[str, Any] = {"t_end_s": self.now(), "status": "done"}

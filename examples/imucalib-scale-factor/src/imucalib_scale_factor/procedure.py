@@ -8,14 +8,17 @@
     [project.entry-points."imucalib.procedures"]
     scale-factor = "imucalib_scale_factor.procedure:PROCEDURE"
 
-Importing this module imports neither the plan nor the analysis: each is imported when first
-used, so that listing the procedures stays cheap.
+Importing this module imports neither the plan nor the analysis nor imucalib's report modules:
+each is imported when first used, so that listing the procedures stays cheap. The result is
+presented by imucalib's generic report content and terminal table (its ``parameter_rows()``):
+the three presentation hooks delegate to them.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
@@ -26,8 +29,11 @@ from imucalib_scale_factor.options import (
 )
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
+    from imucalib.report.document import ReportContent, ReportDocument
     from imucalib_scale_factor.analysis import ScaleFactorResult
 
 __all__ = ["PROCEDURE", "ScaleFactorProcedure"]
@@ -71,6 +77,34 @@ class ScaleFactorProcedure:
         if progress is not None:
             progress(1.0)
         return result
+
+    def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
+        """Return the report's sections 1–5: imucalib's generic content of `result`.
+
+        Its ``parameter_rows()`` with U = 2u, this procedure's description, the fit's χ²/ν.
+        """
+        from imucalib.report.content_generic import content
+
+        return content(result, meta, description=self.description)
+
+    def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
+        """Print `result` with imucalib's generic table: its parameter rows and decision."""
+        from imucalib.report.console import render_generic
+
+        render_generic(console, result, written)
+
+    def summary_report(self, batch: Any, *, recordings: Sequence[Any] | None = None,
+                       report_ids: Mapping[str, str] | None = None) -> ReportDocument:
+        """Refuse: the analysis returns one unit's result, never a batch.
+
+        Raises
+        ------
+        InvalidInputError
+            Always.
+        """
+        from imucalib.report.document import no_summary_report
+
+        no_summary_report(self.name)
 
 
 #: The procedure the entry point ``scale-factor`` names.

@@ -9,22 +9,27 @@ versioned noise JSON, Kalibr and OpenVINS YAML, a datasheet table per record, an
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.allan.options import AllanAnalysisOptions, AllanPlanOptions
 from imucalib.procedures.common.options import option_names
+from imucalib.procedures.common.reporting import GenericReporting
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
     from imucalib.procedures.allan.analysis import NoiseCharacterization
+    from imucalib.report.document import ReportContent
 
 __all__ = ["PROCEDURE", "AllanProcedure"]
 
 
-class AllanProcedure:
+class AllanProcedure(GenericReporting):
     """Noise characterisation (IEEE 952 Annex C) of the static records of a recording."""
 
     name = "allan"
@@ -59,6 +64,21 @@ class AllanProcedure:
         if options:
             raise InvalidInputError(f"procedure allan takes no options; got {sorted(options)}")
         return analyze_allan_recording(recording, unit=unit, progress=progress)
+
+    def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
+        """Return the noise tables and Allan figures of the report (:mod:`.allan.report`).
+
+        A result without its records gets the generic sections.
+        """
+        from imucalib.procedures.allan.report import content
+
+        return content(result, meta) or super().report_content(result, meta)
+
+    def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
+        """Print each record's noise-term table (:mod:`.allan.console`)."""
+        from imucalib.procedures.allan.console import render_noise_characterization
+
+        render_noise_characterization(console, result, written)
 
 
 #: The registered Allan procedure.

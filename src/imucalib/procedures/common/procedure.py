@@ -4,8 +4,13 @@ A procedure is a folder of :mod:`imucalib.procedures` (``p1/``, ``allan/``, …)
 ``procedure`` module holds one object satisfying :class:`Procedure`, registered by name in
 :mod:`imucalib.procedures.registry`. ``imucalib plan new``, ``imucalib calibrate``, the demo and
 the tests reach a procedure only through the registry; the output files of its result are named
-and written by :func:`imucalib.exports.outputs.write_outputs`. docs/procedures.md says how to add
-one.
+and written by :func:`imucalib.exports.outputs.write_outputs`. A procedure also presents its
+result, with code kept in its own folder: its report's sections 1–5
+(:meth:`Procedure.report_content`), the terminal (:meth:`Procedure.render_console`) and a
+batch's summary report (:meth:`Procedure.summary_report`); the report and terminal frameworks
+(:mod:`imucalib.report`) name no procedure, and a procedure without presentation of its own
+delegates to the generic one (:class:`~imucalib.procedures.common.reporting.GenericReporting`).
+docs/procedures.md says how to add one.
 
 Contents
 --------
@@ -15,14 +20,18 @@ Contents
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from imucalib.errors import InvalidInputError
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
+    from imucalib.report.document import ReportContent, ReportDocument
 
 __all__ = ["Procedure", "ProcedureResult", "accepted_options"]
 
@@ -64,7 +73,7 @@ class ProcedureResult(Protocol):
 
 @runtime_checkable
 class Procedure(Protocol):
-    """One calibration or characterisation procedure: its plan and its analysis.
+    """One calibration or characterisation procedure: its plan, its analysis, its presentation.
 
     Attributes
     ----------
@@ -141,6 +150,90 @@ class Procedure(Protocol):
         For one IMU (`unit`; the only one when omitted), with the procedure's `options` (keys in
         :attr:`analysis_options`). `progress`, when given, is called with the fraction of the
         work done (increasing, ending at 1.0), for a progress bar; it must not raise.
+        """
+        ...
+
+    def report_content(self, result: ProcedureResult, meta: Mapping[str, Any]) -> ReportContent:
+        """Return sections 1–5 of the report (certificate) of one unit's result.
+
+        The report's object, equipment, environment, process and results sections
+        (docs/reporting.md); :func:`imucalib.report.document.assemble_report` adds the
+        conclusion and the appendix. Called through the registry by
+        :func:`imucalib.exports.report.build_report` (``report-pdf``, ``report-html``,
+        ``imucalib report``).
+
+        Parameters
+        ----------
+        result : ProcedureResult
+            What :meth:`analyze` returned for one unit (one unit of a batch), or a result read
+            back from its JSON file (a ``CalibrationResult`` as its ``result``).
+        meta : mapping of str to object
+            The facts of the recording analysed
+            (:func:`imucalib.report.sections.recording_facts`): its metadata, temperatures,
+            file name and SHA-256; empty when no recording is given.
+
+        Returns
+        -------
+        ReportContent
+            The sections, the decision in words, the recommendations and the provenance. A
+            procedure without content of its own returns the generic
+            :func:`imucalib.report.content_generic.content`: every parameter of its
+            ``parameter_rows()`` with U = 2u.
+
+        Raises
+        ------
+        InvalidInputError
+            A result the report cannot describe (no parameter rows).
+        """
+        ...
+
+    def render_console(self, console: Console, result: ProcedureResult,
+                       written: Sequence[Path]) -> None:
+        """Print a result of :meth:`analyze` on the terminal.
+
+        For ``imucalib calibrate``, ``imucalib allan`` and the demo, after the output files are
+        written. A procedure without a table of its own calls
+        :func:`imucalib.report.console.render_generic` (its ``parameter_rows()``, decision and
+        files).
+
+        Parameters
+        ----------
+        console : rich.console.Console
+            Where to print.
+        result : ProcedureResult
+            What :meth:`analyze` returned (a batch for P2).
+        written : sequence of Path
+            The files written, listed last.
+        """
+        ...
+
+    def summary_report(self, batch: ProcedureResult, *,
+                       recordings: Sequence[Any] | None = None,
+                       report_ids: Mapping[str, str] | None = None) -> ReportDocument:
+        """Return the summary report of a batch: every unit's result in one document.
+
+        For a procedure whose :meth:`analyze` returns a batch (a result with ``results``, one
+        per unit: P2's array or lot), beside each unit's own report. Called through the registry
+        by :func:`imucalib.exports.report.build_summary_report`.
+
+        Parameters
+        ----------
+        batch : ProcedureResult
+            The batch :meth:`analyze` returned.
+        recordings : sequence of Recording or path, optional
+            The recordings analysed, for the environment section.
+        report_ids : mapping of str to str, optional
+            Each unit's report id as issued; default: the id of the unit's result.
+
+        Returns
+        -------
+        ReportDocument
+
+        Raises
+        ------
+        InvalidInputError
+            The procedure returns no batch
+            (:func:`imucalib.report.document.no_summary_report`).
         """
         ...
 

@@ -5,11 +5,11 @@ Shared by the rate-transfer test (docs/rate-transfer.md, "The plan") and the ins
 mounting, then for each axis a remount placing the cube with that body axis up along the table's
 vertical spin axis (:func:`remount_step`; the fixture pose of :data:`POSE_OF_AXIS`) and one turn
 over whole revolutions at every rate. :func:`signed_rates` turns magnitudes into +ω, −ω pairs
-(:data:`DEFAULT_RATES_DPS`, the P4 source chapter's, when none are given, or ``log_spaced=(min,
-max, n)``: IEEE Std 952-2020 / 1431-2004 logarithmic spacing); :func:`check_rates_in_range`
-refuses a rate at or beyond the gyro's full scale (its samples would clip). The twin
-(:func:`rate_table_twin`): a high-grade single-axis table, one unit of the chosen grade on a
-hexahedral fixture, its reference point on the spin axis.
+(:data:`DEFAULT_RATES_DPS` when none are given, or ``log_spaced=(min, max, n)``: IEEE Std
+952-2020 / 1431-2004 logarithmic spacing); :func:`check_rates_in_range` refuses a rate at or
+beyond the gyro's full scale (its samples would clip). The twin (:func:`rate_table_twin`): a
+high-grade single-axis table, one unit of the chosen grade on a hexahedral fixture, its
+reference point on the spin axis.
 
 Contents
 --------
@@ -56,7 +56,8 @@ __all__ = [
     "signed_rates",
 ]
 
-#: The P4 source chapter's rates, each turned both ways. [°/s]
+#: The rates of the MIMU chapter (a Chinese textbook chapter on MIMU error analysis and
+#: calibration; docs/procedures.md), each turned both ways. [°/s]
 DEFAULT_RATES_DPS: tuple[float, ...] = (5.0, 12.5, 18.0, 27.0, 36.0, 45.0, 60.0)
 #: Body axes that can be tested.
 AXES: tuple[str, ...] = ("x", "y", "z")

@@ -10,19 +10,23 @@ option).
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.field.options import FieldAnalysisOptions, FieldPlanOptions
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
     from imucalib.procedures.field.result import FieldResult
+    from imucalib.report.document import ReportContent
 
 __all__ = ["PROCEDURE", "FieldProcedure"]
 
@@ -30,7 +34,7 @@ __all__ = ["PROCEDURE", "FieldProcedure"]
 _RECORDING_SUFFIXES = (".h5", ".hdf5")
 
 
-class FieldProcedure:
+class FieldProcedure(GenericReporting):
     """Field calibration by hand: accelerometer from poses, gyro from rotations."""
 
     name = "field"
@@ -84,6 +88,18 @@ class FieldProcedure:
             frame = read_imu_table(path, spec)
             log = log_from_frame(frame, unit or "IMU", str(path))
         return analyze_field(log, field_options, progress=progress)
+
+    def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
+        """Return the generic sections 1–5 with the field traceability (:mod:`.field.report`)."""
+        from imucalib.procedures.field.report import content
+
+        return content(result, meta, description=self.description)
+
+    def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
+        """Print the parameters, each fit's χ²/ν, the session, the notes (:mod:`.field.console`)."""
+        from imucalib.procedures.field.console import render_field
+
+        render_field(console, result, written)
 
 
 #: The registered field procedure.

@@ -2,9 +2,9 @@
 
 :func:`generate_installation_plan`: an operator check of the mounting, then for each axis
 (``x``, ``y``, ``z``) a remount with that body axis up on a single-axis table and a +ω and a −ω
-turn over `revolutions` whole revolutions each (the P4 source chapter's one revolution, 360°,
-per direction; two by default, the analysis accepting one fewer at the window edges), at each
-rate of `rate_dps`. Roles ``installation.remount`` and ``installation.rate``, tags
+turn over `revolutions` whole revolutions each (the MIMU chapter's one revolution, 360°, per
+direction, docs/installation.md; two by default, the analysis accepting one fewer at the window
+edges), at each rate of `rate_dps`. Roles ``installation.remount`` and ``installation.rate``, tags
 ``axis=<k>`` and ``rate=<°/s>``. The twin is that of the rate-transfer test
 (:func:`~imucalib.procedures.common.rate_table_plan.rate_table_twin`).
 

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.installation.options import (
     InstallationAnalysisOptions,
     InstallationPlanOptions,
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "InstallationProcedure"]
 
 
-class InstallationProcedure:
+class InstallationProcedure(GenericReporting):
     """Installation errors: the gyro triad's misalignment angles from ±ω turns."""
 
     name = "installation"

@@ -9,19 +9,23 @@ writes the calibration result JSON and the full report JSON.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.p1.options import P1AnalysisOptions, P1PlanOptions
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
     from imucalib.procedures.p1.analysis import P1Analysis
+    from imucalib.report.document import ReportContent
 
 __all__ = ["PROCEDURE", "P1Procedure"]
 
@@ -29,7 +33,7 @@ __all__ = ["PROCEDURE", "P1Procedure"]
 MODELS = ("triad", "per-axis")
 
 
-class P1Procedure:
+class P1Procedure(GenericReporting):
     """Procedure P1: two-dimensional calibration of an IMU on a dual-axis table."""
 
     name = "p1"
@@ -69,6 +73,21 @@ class P1Procedure:
             raise InvalidInputError(f"--model must be 'triad' or 'per-axis'; got {model!r}")
         path = Path(recording.path if hasattr(recording, "path") else recording)
         return analyze_p1(path, unit, P1Options(model=model), progress=progress)
+
+    def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
+        """Return P1's sections 1–5 of the report (:mod:`imucalib.procedures.p1.report`).
+
+        A result read back from its JSON file (no observations) gets the generic ones.
+        """
+        from imucalib.procedures.p1.report import content
+
+        return content(result, meta) or super().report_content(result, meta)
+
+    def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
+        """Print the parameters, the checks and the decision (:mod:`.p1.console`)."""
+        from imucalib.procedures.p1.console import render_calibration
+
+        render_calibration(console, result, written)
 
 
 #: The registered P1 procedure.

@@ -10,24 +10,28 @@ given, only that unit is analysed; the result is a
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.p2.options import P2AnalysisOptions, P2PlanOptions
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
     from imucalib.procedures.p2.batch import P2BatchResult
+    from imucalib.report.document import ReportContent, ReportDocument
 
 __all__ = ["PROCEDURE", "P2Procedure"]
 
 
-class P2Procedure:
+class P2Procedure(GenericReporting):
     """Procedure P2: array full-temperature calibration on a cube in a chamber."""
 
     name = "p2"
@@ -69,6 +73,28 @@ class P2Procedure:
         path = Path(recording.path if hasattr(recording, "path") else recording)
         return analyze_p2(path, units=[unit] if unit else None, options=p2_options,
                           workers=workers, scheduler=scheduler, progress=progress)
+
+    def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
+        """Return a P2 unit's sections 1–5 of the report (:mod:`imucalib.procedures.p2.report`).
+
+        A result read back from its JSON file (no temperature points) gets the generic ones.
+        """
+        from imucalib.procedures.p2.report import content
+
+        return content(result, meta) or super().report_content(result, meta)
+
+    def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
+        """Print the batch: a row per unit, the warnings, the decision (:mod:`.p2.console`)."""
+        from imucalib.procedures.p2.console import render_p2
+
+        render_p2(console, result, written)
+
+    def summary_report(self, batch: Any, *, recordings: Sequence[Any] | None = None,
+                       report_ids: Mapping[str, str] | None = None) -> ReportDocument:
+        """Return the summary report of an array or a lot (:mod:`.p2.summary_report`)."""
+        from imucalib.procedures.p2.summary_report import summary_report
+
+        return summary_report(batch, recordings=recordings, report_ids=report_ids)
 
 
 #: The registered P2 procedure.

@@ -8,15 +8,19 @@ about the test accelerometer; `unit`, when given, must be it.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.p3.options import P3AnalysisOptions, P3PlanOptions
 
 if TYPE_CHECKING:
+    from rich.console import Console
+
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
     from imucalib.procedures.p3.analysis import P3Result
@@ -24,7 +28,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "P3Procedure"]
 
 
-class P3Procedure:
+class P3Procedure(GenericReporting):
     """Procedure P3: accelerometer K2 on a centrifuge with dynamic-unbalance compensation."""
 
     name = "p3"
@@ -69,6 +73,12 @@ class P3Procedure:
         except TypeError as exc:
             raise InvalidInputError(f"procedure p3: {exc}") from None
         return analyze_p3(recording, options=p3_options, progress=progress)
+
+    def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
+        """Print K2 of the three accelerometers, c and c′, the decision (:mod:`.p3.console`)."""
+        from imucalib.procedures.p3.console import render_p3
+
+        render_p3(console, result, written)
 
 
 #: The registered P3 procedure.

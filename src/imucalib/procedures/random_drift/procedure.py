@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.random_drift.options import (
     RandomDriftAnalysisOptions,
     RandomDriftPlanOptions,
@@ -25,7 +26,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "RandomDriftProcedure"]
 
 
-class RandomDriftProcedure:
+class RandomDriftProcedure(GenericReporting):
     """Gyro random drift and accelerometer zero stability from repeated positions."""
 
     name = "random-drift"

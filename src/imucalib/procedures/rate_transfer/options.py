@@ -42,8 +42,8 @@ class RateTransferPlanOptions:
     """Keywords of :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`."""
 
     rates_dps: tuple[float, ...] | None = option(
-        None, help="Rate magnitudes, each turned +ω and −ω (the P4 chapter's 5 … 60 °/s when "
-                   "omitted).", unit="°/s", min=0.0, max=MAX_TABLE_RATE_DPS, flag="rates")
+        None, help="Rate magnitudes, each turned +ω and −ω (5, 12.5, 18, 27, 36, 45 and 60 °/s "
+                   "when omitted).", unit="°/s", min=0.0, max=MAX_TABLE_RATE_DPS, flag="rates")
     log_spaced: tuple[float, float, int] | None = option(
         None, help="Min, max and n: n rate magnitudes spaced logarithmically instead of the "
                    "rates.", unit="°/s")

@@ -8,7 +8,8 @@
    ``remount`` field tells the twin, and the operator, which face), then one turn at every rate
    of the list, each over `revolutions` whole revolutions.
 
-The default rates are those of the P4 source chapter, ±5, ±12.5, ±18, ±27, ±36, ±45, ±60 °/s;
+The default rates, ±5, ±12.5, ±18, ±27, ±36, ±45, ±60 °/s, are those of a Chinese textbook
+chapter on MIMU error analysis and calibration (docs/procedures.md, "The MIMU chapter");
 ``log_spaced=(min, max, n)`` replaces them by n rates spaced logarithmically from min to max,
 both signs (IEEE Std 952-2020 / 1431-2004 rate-transfer tests). A rate at or beyond the gyro's
 full scale is refused (:class:`~imucalib.errors.ConfigurationError`): its samples would clip.

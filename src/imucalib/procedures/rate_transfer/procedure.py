@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
+from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.rate_transfer.options import (
     RateTransferAnalysisOptions,
     RateTransferPlanOptions,
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "RateTransferProcedure"]
 
 
-class RateTransferProcedure:
+class RateTransferProcedure(GenericReporting):
     """Gyro rate transfer: scale factor, bias, nonlinearity and asymmetry per axis."""
 
     name = "rate-transfer"

@@ -6,8 +6,9 @@ each parameter's temperature model (order and how it was chosen, the linear coef
 (T1) with its U, χ²/ν of the fit, the held-out check of the model at temperatures it was not
 fitted to), the errors left after compensation that the decision judges, and the figure of every
 parameter against the unit's internal temperature with its model and 2σ band
-(:func:`~imucalib.report.p2_figures.save_temperature_figure`). The summary of the whole array
-or lot is :func:`~imucalib.report.document.build_summary_report`.
+(:func:`~imucalib.procedures.p2.figures.save_temperature_figure`). The ``report_content`` hook of
+:class:`~imucalib.procedures.p2.procedure.P2Procedure`; the summary of the whole array or lot is
+:mod:`imucalib.procedures.p2.summary_report`.
 
 (T1): p(T, Ṫ, ℓ) = Σ c_j (T − T0)^j + d·Ṫ + h·ℓ (docs/processing-estimation.md).
 """
@@ -64,7 +65,7 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return a P2 unit's sections 1–5 (None for anything but a calibrated P2 unit)."""
     if getattr(unit_result, "result", None) is None or not hasattr(unit_result, "models"):
         return None
-    from imucalib.report.p2_figures import save_temperature_figure
+    from imucalib.procedures.p2.figures import save_temperature_figure
 
     cal = unit_result.result
     prov = cal.provenance
@@ -114,6 +115,6 @@ def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     details = dict(prov.details)
     sections = (object_section(details.get("unit", {"serial": unit_result.unit}),
                                str(unit_result.unit)),
-                equipment_section(meta, None, prov.software_version, procedure="p2"),
+                equipment_section(meta, None, prov.software_version),
                 environment_section(meta, site), process, results)
     return ReportContent(sections, decision, passed, tuple(recs), prov)

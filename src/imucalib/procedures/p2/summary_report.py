@@ -2,7 +2,8 @@
 
 A batch (P2: every unit of one recording, an "array", or of several, a "lot";
 :class:`~imucalib.procedures.p2.batch.P2BatchResult`) gets one report per calibrated unit
-(:func:`~imucalib.report.document.build_report`) and this summary: the units, the equipment and
+(:mod:`imucalib.procedures.p2.report`) and this summary, the ``summary_report`` hook of
+:class:`~imucalib.procedures.p2.procedure.P2Procedure`: the units, the equipment and
 conditions of the recordings, the process, a table with each unit's decision, the errors left
 after compensation, the parameters furthest from the lot (in robust standard deviations,
 1.4826·MAD), each unit's own report id, and the figure of every parameter across the units.
@@ -21,6 +22,7 @@ from imucalib.report.document import (
     ReportDocument,
     ReportTable,
     Section,
+    issued_now,
     report_id,
 )
 from imucalib.report.sections import (
@@ -31,7 +33,7 @@ from imucalib.report.sections import (
     recording_facts,
 )
 
-__all__ = ["summary_document"]
+__all__ = ["summary_report"]
 
 
 def _first_recording(batch: Any, recordings: Sequence[Any] | None) -> Any:
@@ -47,13 +49,30 @@ def _cell(value: float | None, scale: float, unit: str) -> str:
     return "—" if value is None else f"{value / scale:.3g} {unit}"
 
 
-def summary_document(batch: Any, *, recordings: Sequence[Any] | None = None,
-                     issued_utc: str, report_ids: Mapping[str, str] | None = None
-                     ) -> ReportDocument:
-    """Build the summary of `batch` (module docstring); see ``build_summary_report``."""
-    from imucalib.procedures.p2.batch import summary_rows
-    from imucalib.report.p2_figures import save_lot_figure
+def summary_report(batch: Any, *, recordings: Sequence[Any] | None = None,
+                   report_ids: Mapping[str, str] | None = None) -> ReportDocument:
+    """Build the summary report of an array or a production lot (module docstring).
 
+    Parameters
+    ----------
+    batch : P2BatchResult
+        Every unit's result (``results``), with ``recordings`` and ``unit`` ("array"/"lot").
+    recordings : sequence of Recording or path, optional
+        The recordings analysed, for the environment section (the first one's conditions).
+    report_ids : mapping of str to str, optional
+        Each unit's report id as issued (with its records id); default:
+        :func:`~imucalib.report.document.report_id` of the unit's result.
+
+    Returns
+    -------
+    ReportDocument
+        Sections: the units, equipment, environment, process, the per-unit table with each
+        unit's report id, the lot figure, and the conclusion (docs/reporting.md).
+    """
+    from imucalib.procedures.p2.batch import summary_rows
+    from imucalib.procedures.p2.figures import save_lot_figure
+
+    issued = issued_now()
     meta = recording_facts(_first_recording(batch, recordings))
     rows = summary_rows(batch)
     by_unit = {r.unit: r for r in batch.results}
@@ -81,8 +100,7 @@ def summary_document(batch: Any, *, recordings: Sequence[Any] | None = None,
                 (f"The items are the {len(batch.results)} IMUs of {article} {kind} calibrated "
                  f"together by procedure {batch.procedure.upper()}; each has its own report.",),
                 (units_table,)),
-        equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
-                          procedure=str(batch.procedure)),
+        equipment_section(meta, None, getattr(prov, "software_version", "") or "—"),
         environment_section(meta, {}),
         Section(SECTION_TITLES[3], (
             f"Procedure {batch.procedure.upper()} (docs/p2.md), every unit analysed on its own "
@@ -115,7 +133,7 @@ def summary_document(batch: Any, *, recordings: Sequence[Any] | None = None,
     return ReportDocument(
         title=f"Summary report {rid}: {batch.procedure.upper()} {kind} of "
               f"{len(batch.results)} unit(s)",
-        report_id=rid, issued_utc=issued_utc, sections=tuple(sections), passed=batch.passed)
+        report_id=rid, issued_utc=issued, sections=tuple(sections), passed=batch.passed)
 
 
 def _recording_of(unit_result: Any) -> str:

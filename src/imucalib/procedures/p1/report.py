@@ -1,5 +1,8 @@
 """P1's part of the calibration report: process, parameters, checks, residual and checks figures.
 
+The ``report_content`` hook of :class:`~imucalib.procedures.p1.procedure.P1Procedure` (sections
+1–5; :func:`~imucalib.report.document.assemble_report` adds the conclusion and the appendix).
+
 The results section holds every parameter with U = k·u (R.1 of :mod:`imucalib.report.document`),
 the verification checks, the conformity table against the plan's acceptance limits, the
 residual figure (per position and rate), the held-out/repeatability figure, and the noise model

@@ -1,6 +1,7 @@
 """The noise characterisation's (Allan's) part of the report: noise tables and Allan figures.
 
-Each static record's fitted noise terms (value ± u, k = 1, as the datasheet table gives them)
+The ``report_content`` hook of :class:`~imucalib.procedures.allan.procedure.AllanProcedure`:
+each static record's fitted noise terms (value ± u, k = 1, as the datasheet table gives them)
 and its Allan deviation figure per triad (docs/noise.md).
 """
 
@@ -25,7 +26,7 @@ def content(result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return the noise characterisation's sections 1–5 (None without its segments)."""
     if not hasattr(result, "segments"):
         return None
-    from imucalib.report.allan_figure import plot_allan_triad
+    from imucalib.procedures.allan.figures import plot_allan_triad
     from imucalib.report.noise_table import format_noise_table
 
     tables, figures, convention = [], [], ""

@@ -1,0 +1,47 @@
+"""What a calibration result document is: its format name and version, models, parameter names.
+
+Shared by :mod:`imucalib.models.result` (the result, which re-exports every name here) and
+:mod:`imucalib.models._result_reader` (the strict reader of its JSON), so that neither imports
+the other for them. The parameter names are documented in :mod:`imucalib.models.result`.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+from imucalib.conventions import AXES
+
+__all__ = ["MODELS", "RESULT_FORMAT", "RESULT_FORMAT_VERSION", "RTOL", "triad_parameter_names",
+           "triad_parameter_unit"]
+
+RESULT_FORMAT: Final = "imucalib-calibration-result"
+#: Version 2 adds ``fit_quality`` (χ²/ν, expected range, misfit flag per fitted triad); version 3
+#: adds ``temperature_models`` (one per temperature-dependent parameter). Files of versions 1 and
+#: 2 are read with none of what they lack.
+RESULT_FORMAT_VERSION: Final = 3
+MODELS: Final = ("triad", "per-axis")
+#: Relative tolerance of a result's consistency checks: a temperature model's c_0 against the
+#: parameter's value, and (in the reader) symmetry and ``std`` against √diag(covariance).
+RTOL: Final = 1e-9
+
+
+def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False,
+                          k2: bool = False) -> tuple[str, ...]:
+    """Return the parameter names of one triad under `model` (:mod:`imucalib.models.result`)."""
+    if model == "per-axis":
+        return (*(f"{triad}_K_{a}" for a in AXES), *(f"{triad}_b_{a}" for a in AXES))
+    names = [*(f"{triad}_bias_{a}" for a in AXES),
+             *(f"{triad}_M_{i}{j}" for i in AXES for j in AXES)]
+    if g_sensitivity:
+        names += [f"{triad}_G_{i}{j}" for i in AXES for j in AXES]
+    if k2:
+        names += [f"{triad}_K2_{a}" for a in AXES]
+    return tuple(names)
+
+
+def triad_parameter_unit(name: str) -> str:
+    """Return the SI unit of a parameter name (``gyro_bias_x`` → ``rad/s``)."""
+    triad, _, rest = name.partition("_")
+    symbol = rest.split("_")[0]
+    si = "m/s^2" if triad == "accel" else "rad/s"
+    return {"bias": si, "b": si, "G": "rad/s/(m/s^2)", "K2": "1/(m/s^2)"}.get(symbol, "1")
