@@ -1,7 +1,7 @@
 """The 4-position and up/down Earth-rate bias estimators of one gyro axis (docs/earth-rate-bias.md).
 
 With d_k = ȳ_k − ω_k, ȳ_k the window mean of the gyro axis and ω_k the reference Earth rate on
-it (IEEE Std 1431-2004 and 952-2020 static tests; the P4 source chapter):
+it (IEEE Std 1431-2004 and 952-2020 static tests; the MIMU chapter, docs/procedures.md):
 
 - 4-position (the axis horizontal, at azimuths ψ = 0, 90, 180, 270° in one pose):
 

@@ -35,7 +35,7 @@ class InstallationProcedure(GenericReporting):
     name = "installation"
     description = ("installation (misalignment) errors of the gyro triad on a single-axis "
                    "table: each axis up in turn, a +ω and a −ω turn over whole revolutions; "
-                   "the chapter's closed form and the least-squares triad model")
+                   "the MIMU chapter's closed form and the least-squares triad model")
     plan_options_type = InstallationPlanOptions
     plan_options = option_names(InstallationPlanOptions)
     analysis_options_type = InstallationAnalysisOptions

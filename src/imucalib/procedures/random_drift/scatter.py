@@ -11,8 +11,9 @@ For R repeated estimates x_r of one coefficient:
     u(random drift) = random drift/√(2(R − 1))                                                (4)
     σ_A(T) = √(Σ (x_{r+1} − x_r)²/(2(R − 1)))   (T the repetition interval)                   (5)
 
-In (3) the g-sensitive terms enter as their drift at 1 g (the P4 source chapter sums them with
-D0 in °/h); (4) takes the four s as independent and (1)'s relative uncertainty for each.
+In (3) the g-sensitive terms enter as their drift at 1 g (the MIMU chapter, docs/procedures.md,
+sums them with D0 in °/h); (4) takes the four s as independent and (1)'s relative uncertainty
+for each.
 
 Contents
 --------
