@@ -28,8 +28,9 @@ RANK = {
     "station": 6, "report": 6,
     "drivers": 7, "procedures": 7,
     "exports": 9, "records": 9,
-    "demo": 10, "cli": 10,
-    "__main__": 11, "__init__": 11,
+    "calibration": 10,
+    "demo": 11, "cli": 11,
+    "__main__": 12, "__init__": 12,
 }
 
 
@@ -146,12 +147,6 @@ KNOWN_EXCEPTIONS = {
     # written by write_outputs, not yet by a hook of the procedure
     ("exports/outputs.py", "imucalib.procedures.p2.figures"),
     ("exports/outputs.py", "imucalib.procedures.p2.batch"),
-    # `imucalib allan LOG`: the Allan analysis of a log without a plan is its own command
-    ("cli/allan.py", "imucalib.procedures.allan.analysis"),
-    # `imucalib calibrate A.h5 B.h5`: several recordings calibrated together (P2's lot) call
-    # analyze_p2 on the list; the Procedure protocol analyses one recording
-    ("cli/calibrate.py", "imucalib.procedures.p2.analysis"),
-    ("cli/calibrate.py", "imucalib.procedures.p2.batch"),
     # `imucalib segments --detector variance`: the field calibration's interval detector
     ("cli/recording.py", "imucalib.procedures.field.observations"),
 }

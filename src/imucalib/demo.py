@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-record", action="store_true", help="do not record the result")
     args = parser.parse_args(argv)
     console = Console()
-    from imucalib.exports.outputs import write_outputs
+    from imucalib.calibration import calibrate
     from imucalib.io.reader import open_recording
     from imucalib.plan import describe_plan, write_plan
     from imucalib.procedures import registry
@@ -99,20 +99,20 @@ def main(argv: list[str] | None = None) -> int:
         if summary.status != "done":
             raise CalibrationError(f"the run did not complete: {summary.reason}")
         console.rule("[bold]3. Calibrate and verify")
-        analysis = p1.analyze(path, options={"model": "triad"})
+        done = calibrate(path, procedure="p1", options={"model": "triad"}, out=args.out,
+                         record=not args.no_record, db=args.db, operator="demo")
+        analysis, written = done.result, done.written
         assert isinstance(analysis, P1Analysis)
-        written = write_outputs(analysis, args.out, name=path.stem)
         p1.render_console(console, analysis, written)
         console.rule("[bold]4. Against the truth")
         with open_recording(path) as rec:
             truth = rec.truth
         console.print(_truth_table(analysis, truth))
         if not args.no_record:
-            from imucalib.records.calibrations import record_calibration
-
             console.rule("[bold]5. Record")
-            console.print(record_calibration(analysis, path, db=args.db, operator="demo"),
-                          highlight=False, soft_wrap=True)
+            if done.record_error is not None:
+                raise done.record_error
+            console.print(done.record, highlight=False, soft_wrap=True)
     except CalibrationError as exc:
         Console(stderr=True).print(f"[bold red]error:[/] {exc}", highlight=False)
         return 2

@@ -51,6 +51,9 @@ class Good:
     def render_console(self, console, result, written):
         raise NotImplementedError
 
+    def analyze_many(self, recordings, *, units=None, options=None, progress=None):
+        raise NotImplementedError
+
     def summary_report(self, batch, *, recordings=None, report_ids=None):
         raise NotImplementedError
 

@@ -2,22 +2,35 @@
 
 No plan is needed: a CSV (canonical names, a ``--column-map``, or a ``rostopic echo -p`` export,
 detected by :mod:`imucalib.io.csv_layouts`) or a Recording is analysed as one static record by
-the Allan procedure's own analysis (:mod:`imucalib.procedures.allan.analysis`) and written by
-:func:`imucalib.exports.outputs.write_outputs` (docs/noise.md, "imucalib allan").
+the Allan procedure through the one pipeline (:func:`imucalib.calibration.calibrate`): the noise
+JSON, Kalibr and OpenVINS YAML (when every term they need was fitted), the datasheet table and
+the figures are written, and the noise terms with their uncertainties are recorded like any
+calibration (docs/noise.md, "imucalib allan").
 """
 
 from __future__ import annotations
 
+import getpass
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from imucalib.cli._app import app, console, fail
 from imucalib.cli._import_options import ImportOptions, with_import_options
-from imucalib.errors import CalibrationError, InvalidInputError
+from imucalib.errors import CalibrationError
 
 __all__ = ["allan"]
+
+
+def _formats(result: Any) -> Sequence[str]:
+    """Return the outputs of a bare log: Kalibr/OpenVINS YAML only when both triads fit."""
+    formats = ["noise-json", "noise-table", "figures"]
+    seg = result.segments[0]
+    if seg.fits("gyro") and seg.fits("accel"):
+        formats[1:1] = ["kalibr-yaml", "openvins-yaml"]
+    return formats
 
 
 @app.command()
@@ -29,35 +42,25 @@ def allan(
     *,
     import_options: ImportOptions,
     imu: Annotated[str | None, typer.Option(help="IMU stream of a recording.")] = None,
+    db: Annotated[str | None, typer.Option(
+        "--db", help="Records database (default: $IMUCALIB_DB, else records.db in the user's "
+                     "data directory; docs/records.md).")] = None,
+    no_record: Annotated[bool, typer.Option(
+        "--no-record", help="Do not record the noise terms in the records database.")] = False,
 ) -> None:
     """Allan deviations and noise terms of a static log, without a plan (docs/noise.md)."""
-    from imucalib.exports.outputs import write_outputs
-    from imucalib.procedures import registry
-    from imucalib.procedures.allan.analysis import analyze_allan_arrays, analyze_allan_recording
+    from imucalib.calibration import RECORDING_SUFFIXES, calibrate
 
     try:
-        if data.suffix.lower() in (".h5", ".hdf5"):
-            result = analyze_allan_recording(data, unit=imu)
-        else:
-            import numpy as np
-
-            from imucalib.io.import_spec import read_imu_table
-
-            frame = read_imu_table(data, import_options.spec())
-            t = np.asarray(frame.index, dtype=np.float64)
-            cols = {c: frame[c].to_numpy() for c in frame.columns}
-            result = analyze_allan_arrays(t, cols, source=str(data), unit=imu or "imu")
-        folder = out if out is not None else data.parent
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            formats = ["noise-json", "noise-table", "figures"]
-            seg = result.segments[0]
-            if seg.fits("gyro") and seg.fits("accel"):
-                formats[1:1] = ["kalibr-yaml", "openvins-yaml"]
-            written = write_outputs(result, folder, formats, name=data.stem)
-        except OSError as exc:
-            raise InvalidInputError(f"cannot write the outputs into {folder}: "
-                                    f"{exc.strerror or exc}") from exc
+        log = data.suffix.lower() not in RECORDING_SUFFIXES
+        done = calibrate(data, procedure="allan",
+                         options={"import_spec": import_options.spec()} if log else None,
+                         unit=imu, out=out, formats=_formats, record=not no_record, db=db,
+                         operator=getpass.getuser())
     except CalibrationError as exc:
         raise fail(exc) from exc
-    registry.get(result.procedure).render_console(console, result, written)
+    done.procedure.render_console(console, done.result, done.written)
+    if done.record_error is not None:
+        raise fail(done.record_error)
+    if done.record is not None:
+        console.print(done.record, highlight=False, soft_wrap=True)

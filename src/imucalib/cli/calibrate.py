@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import getpass
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -18,44 +18,28 @@ from imucalib.units import DEG_PER_H, G0_MPS2
 
 if TYPE_CHECKING:
     from imucalib.io.import_spec import ImportSpec
-    from imucalib.procedures.common.procedure import ProcedureResult
+    from imucalib.procedures.common.procedure import Procedure
 
-__all__ = ["apply", "calibrate", "run_calibration"]
+__all__ = ["analysis_options", "apply", "calibrate"]
 
 
-def run_calibration(recording: Path, imu: str | None, model: str, out: Path | None, *,
-                    progress: Callable[[float], None] | None = None,
-                    extra: dict[str, Any] | None = None,
-                    more: Sequence[Path] = (), procedure_name: str | None = None,
-                    settings: Sequence[str] = ()
-                    ) -> tuple[ProcedureResult, list[Path]]:
-    """Analyse a recording with its procedure (the registry's choice); write its outputs.
+def analysis_options(procedure: Procedure, recording: Path, model: str,
+                     extra: dict[str, Any] | None, settings: Sequence[str]) -> dict[str, Any]:
+    """Return the analysis options the command line gave `procedure`.
 
-    `progress` is given the fraction of the analysis done (the procedure's own measure).
-    `extra` holds procedure options given on the command line (refused by a procedure that
-    does not take them); `settings` the ``--set NAME=VALUE`` texts, read by the procedure's
-    analysis options (:func:`~imucalib.procedures.common.options.parse_assignment`); `more`
-    further recordings of a lot (P2 only). `procedure_name`
-    names the procedure instead of the recording's roles; a log that is not a Recording (a
-    CSV) is then analysed directly by a procedure that takes ``import_spec`` (the field
-    calibration).
+    `extra` holds the options of the dedicated flags (``--latitude``, ``--gyro-form`` …; None
+    when not given), refused by a procedure that does not take them; `settings` the ``--set
+    NAME=VALUE`` texts, read by the procedure's analysis options
+    (:func:`~imucalib.procedures.common.options.parse_assignment`).
+
+    Raises
+    ------
+    InvalidInputError, ConfigurationError
+        An option the procedure does not take, a value it does not read, an option given twice.
     """
-    from imucalib.exports.outputs import write_outputs
-    from imucalib.io.reader import open_recording
-    from imucalib.procedures import registry
     from imucalib.procedures.common.options import parse_assignment
 
-    if procedure_name is None:
-        with open_recording(recording) as rec:
-            name = registry.identify(rec)
-    else:
-        name = procedure_name
-    procedure = registry.get(name)
-    if recording.suffix.lower() not in (".h5", ".hdf5") and \
-            "import_spec" not in procedure.analysis_options:
-        raise InvalidInputError(f"procedure {name} analyses a Recording of its plan; "
-                                f"{recording} is a log (a CSV goes through --steps, "
-                                "docs/import.md)")
+    name = procedure.name
     options: dict[str, Any] = {"model": model} if "model" in procedure.analysis_options else {}
     given = {k: v for k, v in (extra or {}).items() if v is not None}
     refused = sorted(set(given) - set(procedure.analysis_options))
@@ -70,26 +54,7 @@ def run_calibration(recording: Path, imu: str | None, model: str, out: Path | No
         if key in given:
             raise InvalidInputError(f"--set {key} repeats an option given by its own flag")
         options[key] = value
-    if more:
-        if name != "p2":
-            raise InvalidInputError(f"several recordings are calibrated together only by P2 "
-                                    f"(a production lot); {recording} is a {name} recording")
-        from imucalib.procedures.p2.analysis import P2Options
-        from imucalib.procedures.p2.batch import analyze_p2
-
-        workers = int(options.pop("workers", 1))
-        scheduler = options.pop("scheduler", None)
-        result: ProcedureResult = analyze_p2(
-            [recording, *more], units=[imu] if imu else None, options=P2Options(**options),
-            workers=workers, scheduler=scheduler, progress=progress)
-    else:
-        result = procedure.analyze(recording, unit=imu, options=options, progress=progress)
-    folder = out if out is not None else recording.parent
-    try:
-        return result, write_outputs(result, folder, name=recording.stem)
-    except OSError as exc:
-        raise InvalidInputError(f"cannot write the outputs into {folder}: "
-                                f"{exc.strerror or exc}") from exc
+    return options
 
 
 def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path | None,
@@ -264,6 +229,8 @@ def calibrate(
     DATA.csv` with the import options of `imucalib segments` (docs/field.md). The result is
     recorded in the records database (docs/records.md; ``--no-record`` skips it).
     """
+    from imucalib.calibration import calibrate as run_pipeline
+    from imucalib.calibration import procedure_of
     from imucalib.procedures import registry
 
     try:
@@ -301,23 +268,20 @@ def calibrate(
                                                spec=import_options.spec())
             console.print(f"imported into {recording} (table stream reconstructed from the "
                           "step file)", highlight=False)
+        proc = procedure_of(recording, procedure_name)
+        options = analysis_options(proc, recording, model, extra, settings or ())
         with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
-            result, written = run_calibration(
-                recording, imu, model, out, progress=update, more=tuple(more or ()),
-                extra=extra, procedure_name=procedure_name, settings=tuple(settings or ()))
+            done = run_pipeline(recording, procedure=proc.name, options=options, unit=imu,
+                                more=tuple(more or ()), out=out, record=not no_record, db=db,
+                                operator=getpass.getuser(), progress=update)
     except CalibrationError as exc:
         raise fail(exc) from exc
-    registry.get(result.procedure).render_console(console, result, written)
-    if not no_record:
-        from imucalib.records.calibrations import record_calibration
-
-        try:
-            console.print(record_calibration(result, recording, db=db,
-                                             operator=getpass.getuser()), highlight=False,
-                          soft_wrap=True)
-        except CalibrationError as exc:
-            raise fail(exc) from exc
-    if result.passed is False:
+    done.procedure.render_console(console, done.result, done.written)
+    if done.record_error is not None:
+        raise fail(done.record_error)
+    if done.record is not None:
+        console.print(done.record, highlight=False, soft_wrap=True)
+    if done.result.passed is False:
         raise typer.Exit(code=1)
 
 

@@ -78,6 +78,21 @@ class ScaleFactorProcedure:
             progress(1.0)
         return result
 
+    def analyze_many(self, recordings: Sequence[Recording | str | os.PathLike[str]], *,
+                     units: Sequence[str] | None = None,
+                     options: Mapping[str, Any] | None = None,
+                     progress: Callable[[float], None] | None = None) -> ScaleFactorResult:
+        """Refuse: one recording is one unit's test (no lot is calibrated together).
+
+        Raises
+        ------
+        InvalidInputError
+            Always.
+        """
+        from imucalib.errors import InvalidInputError
+
+        raise InvalidInputError("the scale-factor test analyses one recording at a time")
+
     def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
         """Return the report's sections 1–5: imucalib's generic content of `result`.
 

@@ -181,6 +181,26 @@ class NoiseCharacterization:
         """None: a noise characterisation decides nothing."""
         return None
 
+    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
+        """Return every detected noise term with its standard uncertainty, for the records.
+
+        One row ``(name, value, σ, SI unit)`` per detected term of each channel's fit, named
+        ``<axis>_<term>`` (``gyro_x_N``; docs/noise.md), prefixed ``r<k>.`` by its record's
+        index when the characterisation holds more than one record. A term whose σ is not
+        known is left out (the noise JSON keeps it).
+        """
+        several = len(self.segments) > 1
+        rows = []
+        for k, seg in enumerate(self.segments):
+            prefix = f"r{k}." if several else ""
+            for ch in seg.channels:
+                for term in ch.fit.terms:
+                    if term.detected and math.isfinite(term.value_si) and \
+                            math.isfinite(term.std_si):
+                        rows.append((f"{prefix}{ch.axis_name}_{term.name}",
+                                     float(term.value_si), float(term.std_si), term.unit_si))
+        return rows
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (the body of :meth:`to_json`)."""
         return {"format": _FORMAT_NAME, "format_version": self.format_version,

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from imucalib.io.import_spec import ImportSpec
 from imucalib.plan.bounds import (
     MAX_RECORD_S,
     MAX_TEMPERATURE_DEGC,
@@ -58,4 +59,13 @@ class AllanPlanOptions:
 
 @dataclass(frozen=True)
 class AllanAnalysisOptions:
-    """The keys :func:`~.analysis.analyze_allan_recording` takes as ``options``: none."""
+    """The keys the Allan analysis takes as ``options``: how to read a log that is not a Recording.
+
+    A Recording is analysed by :func:`~.analysis.analyze_allan_recording` (no options); a CSV
+    or text log (``imucalib allan DATA``) as one static record by
+    :func:`~.analysis.analyze_allan_arrays`, read with ``import_spec``.
+    """
+
+    import_spec: ImportSpec | None = option(
+        None, help="How to read a log that is not a Recording (its columns, units, header).",
+        python_only="given by the import options of `imucalib allan DATA` (docs/import.md)")

@@ -13,10 +13,10 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from imucalib.errors import InvalidInputError
 from imucalib.procedures.allan.options import AllanAnalysisOptions, AllanPlanOptions
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
-from imucalib.procedures.common.reporting import GenericReporting
+from imucalib.procedures.common.procedure import accepted_options
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "AllanProcedure"]
 
 
-class AllanProcedure(GenericReporting):
+class AllanProcedure(ProcedureDefaults):
     """Noise characterisation (IEEE 952 Annex C) of the static records of a recording."""
 
     name = "allan"
@@ -52,18 +52,37 @@ class AllanProcedure(GenericReporting):
                 progress: Callable[[float], None] | None = None) -> NoiseCharacterization:
         """Run :func:`~imucalib.procedures.allan.analysis.analyze_allan_recording`.
 
-        `progress`, when given, is called with the fraction of the records analysed.
+        A log that is not a Recording (a CSV, a ``rostopic echo -p`` export) is read with
+        ``options["import_spec"]`` and analysed as one static record
+        (:func:`~imucalib.procedures.allan.analysis.analyze_allan_arrays`). `progress`, when
+        given, is called with the fraction of the records analysed.
 
         Raises
         ------
         InvalidInputError
-            Any option (this procedure takes none).
+            An option other than ``import_spec``.
         """
-        from imucalib.procedures.allan.analysis import analyze_allan_recording
+        from imucalib.procedures.allan.analysis import (
+            analyze_allan_arrays,
+            analyze_allan_recording,
+        )
 
-        if options:
-            raise InvalidInputError(f"procedure allan takes no options; got {sorted(options)}")
-        return analyze_allan_recording(recording, unit=unit, progress=progress)
+        opts = accepted_options(self.name, options, self.analysis_options)
+        spec = opts.pop("import_spec", None)
+        path = None if hasattr(recording, "path") else Path(recording)
+        if path is None or path.suffix.lower() in (".h5", ".hdf5"):
+            return analyze_allan_recording(recording, unit=unit, progress=progress)
+        import numpy as np
+
+        from imucalib.io.import_spec import read_imu_table
+
+        frame = read_imu_table(path, spec)
+        cols = {c: frame[c].to_numpy() for c in frame.columns}
+        result = analyze_allan_arrays(np.asarray(frame.index, dtype=np.float64), cols,
+                                      source=str(path), unit=unit or "imu")
+        if progress is not None:
+            progress(1.0)
+        return result
 
     def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
         """Return the noise tables and Allan figures of the report (:mod:`.allan.report`).

@@ -207,6 +207,23 @@ class Procedure(Protocol):
         """
         ...
 
+    def analyze_many(self, recordings: Sequence[Recording | str | os.PathLike[str]], *,
+                     units: Sequence[str] | None = None,
+                     options: Mapping[str, Any] | None = None,
+                     progress: Callable[[float], None] | None = None) -> ProcedureResult:
+        """Analyse several recordings as one: a production lot (P2: one cube per recording).
+
+        :func:`imucalib.calibration.calibrate` calls it for ``imucalib calibrate REC MORE…``;
+        a procedure that analyses one recording at a time refuses
+        (:class:`~imucalib.procedures.common.defaults.ProcedureDefaults`).
+
+        Raises
+        ------
+        InvalidInputError
+            The procedure analyses one recording at a time.
+        """
+        ...
+
     def summary_report(self, batch: ProcedureResult, *,
                        recordings: Sequence[Any] | None = None,
                        report_ids: Mapping[str, str] | None = None) -> ReportDocument:

@@ -10,9 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.earth_rate_bias.options import (
     EarthRateBiasAnalysisOptions,
     EarthRateBiasPlanOptions,
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "EarthRateBiasProcedure"]
 
 
-class EarthRateBiasProcedure(GenericReporting):
+class EarthRateBiasProcedure(ProcedureDefaults):
     """Navigation-grade gyro bias against Earth rate: 4-position and up/down methods."""
 
     name = "earth-rate-bias"

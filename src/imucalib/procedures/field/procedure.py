@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.field.options import FieldAnalysisOptions, FieldPlanOptions
 
 if TYPE_CHECKING:
@@ -34,7 +34,7 @@ __all__ = ["PROCEDURE", "FieldProcedure"]
 _RECORDING_SUFFIXES = (".h5", ".hdf5")
 
 
-class FieldProcedure(GenericReporting):
+class FieldProcedure(ProcedureDefaults):
     """Field calibration by hand: accelerometer from poses, gyro from rotations."""
 
     name = "field"

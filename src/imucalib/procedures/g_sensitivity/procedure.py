@@ -10,9 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.g_sensitivity.options import (
     GSensitivityAnalysisOptions,
     GSensitivityPlanOptions,
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "GSensitivityProcedure"]
 
 
-class GSensitivityProcedure(GenericReporting):
+class GSensitivityProcedure(ProcedureDefaults):
     """Gyro g-sensitivity (D0 + D1·a_x + D2·a_y + D3·a_z per axis) on a dual-axis table."""
 
     name = "g-sensitivity"

@@ -13,9 +13,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.installation.options import (
     InstallationAnalysisOptions,
     InstallationPlanOptions,
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "InstallationProcedure"]
 
 
-class InstallationProcedure(GenericReporting):
+class InstallationProcedure(ProcedureDefaults):
     """Installation errors: the gyro triad's misalignment angles from ±ω turns."""
 
     name = "installation"

@@ -14,9 +14,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.p1.options import P1AnalysisOptions, P1PlanOptions
 
 if TYPE_CHECKING:
@@ -33,7 +33,7 @@ __all__ = ["PROCEDURE", "P1Procedure"]
 MODELS = ("triad", "per-axis")
 
 
-class P1Procedure(GenericReporting):
+class P1Procedure(ProcedureDefaults):
     """Procedure P1: two-dimensional calibration of an IMU on a dual-axis table."""
 
     name = "p1"

@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.p2.options import P2AnalysisOptions, P2PlanOptions
 
 if TYPE_CHECKING:
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "P2Procedure"]
 
 
-class P2Procedure(GenericReporting):
+class P2Procedure(ProcedureDefaults):
     """Procedure P2: array full-temperature calibration on a cube in a chamber."""
 
     name = "p2"
@@ -60,6 +60,24 @@ class P2Procedure(GenericReporting):
         InvalidInputError
             An unknown option.
         """
+        path = Path(recording.path if hasattr(recording, "path") else recording)
+        return self.analyze_many([path], units=[unit] if unit else None, options=options,
+                                 progress=progress)
+
+    def analyze_many(self, recordings: Sequence[Recording | str | os.PathLike[str]], *,
+                     units: Sequence[str] | None = None,
+                     options: Mapping[str, Any] | None = None,
+                     progress: Callable[[float], None] | None = None) -> P2BatchResult:
+        """Run :func:`~imucalib.procedures.p2.batch.analyze_p2` on a lot (one cube each).
+
+        `options` ``workers`` and ``scheduler`` run the units in parallel (local processes or a
+        Dask scheduler); the others are :class:`~imucalib.procedures.p2.analysis.P2Options`.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option.
+        """
         from imucalib.procedures.p2.analysis import P2Options
         from imucalib.procedures.p2.batch import analyze_p2
 
@@ -70,8 +88,9 @@ class P2Procedure(GenericReporting):
             p2_options = P2Options(**opts)
         except TypeError as exc:
             raise InvalidInputError(f"procedure p2: {exc}") from None
-        path = Path(recording.path if hasattr(recording, "path") else recording)
-        return analyze_p2(path, units=[unit] if unit else None, options=p2_options,
+        paths = [Path(r.path if hasattr(r, "path") else r) for r in recordings]
+        return analyze_p2(paths[0] if len(paths) == 1 else paths,
+                          units=list(units) if units else None, options=p2_options,
                           workers=workers, scheduler=scheduler, progress=progress)
 
     def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:

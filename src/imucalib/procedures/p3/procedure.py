@@ -13,9 +13,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.p3.options import P3AnalysisOptions, P3PlanOptions
 
 if TYPE_CHECKING:
@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "P3Procedure"]
 
 
-class P3Procedure(GenericReporting):
+class P3Procedure(ProcedureDefaults):
     """Procedure P3: accelerometer K2 on a centrifuge with dynamic-unbalance compensation."""
 
     name = "p3"

@@ -10,9 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.random_drift.options import (
     RandomDriftAnalysisOptions,
     RandomDriftPlanOptions,
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "RandomDriftProcedure"]
 
 
-class RandomDriftProcedure(GenericReporting):
+class RandomDriftProcedure(ProcedureDefaults):
     """Gyro random drift and accelerometer zero stability from repeated positions."""
 
     name = "random-drift"

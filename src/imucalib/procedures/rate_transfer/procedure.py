@@ -13,9 +13,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.rate_transfer.options import (
     RateTransferAnalysisOptions,
     RateTransferPlanOptions,
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "RateTransferProcedure"]
 
 
-class RateTransferProcedure(GenericReporting):
+class RateTransferProcedure(ProcedureDefaults):
     """Gyro rate transfer: scale factor, bias, nonlinearity and asymmetry per axis."""
 
     name = "rate-transfer"

@@ -10,9 +10,9 @@ import os
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
-from imucalib.procedures.common.reporting import GenericReporting
 from imucalib.procedures.tumble.options import TumbleAnalysisOptions, TumblePlanOptions
 
 if TYPE_CHECKING:
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 __all__ = ["PROCEDURE", "TumbleProcedure"]
 
 
-class TumbleProcedure(GenericReporting):
+class TumbleProcedure(ProcedureDefaults):
     """The accelerometer multi-position tumble on a dividing head (IEEE Std 1293)."""
 
     name = "tumble"
