@@ -42,6 +42,13 @@ def test_calibrations_are_recorded_queried_reviewed_amended_verified_and_backed_
     assert len(points) == 2 and (tmp_path / "drift.png").stat().st_size > 1000
     cal = CalibrationResult.load(first)
     assert points[0]["value"] == cal.value("accel_bias_x")
+    # without --json: in the display unit of a bias (µg), as every console shows it
+    res = runner.invoke(app, ["records", "drift", "SN-7", "accel_bias_x", "--db", db],
+                        terminal_width=200)
+    assert res.exit_code == 0, res.output
+    ug = cal.value("accel_bias_x") / (1e-6 * 9.80665)
+    first_row = next(line for line in res.output.splitlines() if line.count("│") >= 5)
+    assert "µg" in first_row and f"{ug:+.0f}"[:3] in first_row.replace(" ", "")
     first_id = rows[0]["result_id"]
     res = runner.invoke(app, ["records", "review", str(first_id), "--who", "A. Auditor",
                               "--comment", "ok", "--db", db])

@@ -123,21 +123,33 @@ def drift(serial: Annotated[str, typer.Argument(help="The unit's serial number."
           db: Db = None, as_json: Json = False,
           figure: Annotated[Path | None, typer.Option(
               "--figure", help="Also draw the values with their 2σ bars (PNG).")] = None) -> None:
-    """One parameter of a unit across its calibrations."""
+    """One parameter of a unit across its calibrations (in its display unit; --json: SI)."""
+    from imucalib.report.console import display_parameter, display_unit
+
     try:
         with _open(db) as records:
             rows = records.drift(serial, parameter)
+        si_unit = rows[0].unit if rows else ""
+        shown_unit, scale = display_unit(parameter, si_unit)
         if figure is not None:
             from imucalib.report.drift_figure import save_drift_figure
 
             save_drift_figure(figure, [r.calibrated_utc for r in rows],
-                              [r.value for r in rows], [r.std for r in rows],
-                              title=f"{serial} {parameter}",
-                              unit=rows[0].unit if rows else "")
+                              [r.value / scale for r in rows], [r.std / scale for r in rows],
+                              title=f"{serial} {parameter}", unit=shown_unit)
     except CalibrationError as exc:
         raise fail(exc) from exc
-    _print(rows, as_json, f"{parameter} of {serial}",
-           ["calibrated_utc", "value", "std", "unit", "result_id"])
+    if as_json:
+        _print(rows, as_json, f"{parameter} of {serial}",
+               ["calibrated_utc", "value", "std", "unit", "result_id"])
+        return
+    table = Table("calibrated_utc", "value", "std", "unit", "result_id",
+                  title=f"{parameter} of {serial}")
+    for r in rows:
+        value, std, unit = display_parameter(parameter, r.value, r.std, r.unit)
+        table.add_row(str(_jsonable(r).get("calibrated_utc") or ""), value, std, unit,
+                      str(r.result_id))
+    console.print(table)
 
 
 @records_app.command()

@@ -18,6 +18,7 @@ Contents
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -29,18 +30,33 @@ from rich.table import Column, Table
 from imucalib import units
 from imucalib.report.numbers import round_pair
 
-__all__ = ["display_parameter", "display_unit", "print_written", "render_generic"]
+__all__ = ["DISPLAY_UNITS", "display_parameter", "display_unit", "print_written",
+           "render_generic"]
 
-# display unit of each parameter symbol: (unit text, SI value of one display unit); M's
-# off-diagonal (misalignment) elements are in _OFF_DIAGONAL instead (docs/reporting.md)
-_DISPLAY = {
-    ("accel", "bias"): ("µg", units.UG), ("accel", "b"): ("µg", units.UG),
-    ("gyro", "bias"): ("°/h", units.DEG_PER_H), ("gyro", "b"): ("°/h", units.DEG_PER_H),
-    ("accel", "K"): ("ppm", units.PPM), ("gyro", "K"): ("ppm", units.PPM),
-    ("accel", "M"): ("ppm", units.PPM), ("gyro", "M"): ("ppm", units.PPM),
-    ("gyro", "G"): ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2),
+#: The display unit of each kind of quantity, by its SI unit: (unit text, SI value of one display
+#: unit). One table for every console, report and records view (docs/reporting.md, "Display
+#: units"); a quantity whose SI unit is not here is shown in SI.
+DISPLAY_UNITS: dict[str, tuple[str, float]] = {
+    "m/s^2": ("µg", units.UG),                                      # accelerometer bias, K0
+    "rad/s": ("°/h", units.DEG_PER_H),                              # gyro bias, drift
+    "(rad/s)/(m/s^2)": ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2),  # g-sensitivity G, D1–D3
+    "rad/s/(m/s^2)": ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2),    # (the same, as P1 writes)
+    "1/(m/s^2)": ("µg/g²", units.UG / units.G0_MPS2**2),            # K2, Kip (output per input²)
+    "1/(m/s^2)^2": ("µg/g³", units.UG / units.G0_MPS2**3),          # K3
+    "s/rad": ("ppm/(°/s)", units.PPM / units.DEG_PER_S),            # a gyro's quadratic term
+    "1": ("ppm", units.PPM),                                        # scale factor, misalignment
+    "rad": ("µrad", units.URAD),                                    # small angles
 }
+#: A dimensionless parameter that is a small angle: an off-diagonal M element (misalignment).
 _OFF_DIAGONAL = ("µrad", units.URAD)
+#: Names of scale factors (about 1), shown as their deviation from 1 in ppm.
+_SCALE_FACTOR = re.compile(r"(^|_)(K|K1|scale_factor|scale_from_earth_rate)(_|$)")
+
+
+def _is_misalignment(parts: list[str]) -> bool:
+    """Whether a name's parts are an off-diagonal element of M (``gyro_M_xy``)."""
+    return (len(parts) >= 3 and parts[1] == "M" and len(parts[2]) == 2
+            and parts[2][0] != parts[2][1])
 
 
 def display_parameter(name: str, value: float, sigma: float, si_unit: str
@@ -48,29 +64,41 @@ def display_parameter(name: str, value: float, sigma: float, si_unit: str
     """(value, uncertainty, unit) cells of one parameter in its display unit, GUM 7.2.6 rounding.
 
     `sigma` may be a standard or an expanded uncertainty: it is rounded to two significant
-    digits and the value to the same decimal place (docs/reporting.md). A scale factor ``K`` is
-    shown as its deviation from 1.
+    digits and the value to the same decimal place (docs/reporting.md). A scale factor (``K``,
+    ``K1``, ``scale_factor`` …, dimensionless) is shown as its deviation from 1.
     """
     unit, scale = display_unit(name, si_unit)
-    shown = value - 1.0 if name.split("_")[1:2] == ["K"] else value  # K as its deviation from 1
+    shown = value - 1.0 if _is_scale_factor(name, si_unit) else value
     cells = round_pair(shown / scale, sigma / scale, sign=True)
     return cells.value_text, cells.uncertainty_text, unit
 
 
-def display_unit(name: str, si_unit: str) -> tuple[str, float]:
-    """Return (display unit, SI value of one display unit) of a triad parameter (docs/reporting.md).
+def _is_scale_factor(name: str, si_unit: str) -> bool:
+    return si_unit in ("1", "") and bool(_SCALE_FACTOR.search(name)) and \
+        not _is_misalignment(name.split("_"))
 
-    ``accel_bias_x`` → ("µg", 9.80665e-6); an M off-diagonal element → ("µrad", 1e-6); a name
-    outside the table keeps its SI unit (scale 1).
+
+def display_unit(name: str, si_unit: str) -> tuple[str, float]:
+    """Return (display unit, SI value of one display unit) of a parameter (docs/reporting.md).
+
+    By its SI unit (:data:`DISPLAY_UNITS`): ``accel_bias_x`` in m/s² → ("µg", 9.80665e-6), a
+    gyro bias in rad/s → ("°/h", …); an off-diagonal M element → ("µrad", 1e-6); a triad
+    parameter of the model (``accel_b_x``, ``gyro_G_xy``) by the kind its name says; any other
+    quantity keeps its SI unit (scale 1).
     """
     parts = name.split("_")
-    if len(parts) < 2:
-        return si_unit, 1.0
-    triad, symbol = parts[0], parts[1]
-    unit, scale = _DISPLAY.get((triad, symbol), (si_unit, 1.0))
-    if symbol == "M" and len(parts) == 3 and len(parts[2]) == 2 and parts[2][0] != parts[2][1]:
-        unit, scale = _OFF_DIAGONAL  # a misalignment, a small angle
-    return unit, scale
+    if _is_misalignment(parts):
+        return _OFF_DIAGONAL
+    if len(parts) >= 2:  # a triad parameter's kind is its name's (whatever unit it was given)
+        si_unit = _P1_SI_UNITS.get((parts[0], parts[1]), si_unit)
+    return DISPLAY_UNITS.get(si_unit, (si_unit, 1.0))
+
+
+#: The SI unit of each symbol of the triad model (docs/reporting.md).
+_P1_SI_UNITS = {("accel", "bias"): "m/s^2", ("accel", "b"): "m/s^2",
+                ("gyro", "bias"): "rad/s", ("gyro", "b"): "rad/s",
+                ("accel", "K"): "1", ("gyro", "K"): "1", ("accel", "M"): "1", ("gyro", "M"): "1",
+                ("gyro", "G"): "(rad/s)/(m/s^2)"}
 
 
 def print_written(console: Console, written: Sequence[Path]) -> None:
@@ -89,12 +117,12 @@ def render_generic(console: Console, result: Any, written: Sequence[Path]) -> No
     rows = getattr(result, "parameter_rows", None)
     if callable(rows):
         table = Table("parameter", Column("value", justify="right"),
-                      Column("std. uncertainty", justify="right"), "unit (SI)",
+                      Column("std. uncertainty", justify="right"), "unit",
                       title=f"{result.procedure} {result.unit}")
         for name, value, sigma, unit in rows():
-            cells = round_pair(float(value), float(sigma), sign=True)
-            table.add_row(escape(str(name)), cells.value_text, cells.uncertainty_text,
-                          escape(str(unit)))
+            value_text, sigma_text, shown = display_parameter(str(name), float(value),
+                                                              float(sigma), str(unit))
+            table.add_row(escape(str(name)), value_text, sigma_text, escape(shown))
         console.print(table)
     verdict = {None: "no decision", True: "PASS", False: "FAIL"}[result.passed]
     console.print(f"{result.procedure} result for {result.unit}: {verdict}", highlight=False)

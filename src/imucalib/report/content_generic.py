@@ -25,7 +25,6 @@ from imucalib.report.document import (
 from imucalib.report.sections import (
     environment_section,
     equipment_section,
-    expanded_cells,
     object_section,
     recommendations,
     temperature_model_table,
@@ -36,7 +35,7 @@ __all__ = ["content"]
 
 
 def _rows(result: Any, cal: Any) -> list[tuple[str, str, str, str]]:
-    """(parameter, value, U, unit) rows: triad parameters in display units, others in SI."""
+    """(parameter, value, U, unit) rows, each in the display unit of its kind of quantity."""
     from imucalib.report.console import display_parameter
 
     rows_of = getattr(result, "parameter_rows", None)
@@ -48,13 +47,8 @@ def _rows(result: Any, cal: Any) -> list[tuple[str, str, str, str]]:
     else:
         raise InvalidInputError(f"a {result.procedure} result has no parameter rows: no report "
                                 "can be built from it")
-    rows = []
-    for name, value, sigma, unit in items:
-        if name.startswith(("accel_", "gyro_")) and name.count("_") >= 2:
-            rows.append((name, *display_parameter(name, value, COVERAGE_FACTOR * sigma, unit)))
-        else:
-            rows.append((name, *expanded_cells(value, sigma), unit))
-    return rows
+    return [(name, *display_parameter(name, value, COVERAGE_FACTOR * sigma, unit))
+            for name, value, sigma, unit in items]
 
 
 def _process(result: Any, cal: Any, description: str | None, documentation: str
