@@ -77,6 +77,9 @@ def test_a_procedures_options_are_listed_by_name():
     assert result.exit_code == 0, result.output
     assert "--n-positions" in result.output and "Python only: twin" in result.output
     assert "analysis options (imucalib calibrate): " in result.output
+    assert "step roles of tumble" in result.output  # what a step file's `role` may say
+    for role, meaning in registry.get("tumble").roles.items():
+        assert f"│ {role} " in result.output and meaning.split()[0] in result.output
     bad = runner.invoke(app, ["procedures", "p9"])
     assert bad.exit_code == 2 and "unknown procedure 'p9'" in bad.output
 

@@ -39,11 +39,15 @@ def test_a_step_file_parses_and_writes_back_equal():
     ("x = [", "is not valid TOML"),
     ('format = "imucalib-plan"\n' + HEAD + POSITION, "expected 'imucalib-steps'"),
     (HEAD, "steps: Field required"),
-    (HEAD + POSITION.replace("p1.accel-position", "p1.accel-postion"),
-     "steps[0]: role 'p1.accel-postion' is not one of p1.accel-position"),
-    (HEAD + POSITION.replace("angles_deg = [0.0, 0.0]\n", ""),
-     "steps[0]: a p1.accel-position step needs `angles_deg`"),
+    (HEAD + POSITION.replace("p1.accel-position", "accel-position"),
+     "steps[0]: role 'accel-position' is neither '<procedure>.<purpose>'"),
+    (HEAD + POSITION.replace("p1.accel-position", "p1 .accel"), "is neither"),
+    (HEAD + POSITION + RATE.replace("angles_deg = [0.0, 0.0]\n", ""),
+     "steps[1]: a p1.gyro-rate step needs `angles_deg` (the table angles, outer axis first), "
+     "as steps[0] gives them"),
     (HEAD + RATE.replace('axis = "pitch"\n', ""), "needs `axis` (the turning table axis)"),
+    (HEAD + RATE.replace('rate_dps = 100.0\n', ""), "a turn (a p1.gyro-rate step with `axis`) "
+                                                    "needs `rate_dps`"),
     (HEAD + RATE.replace('axis = "pitch"', 'axis = "yaw"'),
      "steps[0] : `axis` 'yaw' is not one of table_axes ['pitch', 'roll']"),
     (HEAD + POSITION.replace("[0.0, 0.0]", "[0.0]"),
@@ -65,6 +69,22 @@ def test_defects_are_named_with_their_step_and_field(text, expected):
     message = str(err.value).replace("steps[0] : ", "steps[0]: ")
     assert message.startswith("steps.toml")
     assert expected.replace("steps[0] : ", "steps[0]: ") in message, message
+
+
+TUMBLE = ('[[steps]]\nstart_s = 1.0\nend_s = 3.0\nrole = "tumble.position"\nlabel = "x 30°"\n'
+          'tags = ["axis=x", "angle=30", "positions=12", "mount=+z", "yaw=90"]\n'
+          'angles_deg = [30.0, 0.0]\n')
+ALLAN = 'unit = "IMU-9"\n[[steps]]\nstart_s = 1.0\nend_s = 8.0\nrole = "allan.static"\n'
+
+
+def test_any_procedures_roles_parse_the_grammar_alone_is_checked_here():
+    sf = parse_step_file(HEAD + TUMBLE)
+    assert [(s.role, s.kind) for s in sf.steps] == [("tumble.position", "static")]
+    assert sf.steps[0].tags[1] == "angle=30" and sf.has_table
+    unknown = parse_step_file(HEAD + TUMBLE.replace("tumble.position", "tumble.positoin"))
+    assert unknown.steps[0].role == "tumble.positoin"  # the registry refuses it where used
+    allan = parse_step_file(ALLAN)  # no table state: no latitude needed, no table stream
+    assert not allan.has_table and allan.latitude_deg is None
 
 
 def test_a_skeleton_must_be_labelled_before_it_is_accepted():
@@ -115,6 +135,48 @@ def test_the_import_reconstructs_the_table_from_the_commanded_states(tmp_path):
         assert rec.metadata["table_feedback"] == "reconstructed from the step file"
         assert "commanded" in rec.stream_info("table", "commanded").columns[
             "angle_pitch_rad"].description
+
+
+def test_steps_without_table_states_import_without_a_table_stream(tmp_path):
+    t = np.arange(0.0, 400.0, 0.02)
+    rng = np.random.default_rng(5)
+    _write_csv(tmp_path / "log.csv", t, rng.normal(0.0, 1e-3, (t.size, 3)),
+               np.array([0.0, 0.0, 9.8]) + rng.normal(0.0, 1e-3, (t.size, 3)))
+    steps = ALLAN.replace("end_s = 8.0", "end_s = 390.0")
+    out = recording_from_csv(tmp_path / "log.csv", parse_step_file(steps), tmp_path / "a.h5")
+    with open_recording(out) as rec:
+        assert [s.device for s in rec.streams] == ["imu"]
+        assert [(s.role, s.kind) for s in rec.steps] == [("allan.static", "static")]
+        assert "table_feedback" not in rec.metadata
+    (tmp_path / "s.toml").write_text(steps, encoding="utf-8")
+    done = CliRunner().invoke(app, ["calibrate", str(tmp_path / "log.csv"), "--steps",
+                                    str(tmp_path / "s.toml"), "--out", str(tmp_path / "o"),
+                                    "--no-record"])
+    assert done.exit_code == 0, done.output
+    assert "reconstructed" not in done.output
+    assert (tmp_path / "o" / "log.imported.IMU-9.allan.json").is_file()
+
+
+@pytest.mark.parametrize(("role", "message"), [
+    ("tumble.positoin", "step role 'tumble.positoin' is not a role of procedure tumble; its "
+                        "roles: tumble.mount, tumble.position, tumble.drift"),
+    ("p9.position", "step role 'p9.position' names no known procedure ('p9'); known: p1, "),
+])
+def test_import_refuses_a_role_its_procedure_lacks_before_writing(tmp_path, role, message):
+    t = np.arange(0.0, 9.0, 0.01)
+    _write_csv(tmp_path / "log.csv", t, np.zeros((t.size, 3)), np.zeros((t.size, 3)))
+    (tmp_path / "s.toml").write_text(HEAD + TUMBLE.replace("tumble.position", role),
+                                     encoding="utf-8")
+    for args in (["import", str(tmp_path / "log.csv"), "--steps", str(tmp_path / "s.toml"),
+                  "--out", str(tmp_path / "r.h5")],
+                 ["calibrate", str(tmp_path / "log.csv"), "--steps", str(tmp_path / "s.toml"),
+                  "--out", str(tmp_path / "o")]):
+        done = CliRunner().invoke(app, args)
+        assert done.exit_code == 2, done.output
+        lines = done.output.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error:"), done.output
+        assert message in " ".join(done.output.split()), done.output
+    assert not (tmp_path / "r.h5").exists() and not list(tmp_path.glob("o/*"))
 
 
 def test_a_step_with_too_few_samples_is_refused_before_writing(tmp_path):

@@ -22,9 +22,9 @@ from rich.console import Console
 from imucalib.io import open_recording
 from imucalib.io.inspect import summarize_recording
 from imucalib.io.recover import recover_recording
-from imucalib.io.step_roles import P1_ROLES
 from imucalib.plan import parse_plan
 from imucalib.procedures.p1.analysis import P1Options, analyze_p1
+from imucalib.procedures.p1.roles import ROLES as P1_ROLES
 
 DATA = Path(__file__).parents[1] / "data"
 V1_FILE = DATA / "p1_v1.h5"

@@ -15,7 +15,6 @@ from imucalib.errors import (
     MissingSegmentError,
     RecordingError,
 )
-from imucalib.io.step_roles import EARTH_RATE_BIAS_POSITION
 from imucalib.procedures.earth_rate_bias.analysis import analyze_earth_rate_bias
 from imucalib.procedures.earth_rate_bias.methods import (
     AxisWindow,
@@ -23,6 +22,7 @@ from imucalib.procedures.earth_rate_bias.methods import (
     up_down_bias,
 )
 from imucalib.procedures.earth_rate_bias.plan import generate_earth_rate_bias_plan
+from imucalib.procedures.earth_rate_bias.roles import EARTH_RATE_BIAS_POSITION
 from imucalib.procedures.registry import get
 from imucalib.units import EARTH_RATE_RPS
 

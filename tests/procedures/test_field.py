@@ -215,7 +215,7 @@ def test_the_guided_plan_runs_on_the_twin_station_in_the_six_position_form(tmp_p
 
 def test_the_guided_plan_says_what_to_do_and_refuses_what_cannot_work():
     from imucalib.errors import ConfigurationError
-    from imucalib.io.step_roles import FIELD_MOVE, FIELD_POSE, FIELD_REST, FIELD_TURN
+    from imucalib.procedures.field.roles import FIELD_MOVE, FIELD_POSE, FIELD_REST, FIELD_TURN
 
     plan = registry.get("field").generate_plan(n_poses=12)
     roles = [s.role for s in plan.steps]

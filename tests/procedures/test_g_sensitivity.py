@@ -12,7 +12,6 @@ from imucalib.errors import (
     MissingSegmentError,
     RecordingError,
 )
-from imucalib.io.step_roles import G_SENSITIVITY_POSITION
 from imucalib.procedures.common.reference import site_vectors, static_inputs_b
 from imucalib.procedures.g_sensitivity.analysis import analyze_g_sensitivity
 from imucalib.procedures.g_sensitivity.fit import fit_drift_model, six_position_closed_form
@@ -20,6 +19,7 @@ from imucalib.procedures.g_sensitivity.plan import (
     G_SENSITIVITY_POSITIONS_DEG,
     generate_g_sensitivity_plan,
 )
+from imucalib.procedures.g_sensitivity.roles import G_SENSITIVITY_POSITION
 from imucalib.procedures.registry import get
 
 from ._p4_twin import fail_step, gyro_truth, run_twin

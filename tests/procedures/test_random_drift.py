@@ -13,9 +13,9 @@ from imucalib.errors import (
     InsufficientExcitationError,
     MissingSegmentError,
 )
-from imucalib.io.step_roles import RANDOM_DRIFT_POSITION
 from imucalib.procedures.random_drift.analysis import analyze_random_drift
 from imucalib.procedures.random_drift.plan import generate_random_drift_plan
+from imucalib.procedures.random_drift.roles import RANDOM_DRIFT_POSITION
 from imucalib.procedures.random_drift.scatter import allan_at_interval, random_drift, scatter
 from imucalib.procedures.registry import get
 

@@ -6,16 +6,12 @@ import numpy as np
 import pytest
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import (
-    INSTALLATION_RATE,
-    INSTALLATION_REMOUNT,
-    RATE_TRANSFER_RATE,
-    RATE_TRANSFER_REMOUNT,
-)
 from imucalib.plan.schema import OperatorCheckStep, RateStep
 from imucalib.procedures import registry
 from imucalib.procedures.installation.plan import generate_installation_plan
+from imucalib.procedures.installation.roles import INSTALLATION_RATE, INSTALLATION_REMOUNT
 from imucalib.procedures.rate_transfer.plan import DEFAULT_RATES_DPS, generate_rate_transfer_plan
+from imucalib.procedures.rate_transfer.roles import RATE_TRANSFER_RATE, RATE_TRANSFER_REMOUNT
 
 
 def test_default_plan_has_the_chapter_rates_about_each_axis() -> None:

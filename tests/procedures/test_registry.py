@@ -6,10 +6,12 @@ import dataclasses
 import subprocess
 import sys
 from types import SimpleNamespace
+from typing import ClassVar
 
 import pytest
 
 from imucalib.errors import ConfigurationError, InvalidInputError
+from imucalib.io.step_roles import split_role
 from imucalib.procedures import registry
 from imucalib.procedures.common.procedure import Procedure, ProcedureResult
 
@@ -48,6 +50,7 @@ class _DummyAnalysisOptions:
 class _Dummy:
     name = "p-test"
     description = "a test procedure"
+    roles: ClassVar[dict[str, str]] = {}
     plan_options_type = _DummyPlanOptions
     plan_options: frozenset[str] = frozenset()
     analysis_options_type = _DummyAnalysisOptions
@@ -96,6 +99,56 @@ def test_step_roles_name_the_procedure():
     assert registry.procedure_of_roles(["warm-up", "x9.thing"]) is None
     with pytest.raises(ConfigurationError, match="several procedures"):
         registry.procedure_of_roles(["p1.accel-position", "allan.record"])
+
+
+@pytest.mark.parametrize("name", list(registry.BUILTIN))
+def test_a_builtin_names_its_roles_and_its_plan_uses_no_other(name):
+    """Each built-in's ``roles`` is its folder's ``roles.py``; every role is ``<name>.<purpose>``
+    with a one-line meaning, and its default plan gives no step another role."""
+    import importlib
+
+    proc = registry.get(name)
+    module = importlib.import_module(registry.BUILTIN[name].rsplit(".", 1)[0] + ".roles")
+    assert proc.roles is module.ROLES and proc.roles
+    for role, meaning in proc.roles.items():
+        assert split_role(role)[0] == name
+        assert meaning and "\n" not in meaning
+    used = {s.role for s in proc.generate_plan().steps if s.role}
+    assert used <= set(proc.roles), used - set(proc.roles)
+    registry.check_roles(used)
+
+
+def test_the_builtin_p1_scenario_gives_p1_roles():
+    """``sim`` lies below the procedures, so its P1 scenario writes P1's roles as data."""
+    from imucalib.sim.scenario import load_scenario
+
+    used = {s.role for s in load_scenario("dual-axis-p1").steps if s.role}
+    assert used and used <= set(registry.get("p1").roles)
+
+
+@pytest.mark.parametrize(("roles", "message"), [
+    (["tumble.positoin"], "step role 'tumble.positoin' is not a role of procedure tumble; its "
+                          "roles: tumble.mount, tumble.position, tumble.drift"),
+    (["p1.accel-position", "p9.thing"], "step role 'p9.thing' names no known procedure ('p9'); "
+                                        "known: p1, allan"),
+    (["warm-up"], "step role 'warm-up' is not '<procedure>.<purpose>'"),
+])
+def test_check_roles_names_the_unknown_role_and_the_roles_of_its_procedure(roles, message):
+    with pytest.raises(ConfigurationError) as err:
+        registry.check_roles(roles)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_check_roles_takes_any_procedures_roles_and_a_registered_ones(monkeypatch):
+    registry.check_roles(["p1.gyro-rate", "tumble.position", "rate-transfer.rate",
+                          "field.pose", "p3.rate"])
+    monkeypatch.setattr(registry, "_registered", dict(registry._registered))
+    dummy = _Dummy()
+    dummy.roles = {"p-test.record": "a record"}  # type: ignore[misc]
+    registry.register(dummy)
+    registry.check_roles(["p-test.record"])
+    with pytest.raises(ConfigurationError, match=r"its roles: p-test\.record"):
+        registry.check_roles(["p-test.other"])
 
 
 def _rec(steps=(), plan_toml=None):

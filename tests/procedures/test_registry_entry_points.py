@@ -30,6 +30,7 @@ class Options:
 
 class Good:
     description = "a plug-in procedure"
+    roles = {}
     plan_options_type = Options
     plan_options = frozenset()
     analysis_options_type = Options

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_MOUNT, TUMBLE_POSITION
 from imucalib.plan.fixture_poses import rot_pm_for_pose
 from imucalib.procedures import registry
 from imucalib.procedures.common.reference import spin_axis_b
 from imucalib.procedures.tumble.plan import HEAD_MOUNTS, generate_tumble_plan
+from imucalib.procedures.tumble.roles import TUMBLE_DRIFT, TUMBLE_MOUNT, TUMBLE_POSITION
 
 
 def test_default_plan_positions_roles_and_tags() -> None:

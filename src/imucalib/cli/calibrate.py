@@ -58,26 +58,32 @@ def analysis_options(procedure: Procedure, recording: Path, model: str,
 
 
 def import_for_calibration(data: Path, steps: Path, imu: str | None, out: Path | None,
-                           spec: ImportSpec | None = None) -> Path:
+                           spec: ImportSpec | None = None) -> tuple[Path, bool]:
     """Import a CSV and its step file into ``<out>/<stem>.imported.h5`` (replaced if there).
 
     `spec` (the import options: column map, units, counts, time column, header rows …) says how
-    to read the CSV; None or an empty one reads it by its detected layout.
+    to read the CSV; None or an empty one reads it by its detected layout. The step file's roles
+    are checked against the registry first (:func:`~imucalib.procedures.registry.check_roles`):
+    any procedure's roles are accepted, an unknown one refused before anything is written.
+    Returns the Recording and whether it holds a table stream reconstructed from the step file.
     """
     from imucalib.io.csv_recording import recording_from_csv
     from imucalib.io.import_spec import ImportSpec
     from imucalib.io.step_file import load_step_file
+    from imucalib.procedures import registry
 
     step_file = load_step_file(steps)
+    registry.check_roles(s.role for s in step_file.used_steps)
     folder = out if out is not None else data.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InvalidInputError(f"cannot create {folder}: {exc.strerror or exc}") from exc
     target = folder / f"{data.stem}.imported.h5"
-    return recording_from_csv(data, step_file, target, unit=imu, overwrite=True,
+    path = recording_from_csv(data, step_file, target, unit=imu, overwrite=True,
                               spec=None if spec is None or spec == ImportSpec() else spec,
                               step_file_text=steps.read_text(encoding="utf-8"))
+    return path, step_file.has_table
 
 
 def _pairs(given: list[str] | None, flag: str) -> dict[str, tuple[float, float]] | None:
@@ -264,10 +270,10 @@ def calibrate(
                                     "complete; a hand-held log is calibrated by `imucalib "
                                     "calibrate field DATA` (docs/field.md)")
         if steps is not None:
-            recording = import_for_calibration(recording, steps, imu, out,
-                                               spec=import_options.spec())
-            console.print(f"imported into {recording} (table stream reconstructed from the "
-                          "step file)", highlight=False)
+            recording, table = import_for_calibration(recording, steps, imu, out,
+                                                      spec=import_options.spec())
+            console.print(f"imported into {recording}" + (" (table stream reconstructed from "
+                          "the step file)" if table else ""), highlight=False)
         proc = procedure_of(recording, procedure_name)
         options = analysis_options(proc, recording, model, extra, settings or ())
         with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:

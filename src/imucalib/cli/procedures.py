@@ -1,4 +1,4 @@
-"""``imucalib procedures [NAME]``: which procedures exist, and what each one's plan takes."""
+"""``imucalib procedures [NAME]``: which procedures exist, what each one's plan takes, its roles."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ __all__ = ["procedures"]
 @app.command()
 def procedures(
     name: Annotated[str | None, typer.Argument(
-        help="A procedure: list its plan options (flag, default, unit) and analysis options.")]
+        help="A procedure: list its plan options (flag, default, unit), analysis options and "
+             "step roles.")]
     = None,
 ) -> None:
     """List every registered procedure (built-in or installed) with its one-line description.
@@ -25,7 +26,8 @@ def procedures(
     stderr with the reason.
 
     With a NAME, list that procedure's plan options as `imucalib plan new NAME` takes them,
-    grouped, with defaults and units, and the options its analysis takes.
+    grouped, with defaults and units, the options its analysis takes, and its step roles (what
+    a step file's `role` may say, docs/import.md).
     """
     from imucalib.procedures import registry
     from imucalib.procedures.common.options import GROUP_TITLES, GROUPS, option_specs
@@ -70,3 +72,7 @@ def procedures(
     analysis = ", ".join(sorted(proc.analysis_options)) or "none"
     console.print(f"analysis options (imucalib calibrate): {analysis}", highlight=False,
                   soft_wrap=True)
+    roles = Table("role", "what the step is for", title=f"step roles of {proc.name}")
+    for role, meaning in proc.roles.items():
+        roles.add_row(role, meaning)
+    console.print(roles)

@@ -167,13 +167,19 @@ def import_csv(
     *,
     import_options: ImportOptions,
 ) -> None:
-    """Make a Recording from a CSV and its step file, to calibrate like a planned run."""
+    """Make a Recording from a CSV and its step file, to calibrate like a planned run.
+
+    The step file may give any procedure's roles (`imucalib procedures NAME` lists them); a role
+    its procedure does not have is refused before anything is written.
+    """
     from imucalib.io.csv_recording import recording_from_csv
     from imucalib.io.step_file import load_step_file
+    from imucalib.procedures import registry
 
     try:
         spec = import_options.spec()
         step_file = load_step_file(steps)
+        registry.check_roles(s.role for s in step_file.used_steps)
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -182,8 +188,9 @@ def import_csv(
                            step_file_text=steps.read_text(encoding="utf-8"), spec=spec)
     except CalibrationError as exc:
         raise fail(exc) from exc
-    console.print(f"wrote {out}: {len(step_file.used_steps)} steps from {steps}; the table "
-                  "stream is reconstructed from the commanded states", highlight=False)
+    table = "; the table stream is reconstructed from the commanded states"
+    console.print(f"wrote {out}: {len(step_file.used_steps)} steps from {steps}"
+                  + (table if step_file.has_table else ""), highlight=False)
 
 
 def _imu_arrays(path: Path, unit: str | None, spec: Any = None) -> tuple[str, Any, Any, Any]:

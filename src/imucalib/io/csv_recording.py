@@ -1,7 +1,8 @@
 """A Recording from IMU data without step records: a CSV file plus its step file (docs/import.md).
 
-:func:`recording_from_csv` writes a version 2 Recording that every procedure analyses as it
-does a planned run:
+:func:`recording_from_csv` writes a version 2 Recording that the procedure its step roles name
+analyses as it does a planned run (P1, Allan, the tumble …: a procedure that reads the IMU stream,
+the table stream and the steps' roles, tags and commanded states):
 
 - ``/streams/imu/<unit>``: the CSV's samples in SI (:func:`~imucalib.io.csv_import.iter_imu_csv`,
   written chunk by chunk: a log larger than memory imports).
@@ -9,13 +10,15 @@ does a planned run:
   (each sample advances it by ``max(1, round(Δt·f_s))``, so a gap of k sample periods stays
   visible to the time-base reconstruction and equal times still count up),
   ``device_time_s`` = ``time_s``, ``temperature_degc`` NaN, ``saturated`` false.
-- ``/streams/table/commanded``: a table stream **reconstructed from the step file**, not
-  measured: inside each step's interval, at the IMU's own sample times, the commanded angles
-  (a rate step: the angle at ``start_s`` plus ``rate_dps``·(t − ``start_s``) on its axis) and
-  rates. Its columns say so in their descriptions, the metadata key ``table_feedback`` is
-  ``"reconstructed from the step file"``, and the equipment's accuracy enters the analysis as
-  its Type B uncertainty (the step file's ``table_position_accuracy_arcsec``; the default
-  otherwise).
+- ``/streams/table/commanded``, when the steps give table angles or turns
+  (:attr:`~imucalib.io.step_file.StepFile.has_table`): a table stream **reconstructed from the
+  step file**, not measured: inside each step's interval, at the IMU's own sample times, the
+  commanded angles (a rate step: the angle at ``start_s``, 0 when not given, plus
+  ``rate_dps``·(t − ``start_s``) on its axis) and rates. Its columns say so in their
+  descriptions, the metadata key ``table_feedback`` is ``"reconstructed from the step file"``,
+  and the equipment's accuracy enters the analysis as its Type B uncertainty (the step file's
+  ``table_position_accuracy_arcsec``; the default otherwise). Without table states (an Allan
+  record) there is no table stream.
 - ``/steps``: one row per step with a role, status ``done``, its interval as both span and
   valid window, its role, tags and commanded state (``angles_deg``, ``axis`` as an index,
   ``rate_dps``) in the plan's step vocabulary.
@@ -25,7 +28,10 @@ does a planned run:
   ``imu_spec_json`` (accuracies and held-out limits, read by the analysis in place of a plan's).
 
 The step intervals must lie inside the data (each needs at least 10 samples); an interval
-that does not is refused with its step named, before anything is written.
+that does not is refused with its step named, before anything is written. The roles are checked
+for their grammar only (:mod:`imucalib.io.step_file`); that a procedure has them is the caller's
+check against the registry (:func:`imucalib.procedures.registry.check_roles`, which ``imucalib
+import`` and ``imucalib calibrate --steps`` run).
 """
 
 from __future__ import annotations
@@ -239,9 +245,10 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
     meta: dict[str, str | int | float | bool] = {
         "source": "csv-import", "source_file": src.name, "source_sha256": file_sha256(src),
         "step_file_toml": step_file_text or step_file_to_toml(steps),
-        "table_feedback": TABLE_FEEDBACK_RECONSTRUCTED,
         "heading_deg": steps.heading_deg, "imu_identity_json": json.dumps({name: ident}),
     }
+    if steps.has_table:
+        meta["table_feedback"] = TABLE_FEEDBACK_RECONSTRUCTED
     if steps.latitude_deg is not None:
         meta["latitude_deg"] = steps.latitude_deg
     equipment = {k: v for k, v in (
@@ -256,7 +263,9 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
 
     counter = None if file_counter else _counter(t, rate_hz)
     n = t.size
-    streams = [imu_stream_spec(name), _table_spec(steps.table_axes)]
+    streams = [imu_stream_spec(name)]
+    if steps.has_table:
+        streams.append(_table_spec(steps.table_axes))
     with RecordingWriter(out_path, streams=streams, metadata=meta, overwrite=overwrite,
                          flush_interval_s=math.inf) as writer:
         a = 0
@@ -265,7 +274,9 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
                                                  else counter[a:a + len(df)]))
             a += len(df)
         for step, (i0, i1) in zip(used, bounds, strict=True):
-            writer.append(DEVICE_TABLE, RECONSTRUCTED_TABLE, _table_rows(step, steps, t[i0:i1]))
+            if steps.has_table:
+                writer.append(DEVICE_TABLE, RECONSTRUCTED_TABLE,
+                              _table_rows(step, steps, t[i0:i1]))
             idx = writer.begin_step(step.kind, step.label or step.role, step.start_s,
                                     commanded=_commanded(step, steps), role=step.role,
                                     tags=step.tags)
@@ -273,6 +284,7 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
                                valid_end_s=step.end_s, status="done")
         writer.log_event(float(t[0]), "info", "import",
                          f"imported {n:,} samples of {name} from {src.name} with "
-                         f"{len(used)} steps from the step file; the table stream is "
-                         "reconstructed from the commanded states")
+                         f"{len(used)} steps from the step file"
+                         + ("; the table stream is reconstructed from the commanded states"
+                            if steps.has_table else ""))
     return Path(out_path)

@@ -138,7 +138,7 @@ class StepRecord:
     valid_end_s: float  # NaN until known [s]
     status: str
     note: str
-    role: str = ""  # e.g. "p1.accel-position" (imucalib.io.step_roles); "" when none
+    role: str = ""  # e.g. "p1.accel-position" (its procedure's roles.py); "" when none
     tags: tuple[str, ...] = ()
     units: tuple[str, ...] = ()  # IMU unit names the step concerns; () = every IMU
 

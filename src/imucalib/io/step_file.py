@@ -2,9 +2,9 @@
 
 A step file is a small TOML document that says, for IMU data that came without step records (a
 CSV export, a vendor log), which time intervals are measurements, what each one is for in its
-procedure (its role, :mod:`imucalib.io.step_roles`) and the table state it was taken at. With it,
-:func:`imucalib.io.csv_recording.recording_from_csv` turns the data into a Recording that every
-procedure analyses as it does a planned run.
+procedure (its role ``<procedure>.<purpose>``, :mod:`imucalib.io.step_roles`) and the table state
+it was taken at. With it, :func:`imucalib.io.csv_recording.recording_from_csv` turns the data into
+a Recording that the procedure analyses as it does a planned run.
 
 Format (version 1)
 ------------------
@@ -20,7 +20,7 @@ Format (version 1)
     [[steps]]
     start_s = 12.0                 # the interval to average, in the data's time base [s]
     end_s = 42.0
-    role = "p1.accel-position"     # what it is for (or "skip")
+    role = "p1.accel-position"     # what it is for: any procedure's role (or "skip")
     label = "z-up"
     tags = ["repetition=1"]
     angles_deg = [0.0, 0.0]        # table angles held, outer axis first [°]
@@ -32,6 +32,17 @@ Format (version 1)
     axis = "pitch"                 # the turning axis (a name of table_axes, or its index)
     rate_dps = 60.0                # its rate [°/s]
     angles_deg = [0.0, 0.0]        # the angles at start_s [°]
+
+Roles
+-----
+This module checks a role's grammar only (``<procedure>.<purpose>``, or :data:`SKIP`): which
+roles exist is the procedures' fact, checked against the registry where the step file is used
+(:func:`imucalib.procedures.registry.check_roles`, run by ``imucalib import`` and ``imucalib
+calibrate --steps``; ``imucalib procedures NAME`` lists a procedure's roles). The table state is
+generic: an interval that gives ``axis`` and ``rate_dps`` is a turn (kind ``"rate"``), any other a
+static interval; when one interval gives ``angles_deg``, every one must (the table stream is
+reconstructed from them), and ``latitude_deg`` is then required. Tags (``axis=x``,
+``angle=30`` …) are carried to the Recording as the procedure's analysis reads them.
 
 Equipment and specification limits the analysis would otherwise take from a plan may be given
 at the top level: ``table_position_accuracy_arcsec``, ``table_orthogonality_arcsec`` (Type B
@@ -71,21 +82,14 @@ from pydantic import (
 
 from imucalib.conventions import TABLE_AXIS_VECTORS
 from imucalib.errors import InvalidInputError
-from imucalib.io.step_roles import (
-    ALLAN_STATIC,
-    P1_GYRO_RATE,
-    P1_HELD_OUT_RATE,
-    P1_ROLES,
-    role_from_tags,
-)
+from imucalib.io.context import RecordingContext
+from imucalib.io.step_roles import is_role, role_from_tags, split_role
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
 
 __all__ = [
     "FORMAT_NAME",
-    "KNOWN_ROLES",
-    "RATE_ROLES",
     "SKIP",
     "StepEntry",
     "StepFile",
@@ -97,14 +101,11 @@ __all__ = [
 ]
 
 FORMAT_NAME: Final = "imucalib-steps"
-#: The role of an interval to leave out (what a skeleton starts every interval with).
+#: The role of an interval to leave out (what a skeleton starts every interval with); the one
+#: role a step file knows without a procedure.
 SKIP = "skip"
-#: The roles a step file may give.
-KNOWN_ROLES: tuple[str, ...] = (*P1_ROLES, ALLAN_STATIC)
-#: Roles whose interval is a rotation at constant rate (``axis`` and ``rate_dps`` required).
-RATE_ROLES: tuple[str, ...] = (P1_GYRO_RATE, P1_HELD_OUT_RATE)
-#: Roles whose interval needs the table angles (the reference input comes from them).
-_NEEDS_ANGLES = frozenset(P1_ROLES)
+#: What a role looks like, for messages.
+_ROLE_FORM = "'<procedure>.<purpose>' (`imucalib procedures NAME` lists a procedure's roles)"
 
 _TIME_BOUND_S = 1e10
 
@@ -117,14 +118,18 @@ class StepEntry(BaseModel):
     start_s, end_s : float
         The interval, in the data's time base (the valid window that is averaged). [s]
     role : str
-        One of :data:`KNOWN_ROLES`, or :data:`SKIP`.
+        A step role ``<procedure>.<purpose>`` (:func:`~imucalib.io.step_roles.split_role`; that
+        the procedure has it is checked against the registry where the file is used), or
+        :data:`SKIP`.
     label : str
     tags : tuple of str
-        Free tags; ``repetition=<k>`` numbers a repetition.
+        Free tags, carried to the Recording (``repetition=<k>`` numbers a P1 repetition; a
+        tumble record needs ``axis=`` and ``angle=`` …, as the procedure's plan sets them).
     angles_deg : tuple of float, optional
         The table angles held, outer axis first (a rate step: at `start_s`). [°]
     axis : str or int, optional
-        A rate step's turning axis: a name of the file's ``table_axes`` or its index.
+        A rate step's turning axis: a name of the file's ``table_axes`` or its index. Given
+        with `rate_dps`, it makes the interval a turn (:attr:`kind` ``"rate"``).
     rate_dps : float, optional
         A rate step's rate about that axis. [°/s]
     """
@@ -154,29 +159,28 @@ class StepEntry(BaseModel):
         if not self.end_s > self.start_s:
             raise ValueError(f"`end_s` ({self.end_s:g} s) must be after `start_s` "
                              f"({self.start_s:g} s)")
-        if self.role != SKIP and self.role not in KNOWN_ROLES:
-            raise ValueError(f"role {self.role!r} is not one of {', '.join(KNOWN_ROLES)} "
-                             f"or {SKIP!r}")
+        if self.role != SKIP:
+            try:
+                split_role(self.role)
+            except ValueError:
+                raise ValueError(f"role {self.role!r} is neither {_ROLE_FORM} nor "
+                                 f"{SKIP!r}") from None
         if self.angles_deg is not None and not all(math.isfinite(a) for a in self.angles_deg):
             raise ValueError("`angles_deg` must be finite")
-        if self.role in RATE_ROLES:
-            if self.axis is None or self.rate_dps is None:
-                raise ValueError(f"a {self.role} step needs `axis` (the turning table axis) "
-                                 "and `rate_dps`")
-            if not math.isfinite(self.rate_dps):
-                raise ValueError("`rate_dps` must be finite")
-        elif self.role != SKIP and (self.axis is not None or self.rate_dps not in (None, 0.0)):
-            raise ValueError(f"`axis` and `rate_dps` belong to rate steps "
-                             f"({', '.join(RATE_ROLES)}); this step's role is {self.role!r}")
-        if self.role in _NEEDS_ANGLES and self.angles_deg is None:
-            raise ValueError(f"a {self.role} step needs `angles_deg` (the table angles, outer "
-                             "axis first): the reference inputs come from them")
+        if self.rate_dps is not None and not math.isfinite(self.rate_dps):
+            raise ValueError("`rate_dps` must be finite")
+        if self.role != SKIP and self.axis is not None and self.rate_dps is None:
+            raise ValueError(f"a turn (a {self.role} step with `axis`) needs `rate_dps`, its "
+                             "rate about that table axis")
+        if self.role != SKIP and self.axis is None and self.rate_dps not in (None, 0.0):
+            raise ValueError(f"a turn (a {self.role} step with `rate_dps`) needs `axis` (the "
+                             "turning table axis)")
         return self
 
     @property
     def kind(self) -> Literal["static", "rate"]:
-        """``"rate"`` for a rate role, else ``"static"``."""
-        return "rate" if self.role in RATE_ROLES else "static"
+        """``"rate"`` for a turn (the step gives `axis`), else ``"static"``."""
+        return "rate" if self.axis is not None else "static"
 
 
 class StepFile(BaseModel):
@@ -218,15 +222,29 @@ class StepFile(BaseModel):
                       if s.role != SKIP)
         if not used:
             raise ValueError(f"every step's role is {SKIP!r}: give at least one interval a role "
-                             f"({', '.join(KNOWN_ROLES)})")
+                             f"{_ROLE_FORM}")
         for (a0, a1, i), (b0, _b1, j) in itertools.pairwise(used):
             if b0 < a1:
                 raise ValueError(f"steps[{i}] ({a0:g}–{a1:g} s) and steps[{j}] (from {b0:g} s) "
                                  "overlap: each sample belongs to one step")
-        if self.latitude_deg is None and any(s.role in _NEEDS_ANGLES for s in self.steps):
-            raise ValueError("`latitude_deg` is required for P1 steps: the Earth-rate "
-                             "projection needs the site's latitude")
+        given = [i for _, _, i in used if self.steps[i].angles_deg is not None]
+        if given and len(given) != len(used):
+            i = min(i for _, _, i in used if self.steps[i].angles_deg is None)
+            step = self.steps[i]
+            where = f"steps[{i}]" + (f" ({step.label})" if step.label else "")
+            raise ValueError(f"{where}: a {step.role} step needs `angles_deg` (the table angles, "
+                             f"outer axis first), as steps[{given[0]}] gives them: the table "
+                             "stream is reconstructed from every step's angles")
+        if self.latitude_deg is None and self.has_table:
+            raise ValueError("`latitude_deg` is required when the steps give table angles or "
+                             "turns: the reference inputs (gravity, the Earth-rate projection) "
+                             "need the site's latitude")
         return self
+
+    @property
+    def has_table(self) -> bool:
+        """Whether a used step gives table angles or a turn (a table stream is reconstructed)."""
+        return any(s.angles_deg is not None or s.axis is not None for s in self.used_steps)
 
     def axis_index(self, axis: str | int, where: str = "") -> int:
         """Return the index in :attr:`table_axes` of an axis given by name or index."""
@@ -327,15 +345,19 @@ def _held_angles(commanded: Mapping[str, Any], last: tuple[float, ...] | None
 def step_file_from_recording(rec: Recording, unit: str | None = None) -> StepFile:
     """Return the step file of a Recording's completed steps that have a role.
 
-    Each step's valid window becomes an interval; its table angles are those it commanded (a
-    position step) or the last commanded before it (a rate step turns from there); a rate step
+    Any procedure's roles (a role the registry does not know is refused when the file is
+    imported, not here). Each step's valid window becomes an interval with its role, label and
+    tags; its table angles are those it commanded (a position step) or the last commanded
+    before it (a rate step turns from there), none when the run commanded none; a rate step
     gives its commanded axis and rate. Site, table axes and the IMU rate come from the
     Recording's metadata and table stream.
 
     Raises
     ------
     InvalidInputError
-        The Recording has no completed step with a role, or no table stream when one is needed.
+        The Recording has no completed step with a role, a step before any commanded table
+        angles while later ones have them, a rate step without its commanded axis and rate, or
+        a centrifuge step (a step file describes a table).
     """
     import json
 
@@ -356,23 +378,28 @@ def step_file_from_recording(rec: Recording, unit: str | None = None) -> StepFil
     ident = identities.get(name or "", {}) if isinstance(identities, dict) else {}
     steps: list[StepEntry] = []
     last: tuple[float, ...] | None = None
+    unplaced: Any = None  # the first step written before any commanded table angles
     for step in rec.steps:
         cmd = step.commanded if isinstance(step.commanded, dict) else {}
         last = _held_angles(cmd, last)
         role = step.role or role_from_tags(step.kind, step.tags)
-        if (role not in KNOWN_ROLES or step.status != "done" or not step.has_valid_window
+        if (not is_role(role) or step.status != "done" or not step.has_valid_window
                 or (name is not None and not step.concerns(name))):
             continue
+        if step.kind == "centrifuge":
+            raise InvalidInputError(f"{rec.path}: step {step.index} ({step.label}) is a "
+                                    "centrifuge step: a step file describes a table's states, "
+                                    "not a centrifuge's")
         entry: dict[str, Any] = {"start_s": step.valid_start_s, "end_s": step.valid_end_s,
                                  "role": role, "label": step.label, "tags": step.tags}
-        if role in _NEEDS_ANGLES:
-            if last is None:
-                raise InvalidInputError(f"{rec.path}: step {step.index} ({step.label}) has no "
-                                        "commanded table angles before it")
+        if last is not None:
             entry["angles_deg"] = last
-        if role in RATE_ROLES:
+        elif unplaced is None:
+            unplaced = step
+        if step.kind == "rate":
             axis, rate = cmd.get("axis"), cmd.get("rate_dps")
-            if not isinstance(axis, int) or not isinstance(rate, int | float):
+            if (not isinstance(axis, int) or isinstance(axis, bool)
+                    or not isinstance(rate, int | float)):
                 raise InvalidInputError(f"{rec.path}: rate step {step.index} ({step.label}) "
                                         "does not record its commanded axis and rate")
             entry["axis"], entry["rate_dps"] = axis, float(rate)
@@ -380,21 +407,13 @@ def step_file_from_recording(rec: Recording, unit: str | None = None) -> StepFil
     if not steps:
         raise InvalidInputError(f"{rec.path}: no completed step with a role: nothing to write "
                                 "into a step file")
-    limits: dict[str, float] = {}
-    plan_toml = meta.get("plan_toml")
-    if plan_toml:  # the plan's equipment accuracies and held-out limits, read as plain TOML
-        try:
-            plan_doc = tomllib.loads(str(plan_toml))
-        except tomllib.TOMLDecodeError:
-            plan_doc = {}
-        for section, keys in (("equipment", ("table_position_accuracy_arcsec",
-                                             "table_orthogonality_arcsec")),
-                              ("imu", ("accel_accuracy_g", "gyro_accuracy_dps"))):
-            table = plan_doc.get(section, {})
-            for key in keys:
-                value = table.get(key) if isinstance(table, dict) else None
-                if isinstance(value, int | float) and not isinstance(value, bool):
-                    limits[key] = float(value)
+    if unplaced is not None and any(s.angles_deg is not None for s in steps):
+        raise InvalidInputError(f"{rec.path}: step {unplaced.index} ({unplaced.label}) has no "
+                                "commanded table angles before it")
+    context = RecordingContext.of(meta)  # the equipment accuracies and held-out limits
+    limits: dict[str, float] = {**context.equipment,
+                                **{k: v for k, v in context.imu_spec.items()
+                                   if k in ("accel_accuracy_g", "gyro_accuracy_dps")}}
     lat = meta.get("latitude_deg")
     rate_hz = ident.get("sample_rate_hz") if isinstance(ident, dict) else None
     band_hz = ident.get("bandwidth_hz") if isinstance(ident, dict) else None
@@ -426,11 +445,12 @@ def step_file_skeleton(intervals: Sequence[tuple[str, float, float]], *,
     lines = ["# Step file skeleton written by `imucalib segments --step-file` (docs/import.md).",
              "# For each interval to use: set `role`, `angles_deg` (table angles, outer axis",
              "# first), and for a rotation `axis` and `rate_dps`; leave the others as \"skip\".",
-             f"# Roles: {', '.join(KNOWN_ROLES)}.",
+             "# Roles: '<procedure>.<purpose>', e.g. \"p1.accel-position\"; `imucalib",
+             "# procedures NAME` lists a procedure's roles. Give the tags its plan sets.",
              f'format = "{FORMAT_NAME}"']
     if unit:
         lines.append(f'unit = "{unit}"')
-    lines += ["# latitude_deg = 0.0  # the site's latitude [°]: required for P1 steps",
+    lines += ["# latitude_deg = 0.0  # the site's latitude [°]: required with table angles",
               "heading_deg = 0.0", 'table_axes = ["pitch", "roll"]', ""]
     for i, (kind, t0, t1) in enumerate(intervals):
         lines += ["[[steps]]", f"# interval {i}: {kind}, {t1 - t0:.3f} s",

@@ -229,7 +229,7 @@ class _Step(_Model):
     label: str = Field("", max_length=200)
     role: str = Field("", max_length=128,
                       description="what the step is for in its procedure, e.g. "
-                                  "p1.accel-position (imucalib.io.step_roles); stored with "
+                                  "p1.accel-position (procedures/<name>/roles.py); stored with "
                                   "the executed step")
     tags: tuple[Annotated[str, Field(max_length=64)], ...] = Field((), max_length=32)
 

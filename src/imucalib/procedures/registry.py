@@ -20,12 +20,15 @@ kept (:func:`problems` says so; ``imucalib procedures`` lists it).
 
 Which procedure a recording belongs to (:func:`identify`): its steps' roles when they carry
 them (a role ``"p1.accel-position"`` names procedure ``p1``: the part before the first dot), else
-the ``procedure`` field of the plan stored in its metadata.
+the ``procedure`` field of the plan stored in its metadata. Which roles exist is each
+procedure's ``roles`` (its folder's ``roles.py``): :func:`check_roles` refuses a role that its
+procedure does not have, where step roles come from outside a plan (a step file).
 
 Contents
 --------
 :func:`get`, :func:`names`, :func:`origin`, :func:`problems`, :func:`refresh`, :func:`register`,
-:func:`identify`, :func:`procedure_of_roles`, :data:`BUILTIN`, :data:`ENTRY_POINT_GROUP`
+:func:`identify`, :func:`procedure_of_roles`, :func:`check_roles`, :data:`BUILTIN`,
+:data:`ENTRY_POINT_GROUP`
 """
 
 from __future__ import annotations
@@ -38,13 +41,14 @@ from importlib.metadata import EntryPoint, entry_points
 from typing import TYPE_CHECKING
 
 from imucalib.errors import ConfigurationError
+from imucalib.io.step_roles import split_role
 from imucalib.procedures.common.procedure import Procedure
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
 
-__all__ = ["BUILTIN", "ENTRY_POINT_GROUP", "get", "identify", "names", "origin", "problems",
-           "procedure_of_roles", "refresh", "register"]
+__all__ = ["BUILTIN", "ENTRY_POINT_GROUP", "check_roles", "get", "identify", "names", "origin",
+           "problems", "procedure_of_roles", "refresh", "register"]
 
 #: The entry-point group procedures are declared in: the table
 #: ``[project.entry-points."imucalib.procedures"]`` of a ``pyproject.toml`` (docs/plugins.md).
@@ -284,6 +288,47 @@ def procedure_of_roles(roles: Iterable[str | None]) -> str | None:
     return found[0] if found else None
 
 
+def check_roles(roles: Iterable[str]) -> None:
+    """Refuse a step role that its procedure does not have.
+
+    Each role names its procedure (:func:`~imucalib.io.step_roles.split_role`: the part before
+    the first dot), which must be registered and list the role in its ``roles``. For roles given
+    outside a plan: a step file's (``imucalib import``, ``imucalib calibrate --steps``).
+
+    Parameters
+    ----------
+    roles : iterable of str
+        The roles to check (a step file's used steps': ``"skip"`` left out).
+
+    Raises
+    ------
+    ConfigurationError
+        One line, for the first role refused: not ``<procedure>.<purpose>``; its procedure not
+        registered (the message lists the known ones); or not among its procedure's roles (the
+        message lists them). Also a procedure that fails to load (:func:`get`).
+
+    Examples
+    --------
+    >>> check_roles(["p1.accel-position", "p1.gyro-rate"])
+    >>> check_roles(["allan.dynamic"])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    imucalib.errors.ConfigurationError: step role 'allan.dynamic' is not a role ...: allan.static
+    """
+    for role in dict.fromkeys(roles):
+        try:
+            procedure, _ = split_role(role)
+        except ValueError as exc:
+            raise ConfigurationError(f"step {exc}") from None
+        if procedure not in names():
+            raise ConfigurationError(f"step role {role!r} names no known procedure "
+                                     f"({procedure!r}); known: {', '.join(names())}")
+        known = get(procedure).roles
+        if role not in known:
+            raise ConfigurationError(f"step role {role!r} is not a role of procedure "
+                                     f"{procedure}; its roles: {', '.join(known) or 'none'}")
+
+
 def identify(recording: Recording) -> str:
     """Return the name of the procedure an open Recording belongs to (module docstring).
 
@@ -292,18 +337,20 @@ def identify(recording: Recording) -> str:
     ConfigurationError
         If neither roles nor a plan say which, or the plan's procedure is not registered.
     """
-    from imucalib.plan.io import parse_plan
+    from imucalib.io.context import RecordingContext
 
     path = recording.path
     by_role = procedure_of_roles(getattr(s, "role", None) for s in recording.steps)
     if by_role is not None:
         return by_role
-    plan_toml = recording.metadata.get("plan_toml")
-    if not plan_toml:
-        raise ConfigurationError(f"{path} holds no plan: `imucalib calibrate` needs a "
-                                 "recording made by `imucalib run`")
-    procedure = parse_plan(str(plan_toml), str(path)).procedure
-    if procedure not in names():
-        raise ConfigurationError(f"{path}: plan procedure {procedure!r} has no analysis here; "
-                                 f"known: {', '.join(names())}")
-    return str(procedure)
+    context = RecordingContext.of(recording.metadata)
+    if not context.procedure:
+        if not recording.metadata.get("plan_toml"):
+            raise ConfigurationError(f"{path} holds no plan: `imucalib calibrate` needs a "
+                                     "recording made by `imucalib run`")
+        raise ConfigurationError(f"{path}: its plan names no procedure; name it: `imucalib "
+                                 "calibrate PROCEDURE DATA`")
+    if context.procedure not in names():
+        raise ConfigurationError(f"{path}: plan procedure {context.procedure!r} has no analysis "
+                                 f"here; known: {', '.join(names())}")
+    return context.procedure

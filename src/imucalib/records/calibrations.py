@@ -34,12 +34,12 @@ def record_calibration(result: Any, recording: Path | None, *, db: str | None,
     try:
         plan_name, plan_hash = "", ""
         if recording is not None and recording.suffix.lower() in (".h5", ".hdf5"):
+            from imucalib.io.context import RecordingContext
             from imucalib.io.reader import open_recording
 
             with open_recording(recording) as rec:
-                meta = rec.metadata
-                plan_name = str(meta.get("plan_name", "") or "")
-                plan_hash = str(meta.get("plan_hash", "") or "")
+                context = RecordingContext.of(rec.metadata)
+            plan_name, plan_hash = context.plan_name, context.plan_hash
         run_id = records.record_run(plan_name=plan_name, plan_hash=plan_hash,
                                     procedure=str(result.procedure), recording=recording,
                                     operator=operator)

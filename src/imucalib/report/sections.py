@@ -17,7 +17,6 @@ Contents
 from __future__ import annotations
 
 import json
-import re
 import tempfile
 from collections.abc import Iterable, Mapping, Sequence
 from datetime import datetime
@@ -131,8 +130,9 @@ def plan_name(meta: Mapping[str, Any], plan: Any) -> str:
     name = None if plan is None else getattr(plan, "name", None)
     if name:
         return str(name)
-    m = re.search(r'^name\s*=\s*"([^"]*)"', str(meta.get("plan_toml", "")), re.MULTILINE)
-    return m.group(1) if m else "—"
+    from imucalib.io.context import RecordingContext
+
+    return RecordingContext.of(meta).plan_name or "—"
 
 
 # --- the sections ----------------------------------------------------------------------------

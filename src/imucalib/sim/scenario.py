@@ -41,7 +41,6 @@ from typing import Any
 from pydantic import Field, ValidationError, model_validator
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import P1_ACCEL_POSITION, P1_GYRO_BIAS, P1_GYRO_RATE
 from imucalib.plan.bounds import MAX_STEPS, MAX_TOTAL_S, format_validation_error
 from imucalib.plan.equipment import (
     LEGACY_CENTRIFUGE_NAMES,
@@ -243,17 +242,24 @@ def _static_hour() -> Scenario:
     )
 
 
+#: P1's roles the built-in P1 scenario gives its steps: data, as a scenario file gives them
+#: (``imucalib.procedures.p1.roles``; the layers keep ``sim`` below the procedures).
+_P1_ACCEL_POSITION = "p1.accel-position"
+_P1_GYRO_BIAS = "p1.gyro-bias"
+_P1_GYRO_RATE = "p1.gyro-rate"
+
+
 def _dual_axis_p1() -> Scenario:
     six = [(0, 0), (0, 180), (90, 0), (90, 180), (0, 90), (0, 270)]
     steps: list[Any] = [
         PositionStep(kind="position", angles_deg=a, settle_s=30.0, record_s=10.0,
-                     label=f"position pitch={a[0]} roll={a[1]}", role=P1_ACCEL_POSITION,
+                     label=f"position pitch={a[0]} roll={a[1]}", role=_P1_ACCEL_POSITION,
                      tags=("calibration", "six-position"))
         for a in six
     ]
     steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=30.0,
                               record_s=600.0, label="level static (gyro bias)",
-                              role=P1_GYRO_BIAS, tags=("calibration", "gyro-bias")))
+                              role=_P1_GYRO_BIAS, tags=("calibration", "gyro-bias")))
     # rates about pitch (sensor Y), roll (sensor X), and pitch with the roll axis at 90°
     # (sensor Z): the triad's gyro scale factors and misalignments all need a rate
     for axis, roll_deg, about in ((0, 0.0, "pitch"), (1, 0.0, "roll"),
@@ -264,7 +270,7 @@ def _dual_axis_p1() -> Scenario:
             revs = None if rate == 0 else 3
             steps.append(RateStep(kind="rate", axis=axis, rate_dps=rate, settle_s=20.0,
                                   revolutions=revs, record_s=10.0 if revs is None else None,
-                                  label=f"rate about {about} {rate:+g} dps", role=P1_GYRO_RATE,
+                                  label=f"rate about {about} {rate:+g} dps", role=_P1_GYRO_RATE,
                                   tags=("calibration", "rate")))
     steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=5.0,
                               record_s=1.0, label="return home"))

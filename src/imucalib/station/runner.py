@@ -62,6 +62,7 @@ from typing import Any, Protocol
 from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io import StreamSpec
+from imucalib.io.context import EQUIPMENT_KEYS, IMU_SPEC_KEYS, RecordingContext
 from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.inspect import LOAD_EVENT_PREFIX, REMOUNT_EVENT_PREFIX, SWAP_EVENT_PREFIX
 from imucalib.io.reader import open_recording
@@ -331,7 +332,14 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
     except StorageFullError:
         _disconnect(station)
         raise
+    context = RecordingContext(
+        procedure=plan.procedure or "", plan_name=plan.name, plan_hash=plan_hash(plan),
+        equipment={k: float(getattr(plan.equipment, k)) for k in EQUIPMENT_KEYS},
+        imu_spec={k: float(v) for k in IMU_SPEC_KEYS
+                  if (v := getattr(plan.imu, k, None)) is not None},
+        acceptance=plan.acceptance.rule)
     meta: dict[str, str | int | float | bool] = {
+        **context.metadata(),
         "plan_toml": plan_to_toml(plan), "plan_hash": plan_hash(plan),
         "station_json": json.dumps(station.describe()),
         "station_toml": opt.station_toml,

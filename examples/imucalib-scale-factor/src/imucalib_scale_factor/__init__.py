@@ -7,6 +7,8 @@ Contents
 --------
 :mod:`imucalib_scale_factor.options`
     :class:`~imucalib_scale_factor.options.ScaleFactorPlanOptions`, the plan's keywords.
+:mod:`imucalib_scale_factor.roles`
+    The procedure's name and step roles (:data:`~imucalib_scale_factor.roles.ROLES`).
 :mod:`imucalib_scale_factor.plan`
     :func:`~imucalib_scale_factor.plan.generate_scale_factor_plan`.
 :mod:`imucalib_scale_factor.analysis`

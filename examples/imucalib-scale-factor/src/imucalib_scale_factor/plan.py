@@ -12,6 +12,8 @@ The plan carries imucalib's single-axis twin (a high-grade table, one unit of th
 a hexahedral fixture), so ``imucalib run PLAN --station sim`` runs it. A rate at or beyond the
 gyro's full scale is refused (its samples would clip).
 
+The name and the roles are those of :mod:`imucalib_scale_factor.roles` (re-exported here).
+
 Contents
 --------
 :data:`ROLE_MOUNT`, :data:`ROLE_RATE`, :func:`generate_scale_factor_plan`
@@ -36,15 +38,9 @@ from imucalib.procedures.common.rate_table_plan import (
     signed_rates,
 )
 from imucalib_scale_factor.options import DEFAULT_RATES_DPS
+from imucalib_scale_factor.roles import NAME, ROLE_MOUNT, ROLE_RATE
 
 __all__ = ["NAME", "ROLE_MOUNT", "ROLE_RATE", "generate_scale_factor_plan"]
-
-#: The procedure's name: the plan's ``procedure`` field and the prefix of its step roles.
-NAME = "scale-factor"
-#: The mounting check.
-ROLE_MOUNT = f"{NAME}.mount"
-#: A turn over whole revolutions (``commanded`` gives ``rate_dps`` and ``revolutions``).
-ROLE_RATE = f"{NAME}.rate"
 
 
 def generate_scale_factor_plan(

@@ -27,6 +27,7 @@ from imucalib_scale_factor.options import (
     ScaleFactorAnalysisOptions,
     ScaleFactorPlanOptions,
 )
+from imucalib_scale_factor.roles import ROLES
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -45,6 +46,7 @@ class ScaleFactorProcedure:
     name = "scale-factor"
     description = ("one-axis gyro scale factor (plug-in example): turns about the unit's z axis "
                    "at ±ω on a single-axis table; K1 and bias by weighted least squares")
+    roles = ROLES
     plan_options_type = ScaleFactorPlanOptions
     plan_options = option_names(ScaleFactorPlanOptions)
     analysis_options_type = ScaleFactorAnalysisOptions

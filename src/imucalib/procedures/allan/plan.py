@@ -16,7 +16,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import ALLAN_STATIC
 from imucalib.plan.equipment import ChamberConfig, ImuConfig, SiteConfig, TwinEquipment
 from imucalib.plan.schema import (
     ImuSpecConfig,
@@ -28,6 +27,7 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
+from imucalib.procedures.allan.roles import ALLAN_STATIC
 
 __all__ = ["generate_allan_plan"]
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.procedures.allan.options import AllanAnalysisOptions, AllanPlanOptions
+from imucalib.procedures.allan.roles import ROLES
 from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
@@ -35,6 +36,7 @@ class AllanProcedure(ProcedureDefaults):
     name = "allan"
     description = ("noise characterisation: Allan deviations and noise terms of long static "
                    "records, optionally at several temperatures")
+    roles = ROLES
     plan_options_type = AllanPlanOptions
     plan_options = option_names(AllanPlanOptions)
     analysis_options_type = AllanAnalysisOptions

@@ -1,7 +1,8 @@
 """The protocols a procedure implements: :class:`Procedure` and :class:`ProcedureResult`.
 
-A procedure is a folder of :mod:`imucalib.procedures` (``p1/``, ``allan/``, …) whose
-``procedure`` module holds one object satisfying :class:`Procedure`, registered by name in
+A procedure is a folder of :mod:`imucalib.procedures` (``p1/``, ``allan/``, …) whose ``roles``
+module names its step roles (:attr:`Procedure.roles`) and whose ``procedure`` module holds one
+object satisfying :class:`Procedure`, registered by name in
 :mod:`imucalib.procedures.registry`. ``imucalib plan new``, ``imucalib calibrate``, the demo and
 the tests reach a procedure only through the registry; the output files of its result are named
 and written by :func:`imucalib.exports.outputs.write_outputs`. A procedure also presents its
@@ -82,6 +83,12 @@ class Procedure(Protocol):
         (``"p1.accel-position"``).
     description : str
         One line for listings.
+    roles : mapping of str to str
+        The step roles of its plans and analysis, each ``"<name>.<purpose>"``
+        (:func:`~imucalib.io.step_roles.split_role`), with what a step of that role is for (one
+        line); a built-in's come from its folder's ``roles.py``. A step file's roles are checked
+        against them (:func:`~imucalib.procedures.registry.check_roles`); ``imucalib procedures
+        NAME`` lists them.
     plan_options_type : type
         The frozen dataclass whose fields are :meth:`generate_plan`'s keywords, each made by
         :func:`~imucalib.procedures.common.options.option` (help, unit, range, help section,
@@ -111,6 +118,11 @@ class Procedure(Protocol):
     @property
     def description(self) -> str:
         """One line for listings."""
+        ...
+
+    @property
+    def roles(self) -> Mapping[str, str]:
+        """Step role → what a step of that role is for."""
         ...
 
     @property

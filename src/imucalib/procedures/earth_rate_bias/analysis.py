@@ -26,7 +26,6 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import EARTH_RATE_BIAS_POSITION
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
@@ -41,6 +40,7 @@ from imucalib.procedures.earth_rate_bias.methods import (
     scale_at,
     up_down_bias,
 )
+from imucalib.procedures.earth_rate_bias.roles import EARTH_RATE_BIAS_POSITION
 
 __all__ = ["EarthRateBiasAxis", "EarthRateBiasResult", "analyze_earth_rate_bias"]
 

@@ -15,7 +15,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import EARTH_RATE_BIAS_POSITION, EARTH_RATE_BIAS_REMOUNT
 from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.fixture_poses import FIXTURE_AXES
 from imucalib.plan.schema import (
@@ -27,6 +26,10 @@ from imucalib.plan.schema import (
     WarmUpStep,
 )
 from imucalib.procedures.common.grade import WARM_UP_S, check_grade
+from imucalib.procedures.earth_rate_bias.roles import (
+    EARTH_RATE_BIAS_POSITION,
+    EARTH_RATE_BIAS_REMOUNT,
+)
 
 __all__ = ["EARTH_RATE_AZIMUTHS_DEG", "EARTH_RATE_POSES", "generate_earth_rate_bias_plan"]
 

@@ -17,6 +17,7 @@ from imucalib.procedures.earth_rate_bias.options import (
     EarthRateBiasAnalysisOptions,
     EarthRateBiasPlanOptions,
 )
+from imucalib.procedures.earth_rate_bias.roles import ROLES
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -32,6 +33,7 @@ class EarthRateBiasProcedure(ProcedureDefaults):
     name = "earth-rate-bias"
     description = ("gyro bias against Earth rate (navigation grade): 4-position (N, E, S, W) and "
                    "up/down methods on a single-axis table with remounts, compared")
+    roles = ROLES
     plan_options_type = EarthRateBiasPlanOptions
     plan_options = option_names(EarthRateBiasPlanOptions)
     analysis_options_type = EarthRateBiasAnalysisOptions

@@ -25,7 +25,6 @@ Contents
 from __future__ import annotations
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import FIELD_MOVE, FIELD_POSE, FIELD_REST, FIELD_TURN
 from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
     GuardConfig,
@@ -35,6 +34,7 @@ from imucalib.plan.schema import (
     PlanStep,
     StaticStep,
 )
+from imucalib.procedures.field.roles import FIELD_MOVE, FIELD_POSE, FIELD_REST, FIELD_TURN
 
 __all__ = ["generate_field_plan"]
 

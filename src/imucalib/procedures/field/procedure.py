@@ -19,6 +19,7 @@ from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
 from imucalib.procedures.field.options import FieldAnalysisOptions, FieldPlanOptions
+from imucalib.procedures.field.roles import ROLES
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -41,6 +42,7 @@ class FieldProcedure(ProcedureDefaults):
     description = ("calibration without equipment from a hand-held log: the accelerometer "
                    "from static poses of unknown orientation (gravity norm) or a fixture's "
                    "faces, the gyro from the rotations between them")
+    roles = ROLES
     plan_options_type = FieldPlanOptions
     plan_options = option_names(FieldPlanOptions)
     analysis_options_type = FieldAnalysisOptions

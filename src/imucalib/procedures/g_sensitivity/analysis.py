@@ -26,7 +26,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import G_SENSITIVITY_POSITION
 from imucalib.procedures.common.drift_model import (
     DriftFit,
     GSensitivityOptions,
@@ -39,6 +38,7 @@ from imucalib.procedures.common.static_windows import (
     json_safe,
     require_recorded,
 )
+from imucalib.procedures.g_sensitivity.roles import G_SENSITIVITY_POSITION
 
 __all__ = ["GSensitivityOptions", "GSensitivityResult", "analyze_g_sensitivity",
            "drift_parameter_names", "fit_windows"]

@@ -17,7 +17,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import G_SENSITIVITY_POSITION
 from imucalib.plan.schema import (
     ImuSpecConfig,
     OperatorCheckStep,
@@ -31,6 +30,7 @@ from imucalib.procedures.common.static_positions import (
     dual_axis_twin,
     position_steps,
 )
+from imucalib.procedures.g_sensitivity.roles import G_SENSITIVITY_POSITION
 
 __all__ = ["G_SENSITIVITY_POSITIONS_DEG", "check_grade", "dual_axis_twin",
            "generate_g_sensitivity_plan", "position_steps"]

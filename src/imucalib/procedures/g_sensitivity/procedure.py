@@ -17,6 +17,7 @@ from imucalib.procedures.g_sensitivity.options import (
     GSensitivityAnalysisOptions,
     GSensitivityPlanOptions,
 )
+from imucalib.procedures.g_sensitivity.roles import ROLES
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -32,6 +33,7 @@ class GSensitivityProcedure(ProcedureDefaults):
     name = "g-sensitivity"
     description = ("gyro g-sensitivity: drift D0 + D1·a_x + D2·a_y + D3·a_z of each gyro axis "
                    "from static positions on a dual-axis table, Earth rate subtracted")
+    roles = ROLES
     plan_options_type = GSensitivityPlanOptions
     plan_options = option_names(GSensitivityPlanOptions)
     analysis_options_type = GSensitivityAnalysisOptions

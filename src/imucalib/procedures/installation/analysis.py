@@ -25,13 +25,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import INSTALLATION_RATE
 from imucalib.procedures.common.rate_windows import RateProcessing, extract_rate_windows
 from imucalib.procedures.installation.misalignment import (
     Misalignment,
     closed_form_misalignment,
     lsq_misalignment,
 )
+from imucalib.procedures.installation.roles import INSTALLATION_RATE
 
 __all__ = ["InstallationResult", "analyze_installation"]
 

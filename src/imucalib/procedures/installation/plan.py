@@ -18,7 +18,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import INSTALLATION_RATE, INSTALLATION_REMOUNT
 from imucalib.plan.equipment import TwinEquipment
 from imucalib.plan.schema import Plan
 from imucalib.procedures.common.rate_table_plan import (
@@ -27,6 +26,7 @@ from imucalib.procedures.common.rate_table_plan import (
     remounted_turns_plan,
     signed_rates,
 )
+from imucalib.procedures.installation.roles import INSTALLATION_RATE, INSTALLATION_REMOUNT
 
 __all__ = ["generate_installation_plan"]
 

@@ -20,6 +20,7 @@ from imucalib.procedures.installation.options import (
     InstallationAnalysisOptions,
     InstallationPlanOptions,
 )
+from imucalib.procedures.installation.roles import ROLES
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -36,6 +37,7 @@ class InstallationProcedure(ProcedureDefaults):
     description = ("installation (misalignment) errors of the gyro triad on a single-axis "
                    "table: each axis up in turn, a +ω and a −ω turn over whole revolutions; "
                    "the MIMU chapter's closed form and the least-squares triad model")
+    roles = ROLES
     plan_options_type = InstallationPlanOptions
     plan_options = option_names(InstallationPlanOptions)
     analysis_options_type = InstallationAnalysisOptions

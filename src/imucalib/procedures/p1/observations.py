@@ -37,7 +37,7 @@ rot_tp = Π R_{n_i}(θ_i) and
 
 Which windows
 -------------
-The recording's steps say what each window is for (:mod:`imucalib.io.step_roles`): the six
+The recording's steps say what each window is for (:mod:`.roles`): the six
 positions ``p1.accel-position``, the level static record ``p1.gyro-bias``, the calibration rates
 ``p1.gyro-rate``, and the verification's ``p1.held-out-position`` and ``p1.held-out-rate``. A
 step without a role gets the one its tags imply (:func:`~imucalib.io.step_roles.role_from_tags`:
@@ -69,15 +69,7 @@ from numpy.typing import NDArray
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import InvalidInputError, RecordingError
 from imucalib.io.reader import Recording, StepRecord
-from imucalib.io.step_roles import (
-    P1_ACCEL_POSITION,
-    P1_GYRO_BIAS,
-    P1_GYRO_RATE,
-    P1_HELD_OUT_POSITION,
-    P1_HELD_OUT_RATE,
-    P1_ROLES,
-    role_from_tags,
-)
+from imucalib.io.step_roles import role_from_tags
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.io import parse_plan
@@ -93,6 +85,14 @@ from imucalib.procedures.common.reference import (
 from imucalib.procedures.common.windows import RunningMoments as _Moments
 from imucalib.procedures.common.windows import harmonic_residual_std as _harmonic_residual_std
 from imucalib.procedures.common.windows import table_angle_at as _angle_at
+from imucalib.procedures.p1.roles import (
+    P1_ACCEL_POSITION,
+    P1_GYRO_BIAS,
+    P1_GYRO_RATE,
+    P1_HELD_OUT_POSITION,
+    P1_HELD_OUT_RATE,
+)
+from imucalib.procedures.p1.roles import ROLES as P1_ROLES
 from imucalib.processing import (
     compute_integer_revolution_window,
     compute_window_statistics,
@@ -206,7 +206,7 @@ class WindowObservation:
         Per channel (gyro x, y, z, accel x, y, z) the fitted N̂, Ĉ_B, K̂ of the window's Allan
         variance (:func:`~imucalib.processing.statistics.compute_window_statistics`).
     step_role : str
-        The step's role (:mod:`imucalib.io.step_roles`), e.g. ``"p1.accel-position"``.
+        The step's role (:mod:`.roles`), e.g. ``"p1.accel-position"``.
     """
 
     step_index: int

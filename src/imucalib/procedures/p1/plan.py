@@ -19,7 +19,7 @@
 
 every step also tagged ``"rep<k>"``. The steps the fit uses carry ``"calibration"``.
 
-Each measuring step also has a role (:mod:`imucalib.io.step_roles`), stored with the executed
+Each measuring step also has a role (:mod:`.roles`), stored with the executed
 step so that the analysis needs no plan: ``"p1.accel-position"`` (the six positions),
 ``"p1.gyro-bias"`` (the level static record), ``"p1.gyro-rate"`` (calibration rates),
 ``"p1.held-out-position"`` and ``"p1.held-out-rate"`` (verification). The operator check, the
@@ -34,13 +34,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import (
-    P1_ACCEL_POSITION,
-    P1_GYRO_BIAS,
-    P1_GYRO_RATE,
-    P1_HELD_OUT_POSITION,
-    P1_HELD_OUT_RATE,
-)
 from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
     AcceptanceConfig,
@@ -55,6 +48,13 @@ from imucalib.plan.schema import (
     SpecLimits,
     StaticStep,
     WarmUpStep,
+)
+from imucalib.procedures.p1.roles import (
+    P1_ACCEL_POSITION,
+    P1_GYRO_BIAS,
+    P1_GYRO_RATE,
+    P1_HELD_OUT_POSITION,
+    P1_HELD_OUT_RATE,
 )
 
 __all__ = [

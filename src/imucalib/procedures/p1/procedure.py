@@ -18,6 +18,7 @@ from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
 from imucalib.procedures.p1.options import P1AnalysisOptions, P1PlanOptions
+from imucalib.procedures.p1.roles import ROLES
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -39,6 +40,7 @@ class P1Procedure(ProcedureDefaults):
     name = "p1"
     description = ("two-dimensional calibration on a dual-axis table: six positions, a static "
                    "record, rate points, held-out checks, repetitions")
+    roles = ROLES
     plan_options_type = P1PlanOptions
     plan_options = option_names(P1PlanOptions)
     analysis_options_type = P1AnalysisOptions

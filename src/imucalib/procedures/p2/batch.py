@@ -47,10 +47,10 @@ from imucalib.errors import (
 )
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import Recording, StepRecord, open_recording
-from imucalib.io.step_roles import P2_SOAK
 from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
+from imucalib.procedures.p2.roles import P2_SOAK
 
 __all__ = ["P2BatchResult", "analyze_p2", "analyze_unit_file", "analyze_units_file",
            "batch_json", "summary_rows"]
@@ -114,18 +114,11 @@ def summary_rows(batch: P2BatchResult) -> list[dict[str, Any]]:
 
 
 def _plan_limits(rec: Recording) -> tuple[float | None, float | None]:
-    """Return the held-out accuracy of the stored plan (accelerometer [g], gyro [°/s])."""
-    text = rec.metadata.get("plan_toml")
-    if not text:
-        return None, None
-    try:
-        from imucalib.plan.io import parse_plan
+    """Return the held-out accuracy of the recording's plan (accelerometer [g], gyro [°/s])."""
+    from imucalib.io.context import RecordingContext
 
-        plan = parse_plan(str(text))
-    except CalibrationError:
-        return None, None
-    return plan.imu.accel_accuracy_g, plan.imu.gyro_accuracy_dps
-
+    spec = RecordingContext.of(rec.metadata).imu_spec
+    return spec.get("accel_accuracy_g"), spec.get("gyro_accuracy_dps")
 
 def _soak_failures(steps: Sequence[StepRecord], unit: str) -> dict[int, str]:
     """Return the temperature points whose soak did not complete (never reached)."""

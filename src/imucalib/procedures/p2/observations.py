@@ -41,13 +41,13 @@ from numpy.typing import NDArray
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentError, RecordingError
 from imucalib.io.reader import Recording, StepRecord, StreamData
-from imucalib.io.step_roles import P2_RATE, P2_STATIC
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
 from imucalib.procedures.common.noise import FLICKER_FACTOR, window_mean_se
 from imucalib.procedures.common.reference import site_vectors
 from imucalib.procedures.common.windows import table_angle_at
 from imucalib.procedures.p2.reduction import orientation_of
+from imucalib.procedures.p2.roles import P2_RATE, P2_STATIC
 from imucalib.processing import (
     compute_integer_revolution_window,
     compute_window_statistics,

@@ -23,7 +23,7 @@ every unit, at every temperature point, each of its body axes up and down — an
 of the cube sees every orientation over the six poses; the analysis finds which from its
 static accelerometer means.
 
-Every step has a role (:mod:`imucalib.io.step_roles`: ``p2.soak``, ``p2.remount``,
+Every step has a role (:mod:`.roles`: ``p2.soak``, ``p2.remount``,
 ``p2.static``, ``p2.rate``) and the tags ``point=<k>`` and ``leg=heating|cooling``
 (``held-out`` on the points the temperature models must predict without using them),
 ``pose=<axis>`` and, for static records, ``angle=<deg>``.
@@ -38,7 +38,6 @@ from collections.abc import Sequence
 from typing import Literal
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import P2_RATE, P2_REMOUNT, P2_SOAK, P2_STATIC
 from imucalib.plan.bounds import MAX_IMUS
 from imucalib.plan.equipment import (
     ChamberConfig,
@@ -60,6 +59,7 @@ from imucalib.plan.schema import (
     RateStep,
     SoakStep,
 )
+from imucalib.procedures.p2.roles import P2_RATE, P2_REMOUNT, P2_SOAK, P2_STATIC
 
 __all__ = [
     "DEFAULT_HELD_OUT_DEGC",

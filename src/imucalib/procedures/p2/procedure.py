@@ -19,6 +19,7 @@ from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
 from imucalib.procedures.p2.options import P2AnalysisOptions, P2PlanOptions
+from imucalib.procedures.p2.roles import ROLES
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -38,6 +39,7 @@ class P2Procedure(ProcedureDefaults):
     description = ("array full-temperature calibration: IMUs on a cube in a thermal chamber on "
                    "a single-axis table, six orientations × static and ±ω at every "
                    "temperature, temperature models of every parameter")
+    roles = ROLES
     plan_options_type = P2PlanOptions
     plan_options = option_names(P2PlanOptions)
     analysis_options_type = P2AnalysisOptions

@@ -34,7 +34,6 @@ import numpy as np
 from imucalib import units
 from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.models.earth import Site
 from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.p3.observations import (
@@ -43,6 +42,7 @@ from imucalib.procedures.p3.observations import (
     extract_p3_windows,
     p3_unit_names,
 )
+from imucalib.procedures.p3.roles import P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.procedures.p3.roundrobin import (
     PARAMETERS,
     SERIES_NAMES,

@@ -46,7 +46,6 @@ from imucalib.errors import (
     RecordingError,
 )
 from imucalib.io.reader import Recording, StepRecord, StreamData
-from imucalib.io.step_roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
 from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
 from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.window_checks import (
@@ -55,6 +54,7 @@ from imucalib.procedures.common.window_checks import (
     pooled_white_se,
 )
 from imucalib.procedures.common.windows import counter_times, whole_revolutions
+from imucalib.procedures.p3.roles import P3_MOUNT, P3_RATE, P3_REST, P3_TUMBLE
 
 __all__ = ["P3Processing", "P3Window", "extract_p3_windows", "p3_unit_names"]
 

@@ -25,7 +25,7 @@ up to `test_range_g` (20 g by default): ω_i = √(a_i/r_t), a_i = i·a_max/n. W
 ``both_directions=True`` each rate is also run negative (the Earth-rate Coriolis term changes
 sign; the analysis models it either way).
 
-Every step has a role (:mod:`imucalib.io.step_roles`: ``p3.mount``, ``p3.tumble``,
+Every step has a role (:mod:`.roles`: ``p3.mount``, ``p3.tumble``,
 ``p3.rest``, ``p3.rate``, ``p3.swap``, ``p3.load``).
 
 The plan carries a ``[twin]`` table: a centrifuge of static radius r_t whose rotor centre
@@ -43,7 +43,6 @@ from collections.abc import Sequence
 
 from imucalib import units
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import P3_LOAD, P3_MOUNT, P3_RATE, P3_REST, P3_SWAP, P3_TUMBLE
 from imucalib.plan.equipment import (
     CentrifugeConfig,
     FixtureConfig,
@@ -60,6 +59,7 @@ from imucalib.plan.schema import (
     PlanLimits,
     PlanStep,
 )
+from imucalib.procedures.p3.roles import P3_LOAD, P3_MOUNT, P3_RATE, P3_REST, P3_SWAP, P3_TUMBLE
 
 __all__ = ["ARM_POSITIONS_DEG", "UNIT_NAMES", "generate_p3_plan", "p3_rates_dps"]
 

@@ -17,6 +17,7 @@ from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
 from imucalib.procedures.p3.options import P3AnalysisOptions, P3PlanOptions
+from imucalib.procedures.p3.roles import ROLES
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -35,6 +36,7 @@ class P3Procedure(ProcedureDefaults):
     description = ("accelerometer K2 on a precision centrifuge: two reference accelerometers "
                    "in a round-robin measure the rotor's dynamic unbalance, which is removed "
                    "from the test accelerometer's ω⁴ term")
+    roles = ROLES
     plan_options_type = P3PlanOptions
     plan_options = option_names(P3PlanOptions)
     analysis_options_type = P3AnalysisOptions

@@ -14,7 +14,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import RANDOM_DRIFT_POSITION
 from imucalib.plan.schema import (
     ImuSpecConfig,
     OperatorCheckStep,
@@ -30,6 +29,7 @@ from imucalib.procedures.common.static_positions import (
     dual_axis_twin,
     position_steps,
 )
+from imucalib.procedures.random_drift.roles import RANDOM_DRIFT_POSITION
 
 __all__ = ["MIN_REPETITIONS", "generate_random_drift_plan"]
 

@@ -17,6 +17,7 @@ from imucalib.procedures.random_drift.options import (
     RandomDriftAnalysisOptions,
     RandomDriftPlanOptions,
 )
+from imucalib.procedures.random_drift.roles import ROLES
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -32,6 +33,7 @@ class RandomDriftProcedure(ProcedureDefaults):
     name = "random-drift"
     description = ("gyro random drift 2.7·√(σ_D0² + σ_D1² + σ_D2² + σ_D3²) and accelerometer "
                    "zero stability from multi-position runs repeated over hours")
+    roles = ROLES
     plan_options_type = RandomDriftPlanOptions
     plan_options = option_names(RandomDriftPlanOptions)
     analysis_options_type = RandomDriftAnalysisOptions

@@ -29,7 +29,6 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import RATE_TRANSFER_RATE
 from imucalib.procedures.common.rate_windows import (
     RateProcessing,
     RateWindow,
@@ -41,6 +40,7 @@ from imucalib.procedures.rate_transfer.fit import (
     fit_line,
     fit_rate_transfer,
 )
+from imucalib.procedures.rate_transfer.roles import RATE_TRANSFER_RATE
 
 __all__ = ["AxisTransfer", "RateTransferResult", "analyze_rate_transfer", "transfer_of_axis"]
 

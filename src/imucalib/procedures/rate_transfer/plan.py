@@ -14,7 +14,7 @@ chapter on MIMU error analysis and calibration (docs/procedures.md, "The MIMU ch
 both signs (IEEE Std 952-2020 / 1431-2004 rate-transfer tests). A rate at or beyond the gyro's
 full scale is refused (:class:`~imucalib.errors.ConfigurationError`): its samples would clip.
 
-Every step has a role (:mod:`imucalib.io.step_roles`: ``rate-transfer.remount``,
+Every step has a role (:mod:`.roles`: ``rate-transfer.remount``,
 ``rate-transfer.rate``) and the tag ``axis=<x|y|z>``; the turns also ``rate=<°/s>``.
 
 The plan carries a ``[twin]`` table (:func:`rate_table_twin`): a high-grade single-axis table,
@@ -35,7 +35,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import RATE_TRANSFER_RATE, RATE_TRANSFER_REMOUNT
 from imucalib.plan.equipment import TwinEquipment
 from imucalib.plan.schema import Plan
 from imucalib.procedures.common.rate_table_plan import (
@@ -49,6 +48,7 @@ from imucalib.procedures.common.rate_table_plan import (
     remounted_turns_plan,
     signed_rates,
 )
+from imucalib.procedures.rate_transfer.roles import RATE_TRANSFER_RATE, RATE_TRANSFER_REMOUNT
 
 __all__ = ["AXES", "DEFAULT_RATES_DPS", "POSE_OF_AXIS", "UNIT_NAME", "check_rates_in_range",
            "generate_rate_transfer_plan", "rate_table_twin", "remount_step",

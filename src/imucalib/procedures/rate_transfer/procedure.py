@@ -20,6 +20,7 @@ from imucalib.procedures.rate_transfer.options import (
     RateTransferAnalysisOptions,
     RateTransferPlanOptions,
 )
+from imucalib.procedures.rate_transfer.roles import ROLES
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -36,6 +37,7 @@ class RateTransferProcedure(ProcedureDefaults):
     description = ("gyro rate transfer on a single-axis table: each axis up in turn, turns at "
                    "±ω over whole revolutions; scale factor, bias, nonlinearity (ppm of full "
                    "scale), asymmetry and quadratic term per axis")
+    roles = ROLES
     plan_options_type = RateTransferPlanOptions
     plan_options = option_names(RateTransferPlanOptions)
     analysis_options_type = RateTransferAnalysisOptions

@@ -38,7 +38,6 @@ from imucalib.errors import (
     RecordingError,
 )
 from imucalib.io.reader import Recording, StepRecord, StreamData
-from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_POSITION
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
 from imucalib.procedures.common.noise import block_variance
@@ -48,6 +47,7 @@ from imucalib.procedures.common.window_checks import (
     checked_samples,
     pooled_white_se,
 )
+from imucalib.procedures.tumble.roles import TUMBLE_DRIFT, TUMBLE_POSITION
 
 __all__ = ["TumbleProcessing", "TumbleWindow", "extract_tumble_windows"]
 

@@ -31,7 +31,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_MOUNT, TUMBLE_POSITION
 from imucalib.plan.equipment import ImuConfig, SiteConfig, TableConfig, TwinEquipment
 from imucalib.plan.schema import (
     GuardConfig,
@@ -42,6 +41,7 @@ from imucalib.plan.schema import (
     PlanStep,
     PositionStep,
 )
+from imucalib.procedures.tumble.roles import TUMBLE_DRIFT, TUMBLE_MOUNT, TUMBLE_POSITION
 
 __all__ = ["HEAD_MOUNTS", "UNIT_NAME", "generate_tumble_plan", "head_angles_deg"]
 

@@ -14,6 +14,7 @@ from imucalib.procedures.common.defaults import ProcedureDefaults
 from imucalib.procedures.common.options import option_names
 from imucalib.procedures.common.procedure import accepted_options
 from imucalib.procedures.tumble.options import TumbleAnalysisOptions, TumblePlanOptions
+from imucalib.procedures.tumble.roles import ROLES
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -30,6 +31,7 @@ class TumbleProcedure(ProcedureDefaults):
     description = ("accelerometer multi-position tumble on a dividing head (IEEE Std 1293): "
                    "K0, K1, misalignment, K2 − Kpp, Kip, K3 and Koq from the Fourier "
                    "coefficients of N equally spaced positions")
+    roles = ROLES
     plan_options_type = TumblePlanOptions
     plan_options = option_names(TumblePlanOptions)
     analysis_options_type = TumbleAnalysisOptions
