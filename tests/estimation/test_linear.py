@@ -87,9 +87,15 @@ def test_unknown_noise_scales_covariance_by_variance_factor(kit: SimpleNamespace
     assert unknown.variance_factor == pytest.approx(known.variance_factor * kit.SIGMA**2, rel=1e-9)
     assert unknown.variance_factor == pytest.approx(kit.SIGMA**2, rel=0.5)
     np.testing.assert_allclose(unknown.std, known.std * np.sqrt(known.variance_factor), rtol=1e-9)
+    # known noise: scaling follows the one misfit rule (Birge ratio only on a misfit)
     forced = solve_weighted_lsq(d.H, z, param_names=d.param_names, sigma=kit.SIGMA,
                                 scale_covariance=True)
-    np.testing.assert_allclose(forced.std, unknown.std, rtol=1e-9)
+    assert forced.covariance_scaled and not forced.fit_quality.misfit
+    np.testing.assert_array_equal(forced.std, known.std_birge)
+    np.testing.assert_allclose(forced.std, known.std, rtol=1e-12)
+    # unknown noise: σ̂₀² estimates it; nothing is left to test
+    assert unknown.fit_quality.chi2 == unknown.dof and not unknown.fit_quality.misfit
+    np.testing.assert_array_equal(unknown.covariance_birge, unknown.covariance)
 
 
 def test_weights_sigma_and_diagonal_covariance_agree(kit: SimpleNamespace, truth, six_up) -> None:

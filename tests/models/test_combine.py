@@ -54,8 +54,13 @@ def test_disagreeing_tests_are_flagged_and_scaled():
     rest = [n for n in GYRO if n not in bias]
     parts = [_part("a", bias, [0.0, 0.0, 0.0], 1e-6), _part("b", rest, np.zeros(9), 1e-6),
              _part("c", bias, [5e-5, 5e-5, 5e-5], 1e-6)]  # 35σ apart
-    (quality,) = combine_triad_parameters(parts, sensor_id="U").fit_quality
-    assert quality.misfit and quality.birge_ratio > 20
+    combined = combine_triad_parameters(parts, sensor_id="U")
+    (quality,) = combined.fit_quality
+    assert quality.group == "gyro" and quality.misfit and quality.birge_ratio > 20
+    # the reported σ are Birge-scaled (they were not: the group did not match the names)
+    noise, scaled = combined.std(), combined.std(scaled=True)
+    for name in GYRO:
+        assert scaled[name] == pytest.approx(noise[name] * quality.birge_ratio, rel=1e-12)
 
 
 def test_an_incomplete_triad_names_what_is_missing():

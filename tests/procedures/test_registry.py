@@ -62,7 +62,7 @@ class _Dummy:
 
     def analyze(self, recording, *, unit=None, options=None):
         return SimpleNamespace(procedure=self.name, unit=unit or "IMU-1", passed=None,
-                               to_dict=lambda: {"ok": 1})
+                               fit_quality=(), to_dict=lambda: {"ok": 1})
 
     def report_content(self, result, meta):
         raise NotImplementedError

@@ -205,9 +205,10 @@ def test_its_report_prints_every_row_with_its_expanded_uncertainty(
     rows = {r[0]: r[1:] for r in table.rows}
     assert len(rows) == len(result.parameter_rows()) == 6 * 7 + 15
     for name, value, std, unit in result.parameter_rows():
-        shown_unit, scale = (display_unit(name, unit) if name.startswith("accel_")
-                             else (unit, 1.0))
-        shown = value - 1.0 if name.split("_")[1] == "K" else value
+        # every row in the display unit of its kind; a scale factor (K1, K) as K − 1
+        shown_unit, scale = display_unit(name, unit)
+        is_scale = unit == "1" and (name.startswith("K1_") or name.split("_")[1] == "K")
+        shown = value - 1.0 if is_scale else value
         assert rows[name] == (*expected_cells(shown / scale, 2.0 * std / scale), shown_unit)
     assert "(docs/tumble.md)" in doc.section("4.").paragraphs[0]
     assert doc.section("6.").paragraphs[0].startswith("Decision: no conformity decision")

@@ -112,7 +112,8 @@ def test_a_unit_report_states_each_temperature_model_and_draws_them(small):
         assert row[3] == ("pass" if ok else "FAIL")
     # the unit's result file alone (imucalib report RESULT) states the same models
     cal = CalibrationResult.load(small.out / "small.U1.p2.result.json")
-    bare = build_report(SimpleNamespace(result=cal, procedure="p2", unit="U1", passed=None))
+    bare = build_report(SimpleNamespace(result=cal, procedure="p2", unit="U1", passed=None,
+                                        fit_quality=cal.fit_quality))
     again = next(t for t in bare.section("5.").tables if t.title.startswith("temperature"))
     assert again.rows == models.rows
     assert any("T0 = 25 °C" in p for p in bare.section("4.").paragraphs)

@@ -8,7 +8,9 @@ choices: ``docs/processing-estimation.md``.
 Contents
 --------
 :mod:`imucalib.estimation.linear`
-    :func:`solve_weighted_lsq` → :class:`LsqSolution`.
+    :func:`solve_weighted_lsq` → :class:`LsqSolution`: the one weighted least-squares solver of
+    every linear fit (σ, weights or a full covariance; the misfit rule of
+    :mod:`imucalib.models.fit_quality` and the Birge-scaled covariance).
 :mod:`imucalib.estimation.nonlinear`
     :func:`solve_nonlinear_lsq` → :class:`NlsSolution`.
 :mod:`imucalib.estimation.kalman`

@@ -90,6 +90,13 @@ class Whitener:
             return a / (self.sigma if a.ndim == 1 else self.sigma[:, None])
         return np.asarray(scipy.linalg.solve_triangular(self.chol, a, lower=True), dtype=np.float64)
 
+    def whiten_transpose(self, a: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Return Wᵀ·a = L⁻ᵀ·a for a of shape (m,) or (m, p) (the gain Kᵀ = Wᵀ·U·S⁻¹·Vᵀ·D)."""
+        if self.chol is None:
+            return a / (self.sigma if a.ndim == 1 else self.sigma[:, None])
+        return np.asarray(scipy.linalg.solve_triangular(self.chol, a, lower=True, trans="T"),
+                          dtype=np.float64)
+
     def colour(self, a: NDArray[np.float64]) -> NDArray[np.float64]:
         """Return L·a (the inverse of :meth:`whiten`) for a of shape (m,) or (m, p)."""
         if self.chol is None:
@@ -147,7 +154,10 @@ def make_whitener(m: int, *, weights: ArrayLike | None = None,
         raise InvalidInputError(
             f"`covariance` must be a scalar or have shape ({m},) or ({m}, {m}); got {cov.shape}"
         )
-    if not np.allclose(cov, cov.T, rtol=1e-10, atol=0.0):
+    # symmetric to rounding: |C_ij − C_ji| ≤ 1e-10·√(C_ii·C_jj) (a product such as P·C·Pᵀ is
+    # symmetric only to rounding, also where an element should be zero)
+    bound = 1e-10 * np.sqrt(np.abs(np.outer(np.diag(cov), np.diag(cov))))
+    if np.any(np.abs(cov - cov.T) > bound):
         raise InvalidInputError("`covariance` must be symmetric; got max |C - Cᵀ| = "
                                 f"{np.abs(cov - cov.T).max():.3g}")
     try:

@@ -28,7 +28,8 @@ linear drift
     y_k → y_k − ḃ·(t_k − t̄)                                                            (F.1″)
 
 (t̄ the poses' mean time, b then the bias at t̄) adds three rates. :func:`fit_gravity_norm`
-solves (F.2) by Gauss–Newton with the analytic Jacobian, returns the covariance
+solves (F.2) by Gauss–Newton with the analytic Jacobian (each step by
+:func:`~imucalib.estimation.linear.solve_weighted_lsq`), returns the covariance
 (JᵀW J)⁻¹ (the Cramér–Rao bound of the design for white noise), χ²/ν and its Birge-scaled
 covariance on a misfit (the project's rule, docs/processing-estimation.md), and refuses a
 rank-deficient design naming the parameters it cannot see (:class:`InsufficientExcitationError`:
@@ -54,8 +55,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
-from imucalib.errors import ConvergenceError, InsufficientExcitationError, InvalidInputError
+from imucalib.errors import ConvergenceError, InvalidInputError
 from imucalib.estimation._common import check_rank
+from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["PARAMETERS", "GravityNormFit", "correct_accel", "fit_gravity_norm", "pose_coverage"]
@@ -202,37 +204,32 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
         a, j = _jacobian(p[:core], yy - np.outer(dt, p[core:]))
         return a, np.column_stack([j, j[:, :3] * dt[:, None]])
 
-    p = np.zeros(m)
-    for it in range(1, max_iter + 1):
+    names = [*(*PARAMETERS, *K2_PARAMETERS)[:core], *(DRIFT_PARAMETERS if drift else ())]
+
+    def linearised(p: _F64, check: bool) -> tuple[LsqSolution, _F64, _F64]:
+        """Solve the Gauss–Newton step at p by the one solver: (step solution, r, σ_r)."""
         a, j = evaluate(p)
         u = a / np.linalg.norm(a, axis=1, keepdims=True)
         sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
         r = np.linalg.norm(a, axis=1) - gravity_mps2
-        if it == 1:
+        if check:
             _check_rank(j, 1.0 / sr, drift)
-        jw, rw = j / sr[:, None], r / sr
-        step, *_ = np.linalg.lstsq(jw, -rw, rcond=None)
+        return solve_weighted_lsq(
+            j, -r, sigma=sr, param_names=names, context="gravity-norm Jacobian",
+            advice="poses along the axes alone cannot see the non-orthogonality; add tilted "
+                   "poses, or use the six-position form for a fixture's faces"), r, sr
+
+    p = np.zeros(m)
+    for it in range(1, max_iter + 1):
+        step = linearised(p, it == 1)[0].estimate
         p = p + step
         if np.max(np.abs(step)) < tol:
             break
     else:
         raise ConvergenceError(f"the gravity-norm fit did not converge in {max_iter} "
                                "iterations")
-    a, j = evaluate(p)
-    u = a / np.linalg.norm(a, axis=1, keepdims=True)
-    sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
-    r = np.linalg.norm(a, axis=1) - gravity_mps2
-    jw = j / sr[:, None]
-    _check_rank(j, 1.0 / sr, drift)          # at the solution too: axis-aligned poses
-    try:
-        cov = np.linalg.inv(jw.T @ jw)
-    except np.linalg.LinAlgError:
-        names = [*(*PARAMETERS, *K2_PARAMETERS)[:core], *(DRIFT_PARAMETERS if drift else ())]
-        raise InsufficientExcitationError(
-            names, "the poses leave the gravity-norm fit singular at its solution (poses "
-                   "along the axes alone cannot see the non-orthogonality; add tilted "
-                   "poses, or use the six-position form for a fixture's faces)") from None
-    cov = 0.5 * (cov + cov.T)
+    at_solution, r, sr = linearised(p, True)     # checked at the solution too: axis poses
+    cov = at_solution.covariance_noise
     quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - m)
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
                           covariance_noise=cov, quality=quality, residuals=r, iterations=it)

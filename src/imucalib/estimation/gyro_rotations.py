@@ -79,20 +79,21 @@ Gauss–Newton from M = 0, with the Jacobian of (F.6) in M from the same perturb
 (the derivative of the continuous integral: it differs from that of the discrete (F.4) by
 O(Δt²), which changes the steps, not the solution). The steps are chord steps: J and C of
 M = 0 are kept (each step then cuts the error by about ‖M‖) until a step is under `tol`,
-then J and C are evaluated there and the steps repeated (C depends on M only through R). The
+then J and C are evaluated there and the steps repeated (C depends on M only through R); each
+step is the GLS of :func:`~imucalib.estimation.linear.solve_weighted_lsq` with the full C. The
 covariance is (JᵀC⁻¹J)⁻¹ — the Cramér–Rao bound of the design for this noise — Birge-scaled
 when χ²/ν flags a misfit (:func:`imucalib.models.fit_quality.assess_fit`). With the
 covariance C_a of the accelerometer θ the fit used, the accelerometer's own error is
 propagated by the implicit-function rule,
 
-    A = ∂θ_g/∂θ_a = −(JᵀC⁻¹J)⁻¹·JᵀC⁻¹·∂r/∂θ_a,   cov_g += A·C_a·Aᵀ,
+    A = ∂θ_g/∂θ_a = −(JᵀC⁻¹J)⁻¹·JᵀC⁻¹·∂r/∂θ_a = −K·∂r/∂θ_a,   cov_g += A·C_a·Aᵀ,
     cov(θ_g, θ_a) = A·C_a                                                          (F.10)
 
-(∂r/∂θ_a by central differences; the error of θ_a is taken as independent of the noise of the
-pose means used here, though the accelerometer fit used the same means: a correlation this
-neglects). Turns alone make a linear problem: (F.7) is Θ − φn = M·φn, solved in closed form
-by :func:`fit_turns_linear` (its C does not depend on M, so Gauss–Newton reaches the same
-solution).
+(K the solver's gain; ∂r/∂θ_a by central differences; the error of θ_a is taken as
+independent of the noise of the pose means used here, though the accelerometer fit used the
+same means: a correlation this neglects). Turns alone make a linear problem: (F.7) is
+Θ − φn = M·φn, solved in closed form by :func:`fit_turns_linear` (its C does not depend on M,
+so Gauss–Newton reaches the same solution).
 
 A design that leaves entries of M unseen (turns about one axis only; hand rotations all about
 one body axis, or about the vertical) is refused naming them
@@ -121,6 +122,7 @@ from imucalib._checks import as_array
 from imucalib.errors import ConvergenceError, InvalidInputError
 from imucalib.estimation._common import check_rank
 from imucalib.estimation.gravity_norm import correct_accel
+from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["KINDS", "PARAMETERS", "GyroRotationFit", "RotationObservation",
@@ -542,6 +544,13 @@ def _whiten(c: _F64, a: _F64) -> _F64:
     return np.asarray(np.linalg.solve(np.linalg.cholesky(c), a), dtype=np.float64)
 
 
+def _step(jac: _F64, r: _F64, c: _F64, *, gain: bool = False) -> LsqSolution:
+    """Solve for the Gauss–Newton step δM minimising (r + J·δM)ᵀC⁻¹(r + J·δM)."""
+    return solve_weighted_lsq(jac, -r, covariance=c, param_names=PARAMETERS, gain=gain,
+                              group="gyro (rotations)", context="rotations' Jacobian",
+                              advice=_ADVICE)
+
+
 def _check(jac: _F64, c: _F64) -> None:
     check_rank(_whiten(c, jac), PARAMETERS, subject="the rotations", advice=_ADVICE,
                weak_column=_WEAK, weak_singular=_COLLINEAR)
@@ -558,9 +567,7 @@ def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | Non
     rt = design.end_attitudes(m)
     r = design.residuals(m, rt)
     _check(jac, c)
-    jw = _whiten(c, jac)
-    cov_noise = np.linalg.inv(jw.T @ jw)
-    cov_noise = 0.5 * (cov_noise + cov_noise.T)
+    cov_noise = _step(jac, r, c).covariance_noise
     extra: dict[str, _F64] = {}
     cov, c_fit = cov_noise, c
     if accel_covariance is not None:
@@ -578,14 +585,13 @@ def _finish(design: _Design, m: _F64, it: int, accel_covariance: ArrayLike | Non
         design.set_accel(theta_a)
         c_fit = c + da @ ca @ da.T
         c_fit = 0.5 * (c_fit + c_fit.T)
-        jw_t = _whiten(c_fit, jac)
-        step, *_ = np.linalg.lstsq(jw_t, -_whiten(c_fit, r), rcond=None)
-        m = m + step
+        step = _step(jac, r, c_fit, gain=True)
+        m = m + step.estimate
         rt = design.end_attitudes(m)
         r = design.residuals(m, rt)
-        cov = np.asarray(np.linalg.inv(jw_t.T @ jw_t), dtype=np.float64)
-        cov = 0.5 * (cov + cov.T)
-        a = -cov @ jw_t.T @ _whiten(c_fit, da)
+        cov = step.covariance_noise
+        assert step.gain is not None  # asked for
+        a = -step.gain @ da                                              # (F.10)
         extra = {"covariance_accel": cov - cov_noise, "cross_covariance": a @ ca,
                  "accel_sensitivity": a}
     rw = _whiten(c_fit, r)
@@ -635,7 +641,7 @@ def fit_gyro_rotations(rotations: Sequence[RotationObservation], accel_theta: Ar
     # chord steps with J and C of M = 0 (each cuts the error by about ‖M‖) until a step is
     # under tol, then again with J and C evaluated there
     while True:
-        step, *_ = np.linalg.lstsq(_whiten(c, jac), -_whiten(c, r), rcond=None)
+        step = _step(jac, r, c).estimate
         m, it = m + step, it + 1
         small = bool(np.max(np.abs(step)) < tol)
         if full and small:
@@ -664,6 +670,5 @@ def fit_turns_linear(rotations: Sequence[RotationObservation], accel_theta: Arra
                                 f"{int((~design.turn).sum())} \"gravity\" rotation(s)")
     r0, jac, c, _ = design.evaluate(np.zeros(9))       # r(M) = r0 + J·M exactly
     _check(jac, c)
-    m = np.asarray(np.linalg.lstsq(_whiten(c, jac), -_whiten(c, r0), rcond=None)[0],
-                   dtype=np.float64)
+    m = np.array(_step(jac, r0, c).estimate)
     return _finish(design, m, 0, accel_covariance, jac, c)

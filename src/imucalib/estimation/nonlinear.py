@@ -17,7 +17,8 @@ gives the Gauss–Newton covariance [2]_::
 
     Σ_x = (Jᵀ J)⁻¹ (× σ̂₀² = χ²/ν when the noise level is unknown)               (1)
 
-the same expressions as Eqs. (2)–(5) of :mod:`~imucalib.estimation.linear` with H replaced by J.
+the same expressions as Eqs. (2)–(7) of :mod:`~imucalib.estimation.linear` with H replaced by J
+(the same misfit rule and Birge-scaled covariance: the linear solver's statistics are reused).
 Eq. (1) is the inverse Fisher information at x̂ (the Cramér–Rao bound of the linearised model,
 :mod:`~imucalib.estimation.crlb`); it is accurate when the model is close to linear over a few
 standard deviations of x̂ — the closed-loop tests check it against Monte-Carlo spreads.
@@ -42,13 +43,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import ConvergenceError, InvalidInputError
-from imucalib.estimation._common import EstimateAccessors, as_names, make_whitener
-from imucalib.estimation.linear import _fit_statistics, _scaled_svd_factors
-from imucalib.estimation.observability import (
-    DEFAULT_COND_LIMIT,
-    ObservabilityReport,
-    compute_observability,
-)
+from imucalib.estimation._common import as_names, make_whitener
+from imucalib.estimation.linear import LsqStatistics, _factorise, _fit_statistics
+from imucalib.estimation.observability import DEFAULT_COND_LIMIT
 
 __all__ = ["NlsSolution", "ResidualFunction", "solve_nonlinear_lsq"]
 
@@ -57,63 +54,33 @@ ResidualFunction = Callable[[NDArray[np.float64]], ArrayLike]
 
 
 @dataclass(frozen=True, eq=False)
-class NlsSolution(EstimateAccessors):
+class NlsSolution(LsqStatistics):
     """Result of a nonlinear least-squares fit. Arrays are read-only.
+
+    The statistics are those of :class:`~imucalib.estimation.linear.LsqStatistics` with the
+    design H replaced by the Jacobian at x̂: `covariance` is Eq. (1) of
+    :mod:`~imucalib.estimation.nonlinear` (the scaled one when `covariance_scaled`).
 
     Attributes
     ----------
-    param_names : tuple of str
-        Order of `estimate` and `covariance`.
-    estimate : ndarray, shape (p,)
-        x̂.
-    covariance : ndarray, shape (p, p)
-        Eq. (1) of :mod:`~imucalib.estimation.nonlinear` (scaled by σ̂₀² when
-        `covariance_scaled`).
-    std : ndarray, shape (p,)
-        √diag(Σ_x).
-    residuals : ndarray, shape (m,)
-        r(x̂). [observation units]
-    normalized_residuals : ndarray, shape (m,)
-        Residuals divided by their linearised standard deviation (NaN at leverage 1).
+    param_names, estimate, covariance, std, residuals, normalized_residuals, chi2, dof
+        As in :class:`~imucalib.estimation.linear.LsqStatistics` (r = r(x̂)).
+    variance_factor, covariance_scaled, condition_number, rank, observability
+        As there, for the whitened Jacobian at x̂.
+    covariance_noise, covariance_birge, std_birge, fit_quality
+        As there (noise-only covariance, Birge-scaled covariance on a misfit, the one misfit
+        rule).
     jacobian : ndarray, shape (m, p)
         ∂r/∂x at x̂ (not whitened).
-    chi2 : float
-        ‖W·r(x̂)‖².
-    dof : int
-        ν = m − p.
-    variance_factor : float
-        σ̂₀² = χ²/ν (NaN when ν = 0).
-    covariance_scaled : bool
-        Whether `covariance` includes σ̂₀².
-    condition_number : float
-        Of the column-scaled whitened Jacobian at x̂.
-    rank : int
-        Its numerical rank (= p for a returned solution).
-    observability : ObservabilityReport
-        The full report for the Jacobian at x̂.
     n_evaluations : int
         Residual-function evaluations used by the optimiser (finite differences excluded).
     message : str
         The optimiser's termination message.
     """
 
-    param_names: tuple[str, ...]
-    estimate: NDArray[np.float64]
-    covariance: NDArray[np.float64]
-    std: NDArray[np.float64]
-    residuals: NDArray[np.float64]
-    normalized_residuals: NDArray[np.float64]
     jacobian: NDArray[np.float64]
-    chi2: float
-    dof: int
-    variance_factor: float
-    covariance_scaled: bool
-    condition_number: float
-    rank: int
-    observability: ObservabilityReport
     n_evaluations: int
     message: str
-
 
 
 def solve_nonlinear_lsq(
@@ -149,7 +116,8 @@ def solve_nonlinear_lsq(
     covariance : float or array_like, shape (m,) or (m, m), optional
         Residual noise covariance. [observation units²]
     scale_covariance : bool, optional
-        Multiply Σ_x by σ̂₀²; default True when no noise is given (unknown level), else False.
+        Report the scaled covariance; default True when no noise is given (unknown level,
+        estimated by σ̂₀²), else False (:func:`~imucalib.estimation.linear.solve_weighted_lsq`).
     bounds : (array_like, array_like), optional
         Lower and upper bounds of x (each shape (p,) or scalar). The covariance ignores them: a
         solution on a bound has no meaningful Gaussian covariance.
@@ -185,9 +153,9 @@ def solve_nonlinear_lsq(
     whitener, known = make_whitener(m, covariance=covariance, sigma=sigma)
     scale = (not known) if scale_covariance is None else bool(scale_covariance)
     dof = m - p
-    if scale and dof <= 0:
+    if scale and not known and dof <= 0:
         raise InvalidInputError(
-            "scaling the covariance by the a-posteriori variance factor needs more residuals "
+            "estimating the noise level from the residuals needs more residuals "
             f"than parameters; got m = {m}, p = {p} (give the noise, or scale_covariance=False)"
         )
 
@@ -213,20 +181,18 @@ def solve_nonlinear_lsq(
     J = np.asarray(res.jac, dtype=np.float64)  # whitened
     if not np.all(np.isfinite(J)):
         raise InvalidInputError("the Jacobian at the solution must be finite; got NaN or inf")
-    report = compute_observability(J, names, cond_limit=cond_limit)
+    U, s, vt, report = _factorise(J, names, cond_limit)
     report.raise_if_unobservable("Jacobian at the solution")
-    U, s, vt = _scaled_svd_factors(J, report.column_norms)
     r = _call_residuals(residual_fn, x_hat, m)
-    stats = _fit_statistics(U, s, vt, report.column_norms, whitener, r, dof, scale)
+    stats = _fit_statistics(U, s, vt, report.column_norms, whitener, r, dof, scale=scale,
+                            estimated=scale and not known)
     J_raw = whitener.colour(J)
     for arr in (x_hat, J_raw):
         arr.setflags(write=False)
     return NlsSolution(
-        param_names=names, estimate=x_hat, covariance=stats.covariance, std=stats.std,
-        residuals=stats.residuals, normalized_residuals=stats.normalized_residuals,
-        jacobian=J_raw, chi2=stats.chi2, dof=dof, variance_factor=stats.variance_factor,
-        covariance_scaled=scale, condition_number=report.condition_number, rank=report.rank,
-        observability=report, n_evaluations=int(res.nfev), message=str(res.message),
+        param_names=names, estimate=x_hat, dof=dof, covariance_scaled=scale,
+        condition_number=report.condition_number, rank=report.rank, observability=report,
+        jacobian=J_raw, n_evaluations=int(res.nfev), message=str(res.message), **stats,
     )
 
 

@@ -48,7 +48,8 @@ from imucalib._checks import check_positive
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation._common import as_design, as_names
 
-__all__ = ["DEFAULT_COND_LIMIT", "ObservabilityReport", "compute_observability"]
+__all__ = ["DEFAULT_COND_LIMIT", "ObservabilityReport", "compute_observability",
+           "report_from_svd"]
 
 #: Default largest acceptable condition number of the column-scaled, whitened design. A value
 #: of 1e10 still leaves about 6 significant digits in double precision.
@@ -114,13 +115,15 @@ class ObservabilityReport:
         more = f"; and {extra} more" if extra > 0 else ""
         return text + "; weak direction(s) in column-scaled parameters: " + "; ".join(parts) + more
 
-    def raise_if_unobservable(self, context: str = "design") -> None:
+    def raise_if_unobservable(self, context: str = "design", advice: str | None = None) -> None:
         """Raise :class:`InsufficientExcitationError` when the design fails the check.
 
         Parameters
         ----------
         context : str
             What the design is, for the message (``"design"``, ``"Jacobian at the solution"`` …).
+        advice : str, optional
+            What would make the parameters observable, appended to the message.
 
         Raises
         ------
@@ -133,6 +136,8 @@ class ObservabilityReport:
         expected = (f"expected full rank {p} and condition number ≤ {self.cond_limit:.3g}")
         message = (f"the {context} cannot determine all parameters ({expected}; got "
                    f"{self.describe()}); unobservable: {', '.join(self.unobservable)}")
+        if advice:
+            message += f" — {advice}"
         raise InsufficientExcitationError(self.unobservable, message)
 
 
@@ -178,6 +183,40 @@ def compute_observability(
         raise InvalidInputError(f"`participation_threshold` must be in (0, 1]; got {thr}")
     s, vt, norms = _scaled_svd(A)
     return _report(s, vt, norms, names, kmax, thr, A.shape)
+
+
+def report_from_svd(s: NDArray[np.float64], vt: NDArray[np.float64], norms: NDArray[np.float64],
+                    names: tuple[str, ...], shape: tuple[int, int], *,
+                    cond_limit: float = DEFAULT_COND_LIMIT,
+                    participation_threshold: float = 0.01) -> ObservabilityReport:
+    """Build the report from an SVD already computed (for a solver that needs it anyway).
+
+    Parameters
+    ----------
+    s : ndarray, shape (p,)
+        Singular values of the column-scaled design A·D, descending (m ≥ p).
+    vt : ndarray, shape (p, p)
+        Its right singular vectors Vᵀ.
+    norms : ndarray, shape (p,)
+        ‖A_{:,j}‖ of the unscaled columns (D = diag(1/norms), a zero column scaled by 1).
+    names : tuple of str
+        Column names.
+    shape : tuple of int
+        (m, p) of A, for the rank tolerance.
+    cond_limit, participation_threshold : float
+        As for :func:`compute_observability`.
+
+    Returns
+    -------
+    ObservabilityReport
+        The same report as :func:`compute_observability` of A.
+    """
+    kmax = check_positive(cond_limit, "cond_limit")
+    if kmax <= 1.0:
+        raise InvalidInputError(f"`cond_limit` must be > 1; got {kmax}")
+    return _report(np.array(s, dtype=np.float64), np.array(vt, dtype=np.float64),
+                   np.array(norms, dtype=np.float64), names, kmax, participation_threshold,
+                   shape)
 
 
 def _scaled_svd(A: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64],

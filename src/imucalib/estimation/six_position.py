@@ -14,8 +14,9 @@ input axis of the fixture frame), and separates per sensor axis i into
 
 four unknowns (b_i, M_i·) per axis; the six faces give six equations per axis (ν = 2 each).
 With ``k2=True`` a quadratic term K2_i·(g·d_k,i)² joins each axis (F.12′; ν = 1).
-:func:`fit_six_position` solves (F.12) by weighted least squares per axis, with the covariance
-(AᵀWA)⁻¹, χ²/ν over the three axes and the Birge-scaled covariance on a misfit (the project's
+:func:`fit_six_position` solves (F.12) by weighted least squares per axis
+(:func:`~imucalib.estimation.linear.solve_weighted_lsq`), with the covariance (AᵀWA)⁻¹, χ²/ν
+over the three axes and the Birge-scaled covariance on a misfit (the project's
 rule): a pose placed off its nominal direction is a misfit here, which the gravity-norm fit of
 :mod:`imucalib.estimation.gravity_norm` does not mind. A Type B standard uncertainty of g adds
 M an exactly correlated term (∂M/∂g = −(I + M)/g).
@@ -34,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["SixPositionFit", "fit_six_position", "nominal_directions"]
@@ -153,23 +155,21 @@ def fit_six_position(y: ArrayLike, y_std: ArrayLike, directions: ArrayLike,
     cov = np.zeros((k, k))
     resid = np.zeros_like(yy)
     chi2 = 0.0
-    for i in range(3):
-        ai = np.column_stack([a, (gravity_mps2 * d[:, i]) ** 2]) if k2 else a
-        w = 1.0 / sy[:, i]
-        aw = ai * w[:, None]
-        if np.linalg.matrix_rank(aw) < aw.shape[1]:
-            raise InsufficientExcitationError(
-                [f"K2_{_AXES[i]}"], f"the poses do not separate K2_{_AXES[i]} from the bias "
-                                    f"(both faces of {_AXES[i]} and one across are needed)")
-        rhs = (yy[:, i] - gravity_mps2 * d[:, i]) * w
-        sol, *_ = np.linalg.lstsq(aw, rhs, rcond=None)
-        c = np.linalg.inv(aw.T @ aw)
+    for i, ax in enumerate(_AXES):
+        names = [f"bias_{ax}", *(f"M_{ax}{j}" for j in _AXES), *([f"K2_{ax}"] if k2 else [])]
+        fit = solve_weighted_lsq(
+            np.column_stack([a, (gravity_mps2 * d[:, i]) ** 2]) if k2 else a,
+            yy[:, i] - gravity_mps2 * d[:, i], sigma=sy[:, i], param_names=names,
+            context=f"six-position design of axis {ax} (F.12)",
+            advice=f"the poses do not separate K2_{ax} from the bias (both faces of {ax} and "
+                   "one across are needed)" if k2 else None)
         idx = [i, *range(3 + 3 * i, 6 + 3 * i), *([12 + i] if k2 else [])]
-        values[idx] = sol
-        cov[np.ix_(idx, idx)] = c
-        resid[:, i] = yy[:, i] - ai @ sol - gravity_mps2 * d[:, i]
-        chi2 += float(np.sum((resid[:, i] * w) ** 2))
-    # g's Type B: (I + M)·g is what the poses fix ⇒ ∂M/∂g = −(I + M)/g, exactly correlated
+        values[idx] = fit.estimate
+        cov[np.ix_(idx, idx)] = fit.covariance_noise
+        resid[:, i] = fit.residuals
+        chi2 += fit.chi2
+    # g's Type B: (I + M)·g is what the poses fix ⇒ ∂M/∂g = −(I + M)/g, exactly correlated;
+    # then the three axes' χ² pooled, the misfit rule of estimation.linear (Eqs. (6)–(7))
     jg = np.concatenate([np.zeros(3), -(np.eye(3) + values[3:12].reshape(3, 3)).ravel()
                          / gravity_mps2, -2.0 * values[12:] / gravity_mps2])
     cov = cov + np.outer(jg, jg) * gravity_std_mps2**2

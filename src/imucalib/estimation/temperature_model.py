@@ -15,7 +15,8 @@ Model, with T0 the reference temperature, m the order, optional rate and leg ter
     p(T, Ṫ, ℓ) = Σ_{j=0..m} c_j (T − T0)^j + d·Ṫ + h·ℓ,   ℓ = +1 heating, −1 cooling      (1)
 
 Generalised least squares with C = L Lᵀ (Cholesky), design A (rows a_kᵀ of Eq. (1)), β the
-q = m + 1 (+1 rate) (+1 leg) coefficients; computed on the scaled variable x = (T − T0)/s::
+q = m + 1 (+1 rate) (+1 leg) coefficients, by :func:`~imucalib.estimation.linear.solve_weighted_lsq`
+(full C); computed on the scaled variable x = (T − T0)/s::
 
     β̂ = argmin ‖L⁻¹(p − Aβ)‖²,  C_β = (Aᵀ C⁻¹ A)⁻¹                                        (2)
     χ² = (p − Aβ̂)ᵀ C⁻¹ (p − Aβ̂),  ν = K − q                                               (3)
@@ -67,6 +68,7 @@ from scipy import stats
 
 from imucalib._checks import as_array, check_finite_scalar
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.temperature import TemperatureDependence
 from imucalib.models.temperature_record import HeldOutOutcome, ParameterTemperatureModel
@@ -290,20 +292,15 @@ def _unscale(order: int, has_rate: bool, has_leg: bool, sc: _Scaling) -> NDArray
     return np.array(factors)
 
 
-def _gls(a: NDArray[np.float64], p: NDArray[np.float64], chol: NDArray[np.float64]
+def _gls(a: NDArray[np.float64], p: NDArray[np.float64], cov: NDArray[np.float64]
          ) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None:
-    """β̂, C_β, χ² of Eqs. (2)–(3); None when the whitened design is singular."""
-    aw = np.linalg.solve(chol, a)  # L⁻¹A (small K: a dense solve is cheapest)
-    pw = np.linalg.solve(chol, p)
-    norms = np.linalg.norm(aw, axis=0)
-    norms[norms == 0.0] = 1.0
-    u, s, vt = np.linalg.svd(aw / norms, full_matrices=False)
-    if s[-1] <= s[0] / _COND_LIMIT:
+    """β̂, C_β, χ² of Eqs. (2)–(3) by the one solver; None when the design is singular."""
+    try:
+        fit = solve_weighted_lsq(a, p, covariance=cov, cond_limit=_COND_LIMIT,
+                                 param_names=[f"beta_{j}" for j in range(a.shape[1])])
+    except InsufficientExcitationError:
         return None
-    beta = (vt.T @ ((u.T @ pw) / s)) / norms
-    cov_beta = (vt.T / s**2) @ vt / np.outer(norms, norms)
-    r = pw - aw @ beta
-    return beta, cov_beta, float(r @ r)
+    return fit.estimate, fit.covariance_noise, fit.chi2
 
 
 def _n_extra(rate: object, leg: object) -> int:
@@ -340,10 +337,9 @@ def _cv_score(a: NDArray[np.float64], p: NDArray[np.float64], cov: NDArray[np.fl
         keep = np.arange(k) != i
         c_rest = cov[np.ix_(keep, keep)]
         try:
-            chol = np.asarray(np.linalg.cholesky(c_rest), dtype=np.float64)
-        except np.linalg.LinAlgError:
+            fit = _gls(a[keep], p[keep], c_rest)
+        except InvalidInputError:  # C₋ₖ not positive definite
             return math.inf
-        fit = _gls(a[keep], p[keep], chol)
         if fit is None:
             return math.inf
         beta, cov_beta, _ = fit
@@ -451,7 +447,7 @@ def fit_temperature_model(
     cv: dict[int, float] = {}
     for m in orders:
         a = _design(temp, rate, legs, m, sc)
-        fit = _gls(a, p, chol)
+        fit = _gls(a, p, cov)
         if fit is None:
             if order is not None or m == 0:
                 raise _order_error(m, temp, n_extra,
@@ -526,7 +522,8 @@ def gls_weights(fit: TemperatureModelFit, temperature_degc: ArrayLike, variances
                 leg: ArrayLike | None = None) -> NDArray[np.float64]:
     """Return W with β̂ = W·p: the fitted model's GLS estimator for independent estimates.
 
-    ``W = (Aᵀ V⁻¹ A)⁻¹ Aᵀ V⁻¹`` with A the model's design at the fit's points (Eq. (2),
+    ``W = (Aᵀ V⁻¹ A)⁻¹ Aᵀ V⁻¹`` (the gain of :func:`~imucalib.estimation.linear.solve_weighted_lsq`)
+    with A the model's design at the fit's points (Eq. (2),
     physical units) and V = diag(`variances`); row 0 gives c_0. It carries the covariance of
     several parameters' estimates at the same temperatures into their models' coefficients:
     Cov(β_i, β_j) = W_i C_ij W_jᵀ (docs/p2.md, Eq. (P2.12)).
@@ -541,8 +538,10 @@ def gls_weights(fit: TemperatureModelFit, temperature_degc: ArrayLike, variances
     if np.any(var <= 0):
         raise InvalidInputError("`variances` must be positive")
     a = _model_design(fit.model, temp, temperature_rate_degc_ps, leg)
-    aw = a / var[:, None]
-    return np.asarray(np.linalg.solve(a.T @ aw, aw.T), dtype=np.float64)
+    gls = solve_weighted_lsq(a, np.zeros(temp.size), covariance=var, gain=True,
+                             param_names=[f"beta_{j}" for j in range(a.shape[1])])
+    assert gls.gain is not None  # asked for
+    return np.array(gls.gain)  # K of Eq. (1) of estimation.linear
 
 
 def _coefficient_vector(model: TemperaturePolynomial) -> NDArray[np.float64]:

@@ -141,6 +141,8 @@ def combine_triad_parameters(parts: Sequence[TriadPart | Any], *, sensor_id: str
     h = np.zeros((y.size, len(order)))
     for r, j in rows:
         h[r, j] = 1.0
+    # Eq. (C.2) by hand: models sits below estimation in the layers of docs/architecture.md, so
+    # the one solver (estimation.linear.solve_weighted_lsq) is out of reach here
     try:
         chol = np.linalg.cholesky(c)
     except np.linalg.LinAlgError:
@@ -150,14 +152,18 @@ def combine_triad_parameters(parts: Sequence[TriadPart | Any], *, sensor_id: str
     cov = np.linalg.inv(hw.T @ hw)
     theta = cov @ hw.T @ yw
     resid = yw - hw @ theta
-    quality = assess_fit("combined", float(resid @ resid), int(y.size - len(order)))
+    chi2, dof = float(resid @ resid), int(y.size - len(order))
+    # one group per triad, so that CalibrationResult.sigma_scale (by name prefix) applies the
+    # fusion's Birge ratio to every parameter it scaled: the χ² of (C.1) is one test of all
+    quality = tuple(assess_fit(triad, chi2, dof) for triad in ("accel", "gyro")
+                    if any(n.startswith(triad + "_") for n in order))
     cov = 0.5 * (cov + cov.T)
     notes = [f"combined from {', '.join(p.source for p in items)} by generalised least "
              "squares (docs/procedures.md, \"Combining tests\")"]
-    if quality.dof:
-        notes.append(quality.summary())
+    if dof:
+        notes.append(assess_fit("combined", chi2, dof).summary())
     return CalibrationResult(
         sensor_id=sensor_id, procedure="combined", model="triad", param_names=tuple(order),
         values=theta, covariance=cov, units={n: triad_parameter_unit(n) for n in order},
         provenance=provenance or Provenance(details={"parts": [p.source for p in items]}),
-        notes=tuple(notes), fit_quality=(quality,))
+        notes=tuple(notes), fit_quality=quality)

@@ -24,11 +24,14 @@ Contents
 --------
 :class:`FitQuality` (one fit's χ², ν, expected range, misfit flag, Birge ratio), :func:`assess_fit`,
 :data:`MISFIT_QUANTILE`, :data:`EXPECTED_RANGE`. Procedures carry it in their results
-(:attr:`imucalib.models.result.CalibrationResult.fit_quality`, the Allan noise fits).
+(:attr:`imucalib.models.result.CalibrationResult.fit_quality`, the Allan noise fits); the one
+least-squares solver, :func:`imucalib.estimation.linear.solve_weighted_lsq`, returns it with every
+solution (Eqs. (6)–(7) there are (2)–(3) here) and its Birge-scaled covariance.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Final
@@ -144,9 +147,14 @@ def assess_fit(group: str, chi2: float, dof: int, *,
     if dof == 0:
         return FitQuality(group=group, chi2=float(chi2), dof=0, expected_low=math.nan,
                           expected_high=math.nan, misfit=False, quantile=quantile)
+    low, high, threshold = _quantiles(dof, float(quantile))
+    return FitQuality(group=group, chi2=float(chi2), dof=dof, expected_low=low,
+                      expected_high=high, misfit=bool(chi2 > threshold), quantile=quantile)
+
+
+@functools.lru_cache(maxsize=4096)
+def _quantiles(dof: int, quantile: float) -> tuple[float, float, float]:
+    """χ²_ν⁻¹(q_lo)/ν, χ²_ν⁻¹(q_hi)/ν and the threshold χ²_ν⁻¹(q) of Eqs. (1)–(2) (cached)."""
     lo, hi = EXPECTED_RANGE
-    threshold = float(stats.chi2.ppf(quantile, dof))
-    return FitQuality(group=group, chi2=float(chi2), dof=dof,
-                      expected_low=float(stats.chi2.ppf(lo, dof)) / dof,
-                      expected_high=float(stats.chi2.ppf(hi, dof)) / dof,
-                      misfit=bool(chi2 > threshold), quantile=quantile)
+    return (float(stats.chi2.ppf(lo, dof)) / dof, float(stats.chi2.ppf(hi, dof)) / dof,
+            float(stats.chi2.ppf(quantile, dof)))

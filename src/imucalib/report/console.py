@@ -28,10 +28,11 @@ from rich.markup import escape
 from rich.table import Column, Table
 
 from imucalib import units
+from imucalib.models.fit_quality import FitQuality
 from imucalib.report.numbers import round_pair
 
-__all__ = ["DISPLAY_UNITS", "display_parameter", "display_unit", "print_written",
-           "render_generic"]
+__all__ = ["DISPLAY_UNITS", "display_parameter", "display_unit", "print_fit_quality",
+           "print_written", "render_generic"]
 
 #: The display unit of each kind of quantity, by its SI unit: (unit text, SI value of one display
 #: unit). One table for every console, report and records view (docs/reporting.md, "Display
@@ -108,8 +109,15 @@ def print_written(console: Console, written: Sequence[Path]) -> None:
     console.print("wrote " + "\n      ".join(str(p) for p in written), highlight=False)
 
 
+def print_fit_quality(console: Console, quality: Sequence[FitQuality]) -> None:
+    """Print each fit's χ²/ν, one a line; a misfit in yellow, saying its σ are Birge-scaled."""
+    for q in quality:
+        style = "yellow" if q.misfit else None
+        console.print(escape(q.summary()), style=style, highlight=False, soft_wrap=True)
+
+
 def render_generic(console: Console, result: Any, written: Sequence[Path]) -> None:
-    """Print a result's ``parameter_rows()`` (one row per estimate), its decision, the files.
+    """Print a result's ``parameter_rows()``, each fit's χ²/ν, its decision and the files.
 
     The ``render_console`` of a procedure without a table of its own (the classical tests, a
     plug-in): without ``parameter_rows()`` only the decision and the files written.
@@ -124,6 +132,7 @@ def render_generic(console: Console, result: Any, written: Sequence[Path]) -> No
                                                               float(sigma), str(unit))
             table.add_row(escape(str(name)), value_text, sigma_text, escape(shown))
         console.print(table)
+    print_fit_quality(console, result.fit_quality)
     verdict = {None: "no decision", True: "PASS", False: "FAIL"}[result.passed]
     console.print(f"{result.procedure} result for {result.unit}: {verdict}", highlight=False)
     print_written(console, written)

@@ -57,9 +57,9 @@ def _process(result: Any, cal: Any, description: str | None, documentation: str
     name = str(result.procedure)
     text = f"Procedure {name}: {description}" if description is not None else f"Procedure {name}"
     paragraphs = [f"{text.rstrip('.')} ({documentation})."]
-    quality = tuple(getattr(result, "quality", ()) or getattr(cal, "fit_quality", ()) or ())
-    paragraphs += [q.summary() for q in quality if callable(getattr(q, "summary", None))]
-    misfit = any(bool(getattr(q, "misfit", False)) for q in quality)
+    quality = tuple(result.fit_quality)  # a procedure's result, or a CalibrationResult read back
+    paragraphs += [q.summary() for q in quality]
+    misfit = any(q.misfit for q in quality)
     paragraphs += [f"Note: {n}" for n in getattr(result, "notes", ()) or ()]
     return paragraphs, misfit
 

@@ -96,6 +96,11 @@ class ScaleFactorResult:
     procedure: str = NAME
 
     @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """The line fit's χ²/ν and misfit verdict (the ProcedureResult contract)."""
+        return tuple(self.quality)
+
+    @property
     def passed(self) -> bool | None:
         """No acceptance limits: None (no conformity decision)."""
         return None

@@ -58,6 +58,7 @@ from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_paramet
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import InvalidInputError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.fit_quality import FitQuality
 from imucalib.units import parse_unit
 
 __all__ = ["FORMAT_VERSION", "STATIC_STEP_KINDS", "ChannelNoise", "NoiseCharacterization",
@@ -180,6 +181,11 @@ class NoiseCharacterization:
     def passed(self) -> None:
         """None: a noise characterisation decides nothing."""
         return None
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each channel's noise fit: χ²/ν against the Allan covariance, misfit verdict."""
+        return tuple(ch.fit.quality for seg in self.segments for ch in seg.channels)
 
     def parameter_rows(self) -> list[tuple[str, float, float, str]]:
         """Return every detected noise term with its standard uncertainty, for the records.

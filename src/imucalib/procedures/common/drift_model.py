@@ -15,8 +15,9 @@ window through ω_k, so the observations' covariance is full:
     x̂_i = (AᵀC_i⁻¹A)⁻¹·AᵀC_i⁻¹·d_i,  cov x̂_i = (AᵀC_i⁻¹A)⁻¹,  A = [1, f_x, f_y, f_z]           (3)
     χ²_i = rᵀC_i⁻¹r with ν = n − 4; on a misfit (99 % quantile) cov x̂_i is scaled by R_B²    (4)
 
-The three axes are independent (their noise and their δm_i are). :func:`fit_windows` fits the
-model to the static windows of
+(3)–(4) are :func:`~imucalib.estimation.linear.solve_weighted_lsq` with the full covariance (2)
+(its Eqs. (1), (2), (6), (7)). The three axes are independent (their noise and their δm_i are).
+:func:`fit_windows` fits the model to the static windows of
 :func:`~imucalib.procedures.common.static_windows.extract_static_windows` with the options of
 :class:`GSensitivityOptions` (M taken as known, nominal zero, with a Type B standard
 uncertainty per element, 1e-3 by default).
@@ -37,7 +38,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
-from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.estimation.linear import solve_weighted_lsq
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.common.static_windows import StaticWindow
 
 __all__ = ["DriftFit", "GSensitivityOptions", "drift_parameter_names", "fit_drift_model",
@@ -157,16 +159,13 @@ def fit_drift_model(omega_ref_rps: _F64, force_mps2: _F64, gyro_mean_rps: _F64,
     d = y - w @ (np.eye(3) + m).T
     coef, cov, fits, res = np.zeros((3, 4)), np.zeros((12, 12)), [], np.zeros((n, 3))
     for i in range(3):
-        c = np.diag(se[:, i] ** 2) + scale_misalignment_std**2 * (w @ w.T)
-        ci = np.linalg.inv(c)
-        normal = A.T @ ci @ A
-        cov_i = np.linalg.inv(normal)
-        x = cov_i @ (A.T @ ci @ d[:, i])
-        r = d[:, i] - A @ x
-        fit = assess_fit(f"gyro {_AXES[i]}", float(r @ ci @ r), n - 4)
-        coef[i], res[:, i] = x, r
-        cov[4 * i:4 * i + 4, 4 * i:4 * i + 4] = cov_i * fit.sigma_scale**2
-        fits.append(fit)
+        sol = solve_weighted_lsq(
+            A, d[:, i], covariance=np.diag(se[:, i] ** 2) + scale_misalignment_std**2 * (w @ w.T),
+            param_names=names[4 * i:4 * i + 4], group=f"gyro {_AXES[i]}",
+            context="drift-model design [1, f]")                                  # (2), (3)
+        coef[i], res[:, i] = sol.estimate, sol.residuals
+        cov[4 * i:4 * i + 4, 4 * i:4 * i + 4] = sol.covariance_birge                # (4)
+        fits.append(sol.fit_quality)
     return DriftFit(coef, cov, tuple(fits), res)
 
 

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from rich.console import Console
 
     from imucalib.io.reader import Recording
+    from imucalib.models.fit_quality import FitQuality
     from imucalib.plan.schema import Plan
     from imucalib.report.document import ReportContent, ReportDocument
 
@@ -50,6 +51,9 @@ class ProcedureResult(Protocol):
     passed : bool or None
         The procedure's decision; None for a procedure that decides nothing (a noise
         characterisation).
+    fit_quality : tuple of FitQuality
+        Each of its fits' χ²/ν against its expected range and the misfit verdict
+        (:mod:`imucalib.models.fit_quality`); a misfit's σ are reported Birge-scaled.
     """
 
     @property
@@ -65,6 +69,11 @@ class ProcedureResult(Protocol):
     @property
     def passed(self) -> bool | None:
         """The decision, or None."""
+        ...
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each fit's χ²/ν and misfit verdict; empty when no fit has redundancy."""
         ...
 
     def to_dict(self) -> dict[str, Any]:

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
@@ -88,6 +89,11 @@ class EarthRateBiasResult:
     notes: list[str] = field(default_factory=list)
     procedure: str = "earth-rate-bias"
     passed: bool | None = None
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """None: the methods are closed forms of window means, no fit with redundancy."""
+        return ()
 
     def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
         """(gyro_bias_x/y/z from the up/down method, values, diagonal covariance). [rad/s]"""

@@ -51,8 +51,9 @@ from numpy.typing import NDArray
 
 from imucalib import __version__
 from imucalib.errors import CalibrationError, InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.earth import normal_gravity_mps2
-from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.fit_quality import FitQuality
 from imucalib.models.result import Provenance
 from imucalib.procedures.field.observations import (
     FieldLog,
@@ -208,14 +209,19 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
     """Step 4: bias (and G) from the static gyro means less the known Earth rate (FL.2).
 
     Returns the values (b, and G row-major when fitted), their covariance (Birge-scaled on a
-    misfit), the fit quality and the residual per pose.
+    misfit), the fit quality and the residual per pose. The poses' 3×3 covariances (noise and
+    the Earth rate's Type B) make one block-diagonal C: GLS by
+    :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
     """
     omega = EARTH_RATE_RPS
-    k = 12 if g_sensitivity else 3
-    info = np.zeros((k, k))
-    rhs = np.zeros(k)
-    rows = []
-    for p, u, f in zip(poses, up, force, strict=True):
+    names = [f"gyro_bias_{a}" for a in "xyz"]
+    if g_sensitivity:
+        names += [f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz"]
+    n = len(poses)
+    design = np.zeros((3 * n, len(names)))
+    z = np.zeros(3 * n)
+    cov = np.zeros((3 * n, 3 * n))
+    for row, (p, u, f) in enumerate(zip(poses, up, force, strict=True)):
         if lat is None:  # the whole Earth rate unknown in direction
             vertical = np.zeros(3)
             type_b = omega**2 / 3.0 * np.eye(3)
@@ -223,19 +229,15 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
             s, c = math.sin(math.radians(lat)), math.cos(math.radians(lat))
             vertical = omega * s * u
             type_b = (omega * c) ** 2 / 2.0 * (np.eye(3) - np.outer(u, u))
-        h = np.hstack([np.eye(3), np.kron(np.eye(3), f[None, :])]) if g_sensitivity \
+        rows = slice(3 * row, 3 * row + 3)
+        design[rows] = np.hstack([np.eye(3), np.kron(np.eye(3), f[None, :])]) if g_sensitivity \
             else np.eye(3)
-        w = np.linalg.inv(np.diag(p.gyro_se**2) + type_b)
-        r = p.gyro_mean - vertical
-        info += h.T @ w @ h
-        rhs += h.T @ w @ r
-        rows.append((h, w, r))
-    cov = np.linalg.inv(info)
-    values = cov @ rhs
-    resid = [r - h @ values for h, _, r in rows]
-    chi2 = float(sum(e @ w @ e for e, (_, w, _) in zip(resid, rows, strict=True)))
-    quality = assess_fit("gyro (static poses)", chi2, 3 * len(poses) - k)
-    return values, np.asarray(cov * quality.sigma_scale**2, dtype=np.float64), quality, resid
+        z[rows] = p.gyro_mean - vertical
+        cov[rows, rows] = np.diag(p.gyro_se**2) + type_b
+    fit = solve_weighted_lsq(design, z, covariance=cov, param_names=names,
+                             group="gyro (static poses)", context="static gyro design (FL.2)")
+    return (np.array(fit.estimate), np.array(fit.covariance_birge), fit.fit_quality,
+            list(fit.residuals.reshape(n, 3)))
 
 
 def _accel_fit(y: _F64, sy: _F64, g: float, choice: str, times: _F64 | None

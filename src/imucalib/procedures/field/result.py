@@ -169,6 +169,11 @@ class FieldResult:
     procedure: str = "field"
     passed: bool | None = None
 
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """The accelerometer and gyro fits' χ²/ν and misfit verdicts (:attr:`quality`)."""
+        return tuple(self.quality)
+
     def parameter_rows(self) -> list[tuple[str, float, float, str]]:
         """(name, value, σ Birge-scaled on a misfit, SI unit) of every parameter."""
         cal = self.result

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.common.drift_model import (
     DriftFit,
     GSensitivityOptions,
@@ -72,6 +73,11 @@ class GSensitivityResult:
     notes: list[str] = field(default_factory=list)
     procedure: str = "g-sensitivity"
     passed: bool | None = None
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each gyro axis' drift fit (4): χ²/ν and misfit verdict."""
+        return tuple(self.fit.fits)
 
     @property
     def bias_rps(self) -> _F64:

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.common.rate_windows import RateProcessing, extract_rate_windows
 from imucalib.procedures.installation.misalignment import (
     Misalignment,
@@ -60,6 +61,11 @@ class InstallationResult:
     earth_rate_up_rps: float
     n_turns: int
     procedure: str = "installation"
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """The least-squares triad fit's χ²/ν (IN-3); none when it has no redundancy."""
+        return () if self.lsq.quality is None else (self.lsq.quality,)
 
     @property
     def passed(self) -> bool | None:

@@ -5,8 +5,8 @@ axis k up and the table turning at ω about it, the input is x = (ω + Ω_U)·e_
 Earth rate cancels over whole revolutions) and gyro i reads, by the triad model y = b + (I + M)·x
 (IEEE Std 952-2020 / 1431-2004), ȳ_i = b_i + G_ik·g + (δ_ik + M_ik)·x.
 
-Closed form (IN-2), the P4 source chapter's: over a +ω and a −ω turn of n whole revolutions
-each (2π·n = 360°·n turned), the integrated angles Θ_i± = ȳ_i±·T± (IN-1) give
+Closed form (IN-2), the MIMU chapter's (docs/procedures.md): over a +ω and a −ω turn of n
+whole revolutions each (2π·n = 360°·n turned), the integrated angles Θ_i± = ȳ_i±·T± (IN-1) give
 θ_ik = (Θ_i₊ − Θ_i₋)/(2·2π·n): the bias and the g-sensitivity cancel in the difference and so
 does Ω_U (equal spans). Written with the spans' own turned angles Φ± (±2π·n±) it is
 θ_ik = (Θ_i₊/T₊ − Θ_i₋/T₋)/(Φ₊/T₊ − Φ₋/T₋), the same number when n₊ = n₋, T₊ = T₋ and
@@ -16,7 +16,8 @@ forms are averaged with weights 1/σ².
 Least squares (IN-3): for each gyro i, y_i − x_i = c_i,p + Σ_k M_ik·x_k over all turns, c_i,p
 one constant per pose p (b_i + G_ip·g: the g-sensitivity changes with the axis up), weighted
 by 1/σ²; with ``common_bias=True`` one b_i for all poses (G·g neglected) and more degrees of
-freedom. χ²/ν of the pooled fit scales σ by the Birge ratio on a misfit (IN-4).
+freedom. Each gyro's fit is solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq`;
+χ²/ν of the three fits pooled scales σ by the Birge ratio on a misfit (IN-4).
 
 Contents
 --------
@@ -31,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.errors import InsufficientExcitationError, MissingSegmentError
+from imucalib.errors import MissingSegmentError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.procedures.common.rate_windows import RateWindow
 
@@ -134,23 +136,22 @@ def lsq_misalignment(windows: Sequence[RateWindow], earth_up_rps: float, *,
     cov = np.zeros((9, 9))
     chi2, dof = 0.0, 0
     covs = []
+    nc = consts.shape[1]
     for i in range(3):
-        se = np.array([w.gyro_se_rps[i] for w in windows])
-        y = np.array([w.gyro_mean_rps[i] for w in windows]) - x[:, i]
-        a = design / se[:, None]
-        if np.linalg.matrix_rank(a) < design.shape[1]:
-            raise InsufficientExcitationError(
-                [f"gyro_M_{'xyz'[i]}{ax}" for ax in axes],
-                f"gyro {'xyz'[i]}: the turns cannot separate the pose constants from M (each "
-                "axis needs turns at two rates or more, e.g. +ω and −ω)")
-        p, *_ = np.linalg.lstsq(a, y / se, rcond=None)
-        c = np.linalg.inv(a.T @ a)
-        r = (y - design @ p) / se
-        chi2 += float(r @ r)
-        dof += design.shape[0] - design.shape[1]
-        nc = consts.shape[1]
-        matrix[i, cols] = p[nc:]
-        covs.append(c[nc:, nc:])
+        s = "xyz"[i]
+        names = [f"gyro_{s}_constant" + ("" if common_bias else f"_{ax}") for ax in axes[:nc]]
+        names += [f"gyro_M_{s}{ax}" for ax in axes]
+        fit = solve_weighted_lsq(
+            design, np.array([w.gyro_mean_rps[i] for w in windows]) - x[:, i],
+            sigma=np.array([w.gyro_se_rps[i] for w in windows]), param_names=names,
+            context=f"gyro {s} misalignment design",
+            advice="the turns cannot separate the pose constants from M (each axis needs "
+                   "turns at two rates or more, e.g. +ω and −ω)")
+        chi2 += fit.chi2
+        dof += fit.dof
+        matrix[i, cols] = fit.estimate[nc:]
+        covs.append(fit.covariance_noise[nc:, nc:])
+    # the three axes' fits pooled: one χ², the misfit rule of estimation.linear (Eq. (6))
     quality = assess_fit("gyro misalignment", chi2, dof)
     for i, c in enumerate(covs):
         idx = [3 * i + k for k in cols]

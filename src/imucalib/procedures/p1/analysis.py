@@ -164,6 +164,11 @@ class P1Analysis:
         """The decision."""
         return self.decision.passed
 
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each triad fit's χ²/ν and misfit verdict (the calibration's)."""
+        return tuple(self.result.fit_quality)
+
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-able report: the result, the checks and the decision."""
         return {

@@ -206,6 +206,11 @@ class P2UnitResult:
     error_type: str = ""
     procedure: str = "p2"
 
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each temperature model's χ²/ν and misfit verdict (Birge-scaled where a misfit)."""
+        return tuple(m.quality for m in self.models.values())
+
     def to_dict(self) -> dict[str, Any]:
         """Return the whole result as JSON-able data."""
         return {

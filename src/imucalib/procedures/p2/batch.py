@@ -47,6 +47,7 @@ from imucalib.errors import (
 )
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import Recording, StepRecord, open_recording
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
@@ -77,6 +78,11 @@ class P2BatchResult:
     def passed(self) -> bool:
         """Whether every unit passed."""
         return all(r.passed for r in self.results)
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Every unit's fits, unit by unit."""
+        return tuple(q for r in self.results for q in r.fit_quality)
 
     def to_dict(self) -> dict[str, Any]:
         """Return the summary and every unit's result, JSON-able."""

@@ -12,7 +12,8 @@ equation):
 - :func:`least_squares`: all windows in one weighted least-squares fit of the triad model
   (the framework's design, :func:`~imucalib.procedures.common.design.build_design`), the
   accelerometer by Gauss–Newton because the centripetal term multiplies the scale matrix,
-  Eq. (P2.10), with χ²/ν and the Birge scaling of a misfit.
+  Eq. (P2.10), with χ²/ν and the Birge scaling of a misfit; every linear (and Gauss–Newton)
+  step is solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
 
 Model (docs/p2.md, Eqs. (P2.1)–(P2.3)); u_o the body-frame up vector of orientation o (a
 signed unit axis), ω the table rate, Ω_U the vertical Earth rate, g local gravity, r the IMU's
@@ -45,7 +46,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.conventions import AXES
-from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.errors import InvalidInputError
+from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.procedures.common.design import build_design
 
@@ -342,21 +344,13 @@ def closed_form(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
 # the least squares
 
 
-def _solve(h: _F64, z: _F64, se: _F64, what: str) -> tuple[_F64, _F64, float]:
-    """Weighted LSQ z = H·θ: (θ, (HᵀWH)⁻¹, χ²), refusing a rank-deficient design."""
-    hw = h / se[:, None]
-    zw = z / se
-    u, sv, vt = np.linalg.svd(hw, full_matrices=False)
-    if sv[-1] <= sv[0] * 1e-10:
-        raise InsufficientExcitationError(
-            [f"{what} parameters"],
-            f"{what}: the design is rank deficient (condition "
-            f"{sv[0] / max(sv[-1], 1e-300):.3g}); the six orientations and both turning "
-            "directions are needed")
-    theta = vt.T @ ((u.T @ zw) / sv)
-    cov = (vt.T / sv**2) @ vt
-    resid = zw - hw @ theta
-    return theta, cov, float(resid @ resid)
+def _solve(h: _F64, z: _F64, se: _F64, names: Sequence[str], what: str, group: str
+           ) -> LsqSolution:
+    """Weighted LSQ z = H·θ by the one solver, refusing a rank-deficient design (named)."""
+    return solve_weighted_lsq(h, z, param_names=names, sigma=se, group=group,
+                              context=f"{what} design",
+                              advice="the six orientations and both turning directions are "
+                                     "needed")
 
 
 def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate",
@@ -402,6 +396,7 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
     w2 = np.concatenate(omega2)
     estimate_r = lever_arm == "estimate"
     n_p = 15 + (3 if estimate_r else 0)
+    names_a = PARAM_NAMES[21:] + (LEVER_ARM_NAMES if estimate_r else ())
     theta = np.zeros(n_p)
     cov_a = np.zeros((n_p, n_p))
     proj = np.eye(3)[None, :, :] - u_all[:, :, None] * u_all[:, None, :]   # P_o per row
@@ -421,7 +416,8 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
             h = np.hstack([base, jr.reshape(-1, 3)])
         else:
             h = base
-        delta, cov_a, _ = _solve(h, (y - pred).ravel(), se, "accelerometer")
+        step = _solve(h, (y - pred).ravel(), se, names_a, "accelerometer", "accel")
+        delta, cov_a = step.estimate, step.covariance_noise
         theta = theta + delta
         if np.max(np.abs(delta[3:])) < 1e-13:
             break
@@ -443,8 +439,8 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
     se_g = np.vstack([windows.plus_gyro_se_rps, windows.minus_gyro_se_rps]).ravel()
     design = build_design(x_g, ("bias", "scale_misalignment", "g_sensitivity"),
                           specific_force_b=f_g)
-    theta_g, cov_g, chi2_g = _solve(design.H, (y_g - x_g).ravel(), se_g, "gyro")
-    q_g = assess_fit("gyro", chi2_g, se_g.size - theta_g.size)
+    fit_g = _solve(design.H, (y_g - x_g).ravel(), se_g, PARAM_NAMES[:21], "gyro", "gyro")
+    theta_g, cov_g, q_g = fit_g.estimate, fit_g.covariance_noise, fit_g.fit_quality
     values = np.concatenate([theta_g, theta[:15], r])
     n = len(PARAM_NAMES) + 3
     cov = np.zeros((n, n))
@@ -473,7 +469,9 @@ def _lever_arm_given(windows: PointWindows, b: _F64, m: _F64, k2: _F64,
         pred = b + x @ (np.eye(3) + m).T + k2 * x**2
         slope = (np.eye(3) + m)[None, :, :] + 2.0 * (k2 * x)[:, :, None] * np.eye(3)[None]
         jr = -(w2[:, None, None] * (slope @ proj)).reshape(-1, 3)
-        delta, cov, _ = _solve(jr, (y - pred).ravel(), se, "accelerometer lever arm")
+        step = _solve(jr, (y - pred).ravel(), se, LEVER_ARM_NAMES, "accelerometer lever arm",
+                      "accel")
+        delta, cov = step.estimate, step.covariance_noise
         r = r + delta
         if np.max(np.abs(delta)) < 1e-15:
             break

@@ -292,6 +292,11 @@ class P3Result:
         return (self.estimate.value("K2_T") * _G_PER_G2, self.estimate.std("K2_T") * _G_PER_G2)
 
     @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """The round-robin fit's χ²/ν and each series' fit (misfit verdicts)."""
+        return (self.estimate.quality, *(s.quality for s in self.series.values()))
+
+    @property
     def passed(self) -> bool:
         """2σ of K2_T within the target (Birge-scaled on a misfit)."""
         return 2.0 * self.k2_test_g_per_g2[1] <= self.k2_target_g_per_g2

@@ -48,6 +48,10 @@ give x and x² with two degrees of freedom to test the fit, the rest points p0).
 below the method's claim, while fitting it would multiply the σ of m by about ten (its column
 is nearly collinear with x²).
 
+Both fits, each series' and the round-robin's GLS, are solved by
+:func:`~imucalib.estimation.linear.solve_weighted_lsq` (σ per point, or the full covariance
+(P3.4) by its Cholesky factor), which also makes the misfit test (Eq. (6) there).
+
 Misfit (:func:`scale_for_misfit`): a series whose χ² exceeds its 99 % quantile has the σ of
 its m scaled by its Birge ratio, every series by the Birge ratio of the pooled χ² when the pool
 is a misfit; a round-robin misfit (the seven equations inconsistent beyond their σ, ν = 2)
@@ -71,6 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["MIN_RATES", "PARAMETERS", "SERIES_NAMES", "RoundRobinEstimate", "Series",
@@ -198,15 +203,11 @@ def fit_series(rate_rps: ArrayLike, output: ArrayLike, output_std: ArrayLike, *,
                 [f"{name}: drift"], f"{name}: a drift needs rest records before and after "
                 "the rates")
         cols.append(t - t.mean())
-    h = np.column_stack(cols)
-    scale = np.abs(h).max(axis=0)
-    hw = h / scale / sy[:, None]
-    coef_s, *_ = np.linalg.lstsq(hw, y / sy, rcond=None)
-    cov_s = np.linalg.inv(hw.T @ hw)
-    coef = coef_s / scale
-    cov = cov_s / np.outer(scale, scale)
-    resid = (y - h @ coef) / sy
-    quality = assess_fit(name, float(resid @ resid), n - h.shape[1])
+    fit = solve_weighted_lsq(np.column_stack(cols), y, sigma=sy, group=name,
+                             param_names=("p0", "radius", "m", "drift")[:len(cols)],
+                             context=f"{name} series design",
+                             advice="the rates do not separate the x and x² terms")
+    coef, cov, quality = fit.estimate, fit.covariance_noise, fit.fit_quality
     fit_std = float(np.sqrt(cov[2, 2]))
     radius_std = float(np.sqrt(cov[1, 1]))
     rel = float(k1_std / k1)
@@ -327,20 +328,13 @@ def solve_round_robin(series: Mapping[str, Series], *,
     m = np.array([series[k].m for k in SERIES_NAMES])
     cm = series_covariance(series)
     try:
-        chol = np.linalg.cholesky(cm)
+        np.linalg.cholesky(cm)  # the solver's whitening; checked here for this message
     except np.linalg.LinAlgError:
         raise InvalidInputError("the covariance of the series' ω⁴ coefficients is not positive "
                                 "definite (a σ of zero?)") from None
-    scale = np.abs(h).max(axis=0)
-    hw = np.linalg.solve(chol, h / scale)
-    mw = np.linalg.solve(chol, m)
-    cov_s = np.linalg.inv(hw.T @ hw)
-    theta = (cov_s @ hw.T @ mw) / scale
-    cov = cov_s / np.outer(scale, scale)
-    cov = 0.5 * (cov + cov.T)
-    resid = mw - hw @ (theta * scale)
-    quality = assess_fit("round-robin", float(resid @ resid), len(m) - len(PARAMETERS))
-    return RoundRobinEstimate(values=theta, covariance=cov * quality.sigma_scale**2,
-                              covariance_noise=cov, quality=quality,
+    fit = solve_weighted_lsq(h, m, covariance=cm, param_names=PARAMETERS, group="round-robin",
+                             context="round-robin design (P3.3)")
+    return RoundRobinEstimate(values=fit.estimate, covariance=fit.covariance_birge,
+                              covariance_noise=fit.covariance_noise, quality=fit.fit_quality,
                               naive_k2_t=float(m[6] / r2[6]),
                               naive_k2_t_std=float(np.sqrt(cm[6, 6]) / r2[6]), radii_m=radii)

@@ -25,8 +25,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError, RecordingError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import RANDOM_DRIFT_POSITION
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.common.drift_model import (
     GSensitivityOptions,
     drift_parameter_names,
@@ -57,18 +59,26 @@ def fit_accel_bias(windows: list[StaticWindow]) -> tuple[_F64, _F64]:
     """Return each accelerometer's bias and its σ from one repetition's windows. [m/s²]
 
     Weighted least squares of ā_ik − f_ik on [1, f_xk, f_yk, f_zk] (the intercept is the bias;
-    the slopes absorb scale and misalignment).
+    the slopes absorb scale and misalignment), by
+    :func:`~imucalib.estimation.linear.solve_weighted_lsq`. The σ is the white-noise σ within
+    the repetition (docs/random-drift.md: reported beside the scatter s), not Birge-scaled.
+
+    Raises
+    ------
+    InsufficientExcitationError
+        Windows whose forces do not span [1, f_x, f_y, f_z] (named).
     """
     f = np.array([w.force_ref_b_mps2 for w in windows])
     a = np.column_stack([np.ones(len(windows)), f])
     bias, std = np.zeros(3), np.zeros(3)
-    for i in range(3):
-        se = np.array([w.se[3 + i] for w in windows])
-        aw = a / se[:, None]
-        d = np.array([w.mean[3 + i] - w.force_ref_b_mps2[i] for w in windows]) / se
-        cov = np.linalg.inv(aw.T @ aw)
-        bias[i] = (cov @ aw.T @ d)[0]
-        std[i] = math.sqrt(cov[0, 0])
+    for i, ax in enumerate(_AXES):
+        fit = solve_weighted_lsq(
+            a, np.array([w.mean[3 + i] - w.force_ref_b_mps2[i] for w in windows]),
+            sigma=np.array([w.se[3 + i] for w in windows]), group=f"accel {ax}",
+            param_names=(f"accel_bias_{ax}", *(f"accel_slope_{ax}{j}" for j in _AXES)),
+            context=f"accelerometer {ax} bias design")
+        bias[i] = fit.estimate[0]
+        std[i] = fit.std[0]
     return bias, std
 
 
@@ -121,6 +131,12 @@ class RandomDriftResult:
     notes: list[str] = field(default_factory=list)
     procedure: str = "random-drift"
     passed: bool | None = None
+    drift_fits: tuple[FitQuality, ...] = ()
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each repetition's drift fit per gyro axis: χ²/ν and misfit verdict."""
+        return self.drift_fits
 
     def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
         """Mean over the repetitions of D0, G and the accelerometer bias, σ² = s²/R (diagonal)."""
@@ -226,8 +242,8 @@ def analyze_random_drift(recording: Recording | str | os.PathLike[str], *,
     rd = np.array([random_drift(sc[i][0].std, [s.std for s in sc[i][1:]], site.gravity_mps2,
                                 len(groups)) for i in range(3)])
     notes = ["random drift (3) takes D1..D3 as their drift at 1 g; the Earth rate is "
-             "2π/86164.1 s (the sidereal day; the P4 source chapter's 23 h 59 min 57.33 s is a "
-             "misprint)"]
+             "2π/86164.1 s (the sidereal day; the MIMU chapter's 23 h 59 min 57.33 s, "
+             "docs/procedures.md, is a misprint)"]
     return RandomDriftResult(
         unit=name, repetitions=list(groups), times_s=times, drift=drift, drift_std=drift_std,
         accel_bias=acc, accel_bias_std=np.array([a[1] for a in accel]), drift_scatter=sc,
@@ -236,4 +252,5 @@ def analyze_random_drift(recording: Recording | str | os.PathLike[str], *,
         random_drift_rps=rd,
         allan_d0_rps=np.array([allan_at_interval(drift[:, i, 0]) for i in range(3)]),
         allan_accel_mps2=np.array([allan_at_interval(acc[:, i]) for i in range(3)]),
-        interval_s=float(np.mean(np.diff(times))), gravity_mps2=site.gravity_mps2, notes=notes)
+        interval_s=float(np.mean(np.diff(times))), gravity_mps2=site.gravity_mps2, notes=notes,
+        drift_fits=tuple(q for f in fits for q in f.fits))

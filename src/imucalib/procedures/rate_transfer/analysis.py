@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.common.rate_windows import (
     RateProcessing,
     RateWindow,
@@ -151,6 +152,13 @@ class RateTransferResult:
     n_turns: int
     procedure: str = "rate-transfer"
     notes: tuple[str, ...] = field(default=())
+
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each axis' line fit (RT-5) and second fit (RT-7): χ²/ν and misfit verdict."""
+        return tuple(q for a in self.axes
+                     for q in (a.line.quality, *(() if a.transfer is None
+                                                 else (a.transfer.quality,))))
 
     @property
     def passed(self) -> bool | None:

@@ -11,8 +11,10 @@ the vertical Earth rate Ω_U, eq. (RT-1)), y_j the gyro's mean output, σ_j its 
    positive and negative rates, the asymmetry (RT-8) (K₊ − K₋)/((K₊ + K₋)/2) = 2A/E′ and the
    quadratic coefficient E2.
 
-Each fit's χ²/ν is assessed (:func:`~imucalib.models.fit_quality.assess_fit`); on a misfit its
-σ are scaled by the Birge ratio.
+Both fits are solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq` (Eqs. (1)–(7)
+there), weighted by 1/σ_j²: its χ²/ν is assessed by the one misfit rule (Eq. (6) there,
+:func:`~imucalib.models.fit_quality.assess_fit`) and on a misfit the σ are scaled by the Birge
+ratio (Eq. (7) there: the covariance reported here is the solver's ``covariance_birge``).
 
 Contents
 --------
@@ -27,36 +29,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
-from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
+from imucalib.models.fit_quality import FitQuality
 
-__all__ = ["LineFit", "TransferFit", "fit_line", "fit_rate_transfer", "weighted_lsq"]
+__all__ = ["LineFit", "TransferFit", "fit_line", "fit_rate_transfer"]
 
 _F64 = NDArray[np.float64]
 
 
-def weighted_lsq(design: _F64, y: _F64, se: _F64, group: str
-                 ) -> tuple[_F64, _F64, _F64, FitQuality]:
-    """Solve y = design·p weighted by 1/σ²; return (p, covariance, residuals, fit quality).
-
-    The covariance is (AᵀWA)⁻¹ scaled by the fit's σ scale (Birge ratio on a misfit).
-
-    Raises
-    ------
-    InsufficientExcitationError
-        The design is rank deficient.
-    """
-    w = 1.0 / se
-    a = design * w[:, None]
-    if np.linalg.matrix_rank(a) < design.shape[1]:
-        raise InsufficientExcitationError([group], f"{group}: the rates cannot separate the "
-                                          f"{design.shape[1]} terms of the model "
-                                          f"({design.shape[0]} means)")
-    sol, *_ = np.linalg.lstsq(a, y * w, rcond=None)
-    cov = np.asarray(np.linalg.inv(a.T @ a), dtype=np.float64)
-    p: _F64 = np.asarray(sol, dtype=np.float64)
-    r = y - design @ p
-    q = assess_fit(group, float(np.sum((r * w) ** 2)), design.shape[0] - design.shape[1])
-    return p, np.asarray(cov * q.sigma_scale ** 2, dtype=np.float64), r, q
+def _solve(design: _F64, y: _F64, se: _F64, names: tuple[str, ...], group: str) -> LsqSolution:
+    """Fit the means to (RT-5) or (RT-7), weighted by 1/σ², with the one solver."""
+    return solve_weighted_lsq(design, y, param_names=names, sigma=se, group=group,
+                              context=f"{group} rate-transfer design",
+                              advice=f"the {design.shape[0]} means' rates cannot separate the "
+                                     f"{design.shape[1]} terms of the model")
 
 
 @dataclass(frozen=True)
@@ -135,12 +121,20 @@ def _inputs(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike) -> tuple[_F64
 
 def fit_line(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
              group: str = "gyro") -> LineFit:
-    """Fit the straight line (RT-5) and return it with the nonlinearity (RT-6)."""
+    """Fit the straight line (RT-5) and return it with the nonlinearity (RT-6).
+
+    Raises
+    ------
+    InsufficientExcitationError
+        Rates that cannot separate E0 from E (all means at one rate).
+    """
     x, y, se = _inputs(x_rps, y_rps, se_rps)
-    p, cov, r, q = weighted_lsq(np.column_stack([np.ones_like(x), x]), y, se, group)
+    sol = _solve(np.column_stack([np.ones_like(x), x]), y, se, ("E0", "E"), group)
+    p, r = sol.estimate, sol.residuals
     full = abs(float(p[1])) * float(np.max(np.abs(x)))
-    return LineFit(bias_rps=float(p[0]), scale_factor=float(p[1]), cov=cov, residuals_rps=r,
-                   nonlinearity_ppm=float(np.max(np.abs(r)) / full * 1e6), quality=q)
+    return LineFit(bias_rps=float(p[0]), scale_factor=float(p[1]), cov=sol.covariance_birge,
+                   residuals_rps=r, nonlinearity_ppm=float(np.max(np.abs(r)) / full * 1e6),
+                   quality=sol.fit_quality)
 
 
 def fit_rate_transfer(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
@@ -160,5 +154,6 @@ def fit_rate_transfer(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
             f"{group}: the asymmetry and quadratic terms need rates of both signs at ≥ 3 "
             f"magnitudes; got {mags.size} magnitude(s)")
     design = np.column_stack([np.ones_like(x), x, np.abs(x), x * x])
-    p, cov, r, q = weighted_lsq(design, y, se, group)
-    return TransferFit(params=p, cov=cov, residuals_rps=r, quality=q)
+    sol = _solve(design, y, se, ("E0'", "E'", "A", "E2"), group)
+    return TransferFit(params=sol.estimate, cov=sol.covariance_birge,
+                       residuals_rps=sol.residuals, quality=sol.fit_quality)

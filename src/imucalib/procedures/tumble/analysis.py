@@ -37,11 +37,12 @@ from numpy.typing import NDArray
 from imucalib import units
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
+from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.io.reader import Recording, open_recording
 from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_POSITION
 from imucalib.io.streams import DEVICE_IMU
 from imucalib.models.earth import Site
-from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.fit_quality import FitQuality
 from imucalib.procedures.tumble.fourier import (
     COEFFICIENTS,
     SIGNATURE_HARMONICS,
@@ -69,6 +70,8 @@ COEFFICIENT_UNITS: dict[str, str] = {
     "K3": "1/(m/s^2)^2", "Koq": "1/(m/s^2)"}
 #: Drift between a sequence's first and closing 0° records flagged above this many σ.
 DRIFT_Z = 3.0
+#: The FitQuality group of the GLS that combines the head axes (:attr:`TumbleResult.triad_fit`).
+COMBINATION_GROUP = "accel triad (head axes combined)"
 
 
 @dataclass(frozen=True)
@@ -202,6 +205,12 @@ class TumbleResult:
     procedure: str = "tumble"
     passed: bool | None = None
 
+    @property
+    def fit_quality(self) -> tuple[FitQuality, ...]:
+        """Each accelerometer's Fourier fit and the triad fit: χ²/ν and misfit verdicts."""
+        own = tuple(a.fit.quality for a in self.accelerometers)
+        return own if self.triad_fit is None else (*own, self.triad_fit)
+
     def get(self, sensor: str, head_axis: str) -> AccelerometerTumble:
         """Return the fit of accelerometer `sensor` about head axis `head_axis`.
 
@@ -290,18 +299,31 @@ def _triad_order(name: str) -> tuple[int, str]:
     return ({"bias": 0, "M": 1, "K2": 2}.get(kind, 3), name)
 
 
-def _combine(parts: Sequence[tuple[list[str], _F64, _F64]]
-             ) -> tuple[list[str], _F64, _F64]:
-    """GLS of the parameters several head axes give: names, values, covariance."""
+def _combine_fit(parts: Sequence[tuple[list[str], _F64, _F64]]
+                 ) -> tuple[list[str], LsqSolution | None]:
+    """GLS of the parameters several head axes give (the one solver): names and the solution.
+
+    The parts are independent: their covariance is block-diagonal, and the solution's χ² is
+    Σ_parts rᵀC⁻¹r of the parts against the combined values (ν = rows − parameters).
+    """
     names = sorted({n for p in parts for n in p[0]}, key=_triad_order)
     if not names:
-        return [], np.zeros(0), np.zeros((0, 0))
+        return [], None
     t = np.concatenate([p[1] for p in parts])
-    Ci = np.linalg.inv(_block_diag([p[2] for p in parts]))
     A = np.zeros((t.size, len(names)))
     A[np.arange(t.size), [names.index(n) for p in parts for n in p[0]]] = 1.0
-    cov = np.asarray(np.linalg.inv(A.T @ Ci @ A), dtype=np.float64)
-    return names, np.asarray(cov @ A.T @ Ci @ t, dtype=np.float64), cov
+    return names, solve_weighted_lsq(A, t, covariance=_block_diag([p[2] for p in parts]),
+                                     param_names=names, group=COMBINATION_GROUP,
+                                     context="combination of the head axes")
+
+
+def _combine(parts: Sequence[tuple[list[str], _F64, _F64]]
+             ) -> tuple[list[str], _F64, _F64]:
+    """GLS of the parameters several head axes give: names, values, covariance (noise only)."""
+    names, sol = _combine_fit(parts)
+    if sol is None:
+        return [], np.zeros(0), np.zeros((0, 0))
+    return names, np.array(sol.estimate), np.array(sol.covariance_noise)
 
 
 def _block_diag(blocks: Sequence[_F64]) -> _F64:
@@ -484,13 +506,5 @@ def _analyze(rec: Recording, opt: TumbleOptions,
 
 def _combination_quality(accels: Sequence[AccelerometerTumble]) -> FitQuality | None:
     """χ² of the GLS that combines the head axes' triad parameters (their agreement)."""
-    parts = [a.triad() for a in accels]
-    if not parts:
-        return None
-    names, values, _ = _combine(parts)
-    chi2, n = 0.0, 0
-    for pn, pv, pc in parts:
-        r = pv - np.array([values[names.index(x)] for x in pn])
-        chi2 += float(r @ np.linalg.solve(pc, r))
-        n += len(pn)
-    return assess_fit("accel triad (head axes combined)", chi2, n - len(names))
+    _, sol = _combine_fit([a.triad() for a in accels])
+    return None if sol is None else sol.fit_quality

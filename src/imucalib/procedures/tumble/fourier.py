@@ -7,13 +7,14 @@ errors σ_k:
 1. the Fourier fit (T.3): y_k ≈ A0 + Σ_n (A_n cos nθ_k + B_n sin nθ_k), by weighted least
    squares for any angles (:func:`fit_fourier`), or by the discrete Fourier transform for N
    equally spaced positions (:func:`fourier_dft`, (T.4)); both return the coefficients' full
-   covariance and agree to rounding on the same data;
+   covariance and agree to rounding on the same data (the least squares by
+   :func:`~imucalib.estimation.linear.solve_weighted_lsq`, whose gain K is the operator P);
 2. the coefficient inversion (:func:`invert_coefficients`): the harmonics are linear in
    q = K1·(K0, 1, δ, K2−Kpp, Kip, K3, Koq), ĥ = G·q with G = P·D (T.6): D the physical design at
    the positions (T.1), P the Fourier fit's operator — so every alias of Koq's odd harmonics is
-   in G exactly; q by GLS on ĥ with its covariance, then the coefficients p(q) (T.7) with the
-   covariance J·C_q·Jᵀ, J = ∂p/∂q; the χ² of both stages pooled, σ scaled by the Birge ratio on
-   a misfit (:mod:`imucalib.models.fit_quality`);
+   in G exactly; q by GLS on ĥ with its covariance (the same solver), then the coefficients
+   p(q) (T.7) with the covariance J·C_q·Jᵀ, J = ∂p/∂q; the χ² of both stages pooled, σ scaled
+   by the Birge ratio on a misfit (:mod:`imucalib.models.fit_quality`);
 3. identifiability (:func:`resolvable_coefficients`, :func:`check_identifiable`): a coefficient
    is resolved only if its signature harmonic (T.8) survives the aliasing of N positions and no
    other requested coefficient's lands on it; anything else raises
@@ -39,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = [
@@ -192,19 +194,18 @@ def fit_fourier(theta_rad: ArrayLike, y: ArrayLike, sigma: ArrayLike, max_harmon
     keep = np.linalg.norm(H, axis=0) > 1e-9 * math.sqrt(th.size)
     names = [n for n, k in zip(names, keep, strict=True) if k]
     H = H[:, keep]
-    L = np.linalg.cholesky(C)
-    Hw = np.linalg.solve(L, H)
-    sv = np.linalg.svd(Hw, compute_uv=False)
-    if H.shape[1] > th.size or sv[-1] < 1e-9 * sv[0]:
+    if H.shape[1] > th.size:
         raise InsufficientExcitationError(
             names, f"{th.size} positions cannot separate the Fourier terms {names} (up to "
             f"harmonic {max_harmonic}); fit fewer harmonics or add positions")
-    info_inv = np.asarray(np.linalg.inv(Hw.T @ Hw), dtype=np.float64)
-    P = info_inv @ Hw.T @ np.linalg.inv(L)
-    values = P @ yy
-    r = np.linalg.solve(L, yy - H @ values)
-    return FourierFit(names=tuple(names), values=values, covariance=info_inv, operator=P,
-                      theta_rad=th, chi2=float(r @ r), dof=th.size - len(names), method="lsq")
+    sol = solve_weighted_lsq(H, yy, covariance=C, param_names=names, gain=True,
+                             cond_limit=1e9, group="Fourier series",
+                             context=f"Fourier design of {th.size} positions (up to harmonic "
+                                     f"{max_harmonic})",
+                             advice="fit fewer harmonics or add positions")
+    assert sol.gain is not None  # asked for
+    return FourierFit(names=tuple(names), values=sol.estimate, covariance=sol.covariance_noise,
+                      operator=sol.gain, theta_rad=th, chi2=sol.chi2, dof=sol.dof, method="lsq")
 
 
 def equally_spaced(theta_rad: ArrayLike, *, tol_rad: float = 1e-9) -> bool:
@@ -460,20 +461,13 @@ def invert_coefficients(fourier: FourierFit, gravity_mps2: float,
     check_identifiable(names, n_positions=n_pos, theta_rad=th, gravity_mps2=gravity_mps2)
     cols = [COEFFICIENTS.index(c) for c in names]
     G = fourier.operator @ physical_design(th, gravity_mps2)[:, cols]
-    Ch = fourier.covariance
-    L = np.linalg.cholesky(Ch)
-    Gw = np.linalg.solve(L, G)
-    hw = np.linalg.solve(L, fourier.values)
-    if np.linalg.matrix_rank(Gw) < len(names):
-        raise InsufficientExcitationError(
-            list(names), f"the Fourier terms {list(fourier.names)} cannot resolve "
-            f"{list(names)}: fit more harmonics")
-    Cq = np.linalg.inv(Gw.T @ Gw)
-    q = Cq @ Gw.T @ hw
-    r = hw - Gw @ q
-    chi2 = float(r @ r) + fourier.chi2
-    dof = fourier.dof + len(fourier.names) - len(names)
-    quality = assess_fit(group, chi2, dof)
+    gls = solve_weighted_lsq(G, fourier.values, covariance=fourier.covariance, param_names=names,
+                             group=group, context=f"Fourier terms {list(fourier.names)}",
+                             advice=f"they cannot resolve {list(names)}: fit more harmonics")
+    q, Cq = gls.estimate, gls.covariance_noise
+    # the harmonics left unexplained and the series' own residuals, pooled: one χ², Eq. (6) of
+    # estimation.linear on ν = M − p
+    quality = assess_fit(group, gls.chi2 + fourier.chi2, fourier.dof + gls.dof)
     p, J = _p_of_q(names, q)
     Cp = J @ Cq @ J.T
     resid = fourier.values - G @ q
