@@ -24,6 +24,10 @@ class _P1Like:
     passed: bool = True
 
     @property
+    def fit_quality(self) -> tuple:
+        return tuple(self.result.fit_quality)
+
+    @property
     def unit(self) -> str:
         return self.result.sensor_id
 

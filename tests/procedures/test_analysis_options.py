@@ -98,9 +98,15 @@ def _field() -> dict[str, Any]:
     return {**_fields(FieldOptions), "import_spec": _keywords(read_imu_table)["spec"]}
 
 
+def _allan() -> dict[str, Any]:
+    from imucalib.io.import_spec import read_imu_table
+
+    return {"import_spec": _keywords(read_imu_table)["spec"]}  # a log read by its layout
+
+
 #: Per built-in: where its analysis keeps the default of each key {key: real default}.
 REAL_DEFAULTS: dict[str, Callable[[], dict[str, Any]]] = {
-    "p1": _p1, "allan": dict, "p2": _p2, "p3": _p3, "rate-transfer": _rate_transfer,
+    "p1": _p1, "allan": _allan, "p2": _p2, "p3": _p3, "rate-transfer": _rate_transfer,
     "installation": _installation, "g-sensitivity": _g_sensitivity,
     "earth-rate-bias": _earth_rate_bias, "random-drift": _random_drift, "tumble": _tumble,
     "field": _field,

@@ -135,7 +135,7 @@ def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: flo
                 "temperature models)")
         cal = CalibrationResult.load(path)
         wrapped = SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id,
-                                  passed=None)
+                                  passed=None, fit_quality=tuple(cal.fit_quality))
         out.mkdir(parents=True, exist_ok=True)
         written = write_outputs(wrapped, out, formats=(fmt,), name=path.name.split(".")[0],
                                 temperature_degc=temperature_degc)

@@ -34,7 +34,8 @@ def _from_result_file(path: Path) -> Any:
     from imucalib.models.result import CalibrationResult
 
     cal = CalibrationResult.load(path)
-    return SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id, passed=None)
+    return SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id, passed=None,
+                           fit_quality=tuple(cal.fit_quality))
 
 
 def _run_recording(run_id: int, db: str | None) -> tuple[Path, dict[str, Any]]:
