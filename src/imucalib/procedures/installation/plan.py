@@ -54,7 +54,8 @@ def generate_installation_plan(
     revolutions : int
         Whole revolutions per turn (≥ 2).
     settle_s, grade, sample_rate_hz, seed, twin, name :
-        As :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`.
+        Settling before each turn [s], the twin IMU's grade, output rate [Hz] and seed, another
+        twin station, the plan's name (:class:`~.options.InstallationPlanOptions` says each).
 
     Raises
     ------

@@ -61,7 +61,8 @@ def generate_random_drift_plan(*, name: str = "random-drift", grade: str = "tact
     positions_deg : sequence of (pitch, roll), optional
         One repetition's positions; the six axis-up positions when omitted. [°]
     record_s, settle_s, warm_up_s, sample_rate_hz, latitude_deg, noise, errors, seed
-        As :func:`~imucalib.procedures.g_sensitivity.plan.generate_g_sensitivity_plan`.
+        Record and settling at each position, warm-up [s]; the twin's IMU rate [Hz], site
+        [°], noise, known truth values and seed (:class:`~.options.RandomDriftPlanOptions`).
 
     Raises
     ------
