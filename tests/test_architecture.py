@@ -147,9 +147,7 @@ KNOWN_EXCEPTIONS = {
     # written by write_outputs, not yet by a hook of the procedure
     ("exports/outputs.py", "imucalib.procedures.p2.figures"),
     ("exports/outputs.py", "imucalib.procedures.p2.batch"),
-    # `imucalib segments --detector variance`: the field calibration's interval detector
-    ("cli/recording.py", "imucalib.procedures.field.observations"),
-}
+    }
 
 
 def test_the_frameworks_import_no_procedure():

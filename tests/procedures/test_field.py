@@ -18,8 +18,8 @@ from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation.gravity_norm import fit_gravity_norm
 from imucalib.models.triad import apply_triad
 from imucalib.procedures import registry
+from imucalib.procedures.common.static_intervals import FieldLog
 from imucalib.procedures.field.analysis import FieldOptions, analyze_field
-from imucalib.procedures.field.observations import FieldLog
 from imucalib.sim import handheld_session
 
 from ._field_twin import field_truth

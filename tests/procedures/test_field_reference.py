@@ -17,8 +17,8 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from imucalib.estimation.gravity_norm import correct_accel
+from imucalib.procedures.common.static_intervals import FieldLog
 from imucalib.procedures.field.analysis import FieldOptions, analyze_field
-from imucalib.procedures.field.observations import FieldLog
 from imucalib.procedures.field.result import accel_matrix
 from imucalib.sim import handheld_session
 

@@ -1,6 +1,6 @@
 """Verification of a calibration: residuals, held-out accuracy, repeatability, the decision.
 
-Pure functions over numbers; the procedures gather them (:mod:`imucalib.procedures.p1.analysis`).
+Pure functions over numbers; a procedure gathers them into its decision (docs/p1.md).
 
 Contents
 --------

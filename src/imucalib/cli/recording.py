@@ -290,7 +290,7 @@ def segments(
             import numpy as np
 
             from imucalib.models.earth import normal_gravity_mps2
-            from imucalib.procedures.field.observations import FieldLog, find_intervals
+            from imucalib.procedures.common.static_intervals import FieldLog, find_intervals
 
             found = find_intervals(
                 FieldLog(unit or label, label, np.asarray(t, dtype=float),

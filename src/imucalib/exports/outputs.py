@@ -46,7 +46,7 @@ format             file                           content
 ``report-html``    ``….report.html``              the same report as one self-contained page
 =================  =============================  ================================================
 
-A batch (P2: one result per unit, :class:`~imucalib.procedures.p2.batch.P2BatchResult`) is
+A batch (a result with ``results``, one per unit: P2's array or lot) is
 written unit by unit, each unit's files named after it (a unit that could not be calibrated
 gets its ``report.json`` only, which holds the error), then the batch's own files:
 ``<name>.<array|lot>.p2.summary.json`` and ``.summary.csv`` (one row per unit: pass/fail, the

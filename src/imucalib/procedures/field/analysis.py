@@ -55,7 +55,7 @@ from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.earth import normal_gravity_mps2
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.result import Provenance
-from imucalib.procedures.field.observations import (
+from imucalib.procedures.common.static_intervals import (
     FieldLog,
     StaticPose,
     find_intervals,

@@ -66,11 +66,11 @@ class FieldProcedure(ProcedureDefaults):
             An unknown option, an unreadable log (naming the column and row).
         """
         from imucalib.io.reader import Recording, open_recording
-        from imucalib.procedures.field.analysis import FieldOptions, analyze_field
-        from imucalib.procedures.field.observations import (
+        from imucalib.procedures.common.static_intervals import (
             log_from_frame,
             log_from_recording,
         )
+        from imucalib.procedures.field.analysis import FieldOptions, analyze_field
 
         opts = accepted_options(self.name, options, self.analysis_options)
         spec = opts.pop("import_spec", None)

@@ -1,4 +1,4 @@
-"""From a hand-held log to the field calibration's observations: poses and rotations.
+"""A continuous log's static intervals, rotations and poses (the field calibration, segments).
 
 A field log is one IMU's continuous record (a Recording of a guided session, or a user's CSV
 read through the import options of docs/import.md). :func:`find_intervals` runs the variance
@@ -8,6 +8,9 @@ gravity-norm fit has the smallest χ²/ν. :func:`static_poses` reduces each sta
 its mean outputs with a standard error from the white-noise density pooled over every interval
 (block means, :func:`~imucalib.procedures.common.noise.block_variance`): a pose lasts seconds,
 too short for its own noise estimate.
+
+The field calibration (docs/field.md) builds its observations from them, and ``imucalib
+segments --detector variance`` shows the intervals of any log: both use this one detector.
 
 Contents
 --------
