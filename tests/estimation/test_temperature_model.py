@@ -11,13 +11,15 @@ import numpy as np
 import pytest
 
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.temperature_forms import (
+    from_temperature_dependence,
+    to_temperature_dependence,
+)
 from imucalib.estimation.temperature_model import (
     TemperaturePolynomial,
     check_held_out,
     fit_temperature_model,
-    from_temperature_dependence,
     predict_temperature_model,
-    to_temperature_dependence,
 )
 from imucalib.models.temperature import evaluate_parameter
 

@@ -72,6 +72,10 @@ from imucalib.estimation.observability import (
     ObservabilityReport,
     compute_observability,
 )
+from imucalib.estimation.temperature_forms import (
+    from_temperature_dependence,
+    to_temperature_dependence,
+)
 from imucalib.estimation.temperature_model import (
     HeldOutCheck,
     TemperatureModelFit,
@@ -79,9 +83,7 @@ from imucalib.estimation.temperature_model import (
     TemperaturePrediction,
     check_held_out,
     fit_temperature_model,
-    from_temperature_dependence,
     predict_temperature_model,
-    to_temperature_dependence,
 )
 
 __all__ = [

@@ -51,8 +51,8 @@ Contents
 --------
 :class:`TemperaturePolynomial` (the model of Eq. (1)), :class:`TemperatureModelFit`,
 :func:`fit_temperature_model`, :func:`predict_temperature_model` (→
-:class:`TemperaturePrediction`), :func:`check_held_out` (→ :class:`HeldOutCheck`),
-:func:`to_temperature_dependence`, :func:`from_temperature_dependence`.
+:class:`TemperaturePrediction`), :func:`check_held_out` (→ :class:`HeldOutCheck`). The fitted
+models in the twin's and a result's forms: :mod:`imucalib.estimation.temperature_forms`.
 """
 
 from __future__ import annotations
@@ -70,8 +70,6 @@ from imucalib._checks import as_array, check_finite_scalar
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
-from imucalib.models.temperature import TemperatureDependence
-from imucalib.models.temperature_record import HeldOutOutcome, ParameterTemperatureModel
 
 __all__ = [
     "DEFAULT_MAX_ORDER",
@@ -81,11 +79,8 @@ __all__ = [
     "TemperaturePrediction",
     "check_held_out",
     "fit_temperature_model",
-    "from_temperature_dependence",
     "gls_weights",
     "predict_temperature_model",
-    "to_parameter_record",
-    "to_temperature_dependence",
 ]
 
 #: The highest polynomial order tried by default, Eq. (6)/(9).
@@ -629,86 +624,3 @@ def check_held_out(
     p_value = float(stats.chi2.sf(chi2, n))
     return HeldOutCheck(normalised_residuals=z, chi2=chi2, dof=n, p_value=p_value,
                         consistent=bool(np.max(np.abs(z)) <= limit and p_value >= alpha))
-
-
-def to_temperature_dependence(
-    models: Mapping[str, TemperaturePolynomial],
-) -> tuple[TemperatureDependence, dict[str, float]]:
-    """Return the twin's form of fitted models: (TemperatureDependence, {name: p0 = c_0}).
-
-    :func:`imucalib.models.temperature.evaluate_parameter` with that p0 then gives Eq. (1)
-    without the leg term.
-
-    Raises
-    ------
-    InvalidInputError
-        Models with different T0, or one with a hysteresis term (which that form cannot hold).
-    """
-    t0s = {m.reference_temperature_degc for m in models.values()}
-    if len(t0s) > 1:
-        raise InvalidInputError(
-            f"all models must share one reference temperature; got {sorted(t0s)}")
-    coeffs: dict[str, NDArray[np.float64]] = {}
-    rates: dict[str, NDArray[np.float64]] = {}
-    base: dict[str, float] = {}
-    for name, model in models.items():
-        if model.leg_coefficient is not None:
-            raise InvalidInputError(
-                f"model {name!r} has a hysteresis (leg) term, which TemperatureDependence "
-                "cannot hold")
-        base[name] = model.coefficients[0]
-        if model.order >= 1:
-            coeffs[name] = np.array(model.coefficients[1:])
-        if model.rate_coefficient is not None:
-            rates[name] = np.array(model.rate_coefficient)
-    t0 = t0s.pop() if t0s else 25.0
-    dep = TemperatureDependence(reference_temperature_degc=t0, coefficients=coeffs,
-                                rate_coefficients=rates)
-    return dep, base
-
-
-def from_temperature_dependence(dep: TemperatureDependence, name: str,
-                                base: float) -> TemperaturePolynomial:
-    """Return scalar parameter `name` of `dep` (p0 = `base`) as a :class:`TemperaturePolynomial`.
-
-    Raises
-    ------
-    InvalidInputError
-        A non-scalar parameter in `dep`.
-    """
-    p0 = check_finite_scalar(base, "base")
-    poly = dep.coefficients.get(name)
-    rate = dep.rate_coefficients.get(name)
-    for arr, what in ((poly, "coefficients"), (rate, "rate_coefficients")):
-        if arr is not None and arr.reshape(arr.shape[0] if what == "coefficients" else 1,
-                                           -1).shape[1] != 1:
-            raise InvalidInputError(f"`{what}[{name!r}]` must be of a scalar parameter")
-    cs = (p0,) if poly is None else (p0, *(float(c) for c in poly.reshape(-1)))
-    return TemperaturePolynomial(
-        reference_temperature_degc=dep.reference_temperature_degc, coefficients=cs,
-        rate_coefficient=None if rate is None else float(rate.reshape(-1)[0]),
-    )
-
-
-def to_parameter_record(fit: TemperatureModelFit, *,
-                        temperature_range_degc: tuple[float, float] | None = None,
-                        held_out: HeldOutCheck | None = None) -> ParameterTemperatureModel:
-    """Return a fit as the record a CalibrationResult carries (σ Birge-scaled for a misfit).
-
-    The record's covariance is :attr:`TemperatureModelFit.covariance_scaled`, so what a result
-    reports is the uncertainty that owns up to a misfit (docs/processing-estimation.md).
-    """
-    outcome = None
-    if held_out is not None:
-        outcome = HeldOutOutcome(
-            max_abs_z=float(np.max(np.abs(held_out.normalised_residuals))),
-            chi2=float(held_out.chi2), dof=int(held_out.dof),
-            p_value=float(held_out.p_value), consistent=bool(held_out.consistent))
-    m = fit.model
-    return ParameterTemperatureModel(
-        name=fit.name, reference_temperature_degc=m.reference_temperature_degc,
-        coefficients=tuple(float(c) for c in m.coefficients),
-        covariance=np.asarray(fit.covariance_scaled, dtype=np.float64), chi2=float(fit.chi2),
-        dof=int(fit.dof), order_criterion=fit.criterion, rate_coefficient=m.rate_coefficient,
-        leg_coefficient=m.leg_coefficient, temperature_range_degc=temperature_range_degc,
-        held_out=outcome)

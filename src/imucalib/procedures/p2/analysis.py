@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 from imucalib import __version__
 from imucalib import units as u
 from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentError
+from imucalib.estimation.temperature_forms import to_parameter_record
 from imucalib.estimation.temperature_model import (
     DEFAULT_MAX_ORDER,
     HeldOutCheck,
@@ -49,7 +50,6 @@ from imucalib.estimation.temperature_model import (
     fit_temperature_model,
     gls_weights,
     predict_temperature_model,
-    to_parameter_record,
 )
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.result import CalibrationResult, Provenance, triad_parameter_unit
