@@ -36,13 +36,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 
 from imucalib.errors import InvalidInputError
+from imucalib.models.decision import Check, CheckRow, Decision
 
 __all__ = [
     "DECISION_RULE",
@@ -115,57 +115,6 @@ def check_specification(name: str, rows: Sequence[tuple[str, float, float, float
                else f"{len(failed)} of {len(out)} specified quantities beyond their limits: "
                     + ", ".join(r.name for r in failed[:6]) + ("…" if len(failed) > 6 else ""))
     return Check(name, not failed, summary, tuple(out))
-
-
-@dataclass(frozen=True)
-class CheckRow:
-    """One compared quantity: its value, its limit, and whether it is within it."""
-
-    name: str
-    value: float
-    limit: float
-    unit: str
-    passed: bool
-    detail: str = ""
-
-
-@dataclass(frozen=True)
-class Check:
-    """A named check: its rows, its verdict (None when not assessed) and a summary line."""
-
-    name: str
-    passed: bool | None
-    summary: str
-    rows: tuple[CheckRow, ...] = ()
-
-    @property
-    def assessed(self) -> bool:
-        """Whether the check could be made."""
-        return self.passed is not None
-
-
-@dataclass(frozen=True)
-class Decision:
-    """The overall verdict."""
-
-    passed: bool
-    rule: str
-    failed: tuple[str, ...] = ()
-    not_assessed: tuple[str, ...] = ()
-    checks: tuple[Check, ...] = field(default_factory=tuple)
-    notes: tuple[str, ...] = ()
-
-    def summary(self) -> str:
-        """Return the verdict in one line (its notes after it)."""
-        verdict = "PASS" if self.passed else "FAIL"
-        text = f"{verdict} ({self.rule})"
-        if self.failed:
-            text += "; failed: " + ", ".join(self.failed)
-        if self.not_assessed:
-            text += "; not assessed: " + ", ".join(self.not_assessed)
-        for note in self.notes:
-            text += f"; {note}"
-        return text
 
 
 def check_residuals(name: str, groups: Sequence[tuple[str, ArrayLike, ArrayLike]],

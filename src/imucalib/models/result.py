@@ -98,6 +98,7 @@ __all__ = [
     "ParameterTemperatureModel",
     "Provenance",
     "ResidualStats",
+    "fit_quality_dict",
     "triad_parameter_names",
     "triad_parameter_unit",
 ]
@@ -488,7 +489,7 @@ class CalibrationResult:
                            "created_utc": self.provenance.created_utc,
                            "details": dict(self.provenance.details)},
             "notes": list(self.notes),
-            **({"fit_quality": [_fit_quality_dict(q) for q in self.fit_quality]}
+            **({"fit_quality": [fit_quality_dict(q) for q in self.fit_quality]}
                if self.format_version >= 2 else {}),
             **({"temperature_models": [_temperature_model_dict(tm)
                                        for tm in self.temperature_models]}
@@ -517,6 +518,15 @@ class CalibrationResult:
             of the wrong type or value (see the module docstring); the message names `source`
             and the field.
         """
+        if isinstance(data, Mapping) and data.get("format") == RESULT_FORMAT \
+                and data.get("format_version") == 4:  # the result document: its calibration
+            inner = data.get("calibration")
+            if not isinstance(inner, Mapping):
+                raise InvalidInputError(
+                    f"{source} is a {data.get('procedure', '?')} result without a whole triad "
+                    "model (its `calibration` is null): read it with "
+                    "imucalib.models.result_document.load_result")
+            data = inner
         fields = ResultReader(source).read(data)
         residuals = {group: ResidualStats(**r) for group, r in fields.pop("residuals").items()}
         provenance = Provenance(**fields.pop("provenance"))
@@ -592,7 +602,8 @@ def _temperature_model_dict(tm: ParameterTemperatureModel) -> dict[str, Any]:
                 "p_value": ho.p_value, "consistent": ho.consistent}}
 
 
-def _fit_quality_dict(q: FitQuality) -> dict[str, Any]:
+def fit_quality_dict(q: FitQuality) -> dict[str, Any]:
+    """Return a FitQuality as JSON data (undefined ratios of ν = 0 as None)."""
     nan = math.isnan
     return {"group": q.group, "chi2": q.chi2, "dof": q.dof,
             "reduced_chi2": None if q.dof == 0 else q.reduced_chi2,

@@ -15,7 +15,8 @@ docs/procedures.md says how to add one.
 
 Contents
 --------
-:class:`Procedure`, :class:`ProcedureResult`, :func:`accepted_options`
+:class:`Procedure`, :func:`accepted_options`; :class:`ProcedureResult`, the result contract,
+is :mod:`imucalib.models.procedure_result`'s (re-exported here).
 """
 
 from __future__ import annotations
@@ -26,59 +27,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from imucalib.errors import InvalidInputError
+from imucalib.models.procedure_result import ProcedureResult
 
 if TYPE_CHECKING:
     from rich.console import Console
 
     from imucalib.io.reader import Recording
-    from imucalib.models.fit_quality import FitQuality
     from imucalib.plan.schema import Plan
     from imucalib.report.document import ReportContent, ReportDocument
 
 __all__ = ["Procedure", "ProcedureResult", "accepted_options"]
-
-
-@runtime_checkable
-class ProcedureResult(Protocol):
-    """What every procedure's analysis returns, whatever else it holds.
-
-    Attributes
-    ----------
-    procedure : str
-        The registered name of the procedure that made it (``"p1"``, ``"allan"``).
-    unit : str
-        The IMU it is about (its stream's unit name, e.g. ``"IMU-0001"``).
-    passed : bool or None
-        The procedure's decision; None for a procedure that decides nothing (a noise
-        characterisation).
-    fit_quality : tuple of FitQuality
-        Each of its fits' χ²/ν against its expected range and the misfit verdict
-        (:mod:`imucalib.models.fit_quality`); a misfit's σ are reported Birge-scaled.
-    """
-
-    @property
-    def procedure(self) -> str:
-        """Registered name of the procedure that made it."""
-        ...
-
-    @property
-    def unit(self) -> str:
-        """The IMU it is about."""
-        ...
-
-    @property
-    def passed(self) -> bool | None:
-        """The decision, or None."""
-        ...
-
-    @property
-    def fit_quality(self) -> tuple[FitQuality, ...]:
-        """Each fit's χ²/ν and misfit verdict; empty when no fit has redundancy."""
-        ...
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the whole result as JSON-able data."""
-        ...
 
 
 @runtime_checkable
