@@ -15,7 +15,7 @@ from rich.console import Console
 
 from imucalib import units
 from imucalib.errors import ConfigurationError
-from imucalib.io import open_recording
+from imucalib.io import EventKind, open_recording
 from imucalib.io.inspect import summarize_recording
 from imucalib.plan import OperatorCheckStep, Plan, describe_plan, parse_plan, plan_to_toml
 from imucalib.plan.equipment import TwinEquipment
@@ -134,9 +134,10 @@ def test_a_confirmed_swap_and_load_move_the_twin_and_are_logged(tmp_path):
         before, after = mean_accel_x(path, "spin 1", unit), mean_accel_x(path, "spin 2", unit)
         assert after - before == pytest.approx(sign * shift, abs=2e-4)
     with open_recording(path) as rec:
-        events = [e.message for e in rec.log
-                  if e.message.startswith(("units swapped", "centrifuge load set"))]
-    assert events == ["units swapped: A ↔ B", "centrifuge load set: 5 kg"]
+        typed = [(e.kind, e.source, e.message) for e in rec.events()]
+    assert typed == [(EventKind.SWAP, "event:swap", "units swapped: A ↔ B"),
+                     (EventKind.LOAD, "event:load", "centrifuge load set: 5 kg")]
+    events = [m for _, _, m in typed]
     summary_ = summarize_recording(path)
     assert [m for _, m in summary_.swaps_and_loads] == events
     console = Console(record=True, width=200)
@@ -153,7 +154,7 @@ def test_a_station_without_swap_or_load_only_logs(tmp_path):
     assert station.rig.fixture.mount("A").lever_arm_m_m[0] == 0.2
     assert station.rig.centrifuge.load_kg == 0.0
     with open_recording(tmp_path / "r.h5") as rec:
-        assert sum(e.message.startswith("units swapped") for e in rec.log) == 1
+        assert len(rec.events(EventKind.SWAP)) == 1 and len(rec.events("load")) == 1
 
 
 def test_resume_restores_the_swaps_and_the_load(tmp_path):
@@ -191,9 +192,10 @@ def test_resume_restores_the_swaps_and_the_load(tmp_path):
     assert rig.centrifuge.load_kg == 5.0
     assert [(a, b) for _, a, b in made[0].swaps] == [("A", "B")]
     with open_recording(tmp_path / "r.h5") as rec:
-        messages = [e.message for e in rec.log]
-    assert "units swapped: A ↔ B (the completed swaps, restored on resume)" in messages
-    assert "centrifuge load set: 5 kg (the last completed load, restored on resume)" in messages
+        swaps = [e.message for e in rec.events(EventKind.SWAP)]
+        loads = [e.message for e in rec.events(EventKind.LOAD)]
+    assert swaps[-1] == "units swapped: A ↔ B (the completed swaps, restored on resume)"
+    assert loads[-1] == "centrifuge load set: 5 kg (the last completed load, restored on resume)"
     # after the resume, A still reads as on the far side with the load
     assert mean_accel_x(tmp_path / "r.h5", "spin 3", "A") == pytest.approx(
         mean_accel_x(tmp_path / "r.h5", "spin 1", "A")

@@ -17,7 +17,7 @@ import pytest
 from imucalib import units
 from imucalib.drivers import load_driver_station
 from imucalib.drivers.simulators import LoopbackStation
-from imucalib.io import open_recording
+from imucalib.io import EventKind, open_recording
 from imucalib.io.streams import axis_columns
 from imucalib.procedures import generate_p1_plan
 from imucalib.sim.build import build_rig
@@ -136,9 +136,9 @@ def test_a_p3_plan_runs_on_an_acl_centrifuge_over_tcp(tmp_path):
     with open_recording(tmp_path / "p3.h5") as rec:
         done = [s for s in rec.steps if s.status == "done"]
         assert [s.commanded["plan_step"] for s in done] == list(range(len(plan.steps)))
-        events = [e.message for e in rec.log]
-        assert any("units swapped: REF-A ↔ REF-B" in m for m in events)
-        assert any("centrifuge load set: 2 kg" in m for m in events)
+        events = [(e.kind, e.message) for e in rec.events()]
+        assert (EventKind.SWAP, "units swapped: REF-A ↔ REF-B") in events
+        assert (EventKind.LOAD, "centrifuge load set: 2 kg") in events
         rates = [s for s in done if s.role == "p3.rate"]
         assert len(rates) == 12
         for s in rates:  # each rate record's centrifuge feedback turns at the commanded rate

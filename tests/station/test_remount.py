@@ -12,7 +12,7 @@ from pydantic import ValidationError
 from rich.console import Console
 
 from imucalib.conventions import ACCEL_COLUMNS
-from imucalib.io import open_recording
+from imucalib.io import EventKind, open_recording
 from imucalib.io.inspect import summarize_recording
 from imucalib.plan import OperatorCheckStep, Plan, describe_plan, parse_plan, plan_to_toml
 from imucalib.plan.equipment import TwinEquipment
@@ -94,8 +94,10 @@ def test_confirmed_remounts_move_the_twin_and_are_logged(tmp_path):
     np.testing.assert_allclose(means["static +x"]["XP"], [0, 0, G], atol=tol)
     np.testing.assert_allclose(means["static +x"]["ZP"], [G, 0, 0], atol=tol)
     with open_recording(tmp_path / "r.h5") as rec:
-        events = [e.message for e in rec.log if e.message.startswith("fixture remounted")]
+        typed = rec.events()
+        events = [e.message for e in rec.events(EventKind.REMOUNT)]
         commanded = [s.commanded for s in rec.steps if s.kind == "operator-check"]
+    assert [(e.kind, e.source) for e in typed] == [(EventKind.REMOUNT, "event:remount")] * 3
     assert events == ["fixture remounted: +z up, yaw 0°", "fixture remounted: -z up, yaw 0°",
                       "fixture remounted: +x up, yaw 90°"]
     assert [c["remount"] for c in commanded] == ["+z", "-z", "+x"]
@@ -116,7 +118,7 @@ def test_a_declined_remount_moves_nothing(tmp_path):
     assert summary.status != "done"
     assert station.pose == ("+z", 0.0) and len(station.remounts) == 1
     with open_recording(tmp_path / "r.h5") as rec:
-        assert sum(e.message.startswith("fixture remounted") for e in rec.log) == 1
+        assert len(rec.events("remount")) == 1
 
 
 def test_a_station_without_remount_only_logs(tmp_path):
@@ -126,7 +128,7 @@ def test_a_station_without_remount_only_logs(tmp_path):
     assert run_plan(plan, station, tmp_path / "r.h5").status == "done"
     assert station.rig.fixture.rot_pm.magnitude() == 0.0  # never moved
     with open_recording(tmp_path / "r.h5") as rec:
-        assert sum(e.message.startswith("fixture remounted") for e in rec.log) == 3
+        assert len(rec.events("remount")) == 3
     means = step_means(tmp_path / "r.h5")
     np.testing.assert_allclose(means["static -z"]["ZP"], [0, 0, G], atol=0.02 * G)
 
@@ -154,8 +156,9 @@ def test_resume_restores_the_pose_of_the_last_completed_remount(tmp_path):
     np.testing.assert_allclose(means["static -z"]["ZP"], [0, 0, -G], atol=0.02 * G)
     np.testing.assert_allclose(means["static +x"]["XP"], [0, 0, G], atol=0.02 * G)
     with open_recording(tmp_path / "r.h5") as rec:
-        assert any(e.message == "fixture remounted: -z up, yaw 0° (the pose of completed step 2, "
-                                "restored on resume)" for e in rec.log)
+        remounts = [e.message for e in rec.events(EventKind.REMOUNT)]
+    assert "fixture remounted: -z up, yaw 0° (the pose of completed step 2, restored on resume)" \
+        in remounts
 
 
 def test_resume_point_of_a_run_without_remounts(tmp_path):

@@ -7,6 +7,9 @@ Contents
 :func:`open_recording`, :class:`Recording`, :class:`StreamInfo`, :class:`StreamData`,
 :class:`StepRecord`, :class:`LogEvent`
     Read one (:mod:`imucalib.io.reader`).
+:class:`EventKind`
+    The kinds of station event in a Recording's log: remount, swap, load
+    (:mod:`imucalib.io.events`).
 :func:`recover_recording`, :class:`RecoveryReport`, :func:`compact_recording`
     Copy what a crashed writer flushed into a cleanly closed file; rewrite a closed one with
     another compression (:mod:`imucalib.io.recover`).
@@ -16,6 +19,7 @@ A stream or a step of it is exported to CSV or MAT by :mod:`imucalib.exports.str
 
 from __future__ import annotations
 
+from imucalib.io.events import EventKind
 from imucalib.io.reader import (
     LogEvent,
     Recording,
@@ -42,6 +46,7 @@ __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "ColumnSpec",
+    "EventKind",
     "LogEvent",
     "Recording",
     "RecordingWriter",

@@ -23,13 +23,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imucalib.conventions import COUNTER_COLUMN, TIME_COLUMN
+from imucalib.io.events import EventKind
 from imucalib.io.reader import open_recording
 
 if TYPE_CHECKING:
     from rich.console import Console
 
-__all__ = ["LOAD_EVENT_PREFIX", "REMOUNT_EVENT_PREFIX", "SWAP_EVENT_PREFIX", "RecordingSummary",
-           "StreamSummary", "summarize_recording"]
+__all__ = ["RecordingSummary", "StreamSummary", "summarize_recording"]
 
 
 @dataclass(frozen=True)
@@ -64,15 +64,6 @@ class StreamSummary:
         return 1.0 / self.median_interval_s if self.median_interval_s > 0 else float("nan")
 
 
-#: How a station run's log says that the fixture was remounted
-#: (:mod:`imucalib.station.executors.operator_check`).
-REMOUNT_EVENT_PREFIX = "fixture remounted"
-#: How a station run's log says that two units were exchanged on the fixture.
-SWAP_EVENT_PREFIX = "units swapped"
-#: How a station run's log says that the centrifuge arm's test load was changed.
-LOAD_EVENT_PREFIX = "centrifuge load set"
-
-
 @dataclass(frozen=True)
 class RecordingSummary:
     """What a Recording holds."""
@@ -84,9 +75,11 @@ class RecordingSummary:
     steps: list[Any]
     n_events: int
     was_open_for_write: bool
-    #: (time [s], message) of each logged fixture remount (P2's operator checks).
+    #: (time [s], message) of each logged fixture remount (P2's operator checks): the station
+    #: events of kind ``remount`` (:mod:`imucalib.io.events`).
     remounts: tuple[tuple[float, str], ...] = ()
-    #: (time [s], message) of each logged unit swap and centrifuge load change (P3).
+    #: (time [s], message) of each logged unit swap and centrifuge load change (P3): the
+    #: station events of kinds ``swap`` and ``load``, in the order logged.
     swaps_and_loads: tuple[tuple[float, str], ...] = ()
 
     def render(self, console: Console) -> None:
@@ -237,6 +230,7 @@ def summarize_recording(path: str | Path, *, chunk_samples: int = 1 << 18) -> Re
     with open_recording(path) as rec:
         streams = [_scan_stream(rec, info, chunk_samples) for info in rec.streams]
         log = rec.log
+        events = [(float(e.time_s), str(e.message), e.kind) for e in log]
         return RecordingSummary(
             path=Path(path),
             format_version=int(rec.format_version),
@@ -245,9 +239,7 @@ def summarize_recording(path: str | Path, *, chunk_samples: int = 1 << 18) -> Re
             steps=list(rec.steps),
             n_events=len(log),
             was_open_for_write=bool(getattr(rec, "was_open_for_write", False)),
-            remounts=tuple((float(e.time_s), str(e.message)) for e in log
-                           if str(e.message).startswith(REMOUNT_EVENT_PREFIX)),
-            swaps_and_loads=tuple(
-                (float(e.time_s), str(e.message)) for e in log
-                if str(e.message).startswith((SWAP_EVENT_PREFIX, LOAD_EVENT_PREFIX))),
+            remounts=tuple((t, m) for t, m, k in events if k is EventKind.REMOUNT),
+            swaps_and_loads=tuple((t, m) for t, m, k in events
+                                  if k in (EventKind.SWAP, EventKind.LOAD)),
         )

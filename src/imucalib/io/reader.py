@@ -6,7 +6,7 @@ Contents
     Open a Recording (a context manager), including one a crashed writer left open.
 :class:`Recording`
     The opened file: ``metadata``, ``streams``, ``read_stream``, ``iter_stream``, ``steps``,
-    ``read_step``, ``log``, ``truth``, ``read_truth_stream``, ``to_dataframe``.
+    ``read_step``, ``log``, ``events``, ``truth``, ``read_truth_stream``, ``to_dataframe``.
 :class:`StreamInfo`, :class:`StreamData`, :class:`StepRecord`, :class:`LogEvent`
     What it returns.
 
@@ -77,6 +77,7 @@ from imucalib.io._validate import (
     parse_columns,
     touch_all,
 )
+from imucalib.io.events import EventKind, as_event_kind, event_kind
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -175,6 +176,16 @@ class LogEvent:
     level: str
     source: str
     message: str
+
+    @property
+    def kind(self) -> EventKind | None:
+        """The station event this is (a remount, a swap, a load), or None for any other event.
+
+        Read from ``source`` (``"event:<kind>"``), or for a Recording written before the events
+        were typed by the frozen version 1 mapping (:mod:`imucalib.io.events`;
+        ``docs/recording-format.md``, "Station events").
+        """
+        return event_kind(self.source, self.message)
 
 
 @dataclass(frozen=True)
@@ -766,6 +777,32 @@ class Recording:
         t = self._guard("the log", self._table, LOG_GROUP, LOG_FIELDS)
         return [LogEvent(*row) for row in zip(t["time_s"], t["level"], t["source"], t["message"],
                                               strict=True)]
+
+    def events(self, kind: EventKind | str | None = None) -> list[LogEvent]:
+        """Return the logged station events of `kind` (every kind when None), in the order logged.
+
+        A station event is a remount, a unit swap or a centrifuge load change
+        (:class:`~imucalib.io.events.EventKind`; ``docs/recording-format.md``, "Station
+        events"); files written before the events were typed are read by the frozen version 1
+        mapping.
+
+        Parameters
+        ----------
+        kind : EventKind or str, optional
+            ``"remount"``, ``"swap"`` or ``"load"``.
+
+        Returns
+        -------
+        list of LogEvent
+
+        Raises
+        ------
+        InvalidInputError
+            `kind` is no event kind.
+        """
+        wanted = None if kind is None else as_event_kind(kind)
+        return [e for e in self.log
+                if (k := e.kind) is not None and (wanted is None or k is wanted)]
 
     # ----------------------------------------------------------------------------- truth
     @property

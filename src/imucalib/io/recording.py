@@ -52,6 +52,8 @@ Root attributes
     fields up to ``note`` only (``docs/recording-format.md`` says how readers map it).
 ``/log/<field>``
     Events: ``time_s`` (float64), ``level`` (one of :data:`LOG_LEVELS`), ``source``, ``message``.
+    A station event (a remount, a unit swap, a load change) has ``source = "event:<kind>"``
+    (:meth:`RecordingWriter.log_station_event`, :mod:`imucalib.io.events`).
 ``/truth`` (digital twin only; analysis code never reads it)
     Attributes ``<key>_json`` (JSON of each truth value) and datasets ``/truth/arrays/<key>``
     (numpy-array values, exact), and truth streams under ``/truth/streams/<device>/<unit>/``
@@ -130,6 +132,7 @@ from imucalib.io.compression import (
     DEFAULT_COMPRESSION,
     needs_plugin,
 )
+from imucalib.io.events import EventKind, event_message, event_source
 from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
 
 __all__ = [
@@ -672,6 +675,36 @@ class RecordingWriter:
         self._check_open("log an event")
         self._tables.log_event(time_s, level, source, message)
         self._maybe_flush()
+
+    def log_station_event(self, time_s: float, kind: EventKind | str, detail: str) -> str:
+        """Record a station event (a remount, a unit swap, a load change) and return its message.
+
+        The one way a station event is written: source ``"event:<kind>"``, level ``"info"``,
+        message the kind's label and `detail` (:mod:`imucalib.io.events`;
+        ``docs/recording-format.md``, "Station events").
+
+        Parameters
+        ----------
+        time_s : float
+            Event time on the recording's time base [s].
+        kind : EventKind or str
+            ``"remount"``, ``"swap"`` or ``"load"``.
+        detail : str
+            What was done, for people (``"+x up, yaw 90°"``, ``"A ↔ B"``, ``"5 kg"``).
+
+        Returns
+        -------
+        str
+            The message logged.
+
+        Raises
+        ------
+        InvalidInputError
+            Unknown `kind`, or a message longer than its field.
+        """
+        message = event_message(kind, detail)
+        self.log_event(time_s, "info", event_source(kind), message)
+        return message
 
     # ------------------------------------------------------------------------ flush / close
     def flush(self) -> None:

@@ -64,7 +64,7 @@ from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io import StreamSpec
 from imucalib.io.context import EQUIPMENT_KEYS, IMU_SPEC_KEYS, RecordingContext
 from imucalib.io.coverage import uncovered_done_steps
-from imucalib.io.inspect import LOAD_EVENT_PREFIX, REMOUNT_EVENT_PREFIX, SWAP_EVENT_PREFIX
+from imucalib.io.events import EventKind
 from imucalib.io.reader import open_recording
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.recover import recover_recording
@@ -532,9 +532,9 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         if point.remount is not None and callable(restore):
             up, yaw, k = point.remount
             restore(up, yaw)  # the rebuilt twin starts in the +z pose; the fixture was not moved
-            writer.log_event(station.clock.now_s(), "info", "runner",
-                             f"{REMOUNT_EVENT_PREFIX}: {up} up, yaw {yaw:g}° (the pose of "
-                             f"completed step {k}, restored on resume)")
+            writer.log_station_event(station.clock.now_s(), EventKind.REMOUNT,
+                                     f"{up} up, yaw {yaw:g}° (the pose of completed step {k}, "
+                                     "restored on resume)")
         _restore_swaps_and_load(station, writer, point)
         run = RunSession(point.plan, station, writer, opt, identities)
         summary = _drive(run, point.first_step)
@@ -554,16 +554,15 @@ def _restore_swaps_and_load(station: Station, writer: RecordingWriter,
     if point.swaps and callable(swap):
         for first, second in point.swaps:
             swap(first, second)
-        writer.log_event(station.clock.now_s(), "info", "runner",
-                         f"{SWAP_EVENT_PREFIX}: "
-                         + ", ".join(f"{a} ↔ {b}" for a, b in point.swaps)
-                         + " (the completed swaps, restored on resume)")
+        writer.log_station_event(station.clock.now_s(), EventKind.SWAP,
+                                 ", ".join(f"{a} ↔ {b}" for a, b in point.swaps)
+                                 + " (the completed swaps, restored on resume)")
     load = getattr(station, "set_centrifuge_load", None)
     if point.centrifuge_load_kg is not None and callable(load):
         load(point.centrifuge_load_kg)
-        writer.log_event(station.clock.now_s(), "info", "runner",
-                         f"{LOAD_EVENT_PREFIX}: {point.centrifuge_load_kg:g} kg (the last "
-                         "completed load, restored on resume)")
+        writer.log_station_event(station.clock.now_s(), EventKind.LOAD,
+                                 f"{point.centrifuge_load_kg:g} kg (the last completed load, "
+                                 "restored on resume)")
 
 
 def _finished_summary(path: Path, point: ResumePoint) -> RunSummary:

@@ -24,6 +24,7 @@ import numpy as np
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import DeviceError, RecordingError, StorageFullError
+from imucalib.io.events import EventKind
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.storage import format_bytes
 from imucalib.io.streams import (
@@ -418,10 +419,21 @@ class RunSession:
         """Station time from which rows belong to the last tick (at least `tick_s` back)."""
         return min(self.tick_from_s, self.now() - self.opt.tick_s)
 
-    def log_info(self, message: str) -> None:
-        """Log `message` as the runner's in the Recording and show it as the last event."""
-        self.writer.log_event(self.now(), "info", "runner", message)
-        self.status.last_event = message
+    def log_station_event(self, kind: EventKind | str, detail: str) -> None:
+        """Log a station event (a remount, a unit swap, a load) and show it as the last event.
+
+        Written by :meth:`~imucalib.io.recording.RecordingWriter.log_station_event` (source
+        ``"event:<kind>"``, :mod:`imucalib.io.events`; ``docs/recording-format.md``, "Station
+        events").
+
+        Parameters
+        ----------
+        kind : EventKind or str
+            ``"remount"``, ``"swap"`` or ``"load"``.
+        detail : str
+            What was done, for people (``"+x up, yaw 90°"``).
+        """
+        self.status.last_event = self.writer.log_station_event(self.now(), kind, detail)
 
     # --- the step loop ----------------------------------------------------------------------
     def execute(self, index: int, attempt: int) -> str:

@@ -7,14 +7,17 @@ note. A declined check ends the step ``aborted`` and stops the run
 swaps two units or sets the centrifuge's test load has it done on a twin (a station with the
 ``remount``, ``swap_units`` or ``set_centrifuge_load`` method,
 :class:`~imucalib.station.sim.SimStation`) and logs it in any case (the operator did it on a
-real station); :mod:`imucalib.io.inspect` finds these log events by their prefixes.
+real station) as a typed station event (:meth:`RunSession.log_station_event
+<imucalib.station.session.RunSession.log_station_event>`, :mod:`imucalib.io.events`), which
+``Recording.events`` and ``imucalib inspect`` find by its kind (``docs/recording-format.md``,
+"Station events").
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from imucalib.io.inspect import LOAD_EVENT_PREFIX, REMOUNT_EVENT_PREFIX, SWAP_EVENT_PREFIX
+from imucalib.io.events import EventKind
 from imucalib.plan.schema import OperatorCheckStep
 from imucalib.station.executors.base import StepOutcome
 from imucalib.station.signals import StepStop
@@ -55,7 +58,7 @@ def remount(session: RunSession, up: str, yaw_deg: float, why: str = "") -> None
     do = getattr(session.station, "remount", None)
     if callable(do):
         do(up, yaw_deg)
-    session.log_info(f"{REMOUNT_EVENT_PREFIX}: {up} up, yaw {yaw_deg:g}°{why}")
+    session.log_station_event(EventKind.REMOUNT, f"{up} up, yaw {yaw_deg:g}°{why}")
 
 
 def swap_units(session: RunSession, first: str, second: str, why: str = "") -> None:
@@ -67,7 +70,7 @@ def swap_units(session: RunSession, first: str, second: str, why: str = "") -> N
     do = getattr(session.station, "swap_units", None)
     if callable(do):
         do(first, second)
-    session.log_info(f"{SWAP_EVENT_PREFIX}: {first} ↔ {second}{why}")
+    session.log_station_event(EventKind.SWAP, f"{first} ↔ {second}{why}")
 
 
 def set_centrifuge_load(session: RunSession, load_kg: float, why: str = "") -> None:
@@ -79,4 +82,4 @@ def set_centrifuge_load(session: RunSession, load_kg: float, why: str = "") -> N
     do = getattr(session.station, "set_centrifuge_load", None)
     if callable(do):
         do(load_kg)
-    session.log_info(f"{LOAD_EVENT_PREFIX}: {load_kg:g} kg{why}")
+    session.log_station_event(EventKind.LOAD, f"{load_kg:g} kg{why}")
