@@ -138,16 +138,7 @@ _PROCEDURE_FREE = ("report", "exports", "records", "cli", "io")
 
 #: (module, procedure module) imports that remain, each with its reason; the list shrinks as
 #: a procedure hook takes each over. A stale entry fails the test as much as a new import does.
-KNOWN_EXCEPTIONS = {
-    # the noise formats (noise-json, Kalibr/OpenVINS YAML, tables, figures) are Allan's output
-    # writers; OUTPUT_FORMATS is one table of every format, not yet filled by the procedures
-    ("exports/outputs.py", "imucalib.procedures.allan.analysis"),
-    ("exports/outputs.py", "imucalib.procedures.allan.figures"),
-    # P2's temperature-png writer and a batch's summary files (.summary.json/.csv, .lot.png):
-    # written by write_outputs, not yet by a hook of the procedure
-    ("exports/outputs.py", "imucalib.procedures.p2.figures"),
-    ("exports/outputs.py", "imucalib.procedures.p2.batch"),
-    }
+KNOWN_EXCEPTIONS: set[tuple[str, str]] = set()
 
 
 def test_the_frameworks_import_no_procedure():
@@ -187,10 +178,6 @@ def _code_strings(path: Path) -> list[tuple[str, int]]:
 #: Strings of ``io/`` that name a procedure's module or role, each with its reason; a stale entry
 #: fails the test as much as a new one does.
 IO_PROCEDURE_STRINGS = {
-    # transitional re-export (a lazy module __getattr__) of constants that moved to their
-    # procedure's roles.py, for modules not yet updated; remove once nothing imports them there
-    ("io/step_roles.py", "imucalib.procedures.random_drift.roles"),
-    ("io/step_roles.py", "imucalib.procedures.tumble.roles"),
     # the frozen version 1 mapping (role_from_tags): a fact of the file format
     ("io/step_roles.py", "p1.accel-position"),
     ("io/step_roles.py", "p1.gyro-bias"),
@@ -219,3 +206,34 @@ def test_io_names_no_procedure_role_or_module():
     assert IO_PROCEDURE_STRINGS - found == set(), (
         "no longer in io/: remove from IO_PROCEDURE_STRINGS:\n"
         + "\n".join(sorted(map(str, IO_PROCEDURE_STRINGS - found))))
+
+
+#: The attributes of a procedure's result (the contract of
+#: :mod:`imucalib.models.procedure_result` and the ad-hoc ones it replaced): a framework reads
+#: them as members of the contract, never by probing whether a result has them.
+_RESULT_ATTRIBUTES = frozenset({
+    "procedure", "unit", "decision", "passed", "fit_quality", "notes", "calibration",
+    "provenance", "members", "error", "parameter_rows", "triad_parameters", "to_dict",
+    "result", "results", "reasons", "models", "observations", "sensor_id", "param_names",
+    "std", "model", "details"})
+
+
+def test_no_framework_probes_a_result_for_its_attributes():
+    """``report/``, ``exports/``, ``records/``, ``cli/``, the pipeline and the demo read a result
+    through the contract: no ``getattr``/``hasattr`` of a result attribute (by its literal
+    name) in them."""
+    probes = []
+    files = [p for package in ("report", "exports", "records", "cli")
+             for p in sorted((SRC / package).rglob("*.py"))]
+    files += [SRC / "calibration.py", SRC / "demo.py"]
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                    and node.func.id in ("getattr", "hasattr") and len(node.args) >= 2
+                    and isinstance(node.args[1], ast.Constant)
+                    and node.args[1].value in _RESULT_ATTRIBUTES):
+                probes.append(f"{path.relative_to(SRC).as_posix()}:{node.lineno}: "
+                              f"{node.func.id}(…, {node.args[1].value!r})")
+    assert probes == [], ("read the result through its contract "
+                          "(imucalib.models.procedure_result), not by probing:\n"
+                          + "\n".join(probes))

@@ -31,7 +31,8 @@ def test_calibrate_analyses_writes_and_records(tumble_run, tmp_path):
     done = calibrate(tumble_run, out=tmp_path / "out", db=db, operator="tester")
     assert done.procedure.name == "tumble" and done.result.procedure == "tumble"
     names = sorted(p.name for p in done.written)
-    assert names == ["t.IMU-0001.tumble.parameters.csv", "t.IMU-0001.tumble.report.json"]
+    assert names == ["t.IMU-0001.tumble.parameters.csv", "t.IMU-0001.tumble.report.json",
+                     "t.IMU-0001.tumble.result.json"]
     assert all(p.is_file() for p in done.written)
     assert done.record is not None and done.record.startswith("recorded run ")
     assert done.record_error is None
@@ -43,7 +44,7 @@ def test_calibrate_analyses_writes_and_records(tumble_run, tmp_path):
     assert entry.procedure == "tumble"
     recorded = {r.name: (r.value, r.std) for r in entry.parameters}
     rows = done.result.parameter_rows()  # type: ignore[attr-defined]
-    assert recorded == {n: (v, s) for n, v, s, _ in rows} and "K1_x_head_z" in recorded
+    assert recorded == {r.name: (r.value, r.std) for r in rows} and "K1_x_head_z" in recorded
 
 
 def test_record_false_writes_files_only_and_formats_may_depend_on_the_result(tumble_run,

@@ -29,11 +29,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import CalibrationError, InvalidInputError
+from imucalib.models.result import Provenance
 
 if TYPE_CHECKING:
     from imucalib.procedures.common.procedure import Procedure, ProcedureResult
 
-__all__ = ["Calibration", "calibrate", "procedure_of"]
+__all__ = ["Calibration", "calibrate", "procedure_of", "provenance_of"]
 
 #: Suffixes of a Recording (every other file is a log that a procedure reads itself).
 RECORDING_SUFFIXES = (".h5", ".hdf5")
@@ -96,6 +97,31 @@ def procedure_of(data: str | os.PathLike[str], name: str | None = None) -> Proce
     return procedure
 
 
+def provenance_of(path: Path) -> Provenance:
+    """Return where a result of `path` comes from: the file, its SHA-256, its plan's hash.
+
+    For a result that carries no provenance of its own (a calibration carries its own); the
+    plan hash is the recording's (:class:`~imucalib.io.context.RecordingContext`), empty for a
+    log that is no Recording.
+    """
+    from datetime import UTC, datetime
+
+    from imucalib import __version__
+    from imucalib.io.hashing import file_sha256
+
+    plan_hash = ""
+    if path.suffix.lower() in (".h5", ".hdf5"):
+        from imucalib.io.context import RecordingContext
+        from imucalib.io.reader import open_recording
+
+        with open_recording(path) as rec:
+            plan_hash = RecordingContext.of(rec.metadata).plan_hash
+    return Provenance(plan_hash=plan_hash, recording=path.name,
+                      recording_sha256=file_sha256(path) if path.is_file() else "",
+                      software_version=__version__,
+                      created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
+
+
 def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
               options: Mapping[str, Any] | None = None, unit: str | None = None,
               more: Sequence[str | os.PathLike[str]] = (),
@@ -155,7 +181,9 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
     try:
         folder.mkdir(parents=True, exist_ok=True)
         chosen = formats(result) if callable(formats) else formats
-        written = write_outputs(result, folder, chosen, name=name or path.stem)
+        written = write_outputs(result, folder, chosen, name=name or path.stem,
+                                provenance=None if result.calibration is not None
+                                else provenance_of(path))
     except OSError as exc:
         raise InvalidInputError(f"cannot write the outputs into {folder}: "
                                 f"{exc.strerror or exc}") from exc

@@ -80,7 +80,7 @@ def test_duplicated_and_unknown_units_in_the_header(tmp_path):
                    "in double quotes: line 1 column 2 (char 1)"),
     (b'{"format": "imucalib-calibration-result", "format_version": 7}',
      "calibration result {p}: format_version 7 is not supported; this imucalib reads versions "
-     "1..3 (a newer version needs a newer imucalib)"),
+     "1..4 (a newer version needs a newer imucalib)"),
 ])
 def test_bad_result_files(tmp_path, content, message):
     path = tmp_path / "bad.json"

@@ -37,7 +37,7 @@ def test_a_raw_count_log_is_calibrated_and_corrected_end_to_end(tmp_path: Path):
     report = json.loads((out / "mpu.IMU.field.report.json").read_text(encoding="utf-8"))
     assert report["accel_form"] == "gravity-norm" and len(report["poses"]) == 25
     assert (out / "mpu.IMU.field.parameters.csv").read_text(encoding="utf-8").startswith(
-        "parameter,value,std_uncertainty,unit\n")
+        "parameter,value,std_uncertainty,unit,std_noise\n")
     # its report (the default PDF): the field process with every fit's χ²/ν, field traceability
     from pypdf import PdfReader
 

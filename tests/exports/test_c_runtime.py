@@ -251,11 +251,10 @@ def test_unsupported_results_are_refused(tmp_path: Path) -> None:
 
 
 def test_output_format_registered(tmp_path: Path) -> None:
-    class Holder:
-        procedure = "p2"
-        result = triad_result(np.random.default_rng(7))
+    from imucalib.models.result_document import stored_from_calibration
 
-    paths = OUTPUT_FORMATS["c-runtime"](Holder(), tmp_path, "rec.U1.p2")
+    holder = stored_from_calibration(triad_result(np.random.default_rng(7)))
+    paths = OUTPUT_FORMATS["c-runtime"](holder, tmp_path, "rec.U1.p2")
     assert {p.relative_to(tmp_path).as_posix() for p in paths} == {
         "rec.U1.p2.c/imucal_params.h", "rec.U1.p2.c/imucalib_runtime.h",
         "rec.U1.p2.c/imucalib_runtime.c"}

@@ -8,9 +8,9 @@ from its documentation) to samples made by imucalib's forward model.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import replace
 from pathlib import Path
-from types import SimpleNamespace
 
 import h5py
 import numpy as np
@@ -33,6 +33,7 @@ from imucalib.exports.intrinsics import (
 )
 from imucalib.exports.outputs import OUTPUT_FORMATS
 from imucalib.models.result import CalibrationResult, triad_parameter_names
+from imucalib.models.result_document import stored_from_calibration
 from imucalib.models.temperature_record import HeldOutOutcome, ParameterTemperatureModel
 from imucalib.models.triad import apply_triad
 
@@ -225,12 +226,13 @@ def test_openvins_and_kalibr_refuse_k2() -> None:
 
 def test_formats_are_registered_and_need_a_calibration(tmp_path: Path) -> None:
     cal = _result(k2=False)
-    wrapped = SimpleNamespace(result=cal, procedure="p1", unit="U")
+    wrapped = stored_from_calibration(cal)
     for fmt in _NEW:
         (path,) = OUTPUT_FORMATS[fmt](wrapped, tmp_path, "n.U.p1")
         assert path.is_file() and path.stat().st_size > 0
-    with pytest.raises(InvalidInputError, match="needs a calibration result"):
-        OUTPUT_FORMATS["mat"](SimpleNamespace(result=None, procedure="allan"), tmp_path, "x")
+    without = dataclasses.replace(wrapped, calibration=None, procedure="allan")
+    with pytest.raises(InvalidInputError, match="'mat' needs a whole triad model; this allan"):
+        OUTPUT_FORMATS["mat"](without, tmp_path, "x")
 
 
 def test_cli_exports_a_result_as_ros_yaml(tmp_path: Path) -> None:
@@ -529,7 +531,7 @@ def test_yaml_floats_without_a_point_load_as_numbers() -> None:
 def test_write_outputs_passes_a_temperature_to_kalibr_and_openvins_only(tmp_path: Path) -> None:
     from imucalib.exports.outputs import write_outputs
 
-    wrapped = SimpleNamespace(result=_temperature_result(), procedure="p1", unit="U")
+    wrapped = stored_from_calibration(_temperature_result())
     (path,) = write_outputs(wrapped, tmp_path, ("openvins-imu",), name="n",  # type: ignore[arg-type]
                             temperature_degc=40.0)
     assert yaml.safe_load(path.read_text("utf-8"))["imu0"]["imucalib_temperature_degc"] == 40.0

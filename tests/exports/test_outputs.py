@@ -11,17 +11,29 @@ import numpy as np
 import pytest
 
 from imucalib.errors import InvalidInputError
-from imucalib.exports.outputs import OUTPUT_FORMATS, write_outputs
+from imucalib.exports.outputs import OUTPUT_FORMATS, formats_of, write_outputs
+from imucalib.models.decision import Decision
+from imucalib.models.procedure_result import ResultDefaults
 from imucalib.models.result import CalibrationResult, triad_parameter_names
+from imucalib.procedures import registry
 
 
 @dataclass
-class _P1Like:
+class _P1Like(ResultDefaults):
     """Stands for a P1Analysis: a calibration result plus a report."""
 
     result: CalibrationResult
     procedure: str = "p1"
     passed: bool = True
+    notes: tuple[str, ...] = ()
+
+    @property
+    def calibration(self) -> CalibrationResult:
+        return self.result
+
+    @property
+    def decision(self) -> Decision:
+        return Decision(passed=self.passed, rule="a stand-in rule")
 
     @property
     def fit_quality(self) -> tuple:
@@ -48,9 +60,10 @@ def _p1_like() -> _P1Like:
 
 def test_p1_outputs_are_named_after_the_recording_unit_and_procedure(tmp_path):
     result = _p1_like()
-    written = write_outputs(result, tmp_path / "new", name="run")
+    # P1's residual figure needs its analysis (its windows): not a stand-in's
+    formats = [f for f in registry.get("p1").outputs if f != "residuals-png"]
+    written = write_outputs(result, tmp_path / "new", formats, name="run")
     assert [p.name for p in written] == ["run.IMU-7.p1.result.json", "run.IMU-7.p1.report.json",
-                                         "run.IMU-7.p1.residuals.png",
                                          "run.IMU-7.p1.report.pdf"]
     back = CalibrationResult.from_json(written[0].read_text())
     np.testing.assert_array_equal(back.values, result.result.values)
@@ -61,7 +74,7 @@ def test_parameters_csv_on_request(tmp_path):
     result = _p1_like()
     (path,) = write_outputs(result, tmp_path, ["parameters-csv"], name="run")
     rows = list(csv.reader(path.open()))
-    assert rows[0] == ["parameter", "value", "std_uncertainty", "unit"]
+    assert rows[0] == ["parameter", "value", "std_uncertainty", "unit", "std_noise"]
     assert len(rows) == 13 and rows[1][0] == result.result.param_names[0]
     assert float(rows[12][1]) == pytest.approx(2e-5)
     assert float(rows[12][2]) == pytest.approx(np.sqrt(12e-10))
@@ -71,9 +84,21 @@ def test_refuses_unknown_and_impossible_formats(tmp_path):
     result = _p1_like()
     with pytest.raises(InvalidInputError, match=r"unknown output format\(s\) \['pdf'\]"):
         write_outputs(result, tmp_path, ["pdf"], name="run")
-    with pytest.raises(InvalidInputError, match="'kalibr-yaml' needs a noise characterisation"):
+    # a noise format is Allan's own: not one a P1 result has, and refused for one read back
+    with pytest.raises(InvalidInputError,
+                       match=r"unknown output format\(s\) \['kalibr-yaml'\] for a p1 result"):
         write_outputs(result, tmp_path, ["kalibr-yaml"], name="run")
-    assert set(OUTPUT_FORMATS) >= {"result-json", "report-json", "noise-json", "figures"}
+    assert set(OUTPUT_FORMATS) >= {"result-json", "report-json", "parameters-csv"}
+    assert not set(OUTPUT_FORMATS) & {"noise-json", "figures", "residuals-png"}
+    assert set(formats_of("allan")) >= {"result-json", "noise-json", "figures"}
+    assert "residuals-png" in formats_of("p1") and "temperature-png" in formats_of("p2")
+    import dataclasses
+
+    from imucalib.models.result_document import stored_from_calibration
+
+    stored = dataclasses.replace(stored_from_calibration(result.result), procedure="allan")
+    with pytest.raises(InvalidInputError, match="'kalibr-yaml' needs a noise characterisation"):
+        write_outputs(stored, tmp_path, ["kalibr-yaml"], name="run")
 
 
 def test_parameters_csv_round_trips_every_value_exactly(tmp_path):
@@ -82,9 +107,9 @@ def test_parameters_csv_round_trips_every_value_exactly(tmp_path):
     cal, std = result.result, result.result.std()
     rows = list(csv.reader(path.open()))[1:]
     assert [r[0] for r in rows] == list(cal.param_names)
-    for name, value, sigma, unit in rows:
+    for name, value, sigma, unit, sigma_noise in rows:
         assert float(value) == cal.value(name) and float(sigma) == std[name]  # repr: exact
-        assert unit == cal.units[name]
+        assert unit == cal.units[name] and float(sigma_noise) == std[name]  # no misfit
 
 
 def test_parameters_csv_gives_the_birge_scaled_sigma_of_a_misfit(tmp_path):

@@ -104,11 +104,11 @@ def edit(doc: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
 
 
 NOT_SUPPORTED = ("calibration result {p}: format_version {v} is not supported; this imucalib "
-                 "reads versions 1..3 (a newer version needs a newer imucalib)")
+                 "reads versions 1..4 (a newer version needs a newer imucalib)")
 
 
 @pytest.mark.parametrize(("path", "value", "message"), [
-    ("format_version", 4, NOT_SUPPORTED.replace("{v}", "4")),
+    ("format_version", 5, NOT_SUPPORTED.replace("{v}", "5")),
     ("format_version", "1", NOT_SUPPORTED.replace("{v}", 'the string "1"')),
     ("format_version", True, NOT_SUPPORTED.replace("{v}", "a boolean")),
     ("notes", ..., "calibration result {p}: field '(top level)': missing field(s) ['notes']"),

@@ -39,12 +39,8 @@ def test_the_v1_mapping_gives_roles_that_p1_and_allan_still_have():
     assert given == {*registry.get("p1").roles, *registry.get("allan").roles}
 
 
-def test_a_moved_constant_is_still_importable_from_its_old_place():
-    from imucalib.procedures.random_drift.roles import RANDOM_DRIFT_POSITION
-    from imucalib.procedures.tumble.roles import TUMBLE_DRIFT, TUMBLE_POSITION
-
-    assert step_roles.TUMBLE_POSITION is TUMBLE_POSITION
-    assert step_roles.TUMBLE_DRIFT is TUMBLE_DRIFT
-    assert step_roles.RANDOM_DRIFT_POSITION is RANDOM_DRIFT_POSITION
-    with pytest.raises(AttributeError):
-        _ = step_roles.P1_GYRO_RATE
+def test_io_holds_no_procedure_role_constant():
+    """The roles live in their procedures' roles.py; the transitional re-exports are gone."""
+    for name in ("TUMBLE_POSITION", "TUMBLE_DRIFT", "RANDOM_DRIFT_POSITION", "P1_GYRO_RATE"):
+        with pytest.raises(AttributeError):
+            getattr(step_roles, name)

@@ -54,9 +54,12 @@ def test_json_round_trip_is_exact(values):
 
 def test_newer_format_and_foreign_documents_are_refused():
     data = json.loads(make_result(np.zeros(33)).to_json())
-    data["format_version"] = RESULT_FORMAT_VERSION + 1
+    data["format_version"] = RESULT_FORMAT_VERSION + 2  # 4 is the result document's
     with pytest.raises(InvalidInputError,
-                       match=f"format_version {RESULT_FORMAT_VERSION + 1} is not supported"):
+                       match=f"format_version {RESULT_FORMAT_VERSION + 2} is not supported"):
+        CalibrationResult.from_dict(data)
+    data["format_version"] = RESULT_FORMAT_VERSION + 1
+    with pytest.raises(InvalidInputError, match="without a whole triad model"):
         CalibrationResult.from_dict(data)
     with pytest.raises(InvalidInputError, match="not an imucalib calibration result"):
         CalibrationResult.from_json('{"format": "something-else"}')

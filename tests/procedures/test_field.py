@@ -36,8 +36,8 @@ def _calibrate(session, **options):
 
 def _z(result, truth: dict[str, float]) -> dict[str, float]:
     """(estimate − truth)/σ (Birge-scaled on a misfit) of every parameter with a truth."""
-    return {n: (v - truth[n]) / s for n, v, s, _ in result.parameter_rows()
-            if n in truth and s > 0}
+    return {r.name: (r.value - truth[r.name]) / r.std for r in result.parameter_rows()
+            if r.name in truth and r.std > 0}
 
 
 @pytest.mark.parametrize(("grade", "noise", "seed"), [

@@ -72,7 +72,8 @@ def test_calibrate_writes_the_report_and_the_parameters(p3_runs, tmp_path):
     assert report["k2_test_naive_g_per_g2"] - report["k2_test_g_per_g2"] > 4e-7
     assert len(report["covariance"]["matrix"]) == 5
     csv_lines = (tmp_path / f"{stem}.parameters.csv").read_text().splitlines()
-    assert csv_lines[0] == "parameter,value,std_uncertainty,unit" and len(csv_lines) == 13
+    assert csv_lines[0] == "parameter,value,std_uncertainty,unit,std_noise"
+    assert len(csv_lines) == 13
     # the test unit asked by name, K1 as inputs instead of the tumble's
     res = CliRunner().invoke(app, ["calibrate", str(p3_runs[1]), "--out", str(tmp_path), "-q",
                                    "--k1", "REF-A=1.0,1e-5", "--k1", "REF-B=1.0,1e-5",

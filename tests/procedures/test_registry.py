@@ -61,8 +61,19 @@ class _Dummy:
         raise NotImplementedError
 
     def analyze(self, recording, *, unit=None, options=None):
-        return SimpleNamespace(procedure=self.name, unit=unit or "IMU-1", passed=None,
-                               fit_quality=(), to_dict=lambda: {"ok": 1})
+        from imucalib.models.decision import no_decision
+        from imucalib.models.procedure_result import ResultDefaults
+
+        name, serial = self.name, unit or "IMU-1"
+
+        class _Result(ResultDefaults):
+            procedure, unit, fit_quality, notes = name, serial, (), ()
+            decision = no_decision("a test procedure")
+
+            def to_dict(self):
+                return {"ok": 1}
+
+        return _Result()
 
     def report_content(self, result, meta):
         raise NotImplementedError
@@ -75,6 +86,12 @@ class _Dummy:
 
     def summary_report(self, batch, *, recordings=None, report_ids=None):
         raise NotImplementedError
+
+    def output_writers(self):
+        return {}
+
+    def batch_outputs(self, batch, folder, stem):
+        return []
 
 
 def test_register_a_new_procedure(monkeypatch):

@@ -58,6 +58,12 @@ class Good:
     def summary_report(self, batch, *, recordings=None, report_ids=None):
         raise NotImplementedError
 
+    def output_writers(self):
+        return {}
+
+    def batch_outputs(self, batch, folder, stem):
+        return []
+
 ALPHA = Good("alpha-test")
 ZETA = Good("zeta-test")
 MISNAMED = Good("something-else")

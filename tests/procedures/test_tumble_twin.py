@@ -204,7 +204,7 @@ def test_its_report_prints_every_row_with_its_expanded_uncertainty(
     (table,) = doc.section("5.").tables
     rows = {r[0]: r[1:] for r in table.rows}
     assert len(rows) == len(result.parameter_rows()) == 6 * 7 + 15
-    for name, value, std, unit in result.parameter_rows():
+    for name, value, std, unit, _ in result.parameter_rows():
         # every row in the display unit of its kind; a scale factor (K1, K) as K − 1
         shown_unit, scale = display_unit(name, unit)
         is_scale = unit == "1" and (name.startswith("K1_") or name.split("_")[1] == "K")

@@ -59,20 +59,31 @@ def test_amendment_keeps_the_original_and_history_shows_both(records, make_resul
     assert records.verify() == []
 
 
-def test_any_result_with_parameter_rows_is_accepted(records):
-    class Minimal:
-        procedure, model = "allan", "noise"
+def test_any_result_of_the_contract_is_accepted(records):
+    """A procedure's result (models/procedure_result.py) is stored as its result document."""
+    from imucalib.models.decision import no_decision
+    from imucalib.models.procedure_result import ResultDefaults
+    from imucalib.models.reported import ReportedParameter
+
+    class Minimal(ResultDefaults):
+        procedure, unit, fit_quality, notes = "allan", "", (), ()
+        decision = no_decision("no limits")
 
         def parameter_rows(self):
-            return [("arw", 1e-3, 1e-4, "rad/s^0.5"), {"name": "vrw", "value": 2e-3,
-                                                       "std": 2e-4, "unit": "m/s^1.5"}]
+            return [ReportedParameter("arw", 1e-3, 1e-4, "rad/s^0.5", 1e-4),
+                    ReportedParameter("vrw", 2e-3, 2e-4, "m/s^1.5", 1e-4)]
+
+        def to_dict(self):
+            return {"kind": "minimal"}
 
     run = records.record_run(plan_name="allan")
     rid = records.record_result(run, Minimal(), serial="IMU-9")
     entry = records.result(rid)
     assert [(p.name, p.value, p.std) for p in entry.parameters] == [
         ("arw", 1e-3, 1e-4), ("vrw", 2e-3, 2e-4)]
-    assert records.result_document(rid) == {}
+    document = records.result_document(rid)
+    assert document["format_version"] == 4 and document["details"] == {"kind": "minimal"}
+    assert [p["std_noise"] for p in document["parameters"]] == [1e-4, 1e-4]
     with pytest.raises(InvalidInputError, match="names no unit"):
         records.record_result(run, Minimal())
 
@@ -96,14 +107,24 @@ def test_unknown_things_are_named(records, make_result):
 
 def test_a_parameter_that_was_not_estimated_is_left_out_of_the_rows(tmp_path):
     """A procedure may report a quantity as NaN (not estimated): SQLite would store NULL."""
-    from types import SimpleNamespace
-
+    from imucalib.models.decision import Decision
+    from imucalib.models.procedure_result import ResultDefaults
+    from imucalib.models.reported import ReportedParameter
     from imucalib.records import open_records
 
-    result = SimpleNamespace(procedure="p3", sensor_id="T-1", model="", passed=True,
-                             parameter_rows=lambda: [("K2", 7e-6, 1.5e-8, "1/(m/s^2)"),
-                                                     ("nominal_radius", float("nan"),
-                                                      float("nan"), "m")])
+    class P3Like(ResultDefaults):
+        procedure, unit, fit_quality, notes = "p3", "T-1", (), ()
+        decision = Decision(passed=True, rule="r")
+
+        def parameter_rows(self):
+            nan = float("nan")
+            return [ReportedParameter("K2", 7e-6, 1.5e-8, "1/(m/s^2)", 1.5e-8),
+                    ReportedParameter("nominal_radius", nan, nan, "m", nan)]
+
+        def to_dict(self):
+            return {}
+
+    result = P3Like()
     with open_records(str(tmp_path / "r.db")) as records:
         run = records.record_run(procedure="p3")
         rid = records.record_result(run, result, passed=True)

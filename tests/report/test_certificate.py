@@ -35,6 +35,7 @@ from imucalib.report.pdf import write_report_pdf
 
 from ._gum import expected_cells as _expected_cells
 from ._gum import shown_p1 as _shown
+from ._standins import stand_in
 
 
 @pytest.mark.parametrize(("value", "big_u", "cells"), [
@@ -144,16 +145,14 @@ def test_the_id_is_the_same_for_the_same_result_and_differs_for_another(certific
     # another option, another result: another id
     per_axis = registry.get("p1").analyze(consumer_run, options={"model": "per-axis"})
     assert build_report(per_axis).report_id != again.report_id
-    other = SimpleNamespace(fit_quality=(), procedure="earth-rate-bias", unit="IMU-0001",
-                            passed=None, to_dict=lambda: {"x": 1},
-                            parameter_rows=lambda: [("bias_x", 0.0, 1.0, "rad/s")])
+    other = stand_in("earth-rate-bias", "IMU-0001", [("bias_x", 0.0, 1.0, "rad/s")],
+                     to_dict=lambda: {"x": 1})
     assert build_report(other).report_id != again.report_id
 
 
 def test_a_result_with_parameter_rows_gets_the_same_rule():
     rows = [("gyro_bias_x", 1.23456e-5, 3.21e-7, "rad/s"), ("K2", -12.345, 4.98, "1/g")]
-    result = SimpleNamespace(fit_quality=(), procedure="earth-rate-bias", unit="U-1", passed=False,
-                             to_dict=lambda: {"rows": rows}, parameter_rows=lambda: rows)
+    result = stand_in("earth-rate-bias", "U-1", rows, passed=False, to_dict=lambda: {"rows": rows})
     doc = build_report(result)
     table = doc.section("5.").tables[0]
     # a triad parameter in its display unit (1.23456e-5 rad/s = 2.5465 °/h, U = 0.1324 °/h),
@@ -163,7 +162,7 @@ def test_a_result_with_parameter_rows_gets_the_same_rule():
     assert [s.title for s in doc.sections] == list(SECTION_TITLES)
     assert doc.section("6.").paragraphs[0].startswith("Decision: FAIL")
     with pytest.raises(InvalidInputError, match="no parameter rows"):
-        build_report(SimpleNamespace(fit_quality=(), procedure="x", unit="u", passed=None))
+        build_report(stand_in("x", "u"))
 
 
 def test_p1_writes_the_pdf_by_default(certificate):
@@ -257,8 +256,7 @@ def test_every_procedure_the_generic_content_reports_cites_an_existing_page():
     assert "field" in generic and "p3" in generic
     for name in generic:
         assert (root / "docs" / f"{name}.md").is_file(), name
-        doc = build_report(SimpleNamespace(fit_quality=(), procedure=name, unit="U", passed=None,
-                                           to_dict=lambda: {}, parameter_rows=lambda: rows))
+        doc = build_report(stand_in(name, "U", rows))
         assert f"(docs/{name}.md)." in doc.section("4.").paragraphs[0]
         assert registry.get(name).description.rstrip(".")[:40] in doc.section("4.").paragraphs[0]
 

@@ -25,7 +25,7 @@ from imucalib.cli import app
 from imucalib.errors import MissingSegmentError
 from imucalib.exports.outputs import write_outputs
 from imucalib.exports.report import build_report, build_summary_report
-from imucalib.models.result import CalibrationResult
+from imucalib.models.result_document import load_result
 from imucalib.procedures.p2.analysis import failed_unit
 from imucalib.procedures.p2.batch import P2BatchResult, analyze_p2
 from imucalib.records.calibrations import record_calibration
@@ -111,9 +111,7 @@ def test_a_unit_report_states_each_temperature_model_and_draws_them(small):
         ok = unit.compensated_error[key] <= unit.error_limits[key]
         assert row[3] == ("pass" if ok else "FAIL")
     # the unit's result file alone (imucalib report RESULT) states the same models
-    cal = CalibrationResult.load(small.out / "small.U1.p2.result.json")
-    bare = build_report(SimpleNamespace(result=cal, procedure="p2", unit="U1", passed=None,
-                                        fit_quality=cal.fit_quality))
+    bare = build_report(load_result(small.out / "small.U1.p2.result.json"))
     again = next(t for t in bare.section("5.").tables if t.title.startswith("temperature"))
     assert again.rows == models.rows
     assert any("T0 = 25 °C" in p for p in bare.section("4.").paragraphs)

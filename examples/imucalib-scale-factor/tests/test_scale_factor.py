@@ -1,4 +1,4 @@
-"""The example's own checks: the fit on known numbers and the plan's shape.
+"""The example's own checks: the fit on known numbers, the plan's shape, the result contract.
 
 Run with the package importable, e.g. ``PYTHONPATH=examples/imucalib-scale-factor/src pytest
 examples/imucalib-scale-factor/tests`` from imucalib's checkout, or after installing it.
@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from imucalib.errors import ConfigurationError, InsufficientExcitationError
+from imucalib.models.reported import ReportedParameter
 from imucalib.plan.schema import RateStep
 from imucalib.procedures.common.procedure import Procedure, ProcedureResult
 from imucalib_scale_factor.analysis import ScaleFactorResult, fit_scale_factor
@@ -46,4 +47,10 @@ def test_the_plan_turns_about_z_both_ways_and_satisfies_the_protocol() -> None:
                                quality=(fit_scale_factor([1.0, -1.0, 2.0], [1.0, -1.0, 2.0],
                                                          [1.0, 1.0, 1.0])[3],))
     assert isinstance(result, ProcedureResult)
-    assert [r[0] for r in result.parameter_rows()] == ["gyro_K1_z", "gyro_bias_z"]
+    rows = result.parameter_rows()
+    assert all(isinstance(r, ReportedParameter) for r in rows)
+    assert [r.name for r in rows] == ["gyro_K1_z", "gyro_bias_z"]
+    assert [(r.std, r.std_noise) for r in rows] == [(1e-6, 1e-6)] * 2  # no misfit: equal
+    # no acceptance limits: an explicit no decision; no triad model, no triad parameters
+    assert result.passed is None and result.decision.verdict == "NO DECISION"
+    assert result.calibration is None and result.triad_parameters()[0] == []

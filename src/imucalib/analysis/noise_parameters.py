@@ -10,7 +10,7 @@ bias as a random walk ḃ = σ_b·w(t) (docs/noise.md §5). From the Allan fits
 one number per triad: the largest axis (``combine="max"``, conservative) or the RMS over axes. A
 random walk that the fit did not detect is given as its 1σ scale (the uncertainty of the absent
 term) and noted: a filter needs a non-zero value. The files are written by
-:mod:`imucalib.exports.noise`.
+:mod:`imucalib.procedures.allan.noise_exports`.
 
 Contents
 --------

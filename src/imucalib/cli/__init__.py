@@ -25,6 +25,8 @@ Commands
                                    ``calibrate PROCEDURE --help`` lists them
 ``allan DATA``                     noise terms of a bare static log (CSV, ROS CSV or .h5)
 ``apply RESULT DATA --out CSV``    correct a recording's IMU stream or a CSV file
+``combine RESULT… --out FILE``     fuse several tests' triad parameters into one result file
+``schema result``                  the JSON Schema of the result file (format version 4)
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 ``records list|show|history|…``    the calibration records database (docs/records.md)
 ``report RESULT|RECORDING``        the calibration report (certificate) as PDF or HTML; an
@@ -45,6 +47,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     recording,
     records,
     report,
+    results,
     run,
     station,
     twin,

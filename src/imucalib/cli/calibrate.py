@@ -304,6 +304,11 @@ def apply(
 ) -> None:
     """Correct a recording's IMU stream, or a CSV file, with a calibration result.
 
+    Any procedure's result file: one with a whole triad model (P1, P2, field, ``imucalib
+    combine``) applies it; one with part of a triad model (a classical test) applies what it
+    estimated, the triad's other parameters nominal (zero), and says so; a noise
+    characterisation has no model and is refused.
+
     A CSV/text file is read in its own layout through the import options (as ``imucalib
     segments`` reads it, docs/import.md) and corrected chunk by chunk, so a log larger than
     memory is corrected; the corrected CSV is in SI with canonical column names.
@@ -317,11 +322,13 @@ def apply(
 
     from imucalib.io.import_spec import ImportSpec, iter_imu_table
     from imucalib.models.correct import TemperatureRate, correct_imu_frame
-    from imucalib.models.result import CalibrationResult
+    from imucalib.models.result_document import applicable_calibration, load_result
 
     try:
         spec = import_options.spec()
-        result = CalibrationResult.load(result_path)
+        result, nominal = applicable_calibration(load_result(result_path))
+        for note in nominal:
+            console.print(f"note: {note}", highlight=False, soft_wrap=True)
         accel_file = import_options.given["accel_file"]
         _check_out(out, result_path, data, *([accel_file] if accel_file else []))
         n = 0

@@ -54,8 +54,9 @@ def export(
     stream: Annotated[str | None, typer.Option(
         help="Stream as DEVICE/UNIT, e.g. imu/IMU-0001 (a recording).")] = None,
     fmt: Annotated[str | None, typer.Option(
-        "--format", help="For a result: c-runtime (a C99 header and library that apply it "
-                         "in firmware, docs/c-runtime.md), parameters-csv, result-json, mat, "
+        "--format", help="For a result: result-json (the result file, format version 4), "
+                         "parameters-csv, report-pdf, report-html, c-runtime (a C99 header "
+                         "and library that apply it in firmware, docs/c-runtime.md), mat, "
                          "mat73, ros-yaml, kalibr-imu or openvins-imu (docs/exports.md).")]
     = None,
     temperature: Annotated[float | None, typer.Option(
@@ -116,14 +117,11 @@ def export(
 
 def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: float | None
                    ) -> None:
-    """Write a calibration result in `fmt` into the folder `out` (at `temperature_degc`)."""
-    from types import SimpleNamespace
+    """Write a result file in `fmt` into the folder `out` (at `temperature_degc`)."""
+    from imucalib.exports.outputs import OUTPUT_FORMATS, TEMPERATURE_FORMATS, write_outputs
+    from imucalib.models.result_document import load_result
 
-    from imucalib.exports.outputs import TEMPERATURE_FORMATS, write_outputs
-    from imucalib.models.result import CalibrationResult
-
-    allowed = ("c-runtime", "parameters-csv", "result-json", "mat", "mat73", "ros-yaml",
-               "kalibr-imu", "openvins-imu")
+    allowed = tuple(f for f in OUTPUT_FORMATS if f != "report-json")
     try:
         if fmt not in allowed:
             raise InvalidInputError(f"--format must be one of {', '.join(allowed)} for a "
@@ -133,11 +131,9 @@ def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: flo
                 f"--temperature applies to --format {' or '.join(TEMPERATURE_FORMATS)} only; "
                 f"{fmt} holds the result as it is (mat, mat73 and ros-yaml carry its "
                 "temperature models)")
-        cal = CalibrationResult.load(path)
-        wrapped = SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id,
-                                  passed=None, fit_quality=tuple(cal.fit_quality))
+        result = load_result(path)
         out.mkdir(parents=True, exist_ok=True)
-        written = write_outputs(wrapped, out, formats=(fmt,), name=path.name.split(".")[0],
+        written = write_outputs(result, out, formats=(fmt,), name=path.name.split(".")[0],
                                 temperature_degc=temperature_degc)
     except CalibrationError as exc:
         raise fail(exc) from exc

@@ -230,13 +230,17 @@ def amend(result_id: Annotated[int, typer.Argument(help="The result replaced.")]
           new_result: Annotated[Path, typer.Argument(help="The new result JSON.")],
           reason: Annotated[str, typer.Option(help="Why (recorded).")],
           db: Db = None) -> None:
-    """Record a new version of a result; the original stays, `history` shows both."""
-    from imucalib.models.result import CalibrationResult
+    """Record a new version of a result; the original stays, `history` shows both.
+
+    The new result file (any procedure's, docs/procedures.md "The result file") keeps its
+    decision: a FAIL stays a FAIL.
+    """
+    from imucalib.models.result_document import load_result
 
     try:
-        cal = CalibrationResult.load(new_result)
+        result = load_result(new_result)
         with _open(db) as records:
-            rid = records.amend(result_id, cal, reason)
+            rid = records.amend(result_id, result, reason, passed=result.passed)
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(f"result {rid} amends result {result_id} ({reason})", highlight=False)

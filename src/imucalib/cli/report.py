@@ -29,13 +29,9 @@ def _analyse(path: Path, imu: str | None) -> Any:
 
 
 def _from_result_file(path: Path) -> Any:
-    from types import SimpleNamespace
+    from imucalib.models.result_document import load_result
 
-    from imucalib.models.result import CalibrationResult
-
-    cal = CalibrationResult.load(path)
-    return SimpleNamespace(result=cal, procedure=cal.procedure, unit=cal.sensor_id, passed=None,
-                           fit_quality=tuple(cal.fit_quality))
+    return load_result(path)
 
 
 def _run_recording(run_id: int, db: str | None) -> tuple[Path, dict[str, Any]]:
@@ -103,13 +99,13 @@ def report(
             result = _from_result_file(path)
         from imucalib.exports.outputs import file_stem
 
-        units = list(result.results) if hasattr(result, "results") else [result]
+        units = list(result.members) or [result]
         folder = out if out is not None and (len(units) > 1 or run is not None) else None
         stem = path.name.split(".")[0]
         written = []
         ids: dict[str, str] = {}
         for unit_result in units:
-            if getattr(unit_result, "error", ""):
+            if unit_result.error:
                 console.print(f"unit {unit_result.unit}: not calibrated, no report "
                               f"({unit_result.error})", highlight=False, soft_wrap=True)
                 continue

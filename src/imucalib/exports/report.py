@@ -7,8 +7,10 @@ the two: it finds a result's procedure in the registry by the result's ``procedu
 hands its hook to the framework — ``report_content`` for one unit's report (sections 1–5;
 :func:`~imucalib.report.document.assemble_report` adds the conclusion and the appendix),
 ``summary_report`` for a batch's summary (P2: an array or a lot). A result of a procedure not
-installed here (a result file from elsewhere) gets the generic content
-(:mod:`imucalib.report.content_generic`), named by its procedure's name only.
+installed here gets the generic content (:mod:`imucalib.report.content_generic`); a result
+read back from its file (:class:`~imucalib.models.result_document.StoredResult`: the contract
+without the analysis behind it) goes to its procedure like any other, whose content falls back
+to the generic one with the procedure's own description and traceability.
 
 Contents
 --------
@@ -20,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from imucalib.models.procedure_result import ProcedureResult
 from imucalib.report.document import ContentBuilder, ReportDocument, assemble_report
 
 __all__ = ["build_report", "build_summary_report"]
@@ -38,7 +41,7 @@ def _content_of(procedure: str) -> ContentBuilder:
         return content
 
 
-def build_report(result: Any, *, recording: Any = None, review: Any = None,
+def build_report(result: ProcedureResult, *, recording: Any = None, review: Any = None,
                  result_id: int | None = None) -> ReportDocument:
     """Build the report of one unit's procedure result (module docstring).
 
@@ -53,8 +56,8 @@ def build_report(result: Any, *, recording: Any = None, review: Any = None,
         A result the report cannot describe (no parameters, a unit that failed to calibrate,
         a batch), or a malformed review.
     """
-    return assemble_report(result, _content_of(str(getattr(result, "procedure", ""))),
-                           recording=recording, review=review, result_id=result_id)
+    return assemble_report(result, _content_of(result.procedure), recording=recording,
+                           review=review, result_id=result_id)
 
 
 def build_summary_report(batch: Any, *, recordings: Any = None,

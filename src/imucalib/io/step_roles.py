@@ -30,8 +30,6 @@ import re
 from collections.abc import Sequence
 from typing import Final
 
-from imucalib._lazy import lazy_getattr
-
 __all__ = ["MAX_ROLE_LENGTH", "is_role", "role_from_tags", "split_role"]
 
 #: Longest role, in characters (a plan step's ``role`` field).
@@ -139,15 +137,3 @@ def role_from_tags(kind: str, tags: Sequence[str], procedure: str = "") -> str:
     if kind == "rate" and "calibration" in tagset:
         return _V1_P1_GYRO_RATE
     return ""
-
-
-# Transitional: role constants that moved to their procedure's ``roles.py`` and that modules
-# not yet updated still import from here. Resolved on first access from the procedure's own
-# module (no copy of the value here); remove an entry once nothing imports it from here.
-_MOVED: Final = {
-    "RANDOM_DRIFT_POSITION": "imucalib.procedures.random_drift.roles",
-    "TUMBLE_DRIFT": "imucalib.procedures.tumble.roles",
-    "TUMBLE_POSITION": "imucalib.procedures.tumble.roles",
-}
-
-__getattr__ = lazy_getattr(__name__, _MOVED)

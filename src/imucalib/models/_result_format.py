@@ -11,14 +11,17 @@ from typing import Final
 
 from imucalib.conventions import AXES
 
-__all__ = ["MODELS", "RESULT_FORMAT", "RESULT_FORMAT_VERSION", "RTOL", "triad_parameter_names",
-           "triad_parameter_unit"]
+__all__ = ["MODELS", "RESULT_DOCUMENT_VERSION", "RESULT_FORMAT", "RESULT_FORMAT_VERSION", "RTOL",
+           "triad_parameter_names", "triad_parameter_unit"]
 
 RESULT_FORMAT: Final = "imucalib-calibration-result"
 #: Version 2 adds ``fit_quality`` (χ²/ν, expected range, misfit flag per fitted triad); version 3
 #: adds ``temperature_models`` (one per temperature-dependent parameter). Files of versions 1 and
 #: 2 are read with none of what they lack.
 RESULT_FORMAT_VERSION: Final = 3
+#: The version of the one result file of every procedure (:mod:`imucalib.models.result_document`),
+#: whose ``calibration`` holds a calibration result of versions 1–3.
+RESULT_DOCUMENT_VERSION: Final = 4
 MODELS: Final = ("triad", "per-axis")
 #: Relative tolerance of a result's consistency checks: a temperature model's c_0 against the
 #: parameter's value, and (in the reader) symmetry and ``std`` against √diag(covariance).

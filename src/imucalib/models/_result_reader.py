@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from imucalib.errors import InvalidInputError
 from imucalib.models._result_format import (
     MODELS,
+    RESULT_DOCUMENT_VERSION,
     RESULT_FORMAT,
     RESULT_FORMAT_VERSION,
     RTOL,
@@ -155,8 +156,8 @@ class ResultReader:
                 or not 1 <= version <= RESULT_FORMAT_VERSION:
             raise InvalidInputError(
                 f"calibration result {self.source}: format_version {_kind(version)} is not "
-                f"supported; this imucalib reads versions 1..{RESULT_FORMAT_VERSION} (a newer "
-                "version needs a newer imucalib)")
+                f"supported; this imucalib reads versions 1..{RESULT_DOCUMENT_VERSION} (a "
+                "newer version needs a newer imucalib)")
         return version
 
     def names(self, names: list[str], model: str) -> None:

@@ -16,8 +16,9 @@ through it and nothing else (docs/procedures.md, "The result contract"):
 - ``decision``: the one :class:`~imucalib.models.decision.Decision` (``passed`` is its verdict;
   *no decision* said explicitly);
 - ``fit_quality``: each fit's :class:`~imucalib.models.fit_quality.FitQuality`;
-- ``notes``; ``members`` (a batch's per-unit results, empty for one unit) and ``error`` (why a
-  unit of a batch could not be calibrated, empty otherwise);
+- ``notes``; ``provenance`` (where it came from, when it knows); ``members`` (a batch's
+  per-unit results, empty for one unit) and ``error`` (why a unit of a batch could not be
+  calibrated, empty otherwise);
 - :meth:`~ProcedureResult.to_dict`: the whole result, procedure-specific, as JSON-able data.
 
 :class:`ResultDefaults` gives the members most results do not need to write.
@@ -42,7 +43,7 @@ from imucalib.models.reported import ReportedParameter
 if TYPE_CHECKING:
     from imucalib.models.decision import Decision
     from imucalib.models.fit_quality import FitQuality
-    from imucalib.models.result import CalibrationResult
+    from imucalib.models.result import CalibrationResult, Provenance
 
 __all__ = ["ProcedureResult", "ResultDefaults", "TriadParameters", "calibration_rows",
            "no_triad_parameters"]
@@ -91,6 +92,11 @@ class ProcedureResult(Protocol):
         ...
 
     @property
+    def provenance(self) -> Provenance | None:
+        """Where it came from (its calibration's, or the file's it was read from), or None."""
+        ...
+
+    @property
     def members(self) -> tuple[ProcedureResult, ...]:
         """A batch's per-unit results; empty for the result of one unit."""
         ...
@@ -120,7 +126,8 @@ def no_triad_parameters() -> TriadParameters:
 
 def calibration_rows(cal: CalibrationResult) -> list[ReportedParameter]:
     """Return a calibration's parameters as reported rows (σ Birge-scaled per misfit group)."""
-    return [ReportedParameter(n, float(v), cal.sigma(n) * cal.sigma_scale(n),
+    scaled = cal.covariance_scaled  # σ = √diag, as CalibrationResult.std(scaled=True)
+    return [ReportedParameter(n, float(v), math.sqrt(float(scaled[i, i])),
                               str(cal.units.get(n, "")), math.sqrt(float(cal.covariance[i, i])))
             for i, (n, v) in enumerate(zip(cal.param_names, cal.values, strict=True))]
 
@@ -153,6 +160,12 @@ class ResultDefaults:
     def calibration(self) -> CalibrationResult | None:
         """No whole triad model."""
         return None
+
+    @property
+    def provenance(self) -> Provenance | None:
+        """The calibration's provenance, or None."""
+        cal = self.calibration
+        return None if cal is None else cal.provenance
 
     def triad_parameters(self) -> TriadParameters:
         """No triad parameters."""

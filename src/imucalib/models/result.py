@@ -73,6 +73,7 @@ from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
 from imucalib.models._result_format import (
     MODELS,
+    RESULT_DOCUMENT_VERSION,
     RESULT_FORMAT,
     RESULT_FORMAT_VERSION,
     RTOL,
@@ -99,6 +100,7 @@ __all__ = [
     "Provenance",
     "ResidualStats",
     "fit_quality_dict",
+    "read_result_text",
     "triad_parameter_names",
     "triad_parameter_unit",
 ]
@@ -519,12 +521,12 @@ class CalibrationResult:
             and the field.
         """
         if isinstance(data, Mapping) and data.get("format") == RESULT_FORMAT \
-                and data.get("format_version") == 4:  # the result document: its calibration
+                and data.get("format_version") == RESULT_DOCUMENT_VERSION:  # its calibration
             inner = data.get("calibration")
             if not isinstance(inner, Mapping):
                 raise InvalidInputError(
                     f"{source} is a {data.get('procedure', '?')} result without a whole triad "
-                    "model (its `calibration` is null): read it with "
+                    "model (its `calibration` is null or missing): read it with "
                     "imucalib.models.result_document.load_result")
             data = inner
         fields = ResultReader(source).read(data)
@@ -562,24 +564,7 @@ class CalibrationResult:
             text or not valid JSON, or any defect :meth:`from_dict` names.
         """
         p = Path(path)
-        try:
-            with open(p, "rb") as fh:
-                raw = fh.read(MAX_RESULT_BYTES + 1)
-        except OSError as exc:
-            raise InvalidInputError(f"cannot read calibration result {p}: "
-                                    f"{exc.strerror or exc}") from exc
-        if len(raw) > MAX_RESULT_BYTES:
-            raise InvalidInputError(f"calibration result {p} is larger than "
-                                    f"{MAX_RESULT_BYTES // 2**20} MiB; a result is a few "
-                                    "kilobytes of JSON")
-        try:
-            text = raw.decode("utf-8-sig")
-        except UnicodeDecodeError as exc:
-            raise InvalidInputError(
-                f"calibration result {p} is not UTF-8 text: byte 0x{raw[exc.start]:02x} at "
-                f"offset {exc.start} cannot be decoded (expected the JSON `imucalib calibrate` "
-                "writes)") from exc
-        return cls.from_json(text, str(p))
+        return cls.from_json(read_result_text(p), str(p))
 
     def isclose(self, other: CalibrationResult, *, rtol: float = 0.0, atol: float = 0.0
                 ) -> bool:
@@ -587,6 +572,34 @@ class CalibrationResult:
         return (self.param_names == other.param_names and self.model == other.model
                 and np.allclose(self.values, other.values, rtol=rtol, atol=atol)
                 and np.allclose(self.covariance, other.covariance, rtol=rtol, atol=atol))
+
+
+def read_result_text(path: str | os.PathLike[str]) -> str:
+    """Return a result file's text: at most :data:`MAX_RESULT_BYTES`, UTF-8 (a BOM allowed).
+
+    Raises
+    ------
+    InvalidInputError
+        A file that cannot be read, is too large, or is not UTF-8 text (byte and offset named).
+    """
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            raw = fh.read(MAX_RESULT_BYTES + 1)
+    except OSError as exc:
+        raise InvalidInputError(f"cannot read calibration result {p}: "
+                                f"{exc.strerror or exc}") from exc
+    if len(raw) > MAX_RESULT_BYTES:
+        raise InvalidInputError(f"calibration result {p} is larger than "
+                                f"{MAX_RESULT_BYTES // 2**20} MiB; a result is a few "
+                                "kilobytes of JSON")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InvalidInputError(
+            f"calibration result {p} is not UTF-8 text: byte 0x{raw[exc.start]:02x} at "
+            f"offset {exc.start} cannot be decoded (expected the JSON `imucalib calibrate` "
+            "writes)") from exc
 
 
 def _temperature_model_dict(tm: ParameterTemperatureModel) -> dict[str, Any]:

@@ -12,9 +12,10 @@ key                content
 ``parameters``     every reported quantity: ``name``, ``value``, ``std`` (the σ the tool
                    reports: Birge-scaled where its fit is a misfit), ``std_noise`` (before that
                    scaling), ``unit`` (SI); a quantity not estimated has ``null`` σ
-``covariance``     ``{"names", "matrix"}``: the joint covariance of the triad parameters as
-                   reported (those of ``calibration``, else the procedure's triad part), or
-                   ``null`` for a result without one (a noise characterisation)
+``covariance``     ``{"names", "values", "matrix"}``: the triad parameters with their joint
+                   covariance as reported (those of ``calibration``, else the procedure's
+                   triad part, which ``imucalib combine`` fuses), or ``null`` for a result
+                   without one (a noise characterisation)
 ``fit_quality``    each fit's χ², ν, expected range, misfit flag and Birge ratio
 ``decision``       ``passed`` (true, false, or null for *no decision*), the rule, the checks
 ``notes``          what the reader must know
@@ -33,7 +34,8 @@ result`` prints it.
 Contents
 --------
 :data:`RESULT_DOCUMENT_VERSION`, :func:`result_document`, :func:`result_schema`,
-:class:`StoredResult`, :func:`load_result`, :func:`applicable_calibration`
+:class:`StoredResult`, :func:`load_result`, :func:`stored_from_calibration`,
+:func:`applicable_calibration`, :func:`json_data`, :func:`provenance_dict`
 """
 
 from __future__ import annotations
@@ -51,6 +53,7 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InvalidInputError
 from imucalib.models._result_format import (
+    RESULT_DOCUMENT_VERSION,
     RESULT_FORMAT,
     triad_parameter_names,
     triad_parameter_unit,
@@ -60,28 +63,26 @@ from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ProcedureResult, TriadParameters, calibration_rows
 from imucalib.models.reported import ReportedParameter
 from imucalib.models.result import (
-    MAX_RESULT_BYTES,
     CalibrationResult,
     Provenance,
     fit_quality_dict,
+    read_result_text,
 )
 
-__all__ = ["RESULT_DOCUMENT_VERSION", "StoredResult", "applicable_calibration", "load_result",
-           "provenance_dict", "result_document", "result_schema"]
-
-#: The version of the one result document; versions 1–3 are calibration results
-#: (:mod:`imucalib.models.result`), read as the ``calibration`` of a :class:`StoredResult`.
-RESULT_DOCUMENT_VERSION: Final = 4
+__all__ = ["RESULT_DOCUMENT_VERSION", "StoredResult", "applicable_calibration", "json_data",
+           "load_result", "provenance_dict", "result_document", "result_schema",
+           "stored_from_calibration"]
 
 
-def _plain(value: Any) -> Any:
+
+def json_data(value: Any) -> Any:
     """Return `value` as strict JSON data: numpy to Python, non-finite numbers to None."""
     if isinstance(value, Mapping):
-        return {str(k): _plain(v) for k, v in value.items()}
+        return {str(k): json_data(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
+        return [json_data(v) for v in value]
     if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
+        return json_data(value.tolist())
     if isinstance(value, (bool, np.bool_)):
         return bool(value)
     if isinstance(value, (int, np.integer)):
@@ -98,17 +99,19 @@ def provenance_dict(prov: Provenance) -> dict[str, Any]:
     """Return a :class:`~imucalib.models.result.Provenance` as JSON data."""
     return {"plan_hash": prov.plan_hash, "recording_sha256": prov.recording_sha256,
             "recording": prov.recording, "software_version": prov.software_version,
-            "created_utc": prov.created_utc, "details": _plain(dict(prov.details))}
+            "created_utc": prov.created_utc, "details": json_data(dict(prov.details))}
 
 
 def _covariance(result: ProcedureResult) -> dict[str, Any] | None:
     cal = result.calibration
     if cal is not None:
-        return {"names": list(cal.param_names), "matrix": _plain(cal.covariance_scaled)}
-    names, _, cov = result.triad_parameters()
+        return {"names": list(cal.param_names), "values": json_data(cal.values),
+                "matrix": json_data(cal.covariance_scaled)}
+    names, values, cov = result.triad_parameters()
     if not names:
         return None
-    return {"names": list(names), "matrix": _plain(np.asarray(cov, dtype=float))}
+    return {"names": list(names), "values": json_data(np.asarray(values, dtype=float)),
+            "matrix": json_data(np.asarray(cov, dtype=float))}
 
 
 def result_document(result: ProcedureResult, *, provenance: Provenance | None = None
@@ -120,7 +123,7 @@ def result_document(result: ProcedureResult, *, provenance: Provenance | None = 
     result : ProcedureResult
         One unit's result (a batch's members are written one by one).
     provenance : Provenance, optional
-        Where it came from; default: its calibration's, else an empty one.
+        Where it came from; default: the result's own, else an empty one.
 
     Raises
     ------
@@ -131,22 +134,22 @@ def result_document(result: ProcedureResult, *, provenance: Provenance | None = 
         raise InvalidInputError("a result document is of one unit; write a batch's members "
                                 "one by one")
     cal = result.calibration
-    prov = provenance or (cal.provenance if cal is not None else Provenance())
+    prov = provenance or result.provenance or Provenance()
     return {
         "format": RESULT_FORMAT,
         "format_version": RESULT_DOCUMENT_VERSION,
         "procedure": str(result.procedure),
         "unit": str(result.unit),
-        "parameters": [{"name": r.name, "value": _plain(r.value), "std": _plain(r.std),
-                        "std_noise": _plain(r.std_noise), "unit": r.unit}
+        "parameters": [{"name": r.name, "value": json_data(r.value), "std": json_data(r.std),
+                        "std_noise": json_data(r.std_noise), "unit": r.unit}
                        for r in result.parameter_rows()],
         "covariance": _covariance(result),
         "fit_quality": [fit_quality_dict(q) for q in result.fit_quality],
-        "decision": _plain(result.decision.to_dict()),
+        "decision": json_data(result.decision.to_dict()),
         "notes": [str(n) for n in result.notes],
         "provenance": provenance_dict(prov),
         "calibration": None if cal is None else cal.to_dict(),
-        "details": _plain(result.to_dict()),
+        "details": json_data(result.to_dict()),
     }
 
 
@@ -163,6 +166,7 @@ class StoredResult:
     unit: str
     rows: tuple[ReportedParameter, ...]
     covariance_names: tuple[str, ...]
+    covariance_values: NDArray[np.float64]
     covariance: NDArray[np.float64]
     fit_quality: tuple[FitQuality, ...]
     decision: Decision
@@ -192,13 +196,10 @@ class StoredResult:
         return list(self.rows)
 
     def triad_parameters(self) -> TriadParameters:
-        """Return the stored covariance's triad parameters with their values (or none)."""
-        values = {r.name: r.value for r in self.rows}
-        if self.calibration is not None:
-            values.update(self.calibration.as_dict())
+        """Return the stored covariance block's triad parameters (or none)."""
         keep = [i for i, n in enumerate(self.covariance_names) if _is_triad_name(n)]
         names = [self.covariance_names[i] for i in keep]
-        return (names, np.array([values[n] for n in names], dtype=float),
+        return (names, np.asarray(self.covariance_values[keep], dtype=float),
                 np.asarray(self.covariance[np.ix_(keep, keep)], dtype=float))
 
     def to_dict(self) -> dict[str, Any]:
@@ -212,15 +213,23 @@ def _is_triad_name(name: str) -> bool:
         triad, "triad", g_sensitivity=True, k2=True)
 
 
-def _from_calibration(cal: CalibrationResult, source: str) -> StoredResult:
+def stored_from_calibration(cal: CalibrationResult, *, decision: Decision | None = None,
+                            details: Mapping[str, Any] | None = None, source: str = ""
+                            ) -> StoredResult:
+    """Return a calibration as a result of the contract (a file of versions 1–3, a fusion).
+
+    Its parameters are the calibration's (σ Birge-scaled per misfit group), its covariance the
+    scaled one; `decision` defaults to *no decision* (such a calibration holds none).
+    """
     return StoredResult(
         procedure=cal.procedure, unit=cal.sensor_id, rows=tuple(calibration_rows(cal)),
-        covariance_names=tuple(cal.param_names), covariance=cal.covariance_scaled,
+        covariance_names=tuple(cal.param_names), covariance_values=cal.values,
+        covariance=cal.covariance_scaled,
         fit_quality=tuple(cal.fit_quality),
-        decision=no_decision("a calibration result file of format version "
-                             f"{cal.format_version} holds no decision"),
+        decision=decision or no_decision(
+            f"a calibration result of format version {cal.format_version} holds no decision"),
         notes=tuple(cal.notes), provenance=cal.provenance, calibration=cal,
-        details={}, source=source)
+        details=dict(details or {}), source=source)
 
 
 def _fail(source: str, where: str, expected: str, got: Any) -> InvalidInputError:
@@ -267,13 +276,20 @@ def _from_document(doc: Mapping[str, Any], source: str) -> StoredResult:
             raise _fail(source, "calibration", "an object or null", doc["calibration"])
         cal = CalibrationResult.from_dict(doc["calibration"], f"{source} (calibration)")
     names: tuple[str, ...] = ()
+    values = np.zeros(0)
     cov = np.zeros((0, 0))
     if doc["covariance"] is not None:
         c = doc["covariance"]
-        if not isinstance(c, Mapping) or not isinstance(c.get("names"), list) \
-                or not isinstance(c.get("matrix"), list):
-            raise _fail(source, "covariance", "{names: [...], matrix: [[...]]} or null", c)
+        if not isinstance(c, Mapping) or not all(isinstance(c.get(k), list) for k in (
+                "names", "values", "matrix")):
+            raise _fail(source, "covariance",
+                        "{names: [...], values: [...], matrix: [[...]]} or null", c)
         names = tuple(_text(n, source, "covariance.names[]") for n in c["names"])
+        values = np.array([_number(v, source, f"covariance.values[{i}]")
+                           for i, v in enumerate(c["values"])], dtype=float)
+        if values.shape != (len(names),):
+            raise _fail(source, "covariance.values", f"{len(names)} numbers (one per name)",
+                        f"{values.size}")
         try:
             cov = np.array(c["matrix"], dtype=float)
         except (TypeError, ValueError):
@@ -309,7 +325,7 @@ def _from_document(doc: Mapping[str, Any], source: str) -> StoredResult:
     return StoredResult(
         procedure=_text(doc["procedure"], source, "procedure"),
         unit=_text(doc["unit"], source, "unit"), rows=tuple(rows), covariance_names=names,
-        covariance=cov,
+        covariance_values=values, covariance=cov,
         fit_quality=tuple(reader.fit_quality(q, f"fit_quality[{i}]")
                           for i, q in enumerate(quality)),
         decision=decision_from_dict(decision, f"result {source}"), notes=tuple(notes),
@@ -326,23 +342,18 @@ def load_result(path: str | os.PathLike[str]) -> StoredResult:
         result, or has a malformed field (named).
     """
     p = Path(path)
+    text = read_result_text(p)
     try:
-        with open(p, "rb") as fh:
-            raw = fh.read(MAX_RESULT_BYTES + 1)
-    except OSError as exc:
-        raise InvalidInputError(f"cannot read result {p}: {exc.strerror or exc}") from exc
-    if len(raw) > MAX_RESULT_BYTES:
-        raise InvalidInputError(f"result {p} is larger than {MAX_RESULT_BYTES // 2**20} MiB; a "
-                                "result is kilobytes of JSON")
-    try:
-        doc = json.loads(raw.decode("utf-8-sig"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-        raise InvalidInputError(f"result {p} is not the JSON of an imucalib result: {exc}"
-                                ) from exc
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"calibration result {p} is not valid JSON: {exc}") from exc
+    except RecursionError as exc:
+        raise InvalidInputError(f"calibration result {p} is not a calibration result: its JSON "
+                                "nests too deeply") from exc
     if isinstance(doc, Mapping) and doc.get("format") == RESULT_FORMAT \
             and doc.get("format_version") == RESULT_DOCUMENT_VERSION:
         return _from_document(doc, str(p))
-    return _from_calibration(CalibrationResult.from_dict(doc, str(p)), str(p))
+    return stored_from_calibration(CalibrationResult.from_dict(doc, str(p)), source=str(p))
 
 
 def applicable_calibration(result: ProcedureResult) -> tuple[CalibrationResult, tuple[str, ...]]:
@@ -454,8 +465,9 @@ def result_schema() -> dict[str, Any]:
                                "unit": {"type": "string"}}}},
             "covariance": {"oneOf": [
                 {"type": "null"},
-                {"type": "object", "required": ["names", "matrix"],
+                {"type": "object", "required": ["names", "values", "matrix"],
                  "properties": {"names": strings,
+                                "values": {"type": "array", "items": {"type": "number"}},
                                 "matrix": {"type": "array", "items": {
                                     "type": "array", "items": {"type": "number"}}}}}]},
             "fit_quality": {"type": "array", "items": fit},

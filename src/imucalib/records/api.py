@@ -38,6 +38,9 @@ from sqlalchemy.orm import Session
 
 from imucalib.errors import InvalidInputError, RecordsError
 from imucalib.io.hashing import file_sha256
+from imucalib.models.procedure_result import ProcedureResult, calibration_rows
+from imucalib.models.result import CalibrationResult
+from imucalib.models.result_document import result_document
 from imucalib.records import chain
 from imucalib.records.canonical import canonical_json
 from imucalib.records.engine import BEGIN_OPTION, make_engine, resolve_url, safe_url, upgrade
@@ -98,39 +101,21 @@ def _json_text(value: Mapping[str, Any] | None, name: str) -> str:
         raise InvalidInputError(f"`{name}` must be JSON-able; got {value!r} ({exc})") from exc
 
 
-def parameter_rows(result: Any) -> list[ParameterRow]:
-    """Return a result's parameters: its ``parameter_rows()`` or a CalibrationResult's fields.
+def parameter_rows(result: ProcedureResult | CalibrationResult) -> list[ParameterRow]:
+    """Return a result's parameters as the records keep them: σ as reported.
 
-    ``parameter_rows()`` may yield :class:`ParameterRow`, ``(name, value, std, unit)`` tuples or
-    mappings with those keys; a CalibrationResult gives its standard uncertainties as reported,
-    Birge-scaled by √(χ²/ν) for a group whose fit is a misfit (its noise-only σ stay in the
-    stored document's covariance). A row whose value or standard uncertainty is not a finite number
-    (a quantity a procedure reports as not estimated: P3's nominal radii, say) is left out of
-    the parameter rows; the result's stored document keeps it.
+    A procedure's result gives its ``parameter_rows()`` (the result contract,
+    :class:`~imucalib.models.procedure_result.ProcedureResult`); a CalibrationResult its
+    parameters with the standard uncertainties as reported, Birge-scaled by √(χ²/ν) for a group
+    whose fit is a misfit (its noise-only σ stay in the stored document's covariance). A row
+    whose value or standard uncertainty is not a finite number (a quantity a procedure reports
+    as not estimated: P3's nominal radii, say) is left out of the parameter rows; the result's
+    stored document keeps it.
     """
-    return [r for r in _parameter_rows(result)
+    rows = (calibration_rows(result) if isinstance(result, CalibrationResult)
+            else result.parameter_rows())
+    return [ParameterRow(r.name, float(r.value), float(r.std), r.unit) for r in rows
             if math.isfinite(r.value) and math.isfinite(r.std)]
-
-
-def _parameter_rows(result: Any) -> list[ParameterRow]:
-    if hasattr(result, "parameter_rows"):
-        rows = []
-        for item in result.parameter_rows():
-            if isinstance(item, ParameterRow):
-                rows.append(item)
-            elif isinstance(item, Mapping):
-                rows.append(ParameterRow(str(item["name"]), float(item["value"]),
-                                         float(item["std"]), str(item.get("unit", ""))))
-            else:
-                name, value, std, unit = item
-                rows.append(ParameterRow(str(name), float(value), float(std), str(unit)))
-        return rows
-    if hasattr(result, "param_names") and hasattr(result, "std"):
-        std = result.std(scaled=True)  # Birge-scaled where its group's fit is a misfit
-        return [ParameterRow(n, float(v), float(std[n]), str(result.units.get(n, "")))
-                for n, v in zip(result.param_names, result.values, strict=True)]
-    raise InvalidInputError("a result must have `parameter_rows()` or be a CalibrationResult; "
-                            f"got {type(result).__name__}")
 
 
 class Records:
@@ -362,12 +347,15 @@ class Records:
         if session.get(Run, run_id) is None:
             raise RecordsError(f"no run with id {run_id} in the records")
         rows = parameter_rows(result)
-        document = result.to_dict() if hasattr(result, "to_dict") else {}
-        row = Result(run_id=run_id, unit_id=unit_id, procedure=str(getattr(result, "procedure",
-                                                                           "")),
-                     model=str(getattr(result, "model", "")), passed=passed,
+        if isinstance(result, CalibrationResult):
+            document, model = result.to_dict(), result.model
+        else:  # the result document (format version 4, imucalib.models.result_document)
+            cal = result.calibration
+            document, model = result_document(result), "" if cal is None else cal.model
+        row = Result(run_id=run_id, unit_id=unit_id, procedure=str(result.procedure),
+                     model=model, passed=passed,
                      verification_json=_json_text(verification, "verification"),
-                     document_json=_json_text(document, "result.to_dict()"), version=version,
+                     document_json=_json_text(document, "the result document"), version=version,
                      replaces_id=replaces, amendment_reason=reason)
         params = [ResultParameter(name=r.name, value=r.value, std=r.std, unit=r.unit)
                   for r in rows]
@@ -387,16 +375,19 @@ class Records:
         Parameters
         ----------
         run_id : int
-        result : CalibrationResult or any object with ``parameter_rows()`` (and optionally
-            ``to_dict()``, ``procedure``, ``model``, ``sensor_id``)
+        result : ProcedureResult or CalibrationResult
+            One unit's result (the result contract); its document is stored (a
+            procedure's result as the version-4 result document).
         passed : bool or None
             The decision: passed, failed, or not decided.
         verification : mapping, optional
             The verification outcome (JSON-able).
         serial : str, optional
-            The unit; default ``result.sensor_id``. A new serial adds the unit.
+            The unit; default the result's (``unit``, a CalibrationResult's ``sensor_id``). A
+            new serial adds the unit.
         """
-        serial = serial or str(getattr(result, "sensor_id", ""))
+        serial = serial or (result.sensor_id if isinstance(result, CalibrationResult)
+                            else str(result.unit))
         if not serial:
             raise InvalidInputError("the result names no unit: give `serial` or a result with "
                                     "`sensor_id`")
@@ -460,9 +451,12 @@ class Records:
                          write=False)
 
     def result_document(self, result_id: int) -> dict[str, Any]:
-        """Return the stored ``to_dict()`` document of a result.
+        """Return the stored document of a result.
 
-        ``CalibrationResult.from_dict`` rebuilds the result from it.
+        A procedure's result document (format version 4,
+        :func:`~imucalib.models.result_document.result_document`) or a CalibrationResult's
+        ``to_dict()``; ``CalibrationResult.from_dict`` rebuilds the calibration from either
+        (when the result has one).
         """
         def work(session: Session) -> dict[str, Any]:
             row = session.get(Result, result_id)

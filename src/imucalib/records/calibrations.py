@@ -10,22 +10,22 @@ Contents
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+
+from imucalib.models.procedure_result import ProcedureResult
 
 __all__ = ["record_calibration"]
 
 
-def record_calibration(result: Any, recording: Path | None, *, db: str | None,
+def record_calibration(result: ProcedureResult, recording: Path | None, *, db: str | None,
                        operator: str = "") -> str:
     """Record a procedure result (and the run behind it) and return one line saying where.
 
-    A result holding a :class:`~imucalib.models.result.CalibrationResult` (``.result``), or
-    one with ``parameter_rows()``, is recorded; a batch (P2) records each unit; a noise
-    characterisation has no parameters with uncertainties to record and is only noted.
+    Each unit's result with reported parameters is recorded as its result document (the result
+    contract; a batch, P2, records each unit that was calibrated); a result without parameters
+    is only noted.
     """
-    units = list(getattr(result, "results", None) or [result])
-    recordable = [u for u in units if getattr(u, "result", None) is not None
-                  or callable(getattr(u, "parameter_rows", None))]
+    units = list(result.members) or [result]
+    recordable = [u for u in units if not u.error and u.parameter_rows()]
     if not recordable:
         return f"not recorded: a {result.procedure} result has no calibrated parameters"
     from imucalib.records.api import open_records
@@ -43,15 +43,9 @@ def record_calibration(result: Any, recording: Path | None, *, db: str | None,
         run_id = records.record_run(plan_name=plan_name, plan_hash=plan_hash,
                                     procedure=str(result.procedure), recording=recording,
                                     operator=operator)
-        ids = []
-        for unit in recordable:
-            cal = getattr(unit, "result", None)
-            ids.append(records.record_result(run_id, cal if cal is not None else unit,
-                                             passed=getattr(unit, "passed", None),
-                                             serial=str(getattr(unit, "unit", "")) or None))
+        ids = [records.record_result(run_id, unit, passed=unit.passed, serial=str(unit.unit))
+               for unit in recordable]
         return (f"recorded run {run_id}, result(s) {', '.join(map(str, ids))} in "
                 f"{records.url}")
     finally:
         records.close()
-
-

@@ -25,11 +25,10 @@ Contents
     The terminal's shared pieces: display units, the generic result table.
 :mod:`imucalib.report.noise_table`
     :func:`~imucalib.report.noise_table.format_noise_table` (the datasheet-style noise table).
-:mod:`imucalib.report.residual_figure`, :mod:`imucalib.report.checks_figure`,
-:mod:`imucalib.report.noise_model_figure`, :mod:`imucalib.report.drift_figure`,
-:mod:`imucalib.report.segments_figure`
-    The shared figures: residuals per window, checks over their limits, a noise model's Allan
-    deviation, drift across recalibrations, a log's segments.
+:mod:`imucalib.report.checks_figure`, :mod:`imucalib.report.noise_model_figure`,
+:mod:`imucalib.report.drift_figure`, :mod:`imucalib.report.segments_figure`
+    The shared figures: checks over their limits, a noise model's Allan deviation, drift
+    across recalibrations, a log's segments.
 
 Each is imported from its module (this package imports nothing eagerly).
 """

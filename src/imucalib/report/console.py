@@ -21,7 +21,6 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
@@ -29,6 +28,7 @@ from rich.table import Column, Table
 
 from imucalib import units
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ProcedureResult
 from imucalib.report.numbers import round_pair
 
 __all__ = ["DISPLAY_UNITS", "display_parameter", "display_unit", "print_fit_quality",
@@ -116,23 +116,25 @@ def print_fit_quality(console: Console, quality: Sequence[FitQuality]) -> None:
         console.print(escape(q.summary()), style=style, highlight=False, soft_wrap=True)
 
 
-def render_generic(console: Console, result: Any, written: Sequence[Path]) -> None:
+def render_generic(console: Console, result: ProcedureResult, written: Sequence[Path]) -> None:
     """Print a result's ``parameter_rows()``, each fit's χ²/ν, its decision and the files.
 
     The ``render_console`` of a procedure without a table of its own (the classical tests, a
-    plug-in): without ``parameter_rows()`` only the decision and the files written.
+    plug-in); a result without parameter rows prints its decision and the files only.
     """
-    rows = getattr(result, "parameter_rows", None)
-    if callable(rows):
+    rows = result.parameter_rows()
+    if rows:
         table = Table("parameter", Column("value", justify="right"),
                       Column("std. uncertainty", justify="right"), "unit",
                       title=f"{result.procedure} {result.unit}")
-        for name, value, sigma, unit in rows():
-            value_text, sigma_text, shown = display_parameter(str(name), float(value),
-                                                              float(sigma), str(unit))
-            table.add_row(escape(str(name)), value_text, sigma_text, escape(shown))
+        for row in rows:
+            value_text, sigma_text, shown = display_parameter(row.name, row.value, row.std,
+                                                              row.unit)
+            table.add_row(escape(row.name), value_text, sigma_text, escape(shown))
         console.print(table)
     print_fit_quality(console, result.fit_quality)
-    verdict = {None: "no decision", True: "PASS", False: "FAIL"}[result.passed]
-    console.print(f"{result.procedure} result for {result.unit}: {verdict}", highlight=False)
+    decision = result.decision  # its notes repeat the misfits printed above
+    failed = f"; failed: {', '.join(decision.failed)}" if decision.failed else ""
+    console.print(f"{result.procedure} result for {result.unit}: {decision.verdict} "
+                  f"({escape(decision.rule)}{escape(failed)})", highlight=False, soft_wrap=True)
     print_written(console, written)

@@ -3,18 +3,21 @@
 The ``report_content`` hook of a procedure without content of its own delegates here, and so
 does one with its own for a calibration result read back from its JSON file; the procedure
 passes its description, its documentation page and, when its references are its own, its
-traceability statement (this module names no procedure). The rows come from the result's
-``parameter_rows()`` (name, value, u, unit) or, for a bare
-:class:`~imucalib.models.result.CalibrationResult`, from its parameters (u Birge-scaled under a
-misfit).
+traceability statement (this module names no procedure). Everything comes from the result
+contract (:class:`~imucalib.models.procedure_result.ProcedureResult`): the rows from
+``parameter_rows()`` (u as reported: Birge-scaled under a misfit), the decision and its failed
+checks, each fit's χ²/ν, the notes, the provenance and, with a calibration, its temperature
+models.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
 from imucalib.errors import InvalidInputError
+from imucalib.models.procedure_result import ProcedureResult
 from imucalib.report.document import (
     COVERAGE_FACTOR,
     SECTION_TITLES,
@@ -34,37 +37,32 @@ from imucalib.report.sections import (
 __all__ = ["content"]
 
 
-def _rows(result: Any, cal: Any) -> list[tuple[str, str, str, str]]:
+def _rows(result: ProcedureResult) -> list[tuple[str, str, str, str]]:
     """(parameter, value, U, unit) rows, each in the display unit of its kind of quantity."""
     from imucalib.report.console import display_parameter
 
-    rows_of = getattr(result, "parameter_rows", None)
-    if callable(rows_of):
-        items = [(str(n), float(v), float(s), str(u)) for n, v, s, u in rows_of()]
-    elif callable(getattr(cal, "std", None)) and hasattr(cal, "param_names"):
-        std = cal.std(scaled=True)  # a calibration result without a procedure's analysis
-        items = [(n, cal.value(n), std[n], cal.units[n]) for n in cal.param_names]
-    else:
+    rows = [r for r in result.parameter_rows() if math.isfinite(r.value)]
+    if not rows:
         raise InvalidInputError(f"a {result.procedure} result has no parameter rows: no report "
                                 "can be built from it")
-    return [(name, *display_parameter(name, value, COVERAGE_FACTOR * sigma, unit))
-            for name, value, sigma, unit in items]
+    return [(r.name, *display_parameter(r.name, r.value, COVERAGE_FACTOR * r.std, r.unit))
+            for r in rows]
 
 
-def _process(result: Any, cal: Any, description: str | None, documentation: str
+def _process(result: ProcedureResult, description: str | None, documentation: str
              ) -> tuple[list[str], bool]:
     """Return the process paragraphs (the procedure, each fit's χ²/ν) and the misfit flag."""
     name = str(result.procedure)
     text = f"Procedure {name}: {description}" if description is not None else f"Procedure {name}"
     paragraphs = [f"{text.rstrip('.')} ({documentation})."]
-    quality = tuple(result.fit_quality)  # a procedure's result, or a CalibrationResult read back
+    quality = tuple(result.fit_quality)
     paragraphs += [q.summary() for q in quality]
     misfit = any(q.misfit for q in quality)
-    paragraphs += [f"Note: {n}" for n in getattr(result, "notes", ()) or ()]
+    paragraphs += [f"Note: {n}" for n in result.notes]
     return paragraphs, misfit
 
 
-def content(result: Any, meta: Mapping[str, Any], *, description: str | None = None,
+def content(result: ProcedureResult, meta: Mapping[str, Any], *, description: str | None = None,
             documentation: str = "its documentation",
             traceability: str | None = None) -> ReportContent:
     """Return sections 1–5 of any result with parameters (module docstring).
@@ -72,7 +70,7 @@ def content(result: Any, meta: Mapping[str, Any], *, description: str | None = N
     Parameters
     ----------
     result : ProcedureResult
-        With ``parameter_rows()``, or a ``CalibrationResult`` as ``result``.
+        Of one unit, from an analysis or read back from its file.
     meta : mapping
         The recording's facts (:func:`~imucalib.report.sections.recording_facts`).
     description : str, optional
@@ -89,25 +87,25 @@ def content(result: Any, meta: Mapping[str, Any], *, description: str | None = N
     InvalidInputError
         A result without parameter rows.
     """
-    cal: Any = getattr(result, "result", None)
-    prov = getattr(cal, "provenance", None) or getattr(result, "provenance", None)
+    cal = result.calibration
+    prov = result.provenance
     table = ReportTable(f"{result.procedure} results of {result.unit}",
                         ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
-                        tuple(_rows(result, cal)))
-    passed = result.passed
-    decision = {None: "No conformity decision was made.",
+                        tuple(_rows(result)))
+    passed = result.decision.passed
+    decision = {None: f"No conformity decision was made ({result.decision.rule}).",
                 True: "Every assessed check passed.", False: "A check failed."}[passed]
-    reasons = list(getattr(result, "reasons", ()) or ())
-    process, misfit = _process(result, cal, description, documentation)
-    details = dict(getattr(prov, "details", {}) or {})
+    reasons = list(result.decision.failed)
+    process, misfit = _process(result, description, documentation)
+    details = dict(prov.details) if prov is not None else {}
     tables = [table]
-    if getattr(cal, "temperature_models", None):
+    if cal is not None and cal.temperature_models:
         tables.append(temperature_model_table(cal))
         process.append(f"The parameters hold at T0 = {cal.reference_temperature_degc:g} °C; "
                        "each temperature model (T1) gives them at other temperatures.")
     sections = (
         object_section(details.get("unit", {"serial": result.unit}), str(result.unit)),
-        equipment_section(meta, None, getattr(prov, "software_version", "") or "—",
+        equipment_section(meta, None, (prov.software_version if prov is not None else "") or "—",
                           statement=traceability),
         environment_section(meta, {}),
         Section(SECTION_TITLES[3], tuple(process)),

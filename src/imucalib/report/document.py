@@ -57,6 +57,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, NoReturn, TypeAlias
 
+from imucalib.models.procedure_result import ProcedureResult
+
 __all__ = ["COVERAGE_FACTOR", "SECTION_TITLES", "ContentBuilder", "ReportContent",
            "ReportDocument", "ReportFigure", "ReportTable", "ReviewStatus", "Section",
            "assemble_report", "issued_now", "no_summary_report", "report_id", "write_report"]
@@ -146,12 +148,17 @@ def _without_analysis_time(data: Any) -> Any:
     return data
 
 
-def report_id(result: Any, *, result_id: int | None = None) -> str:
-    """Return the report's unique id (module docstring): ``IMUCAL-P1-<serial>-<hash>[-R<id>]``."""
-    body = (_without_analysis_time(result.to_dict())
-            if callable(getattr(result, "to_dict", None)) else repr(result))
+def report_id(result: ProcedureResult, *, result_id: int | None = None) -> str:
+    """Return the report's unique id (module docstring): ``IMUCAL-P1-<serial>-<hash>[-R<id>]``.
+
+    The hash is of the result's ``to_dict()`` without analysis times, so a result read back
+    from its file (whose ``details`` are that dict) gets the id of the report written with it.
+    """
+    from imucalib.models.result_document import json_data
+
+    body = _without_analysis_time(json_data(result.to_dict()))
     digest = hashlib.sha256(_canonical_json(body).encode("utf-8")).hexdigest()[:12]
-    serial = re.sub(r"[^A-Za-z0-9]+", "-", str(getattr(result, "unit", "") or "unit")).strip("-")
+    serial = re.sub(r"[^A-Za-z0-9]+", "-", str(result.unit or "unit")).strip("-")
     text = f"IMUCAL-{str(result.procedure).upper()}-{serial or 'unit'}-{digest}"
     return text if result_id is None else f"{text}-R{int(result_id)}"
 
@@ -203,8 +210,10 @@ def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = No
     ----------
     result : ProcedureResult
         One unit's result: a P1 analysis, a P2 unit, a noise characterisation (Allan), a field
-        calibration, or any result with ``parameter_rows()`` or a ``CalibrationResult``.
-        A batch (``results``): its procedure's ``summary_report`` and one report per unit.
+        calibration, any result of the contract
+        (:class:`~imucalib.models.procedure_result.ProcedureResult`), one read back from its
+        file included. A batch (``members``): its procedure's ``summary_report`` and one
+        report per unit.
     content : callable
         Its procedure's ``report_content`` hook (:data:`ContentBuilder`): sections 1–5.
     recording : Recording or path, optional
@@ -228,10 +237,10 @@ def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = No
     from imucalib.errors import InvalidInputError
     from imucalib.report import sections as common
 
-    if hasattr(result, "results"):
+    if result.members:
         raise InvalidInputError("a batch of units gets one report per unit and a summary "
                                 "(build_summary_report); build_report takes one unit's result")
-    if getattr(result, "error", ""):
+    if result.error:
         raise InvalidInputError(f"unit {result.unit} could not be calibrated ({result.error}): "
                                 "there is no result to report")
     meta = common.recording_facts(recording)

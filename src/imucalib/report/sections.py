@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from imucalib.errors import InvalidInputError
+from imucalib.models.result import Provenance
 from imucalib.report.document import (
     COVERAGE_FACTOR,
     SECTION_TITLES,
@@ -268,15 +269,16 @@ def conclusion_section(decision_text: str, passed: bool | None, recs: list[str],
     return Section(SECTION_TITLES[5], tuple(paragraphs))
 
 
-def appendix(meta: Mapping[str, Any], plan: Any, prov: Any, extra: Sequence[tuple[str, str]]
-             ) -> Section:
+def appendix(meta: Mapping[str, Any], plan: Any, prov: Provenance | None,
+             extra: Sequence[tuple[str, str]]) -> Section:
     """Build the appendix: plan name and hash, recording and its SHA-256, software, extras."""
-    plan_hash = getattr(prov, "plan_hash", "") or str(meta.get("plan_hash", "")) or "—"
+    p = prov or Provenance()
+    plan_hash = p.plan_hash or str(meta.get("plan_hash", "")) or "—"
     rows = [("plan name", plan_name(meta, plan)), ("plan hash (SHA-256)", plan_hash),
-            ("recording", getattr(prov, "recording", "") or "—"),
-            ("recording SHA-256", getattr(prov, "recording_sha256", "") or "not hashed"),
-            ("software version", getattr(prov, "software_version", "") or "—"),
-            ("result created (UTC)", getattr(prov, "created_utc", "") or "—"), *extra]
+            ("recording", p.recording or "—"),
+            ("recording SHA-256", p.recording_sha256 or "not hashed"),
+            ("software version", p.software_version or "—"),
+            ("result created (UTC)", p.created_utc or "—"), *extra]
     return Section(SECTION_TITLES[6],
                    ("The raw data are identified by their SHA-256: imucalib recomputes it "
                     "from the recording file.",),

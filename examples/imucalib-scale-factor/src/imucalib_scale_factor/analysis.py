@@ -13,8 +13,13 @@ is solved by weighted least squares (:func:`imucalib.estimation.solve_weighted_l
 fit's χ²/ν is assessed (:func:`imucalib.models.fit_quality.assess_fit`): on a misfit (χ² above
 its 99 % quantile) the standard uncertainties are scaled by the Birge ratio √(χ²/ν).
 
-The result (:class:`ScaleFactorResult`) offers what imucalib's outputs, report and records ask
-of a result: ``procedure``, ``unit``, ``passed``, ``to_dict()`` and ``parameter_rows()``.
+The result (:class:`ScaleFactorResult`) satisfies imucalib's result contract
+(:class:`imucalib.models.procedure_result.ProcedureResult`), which imucalib's result file,
+outputs, report and records read: ``procedure``, ``unit``, ``decision`` (*no decision*: the test
+sets no limits) and ``passed``, ``fit_quality``, ``notes``, ``parameter_rows()`` (each σ as
+reported and before the Birge scaling) and ``to_dict()``; the rest (``calibration``,
+``members``, ``error``, ``triad_parameters()``: none) comes from imucalib's
+:class:`~imucalib.models.procedure_result.ResultDefaults`.
 
 Contents
 --------
@@ -24,7 +29,7 @@ Contents
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -36,7 +41,10 @@ from imucalib import __version__ as imucalib_version
 from imucalib.estimation import solve_weighted_lsq
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.procedure_result import ResultDefaults
+from imucalib.models.reported import ReportedParameter
 from imucalib.models.result import Provenance
 from imucalib.procedures.common.rate_windows import RateProcessing, extract_rate_windows
 from imucalib_scale_factor import __version__
@@ -47,11 +55,17 @@ __all__ = ["ScaleFactorResult", "analyze_scale_factor", "fit_scale_factor"]
 _F64 = NDArray[np.float64]
 #: The parameter names of the CSV, the report and the records (the triad naming of imucalib).
 K1_NAME, BIAS_NAME = "gyro_K1_z", "gyro_bias_z"
+#: The provenance of a result made without a recording (frozen: one instance is shared).
+_NO_PROVENANCE = Provenance()
 
 
 @dataclass(frozen=True)
-class ScaleFactorResult:
+class ScaleFactorResult(ResultDefaults):
     """The z gyro's scale factor and bias of one unit (module docstring).
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult`; ``passed``, ``calibration``
+    (None), ``members``, ``error`` and ``triad_parameters()`` (none: K1 and b stay this test's
+    own quantities) from :class:`~imucalib.models.procedure_result.ResultDefaults`.
 
     Attributes
     ----------
@@ -91,7 +105,9 @@ class ScaleFactorResult:
     residuals_rps: _F64
     quality: tuple[FitQuality, ...]
     earth_rate_up_rps: float = 0.0
-    provenance: Provenance = field(default_factory=Provenance)
+    # a class-level default (not a default_factory): only so does the field override the
+    # ``provenance`` property of ResultDefaults
+    provenance: Provenance = _NO_PROVENANCE
     notes: tuple[str, ...] = ()
     procedure: str = NAME
 
@@ -101,9 +117,11 @@ class ScaleFactorResult:
         return tuple(self.quality)
 
     @property
-    def passed(self) -> bool | None:
-        """No acceptance limits: None (no conformity decision)."""
-        return None
+    def decision(self) -> Decision:
+        """*No decision*: the test sets no acceptance limits (``passed`` is None)."""
+        return no_decision("the scale-factor test has no acceptance limits: K1 and the bias "
+                           "are reported with their standard uncertainties",
+                           notes=tuple(q.summary() for q in self.quality if q.misfit))
 
     def to_dict(self) -> dict[str, Any]:
         """Return everything as JSON-able data (the report JSON, the records' document)."""
@@ -111,7 +129,7 @@ class ScaleFactorResult:
         p = self.provenance
         return {
             "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
-            "k1": self.k1, "k1_std": self.k1_std,
+            "decision": self.decision.to_dict(), "k1": self.k1, "k1_std": self.k1_std,
             "bias_rps": self.bias_rps, "bias_std_rps": self.bias_std_rps,
             "correlation": self.correlation,
             "chi2_per_dof": q.reduced_chi2, "dof": q.dof, "misfit": q.misfit,
@@ -125,10 +143,21 @@ class ScaleFactorResult:
             "notes": list(self.notes),
         }
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """Return (name, value, standard uncertainty, SI unit) of each estimate."""
-        return [(K1_NAME, self.k1, self.k1_std, "1"),
-                (BIAS_NAME, self.bias_rps, self.bias_std_rps, "rad/s")]
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Return K1 and the bias as reported, SI.
+
+        Returns
+        -------
+        list of ReportedParameter
+            ``gyro_K1_z`` [1] and ``gyro_bias_z`` [rad/s]. ``std``: the standard uncertainty
+            reported (:attr:`k1_std`, :attr:`bias_std_rps`: scaled by the Birge ratio
+            √(χ²/ν) on a misfit); ``std_noise``: the same before that scaling (``std`` divided
+            by the fit's ``sigma_scale``), the σ_j propagated. Equal when the fit is no misfit.
+        """
+        scale = self.quality[0].sigma_scale if self.quality else 1.0
+        return [ReportedParameter(K1_NAME, self.k1, self.k1_std, "1", self.k1_std / scale),
+                ReportedParameter(BIAS_NAME, self.bias_rps, self.bias_std_rps, "rad/s",
+                                  self.bias_std_rps / scale)]
 
 
 def fit_scale_factor(input_rps: ArrayLike, output_rps: ArrayLike, se_rps: ArrayLike

@@ -51,7 +51,15 @@ class ScaleFactorProcedure:
     plan_options = option_names(ScaleFactorPlanOptions)
     analysis_options_type = ScaleFactorAnalysisOptions
     analysis_options = option_names(ScaleFactorAnalysisOptions)
-    outputs = ("report-json", "parameters-csv", "report-pdf")
+    outputs = ("result-json", "report-json", "parameters-csv", "report-pdf")
+
+    def output_writers(self) -> Mapping[str, Callable[[Any, Path, str], list[Path]]]:
+        """Return no output format of its own: the shared ones serve."""
+        return {}
+
+    def batch_outputs(self, batch: Any, folder: Path, stem: str) -> list[Path]:
+        """Write nothing: this procedure makes no batch."""
+        return []
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib_scale_factor.plan.generate_scale_factor_plan` of `options`."""

@@ -27,6 +27,15 @@ the stream; values in another physical unit (``deg/s``, ``g``, …) are converte
 
 The result has a versioned JSON form (:meth:`NoiseCharacterization.to_json`); a file from a
 newer format version is refused.
+
+The result contract
+-------------------
+:class:`NoiseCharacterization` is a :class:`~imucalib.models.procedure_result.ProcedureResult`
+(docs/procedures.md, "The result contract"): its parameters are the detected noise terms
+(:meth:`~NoiseCharacterization.parameter_rows`; their σ are those of the GLS fit against the
+Allan covariance, not Birge-scaled, so ``std_noise`` = ``std``, a misfit named in the decision's
+notes); it estimates no triad parameter and has no calibration; its decision is *no decision*
+(:data:`NO_DECISION_REASON`): a noise characterisation has no acceptance limits (docs/noise.md).
 """
 
 from __future__ import annotations
@@ -58,11 +67,16 @@ from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_paramet
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import InvalidInputError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults
+from imucalib.models.reported import ReportedParameter
+from imucalib.models.result import Provenance
 from imucalib.units import parse_unit
 
-__all__ = ["FORMAT_VERSION", "STATIC_STEP_KINDS", "ChannelNoise", "NoiseCharacterization",
-           "SegmentNoise", "analyze_allan_arrays", "analyze_allan_recording"]
+__all__ = ["FORMAT_VERSION", "NO_DECISION_REASON", "STATIC_STEP_KINDS", "ChannelNoise",
+           "NoiseCharacterization", "SegmentNoise", "analyze_allan_arrays",
+           "analyze_allan_recording"]
 
 #: Version of the JSON form of :class:`NoiseCharacterization`.
 FORMAT_VERSION = 1
@@ -70,6 +84,8 @@ FORMAT_VERSION = 1
 STATIC_STEP_KINDS = ("static", "allan")
 _FORMAT_NAME = "imucalib-noise-characterization"
 _SI_UNIT = {"gyro": "rad/s", "accel": "m/s^2"}
+#: Why a noise characterisation decides nothing.
+NO_DECISION_REASON = "a noise characterisation has no acceptance limits"
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,8 +176,12 @@ class SegmentNoise:
 
 
 @dataclass(frozen=True, eq=False)
-class NoiseCharacterization:
-    """Result of :func:`analyze_allan_recording`: one :class:`SegmentNoise` per record."""
+class NoiseCharacterization(ResultDefaults):
+    """Result of :func:`analyze_allan_recording`: one :class:`SegmentNoise` per record.
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult` (module docstring, "The result
+    contract"): no calibration, no triad parameters, *no decision*.
+    """
 
     recording: str  # path of the recording
     device: str
@@ -174,26 +194,42 @@ class NoiseCharacterization:
 
     @property
     def procedure(self) -> str:
-        """``"allan"`` (:class:`~imucalib.procedures.common.procedure.ProcedureResult`)."""
+        """``"allan"``."""
         return "allan"
 
     @property
-    def passed(self) -> None:
-        """None: a noise characterisation decides nothing."""
-        return None
+    def decision(self) -> Decision:
+        """*No decision* (:data:`NO_DECISION_REASON`); each misfit noise fit in its notes."""
+        return no_decision(NO_DECISION_REASON, notes=self.notes)
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Each noise fit that is a misfit: its record, its axis and its χ²/ν."""
+        several = len(self.segments) > 1
+        return tuple(f"{f'record {k} ({seg.label}), ' if several else ''}{ch.axis_name} noise "
+                     f"fit, {ch.fit.quality.summary()}"
+                     for k, seg in enumerate(self.segments) for ch in seg.channels
+                     if ch.fit.quality.misfit)
+
+    @property
+    def provenance(self) -> Provenance:
+        """The recording analysed (its file name), the software and the time."""
+        return Provenance(recording=Path(self.recording).name if self.recording else "",
+                          software_version=self.software_version, created_utc=self.created_utc)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
         """Each channel's noise fit: χ²/ν against the Allan covariance, misfit verdict."""
         return tuple(ch.fit.quality for seg in self.segments for ch in seg.channels)
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
+    def parameter_rows(self) -> list[ReportedParameter]:
         """Return every detected noise term with its standard uncertainty, for the records.
 
-        One row ``(name, value, σ, SI unit)`` per detected term of each channel's fit, named
-        ``<axis>_<term>`` (``gyro_x_N``; docs/noise.md), prefixed ``r<k>.`` by its record's
-        index when the characterisation holds more than one record. A term whose σ is not
-        known is left out (the noise JSON keeps it).
+        One row per detected term of each channel's fit, named ``<axis>_<term>``
+        (``gyro_x_white``; docs/noise.md), prefixed ``r<k>.`` by its record's index when the
+        characterisation holds more than one record. The σ is the GLS fit's against the Allan
+        covariance (not Birge-scaled), so ``std_noise`` = ``std``. A term whose σ is not known
+        is left out (the noise JSON keeps it).
         """
         several = len(self.segments) > 1
         rows = []
@@ -203,8 +239,10 @@ class NoiseCharacterization:
                 for term in ch.fit.terms:
                     if term.detected and math.isfinite(term.value_si) and \
                             math.isfinite(term.std_si):
-                        rows.append((f"{prefix}{ch.axis_name}_{term.name}",
-                                     float(term.value_si), float(term.std_si), term.unit_si))
+                        std = float(term.std_si)
+                        rows.append(ReportedParameter(f"{prefix}{ch.axis_name}_{term.name}",
+                                                      float(term.value_si), std, term.unit_si,
+                                                      std))
         return rows
 
     def to_dict(self) -> dict[str, Any]:

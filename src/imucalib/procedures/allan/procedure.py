@@ -41,7 +41,14 @@ class AllanProcedure(ProcedureDefaults):
     plan_options = option_names(AllanPlanOptions)
     analysis_options_type = AllanAnalysisOptions
     analysis_options = option_names(AllanAnalysisOptions)
-    outputs = ("noise-json", "kalibr-yaml", "openvins-yaml", "noise-table", "figures")
+    outputs = ("result-json", "noise-json", "kalibr-yaml", "openvins-yaml", "noise-table",
+               "figures")
+
+    def output_writers(self) -> Mapping[str, Callable[[Any, Path, str], list[Path]]]:
+        """Return the noise outputs (:data:`~imucalib.procedures.allan.outputs.NOISE_WRITERS`)."""
+        from imucalib.procedures.allan.outputs import NOISE_WRITERS
+
+        return NOISE_WRITERS
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.allan.plan.generate_allan_plan` (its keywords)."""

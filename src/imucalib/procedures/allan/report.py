@@ -8,7 +8,6 @@ and its Allan deviation figure per triad (docs/noise.md).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 from imucalib.report.document import SECTION_TITLES, ReportContent, ReportTable, Section
@@ -24,7 +23,9 @@ __all__ = ["content"]
 
 def content(result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return the noise characterisation's sections 1–5 (None without its segments)."""
-    if not hasattr(result, "segments"):
+    from imucalib.procedures.allan.analysis import NoiseCharacterization
+
+    if not isinstance(result, NoiseCharacterization):  # read back: no Allan curves
         return None
     from imucalib.procedures.allan.figures import plot_allan_triad
     from imucalib.report.noise_table import format_noise_table
@@ -63,9 +64,6 @@ def content(result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
                 tuple(tables), tuple(figures)),
     ]
     recs = ["Use the noise terms in the navigation filter's process noise."]
-    prov = type("Prov", (), {"recording": Path(result.recording).name,
-                             "software_version": result.software_version,
-                             "created_utc": result.created_utc})()
     return ReportContent(tuple(sections), "A noise characterisation makes no conformity "
-                         "decision.", None, tuple(recs), prov)
+                         "decision.", None, tuple(recs), result.provenance)
 

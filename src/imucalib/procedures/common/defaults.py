@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from imucalib.errors import InvalidInputError
@@ -27,6 +28,14 @@ __all__ = ["ProcedureDefaults"]
 
 class ProcedureDefaults(GenericReporting):
     """The generic report, console and summary hooks, and one recording at a time."""
+
+    def output_writers(self) -> Mapping[str, Callable[[Any, Path, str], list[Path]]]:
+        """Return no output format of its own: the shared ones serve."""
+        return {}
+
+    def batch_outputs(self, batch: Any, folder: Path, stem: str) -> list[Path]:
+        """Write nothing: the procedure makes no batch."""
+        return []
 
     def analyze_many(self, recordings: Sequence[Recording | str | os.PathLike[str]], *,
                      units: Sequence[str] | None = None,

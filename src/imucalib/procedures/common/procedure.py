@@ -36,7 +36,10 @@ if TYPE_CHECKING:
     from imucalib.plan.schema import Plan
     from imucalib.report.document import ReportContent, ReportDocument
 
-__all__ = ["Procedure", "ProcedureResult", "accepted_options"]
+__all__ = ["OutputWriter", "Procedure", "ProcedureResult", "accepted_options"]
+
+#: A procedure's writer of one output format: (result, folder, file stem) → the paths written.
+OutputWriter = Callable[[Any, Path, str], list[Path]]
 
 
 @runtime_checkable
@@ -183,6 +186,26 @@ class Procedure(Protocol):
             What :meth:`analyze` returned (a batch for P2).
         written : sequence of Path
             The files written, listed last.
+        """
+        ...
+
+    def output_writers(self) -> Mapping[str, OutputWriter]:
+        """Return the output formats this procedure writes itself, by format name.
+
+        :func:`~imucalib.exports.outputs.write_outputs` writes the formats every result has
+        (:data:`~imucalib.exports.outputs.OUTPUT_FORMATS`: result JSON, parameters CSV,
+        intrinsics, reports) and these (Allan: the noise YAML, tables and figures; P1: the
+        residual figure; P2: the temperature figure). A writer takes (result, folder, file
+        stem) and returns the paths it wrote; none by default
+        (:class:`~imucalib.procedures.common.defaults.ProcedureDefaults`).
+        """
+        ...
+
+    def batch_outputs(self, batch: ProcedureResult, folder: Path, stem: str) -> list[Path]:
+        """Write a batch's own files after its members' (P2: the lot's summary and figure).
+
+        Called by :func:`~imucalib.exports.outputs.write_outputs` for a result with
+        ``members``; `stem` is ``<name>.<batch unit>.<procedure>``. None by default.
         """
         ...
 

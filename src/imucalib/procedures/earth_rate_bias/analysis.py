@@ -18,15 +18,17 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
@@ -45,7 +47,6 @@ from imucalib.procedures.earth_rate_bias.roles import EARTH_RATE_BIAS_POSITION
 
 __all__ = ["EarthRateBiasAxis", "EarthRateBiasResult", "analyze_earth_rate_bias"]
 
-_F64 = NDArray[np.float64]
 _AXES = "xyz"
 #: rad/s → °/h
 DPH_PER_RPS = 180.0 / math.pi * 3600.0
@@ -79,48 +80,86 @@ class EarthRateBiasAxis:
 
 
 @dataclass(frozen=True)
-class EarthRateBiasResult:
-    """The Earth-rate bias test's result (the results contract of docs/procedures.md)."""
+class EarthRateBiasResult(ResultDefaults):
+    """The Earth-rate bias test's result (the result contract, docs/procedures.md).
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult`: the gyro biases, part of the
+    triad model (no ``calibration``; :meth:`triad_parameters` for ``imucalib combine``), *no
+    decision*, no fit with redundancy.
+
+    Attributes
+    ----------
+    unit : str
+        The IMU.
+    axes : tuple of EarthRateBiasAxis
+        Per gyro axis x, y, z.
+    latitude_deg : float
+        The recorded latitude. [°]
+    windows : list of StaticWindow
+        The reduced positions.
+    notes : tuple of str
+        What was assumed; the axes whose methods differ by more than 3 σ.
+    procedure : str
+        ``"earth-rate-bias"``.
+    """
 
     unit: str
     axes: tuple[EarthRateBiasAxis, ...]
     latitude_deg: float
     windows: list[StaticWindow]
-    notes: list[str] = field(default_factory=list)
+    notes: tuple[str, ...] = ()
     procedure: str = "earth-rate-bias"
-    passed: bool | None = None
+
+    @property
+    def decision(self) -> Decision:
+        """*No decision*: the plan gives no acceptance limits."""
+        return no_decision("the Earth-rate bias test has no acceptance limits: the plan gives "
+                           "none; both methods' biases are reported with their standard "
+                           "uncertainties and compared (z)")
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
         """None: the methods are closed forms of window means, no fit with redundancy."""
         return ()
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
-        """(gyro_bias_x/y/z from the up/down method, values, diagonal covariance). [rad/s]"""
+    def triad_parameters(self) -> TriadParameters:
+        """Return (gyro_bias_x/y/z from the up/down method, values, diagonal covariance). [rad/s]
+
+        The covariance as reported (no fit, nothing Birge-scaled): the σ of the rows
+        ``gyro_bias_i`` of :meth:`parameter_rows`.
+        """
         values = np.array([a.up_down.value_rps for a in self.axes])
         cov = np.diag([a.up_down.std_rps**2 for a in self.axes])
         return [f"gyro_bias_{i}" for i in _AXES], values, cov
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, standard uncertainty, unit) of every estimate, SI."""
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Return every estimate as reported, SI (5 per axis).
+
+        Returns
+        -------
+        list of ReportedParameter
+            Per axis: ``gyro_bias_i`` (up/down (2), the one handed on),
+            ``gyro_bias_i_four_position`` (1), ``gyro_half_difference_i`` (3),
+            ``latitude_from_gyro_i`` (4) [deg], ``gyro_scale_from_earth_rate_i`` (6) [1].
+            ``std``: the σ of the closed forms, propagated from the windows' standard errors;
+            ``std_noise``: the same σ (no fit, so no Birge scaling: the two are equal).
+        """
         rows = []
         for i, a in zip(_AXES, self.axes, strict=True):
-            rows += [(f"gyro_bias_{i}", a.up_down.value_rps, a.up_down.std_rps, "rad/s"),
-                     (f"gyro_bias_{i}_four_position", a.four_position.value_rps,
-                      a.four_position.std_rps, "rad/s"),
-                     (f"gyro_half_difference_{i}", a.half_difference.value_rps,
-                      a.half_difference.std_rps, "rad/s"),
-                     (f"latitude_from_gyro_{i}", a.latitude_deg.value_rps,
-                      a.latitude_deg.std_rps, "deg"),
-                     (f"gyro_scale_from_earth_rate_{i}", a.scale.value_rps, a.scale.std_rps,
-                      "1")]
+            for name, est, unit in ((f"gyro_bias_{i}", a.up_down, "rad/s"),
+                                    (f"gyro_bias_{i}_four_position", a.four_position, "rad/s"),
+                                    (f"gyro_half_difference_{i}", a.half_difference, "rad/s"),
+                                    (f"latitude_from_gyro_{i}", a.latitude_deg, "deg"),
+                                    (f"gyro_scale_from_earth_rate_{i}", a.scale, "1")):
+                rows.append(ReportedParameter(name, est.value_rps, est.std_rps, unit,
+                                              est.std_rps))
         return rows
 
     def to_dict(self) -> dict[str, Any]:
         """Return the whole result as JSON-able data (biases also in °/h)."""
         out = {
             "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
-            "latitude_deg": self.latitude_deg,
+            "decision": self.decision.to_dict(), "latitude_deg": self.latitude_deg,
             "axes": {i: {"four_position_rps": a.four_position.value_rps,
                          "four_position_std_rps": a.four_position.std_rps,
                          "up_down_rps": a.up_down.value_rps,
@@ -136,7 +175,7 @@ class EarthRateBiasResult:
             "windows": [{"step": w.step_index, "label": w.label, "pose": w.pose,
                          "gyro_mean_rps": w.mean[:3], "gyro_se_rps": w.se[:3],
                          "omega_ref_b_rps": w.omega_ref_b_rps} for w in self.windows],
-            "notes": self.notes,
+            "notes": list(self.notes),
         }
         return dict(json_safe(out))  # type: ignore[call-overload]
 
@@ -200,4 +239,4 @@ def analyze_earth_rate_bias(recording: Recording | str | os.PathLike[str], *,
     notes += [f"gyro {_AXES[k]}: the methods differ by {a.z:.1f} σ" for k, a in enumerate(axes)
               if abs(a.z) > 3]
     return EarthRateBiasResult(unit=name, axes=axes, latitude_deg=site.latitude_deg,
-                               windows=windows, notes=notes)
+                               windows=windows, notes=tuple(notes))

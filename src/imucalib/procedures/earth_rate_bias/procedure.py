@@ -38,7 +38,7 @@ class EarthRateBiasProcedure(ProcedureDefaults):
     plan_options = option_names(EarthRateBiasPlanOptions)
     analysis_options_type = EarthRateBiasAnalysisOptions
     analysis_options = option_names(EarthRateBiasAnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~.plan.generate_earth_rate_bias_plan` (its keywords)."""

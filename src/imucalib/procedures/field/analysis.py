@@ -30,6 +30,8 @@ Steps (docs/field.md derives each):
    "gravity" or "turns" only, or "none".
 6. The triad model (FL.1) with the joint covariance; every fit's χ²/ν in the result and, on a
    misfit, the Birge-scaled σ (the project's rule) and a note.
+7. *No decision*: a field calibration has no acceptance limits
+   (:func:`~imucalib.procedures.field.result.field_decision`, each misfit named in its notes).
 
 Contents
 --------
@@ -54,6 +56,7 @@ from imucalib.errors import CalibrationError, InsufficientExcitationError, Inval
 from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.earth import normal_gravity_mps2
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.reported import ReportedParameter
 from imucalib.models.result import Provenance
 from imucalib.procedures.common.static_intervals import (
     FieldLog,
@@ -64,6 +67,7 @@ from imucalib.procedures.common.static_intervals import (
 from imucalib.procedures.field.result import (
     FieldResult,
     calibration_result,
+    field_decision,
     triad_from_field,
 )
 from imucalib.units import EARTH_RATE_RPS, UG
@@ -353,7 +357,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         form = "six-position" if _on_faces(y) else "gravity-norm"
     notes = [g_note]
     six = None
-    drift_rows: list[tuple[str, float, float, str]] = []
+    drift_rows: list[ReportedParameter] = []
     drift = form == "gravity-norm" and (opt.accel_drift == "yes" or (
         opt.accel_drift == "auto" and len(poses) >= _DRIFT_MIN_POSES))
     times = np.array([0.5 * (p.start_time_s + p.end_time_s) for p in poses])
@@ -384,8 +388,9 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         if drift:   # the poses' means at t̄, for the gravity directions of the gyro
             rate = fit.values[core:]
             y = y - np.outer(times - times.mean(), rate)
-            drift_rows = [(f"accel_bias_rate_{a}", float(v), float(math.sqrt(
-                full_cov[core + i, core + i] * fit.quality.sigma_scale**2)), "m/s^3")
+            drift_rows = [ReportedParameter(f"accel_bias_rate_{a}", float(v), float(math.sqrt(
+                full_cov[core + i, core + i] * fit.quality.sigma_scale**2)), "m/s^3",
+                float(math.sqrt(full_cov[core + i, core + i])))
                 for i, (a, v) in enumerate(zip("xyz", rate, strict=True))]
         corrected = correct_accel(accel_values, y)
     else:
@@ -476,7 +481,8 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         quality=tuple(quality), notes=tuple(notes),
         details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
                  "window_s": opt.window_s, "accel_values": accel_values,
-                 "accel_covariance": accel_cov})
+                 "accel_covariance": accel_cov},
+        decision=field_decision(tuple(quality)))
 
 
 def _gyro_cov(fit: Any) -> _F64:

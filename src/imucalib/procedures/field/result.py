@@ -13,9 +13,14 @@ zero variance). The covariance is carried through the Jacobian of (FL.1) (numeri
 differences), with the gyro block and the gyro–accelerometer cross-covariance of the rotation
 fit as they are.
 
+A field calibration has no acceptance limits: its result (:class:`FieldResult`, a
+:class:`~imucalib.models.procedure_result.ProcedureResult`) makes *no decision*
+(:data:`NO_DECISION_REASON`), its notes and each fit's χ²/ν saying what the reader must know.
+
 Contents
 --------
-:class:`FieldResult`, :func:`triad_from_field`, :func:`accel_matrix`.
+:class:`FieldResult`, :func:`triad_from_field`, :func:`accel_matrix`,
+:func:`field_decision`, :data:`NO_DECISION_REASON`.
 """
 
 from __future__ import annotations
@@ -26,7 +31,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters, calibration_rows
+from imucalib.models.reported import ReportedParameter
 from imucalib.models.result import (
     CalibrationResult,
     Provenance,
@@ -35,9 +43,21 @@ from imucalib.models.result import (
 )
 from imucalib.procedures.common.static_windows import json_safe
 
-__all__ = ["FieldResult", "accel_matrix", "triad_from_field"]
+__all__ = ["NO_DECISION_REASON", "FieldResult", "accel_matrix", "field_decision",
+           "triad_from_field"]
 
 _F64 = NDArray[np.float64]
+
+#: Why a field calibration decides nothing (docs/field.md).
+NO_DECISION_REASON = ("a field calibration has no acceptance limits: it reports the triad "
+                      "model and each fit's χ²/ν (docs/field.md)")
+#: The group of the static gyro fit (FL.2) in :attr:`FieldResult.quality`.
+_STATIC_GYRO_GROUP = "gyro (static poses)"
+
+
+def field_decision(quality: tuple[FitQuality, ...] = ()) -> Decision:
+    """Return a field calibration's *no decision*, each misfit fit's summary in its notes."""
+    return no_decision(NO_DECISION_REASON, notes=tuple(q.summary() for q in quality if q.misfit))
 
 
 def accel_matrix(theta: NDArray[np.float64]) -> _F64:
@@ -112,8 +132,11 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
 
 
 @dataclass(frozen=True)
-class FieldResult:
-    """A field calibration (the results contract of docs/procedures.md).
+class FieldResult(ResultDefaults):
+    """A field calibration (the result contract of docs/procedures.md).
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult`: ``calibration`` is
+    :attr:`result`; ``decision`` *no decision* (:func:`field_decision`), so ``passed`` is None.
 
     Attributes
     ----------
@@ -128,7 +151,8 @@ class FieldResult:
     gyro_static_names : tuple of str
         ``gyro_bias_x`` … and, when fitted, ``gyro_G_xx`` … (from the static poses).
     gyro_static_values, gyro_static_cov : ndarray
-        Their values and covariance (also in `result` when the gyro triad is).
+        Their values and covariance, Birge-scaled where the static fit (FL.2) is a misfit
+        (also in `result` when the gyro triad is).
     gravity_mps2, gravity_std_mps2 : float
         Local g used and its standard uncertainty. [m/s²]
     threshold_factor : float
@@ -144,8 +168,12 @@ class FieldResult:
     notes : tuple of str
     details : dict
         The accelerometer's fitted values and covariance as fitted, the latitude, the settings.
-    extra_rows : list of (name, value, σ, unit)
-        Estimates outside the triad model (the accelerometer's bias rates, (F.1″)).
+    extra_rows : list of ReportedParameter
+        Estimates outside the triad model (the accelerometer's bias rates, (F.1″)), σ
+        Birge-scaled as the accelerometer fit's.
+    procedure : str
+    decision : Decision
+        *No decision* (:func:`field_decision`): a field calibration has no acceptance limits.
     """
 
     unit: str
@@ -165,27 +193,42 @@ class FieldResult:
     quality: tuple[FitQuality, ...]
     notes: tuple[str, ...] = ()
     details: dict[str, Any] = field(default_factory=dict)
-    extra_rows: list[tuple[str, float, float, str]] = field(default_factory=list)
+    extra_rows: list[ReportedParameter] = field(default_factory=list)
     procedure: str = "field"
-    passed: bool | None = None
+    decision: Decision = field(default_factory=field_decision)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
         """The accelerometer and gyro fits' χ²/ν and misfit verdicts (:attr:`quality`)."""
         return tuple(self.quality)
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, σ Birge-scaled on a misfit, SI unit) of every parameter."""
-        cal = self.result
-        std = cal.std(scaled=True)
-        rows = [(n, cal.value(n), std[n], triad_parameter_unit(n)) for n in cal.param_names]
-        if not cal.has_triad("gyro"):
+    @property
+    def calibration(self) -> CalibrationResult:
+        """The triad model (:attr:`result`)."""
+        return self.result
+
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Every parameter: name, value, σ (Birge-scaled on a misfit), SI unit, σ before scaling.
+
+        The calibration's parameters (σ scaled per triad as its fit, docs/field.md step 6), then,
+        when no rotation was fitted, the static gyro bias (and G) of (FL.2), then the
+        :attr:`extra_rows`. The gyro bias and G come from the static fit (FL.2), whose Birge
+        ratio their covariance holds already (:attr:`gyro_static_cov`): their ``std_noise`` is
+        that σ divided by it (docs/processing-estimation.md, Eq. (3)).
+        """
+        static = set(self.gyro_static_names)
+        scale = next((q.sigma_scale for q in self.quality if q.group == _STATIC_GYRO_GROUP),
+                     1.0)
+        rows = [r._replace(std_noise=r.std_noise / scale) if r.name in static else r
+                for r in calibration_rows(self.result)]
+        if not self.result.has_triad("gyro"):
             sb = np.sqrt(np.diag(self.gyro_static_cov))
-            rows += [(n, float(v), float(s), triad_parameter_unit(n)) for n, v, s in
+            rows += [ReportedParameter(n, float(v), float(s), triad_parameter_unit(n),
+                                       float(s) / scale) for n, v, s in
                      zip(self.gyro_static_names, self.gyro_static_values, sb, strict=True)]
         return rows + list(self.extra_rows)
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
+    def triad_parameters(self) -> TriadParameters:
         """(names, values, covariance Birge-scaled) for :func:`~imucalib.models.combine`."""
         cal = self.result
         return list(cal.param_names), cal.values.copy(), cal.covariance_scaled.copy()
@@ -196,7 +239,8 @@ class FieldResult:
         out = {
             "procedure": self.procedure, "unit": self.unit, "source": self.source,
             "passed": self.passed, "accel_form": self.accel_form, "gyro_form": self.gyro_form,
-            "parameters": {n: {"value": v, "std": s, "unit": u} for n, v, s, u in rows},
+            "parameters": {r.name: {"value": r.value, "std": r.std, "unit": r.unit}
+                           for r in rows},
             "fit_quality": [{"group": q.group, "chi2": q.chi2, "dof": q.dof,
                              "reduced_chi2": q.reduced_chi2, "misfit": q.misfit,
                              "sigma_scale": q.sigma_scale} for q in self.quality],

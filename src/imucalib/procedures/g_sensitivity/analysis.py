@@ -19,14 +19,17 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.common.drift_model import (
     DriftFit,
     GSensitivityOptions,
@@ -48,21 +51,27 @@ _F64 = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class GSensitivityResult:
-    """The g-sensitivity test's result (the results contract of docs/procedures.md).
+class GSensitivityResult(ResultDefaults):
+    """The g-sensitivity test's result (the result contract, docs/procedures.md).
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult`: part of the gyro triad model
+    (no ``calibration``; :meth:`triad_parameters` for ``imucalib combine``), *no decision*.
 
     Attributes
     ----------
     unit : str
         The IMU.
     fit : DriftFit
-        Coefficients (3, 4): D0 [rad/s] and D1..D3 [rad/s per m/s²] per gyro axis, covariance.
+        Coefficients (3, 4): D0 [rad/s] and D1..D3 [rad/s per m/s²] per gyro axis, covariance
+        (Birge-scaled per axis on a misfit).
     windows : list of StaticWindow
         The reduced positions.
     gravity_mps2, latitude_deg : float
         The site used. [m/s²], [°]
-    notes : list of str
-        What was assumed.
+    notes : tuple of str
+        What was assumed; each misfit's summary.
+    procedure : str
+        ``"g-sensitivity"``.
     """
 
     unit: str
@@ -70,9 +79,15 @@ class GSensitivityResult:
     windows: list[StaticWindow]
     gravity_mps2: float
     latitude_deg: float
-    notes: list[str] = field(default_factory=list)
+    notes: tuple[str, ...] = ()
     procedure: str = "g-sensitivity"
-    passed: bool | None = None
+
+    @property
+    def decision(self) -> Decision:
+        """*No decision*: the plan gives no acceptance limits (each misfit in its notes)."""
+        return no_decision("the g-sensitivity test has no acceptance limits: the plan gives "
+                           "none; D0 and G are reported with their standard uncertainties",
+                           notes=tuple(f.summary() for f in self.fit.fits if f.misfit))
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -89,23 +104,42 @@ class GSensitivityResult:
         """G (3, 3): row gyro axis, column specific-force axis. [rad/s per m/s²]"""
         return np.asarray(self.fit.coefficients[:, 1:], dtype=np.float64)
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
-        """(names, values, covariance) in the names of :mod:`imucalib.models.result`."""
+    def triad_parameters(self) -> TriadParameters:
+        """Return (names, values, covariance) in the names of :mod:`imucalib.models.result`.
+
+        The covariance as reported: Birge-scaled per gyro axis whose fit is a misfit (4), the
+        σ of :meth:`parameter_rows`.
+        """
         return drift_parameter_names(), self.fit.coefficients.ravel().copy(), \
             self.fit.covariance.copy()
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, standard uncertainty, unit) of every estimate, SI."""
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Return the 12 coefficients as reported, SI.
+
+        Returns
+        -------
+        list of ReportedParameter
+            Row-major as :meth:`triad_parameters`. ``std``: the σ reported, √ of the diagonal
+            of the covariance (3)–(4), scaled by the axis fit's Birge ratio √(χ²/ν) where it
+            is a misfit; ``std_noise``: the same σ before that scaling (``std`` divided by
+            the axis fit's ``sigma_scale``), the window noise and σ_M's Type B term (2)
+            propagated. Equal where the axis fit is no misfit.
+        """
         names, values, cov = self.triad_parameters()
-        return [(n, float(v), float(math.sqrt(cov[k, k])),
-                 "rad/s" if "bias" in n else "(rad/s)/(m/s^2)")
-                for k, (n, v) in enumerate(zip(names, values, strict=True))]
+        rows = []
+        for k, (n, v) in enumerate(zip(names, values, strict=True)):
+            std = float(math.sqrt(cov[k, k]))
+            rows.append(ReportedParameter(
+                n, float(v), std, "rad/s" if "bias" in n else "(rad/s)/(m/s^2)",
+                std / self.fit.fits[k // 4].sigma_scale))
+        return rows
 
     def to_dict(self) -> dict[str, Any]:
         """Return the whole result as JSON-able data."""
         names, values, cov = self.triad_parameters()
         out = {
             "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+            "decision": self.decision.to_dict(),
             "parameters": {n: {"value": float(v), "std": float(math.sqrt(cov[k, k]))}
                            for k, (n, v) in enumerate(zip(names, values, strict=True))},
             "covariance": cov,
@@ -155,4 +189,4 @@ def analyze_g_sensitivity(recording: Recording | str | os.PathLike[str], *,
     notes += [f.summary() for f in fit.fits if f.misfit]
     return GSensitivityResult(unit=name, fit=fit, windows=windows,
                               gravity_mps2=site.gravity_mps2, latitude_deg=site.latitude_deg,
-                              notes=notes)
+                              notes=tuple(notes))

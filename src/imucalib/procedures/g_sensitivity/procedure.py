@@ -38,7 +38,7 @@ class GSensitivityProcedure(ProcedureDefaults):
     plan_options = option_names(GSensitivityPlanOptions)
     analysis_options_type = GSensitivityAnalysisOptions
     analysis_options = option_names(GSensitivityAnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.g_sensitivity.plan.generate_g_sensitivity_plan`."""

@@ -10,6 +10,10 @@ the closed form's σ is reported (``agreement_sigma``).
 columns from the least-squares form (the diagonal belongs to the rate transfer, whose rates
 also see the nonlinearity).
 
+The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
+ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and *no
+decision* (the installation test has no acceptance limits).
+
 Contents
 --------
 :class:`InstallationResult`, :func:`analyze_installation`
@@ -25,7 +29,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.common.rate_windows import RateProcessing, extract_rate_windows
 from imucalib.procedures.installation.misalignment import (
     Misalignment,
@@ -41,8 +48,12 @@ _AXES = "xyz"
 
 
 @dataclass(frozen=True)
-class InstallationResult:
+class InstallationResult(ResultDefaults):
     """The misalignment of one unit's gyro triad (module docstring).
+
+    It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
+    ``calibration`` (the off-diagonal ``gyro_M_ij`` only, :meth:`triad_parameters`),
+    ``decision`` *no decision*.
 
     Attributes
     ----------
@@ -53,6 +64,8 @@ class InstallationResult:
     n_turns : int
     procedure : str
         ``"installation"``.
+    notes : tuple of str
+        What the reader must know (the least-squares fit's misfit).
     """
 
     unit: str
@@ -61,6 +74,7 @@ class InstallationResult:
     earth_rate_up_rps: float
     n_turns: int
     procedure: str = "installation"
+    notes: tuple[str, ...] = ()
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -68,9 +82,12 @@ class InstallationResult:
         return () if self.lsq.quality is None else (self.lsq.quality,)
 
     @property
-    def passed(self) -> bool | None:
-        """No acceptance limits: None."""
-        return None
+    def decision(self) -> Decision:
+        """*No decision*: the plan gives no acceptance limits (a misfit in its notes)."""
+        return no_decision("the installation test has no acceptance limits (the plan gives "
+                           "none): it measures the gyro triad's misalignment "
+                           "(docs/installation.md)",
+                           notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
 
     @property
     def agreement_sigma(self) -> float:
@@ -86,30 +103,46 @@ class InstallationResult:
             return [[None if not np.isfinite(v) else float(v) for v in row] for row in a]
 
         return {"procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+                "decision": self.decision.to_dict(),
                 "earth_rate_up_rps": self.earth_rate_up_rps, "n_turns": self.n_turns,
                 "closed_form": {"M": tolist(self.closed_form.matrix),
                                 "M_std": tolist(self.closed_form.std)},
                 "lsq": {"M": tolist(self.lsq.matrix), "M_std": tolist(self.lsq.std),
                         "chi2_per_dof": None if q is None or q.dof == 0 else q.reduced_chi2,
                         "fit": "" if q is None else q.summary()},
-                "agreement_sigma": self.agreement_sigma}
+                "agreement_sigma": self.agreement_sigma, "notes": list(self.notes)}
 
     def _entries(self, off_diagonal: bool) -> list[tuple[int, int]]:
         return [(i, j) for i in range(3) for j in range(3)
                 if np.isfinite(self.lsq.matrix[i, j]) and (i != j or not off_diagonal)]
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, σ, unit): M_ij of both forms (``_closed`` suffix for (IN-2))."""
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """M_ij of both forms, SI (``_closed`` suffix for (IN-2)).
+
+        ``std`` is the σ reported: the least-squares form's Birge-scaled when its pooled fit
+        is a misfit (IN-4), the closed form's from the means' σ (no fit, no scaling).
+        ``std_noise`` is the same σ before that scaling: the least-squares σ / its
+        ``sigma_scale``; the closed form's σ itself.
+        """
+        q = self.lsq.quality
+        scale = 1.0 if q is None else q.sigma_scale
         rows = []
         for i, j in self._entries(False):
             name = f"gyro_M_{_AXES[i]}{_AXES[j]}"
-            rows.append((name, float(self.lsq.matrix[i, j]), float(self.lsq.std[i, j]), "1"))
-            rows.append((f"{name}_closed", float(self.closed_form.matrix[i, j]),
-                         float(self.closed_form.std[i, j]), "1"))
+            std = float(self.lsq.std[i, j])
+            closed = float(self.closed_form.std[i, j])
+            rows.append(ReportedParameter(name, float(self.lsq.matrix[i, j]), std, "1",
+                                          std / scale))
+            rows.append(ReportedParameter(f"{name}_closed", float(self.closed_form.matrix[i, j]),
+                                          closed, "1", closed))
         return rows
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
-        """Return the off-diagonal ``gyro_M_ij`` of the least-squares form and their covariance."""
+    def triad_parameters(self) -> TriadParameters:
+        """Return the off-diagonal ``gyro_M_ij`` of the least-squares form and their covariance.
+
+        The covariance is the one reported (Birge-scaled on a misfit, (IN-4)), whose diagonal
+        is the σ² of the same rows of :meth:`parameter_rows`.
+        """
         entries = self._entries(True)
         idx = [3 * i + j for i, j in entries]
         names = [f"gyro_M_{_AXES[i]}{_AXES[j]}" for i, j in entries]
@@ -139,7 +172,9 @@ def analyze_installation(recording: Recording | str | os.PathLike[str], *,
                                         common_bias=common_bias)
     name, windows, earth_up = extract_rate_windows(recording, unit, (INSTALLATION_RATE,),
                                                    processing=processing)
+    closed = closed_form_misalignment(windows, earth_up)
+    lsq = lsq_misalignment(windows, earth_up, common_bias=common_bias)
+    misfit = () if lsq.quality is None or not lsq.quality.misfit else (lsq.quality.summary(),)
     return InstallationResult(
-        unit=name, closed_form=closed_form_misalignment(windows, earth_up),
-        lsq=lsq_misalignment(windows, earth_up, common_bias=common_bias),
-        earth_rate_up_rps=earth_up, n_turns=len(windows))
+        unit=name, closed_form=closed, lsq=lsq,
+        earth_rate_up_rps=earth_up, n_turns=len(windows), notes=misfit)

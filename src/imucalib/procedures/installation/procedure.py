@@ -42,7 +42,7 @@ class InstallationProcedure(ProcedureDefaults):
     plan_options = option_names(InstallationPlanOptions)
     analysis_options_type = InstallationAnalysisOptions
     analysis_options = option_names(InstallationAnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.installation.plan.generate_installation_plan`."""

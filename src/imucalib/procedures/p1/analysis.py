@@ -37,8 +37,6 @@ import numpy as np
 
 from imucalib import __version__, units
 from imucalib.analysis.verification import (
-    Check,
-    Decision,
     check_accuracy,
     check_repeatability,
     check_residuals,
@@ -49,7 +47,9 @@ from imucalib.analysis.verification import (
 from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import open_recording
+from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality, assess_fit
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.result import (
     CalibrationResult,
     Provenance,
@@ -138,8 +138,17 @@ class P1Options:
 
 
 @dataclass(frozen=True, eq=False)
-class P1Analysis:
-    """Everything a P1 analysis produced."""
+class P1Analysis(ResultDefaults):
+    """Everything a P1 analysis produced.
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult` (docs/procedures.md, "The
+    result contract"): ``calibration`` is the fit of every repetition (:attr:`result`), whose
+    parameters are the :meth:`~imucalib.models.procedure_result.ResultDefaults.parameter_rows`
+    (σ Birge-scaled per triad whose fit is a misfit, docs/processing-estimation.md Eq. (3)) and
+    whose covariance as reported the :meth:`triad_parameters`; ``decision`` is the one of
+    :data:`~imucalib.analysis.verification.DECISION_RULE` over :attr:`checks` (docs/p1.md,
+    rules 5–7); ``passed`` is its verdict.
+    """
 
     result: CalibrationResult
     per_repetition: dict[int, CalibrationResult]
@@ -151,7 +160,7 @@ class P1Analysis:
 
     @property
     def procedure(self) -> str:
-        """``"p1"`` (:class:`~imucalib.procedures.common.procedure.ProcedureResult`)."""
+        """``"p1"``."""
         return "p1"
 
     @property
@@ -160,14 +169,24 @@ class P1Analysis:
         return self.result.sensor_id
 
     @property
-    def passed(self) -> bool:
-        """The decision."""
-        return self.decision.passed
+    def calibration(self) -> CalibrationResult:
+        """The calibration: the fit of every repetition's calibration windows (:attr:`result`)."""
+        return self.result
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """The calibration's notes (Earth rate, gravity, weights, Type B, a misfit)."""
+        return tuple(self.result.notes)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
         """Each triad fit's χ²/ν and misfit verdict (the calibration's)."""
         return tuple(self.result.fit_quality)
+
+    def triad_parameters(self) -> TriadParameters:
+        """Return the calibration's parameters with their covariance as reported (Birge-scaled)."""
+        cal = self.result
+        return list(cal.param_names), cal.values.copy(), cal.covariance_scaled.copy()
 
     def to_dict(self) -> dict[str, Any]:
         """Return a JSON-able report: the result, the checks and the decision."""

@@ -47,6 +47,12 @@ class P1Procedure(ProcedureDefaults):
     analysis_options = option_names(P1AnalysisOptions)
     outputs = ("result-json", "report-json", "residuals-png", "report-pdf")
 
+    def output_writers(self) -> Mapping[str, Callable[[Any, Path, str], list[Path]]]:
+        """Return the residual figure (:data:`~imucalib.procedures.p1.outputs.P1_WRITERS`)."""
+        from imucalib.procedures.p1.outputs import P1_WRITERS
+
+        return P1_WRITERS
+
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.p1.plan.generate_p1_plan` (its keywords)."""
         from imucalib.procedures.p1.plan import generate_p1_plan

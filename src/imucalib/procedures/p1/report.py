@@ -37,9 +37,11 @@ __all__ = ["content"]
 
 def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return P1's sections 1–5 (None for a result without its observations)."""
-    if not hasattr(analysis, "observations"):
+    from imucalib.procedures.p1.analysis import P1Analysis
+
+    if not isinstance(analysis, P1Analysis):  # read back from its file: no observations
         return None
-    from imucalib.report.residual_figure import save_residual_figure
+    from imucalib.procedures.p1.residual_figure import save_residual_figure
 
     result, obs = analysis.result, analysis.observations
     prov = result.provenance

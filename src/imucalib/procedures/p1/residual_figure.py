@@ -1,4 +1,4 @@
-"""Residual figures of a calibration: each window's residual mean per axis, with its 2σ bar.
+"""P1's residual figure (output ``residuals-png``): each window's residual mean, ±2σ bars.
 
 One panel per fitted triad: the accelerometer's residuals per static position [µg], the gyro's
 per window (positions and rate points) [°/h], each axis in its own colour, with error bars of

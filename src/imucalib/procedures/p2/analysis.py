@@ -16,14 +16,22 @@ into
 3. the CalibrationResult: every parameter at T0 (the models' c_0) with the joint covariance of
    those c_0 across parameters (each model's GLS weights applied to the per-point covariance,
    docs/p2.md Eq. (P2.12)), the per-point fit quality, and the temperature models;
-4. the decision: at every held-out point (at every calibration point when none was held out)
-   the output error left after compensation at the reference input (1 g, |ω|) must be within
-   the specification's accuracy (``imu.accel_accuracy_g``, ``imu.gyro_accuracy_dps``).
+4. the decision (:attr:`P2UnitResult.decision`, rule :data:`DECISION_RULE`): at every
+   held-out point (at every calibration point when none was held out) the output error left
+   after compensation at the reference input (1 g, |ω|) must be within the specification's
+   accuracy (``imu.accel_accuracy_g``, ``imu.gyro_accuracy_dps``), and the closed form must
+   agree with least squares within :data:`AGREEMENT_LIMIT` σ; a unit that could not be
+   calibrated fails with its error.
+
+The unit's result is a :class:`~imucalib.models.procedure_result.ProcedureResult`
+(docs/procedures.md, "The result contract"): its parameters are the calibration's at T0 with
+the σ of Eq. (P2.12) and, beside them, the same σ before any Birge scaling
+(:attr:`P2UnitResult.std_noise`: Eq. (P2.12) with s = 1 and each point's noise-only C_k).
 
 Contents
 --------
 :class:`P2Options`, :class:`PointResult`, :class:`P2UnitResult`, :func:`analyze_unit`,
-:func:`assemble_point`, :data:`AGREEMENT_LIMIT`.
+:func:`assemble_point`, :func:`failed_unit`, :data:`AGREEMENT_LIMIT`, :data:`DECISION_RULE`.
 """
 
 from __future__ import annotations
@@ -51,7 +59,14 @@ from imucalib.estimation.temperature_model import (
     gls_weights,
     predict_temperature_model,
 )
+from imucalib.models.decision import Check, CheckRow, Decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import (
+    ProcedureResult,
+    TriadParameters,
+    no_triad_parameters,
+)
+from imucalib.models.reported import ReportedParameter
 from imucalib.models.result import CalibrationResult, Provenance, triad_parameter_unit
 from imucalib.procedures.p2.observations import (
     P2Processing,
@@ -71,13 +86,19 @@ from imucalib.procedures.p2.reduction import (
     least_squares,
 )
 
-__all__ = ["AGREEMENT_LIMIT", "P2Options", "P2UnitResult", "PointResult", "analyze_unit",
-           "assemble_point", "failed_unit"]
+__all__ = ["AGREEMENT_LIMIT", "DECISION_RULE", "P2Options", "P2UnitResult", "PointResult",
+           "analyze_unit", "assemble_point", "failed_unit"]
 
 _F64 = NDArray[np.float64]
 
 #: The largest |closed form − least squares| accepted, in σ of the least-squares estimate.
 AGREEMENT_LIMIT: Final = 4.0
+#: P2's acceptance rule in words (docs/p2.md, "The decision").
+DECISION_RULE: Final = (
+    "P2 acceptance (docs/p2.md): the largest accelerometer and gyro output error left after "
+    "compensation, at the held-out temperature points (the calibration points when none is "
+    "held out), within the plan's accuracy; the closed form agrees with least squares within "
+    f"{AGREEMENT_LIMIT:g} σ")
 
 
 @dataclass(frozen=True)
@@ -186,10 +207,34 @@ def _quality_dict(q: FitQuality) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class P2UnitResult:
-    """The P2 result of one unit (a :class:`~imucalib.procedures.common.procedure.ProcedureResult`).
+    """The P2 result of one unit (a :class:`~imucalib.models.procedure_result.ProcedureResult`).
 
     ``error`` is set (and everything else empty) when the unit could not be calibrated; the
     other units of the array are not affected.
+
+    Attributes
+    ----------
+    unit : str
+    passed : bool or None
+        The verdict of :attr:`decision` (False with an `error`).
+    points, models, held_out
+        Each temperature point's estimates, each parameter's temperature model and its
+        held-out check.
+    result : CalibrationResult or None
+        The parameters at T0 with the covariance of Eq. (P2.12) (docs/p2.md), Birge ratios
+        included; None when the unit could not be calibrated.
+    compensated_error, error_limits : mapping of str to float
+        The largest output error after compensation and its limit (``accel_mps2``,
+        ``gyro_rps``). [m/s², rad/s]
+    reasons : tuple of str
+        Why the unit failed (the decision's failed checks).
+    notes : tuple of str
+    error, error_type : str
+        Why the unit could not be calibrated, and the error's type.
+    procedure : str
+    std_noise : mapping of str to float
+        Each parameter's σ at T0 before Birge scaling: Eq. (P2.12) with s = 1 and each point's
+        noise-only covariance C_k, the same GLS weights W (empty for a unit not calibrated).
     """
 
     unit: str
@@ -205,11 +250,85 @@ class P2UnitResult:
     error: str = ""
     error_type: str = ""
     procedure: str = "p2"
+    std_noise: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
         """Each temperature model's χ²/ν and misfit verdict (Birge-scaled where a misfit)."""
         return tuple(m.quality for m in self.models.values())
+
+    @property
+    def calibration(self) -> CalibrationResult | None:
+        """The parameters at T0 (:attr:`result`), or None for a unit not calibrated."""
+        return self.result
+
+    @property
+    def provenance(self) -> Provenance | None:
+        """The calibration's provenance, or None for a unit not calibrated."""
+        return None if self.result is None else self.result.provenance
+
+    @property
+    def members(self) -> tuple[ProcedureResult, ...]:
+        """No members: the result of one unit."""
+        return ()
+
+    @property
+    def decision(self) -> Decision:
+        """The unit's verdict under :data:`DECISION_RULE` (docs/p2.md, "The decision").
+
+        ``failed`` are the :attr:`reasons`; the checks are the accelerometer's and the gyro's
+        error after compensation against their limits and the agreement of the closed form
+        with least squares. A unit that could not be calibrated fails with its error.
+        """
+        if self.error:
+            return Decision(passed=self.passed, rule="a P2 unit that could not be calibrated "
+                            "fails (docs/p2.md)", failed=self.reasons or (self.error,),
+                            not_assessed=("error after compensation",))
+        checks = []
+        for name, key, unit, scale in (
+                ("accelerometer error after compensation", "accel_mps2", "g", u.G0_MPS2),
+                ("gyro error after compensation", "gyro_rps", "°/s", u.DEG)):
+            if key in self.compensated_error and key in self.error_limits:
+                value, limit = self.compensated_error[key], self.error_limits[key]
+                ok = not value > limit
+                checks.append(Check(name, ok, f"{value / scale:.3g} {unit} (limit "
+                                    f"{limit / scale:g} {unit})",
+                                    (CheckRow(name, value / scale, limit / scale, unit, ok),)))
+        if self.points:
+            worst = max(p.agreement_sigma for p in self.points)
+            ok = not worst > AGREEMENT_LIMIT
+            checks.append(Check("closed form against least squares", ok,
+                                f"largest difference {worst:.2g} σ (limit {AGREEMENT_LIMIT:g} σ)",
+                                (CheckRow("largest |closed form − least squares|", worst,
+                                          AGREEMENT_LIMIT, "σ", ok),)))
+        misfits = sum(m.quality.misfit for m in self.models.values())
+        notes = ((f"the temperature models of {misfits} parameter(s) are misfits: their σ are "
+                  "Birge-scaled by √(χ²/ν)",) if misfits else ())
+        return Decision(passed=self.passed, rule=DECISION_RULE, failed=tuple(self.reasons),
+                        checks=tuple(checks), notes=notes)
+
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Return every parameter at T0: value, σ of Eq. (P2.12), SI unit, σ before scaling.
+
+        ``std`` is the σ the result reports (its covariance holds the Birge ratios of misfit
+        point fits and temperature models, docs/p2.md Eq. (P2.12)); ``std_noise`` the same σ
+        before any Birge scaling (:attr:`std_noise`; ``std`` where it is not known). Empty for a
+        unit that could not be calibrated.
+        """
+        cal = self.result
+        if cal is None:
+            return []
+        std = cal.std(scaled=True)
+        return [ReportedParameter(n, float(v), std[n], str(cal.units.get(n, "")),
+                                  float(self.std_noise.get(n, std[n])))
+                for n, v in zip(cal.param_names, cal.values, strict=True)]
+
+    def triad_parameters(self) -> TriadParameters:
+        """Return the parameters at T0 with the covariance of Eq. (P2.12) (none if failed)."""
+        cal = self.result
+        if cal is None:
+            return no_triad_parameters()
+        return list(cal.param_names), cal.values.copy(), cal.covariance_scaled.copy()
 
     def to_dict(self) -> dict[str, Any]:
         """Return the whole result as JSON-able data."""
@@ -356,6 +475,7 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     rates = np.array([p.temperature_rate_degc_ps for p in cal])
     legs = np.array([_leg_value(p.leg) for p in cal])
     covs = [p.least_squares.covariance_scaled() for p in cal]
+    covs_noise = [p.least_squares.covariance for p in cal]
     n_par = len(PARAM_NAMES)
     models: dict[str, TemperatureModelFit] = {}
     weights: list[_F64] = []
@@ -380,6 +500,9 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         cov0 += np.outer(w_mat[:, k], w_mat[:, k]) * c[:n_par, :n_par]
     s = np.array(scales)
     cov0 = cov0 * np.outer(s, s)
+    # the same σ before any Birge scaling: s = 1 and each point's noise-only C_k, the same W
+    var0_noise = sum((w_mat[:, k] ** 2 * np.diag(c)[:n_par] for k, c in enumerate(covs_noise)),
+                     np.zeros(n_par))
     values0 = np.array([models[n].model.coefficients[0] for n in PARAM_NAMES])
     # held-out checks and the compensated error
     held = [p for p in points if p.held_out]
@@ -458,7 +581,9 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
                         held_out=checks, result=result, compensated_error=errors,
                         error_limits={"accel_mps2": accel_lim * u.G0_MPS2,
                                       "gyro_rps": gyro_lim * u.DEG},
-                        reasons=tuple(reasons), notes=tuple(notes))
+                        reasons=tuple(reasons), notes=tuple(notes),
+                        std_noise={n: float(np.sqrt(v)) for n, v in zip(PARAM_NAMES, var0_noise,
+                                                                         strict=True)})
 
 
 def _mean_lever_arm(points: Sequence[PointResult]) -> list[float]:

@@ -20,8 +20,8 @@ file).
 
 Contents
 --------
-:class:`P2BatchResult`, :func:`analyze_p2`, :func:`analyze_unit_file`,
-:func:`analyze_units_file`, :func:`summary_rows`, :func:`batch_json`.
+:class:`P2BatchResult`, :data:`BATCH_DECISION_RULE`, :func:`analyze_p2`,
+:func:`analyze_unit_file`, :func:`analyze_units_file`, :func:`summary_rows`, :func:`batch_json`.
 """
 
 from __future__ import annotations
@@ -47,22 +47,29 @@ from imucalib.errors import (
 )
 from imucalib.io.hashing import file_sha256
 from imucalib.io.reader import Recording, StepRecord, open_recording
+from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults
 from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
 from imucalib.procedures.p2.roles import P2_SOAK
 
-__all__ = ["P2BatchResult", "analyze_p2", "analyze_unit_file", "analyze_units_file",
-           "batch_json", "summary_rows"]
+__all__ = ["BATCH_DECISION_RULE", "P2BatchResult", "analyze_p2", "analyze_unit_file",
+           "analyze_units_file", "batch_json", "summary_rows"]
+
+#: The decision rule of a batch (docs/p2.md, "The decision").
+BATCH_DECISION_RULE = "a P2 array or lot passes when every unit passes P2's acceptance"
 
 
 @dataclass(frozen=True)
-class P2BatchResult:
+class P2BatchResult(ResultDefaults):
     """Every unit's P2 result, of one recording (an array) or many (a production lot).
 
-    A :class:`~imucalib.procedures.common.procedure.ProcedureResult`: ``unit`` is ``"array"``
-    (or ``"lot"``), ``passed`` whether every unit passed.
+    A :class:`~imucalib.models.procedure_result.ProcedureResult` (docs/procedures.md, "The
+    result contract"): ``unit`` is ``"array"`` (or ``"lot"``), ``members`` are the units'
+    results (each written on its own), ``decision`` passes when every unit passes (docs/p2.md,
+    "The decision"); a batch has no parameters, triad model or provenance of its own.
     """
 
     recordings: tuple[str, ...]
@@ -75,9 +82,20 @@ class P2BatchResult:
         return "array" if len(self.recordings) == 1 else "lot"
 
     @property
-    def passed(self) -> bool:
-        """Whether every unit passed."""
-        return all(r.passed for r in self.results)
+    def members(self) -> tuple[P2UnitResult, ...]:
+        """Every unit's result, in the order of the recordings and their units."""
+        return tuple(self.results)
+
+    @property
+    def decision(self) -> Decision:
+        """Pass when every unit passes; ``failed`` names the units that did not."""
+        failed = tuple(r.unit for r in self.results if not r.passed)
+        return Decision(passed=not failed, rule=BATCH_DECISION_RULE, failed=failed)
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Why each unit that could not be calibrated failed (``<unit>: <error>``)."""
+        return tuple(f"{r.unit}: {r.error}" for r in self.results if r.error)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:

@@ -46,6 +46,18 @@ class P2Procedure(ProcedureDefaults):
     analysis_options = option_names(P2AnalysisOptions)
     outputs = ("result-json", "report-json", "temperature-png", "report-pdf")
 
+    def output_writers(self) -> Mapping[str, Callable[[Any, Path, str], list[Path]]]:
+        """Return the temperature figure (:data:`~imucalib.procedures.p2.outputs.P2_WRITERS`)."""
+        from imucalib.procedures.p2.outputs import P2_WRITERS
+
+        return P2_WRITERS
+
+    def batch_outputs(self, batch: Any, folder: Path, stem: str) -> list[Path]:
+        """Write the lot's summary (:func:`~imucalib.procedures.p2.outputs.write_batch_summary`)."""
+        from imucalib.procedures.p2.outputs import write_batch_summary
+
+        return write_batch_summary(batch, folder, stem)
+
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.p2.plan.generate_p2_plan` (its keywords)."""
         from imucalib.procedures.p2.plan import generate_p2_plan

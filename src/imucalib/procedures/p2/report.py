@@ -63,7 +63,9 @@ def _error_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
 
 def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return a P2 unit's sections 1–5 (None for anything but a calibrated P2 unit)."""
-    if getattr(unit_result, "result", None) is None or not hasattr(unit_result, "models"):
+    from imucalib.procedures.p2.analysis import P2UnitResult
+
+    if not isinstance(unit_result, P2UnitResult) or unit_result.result is None:
         return None
     from imucalib.procedures.p2.figures import save_temperature_figure
 

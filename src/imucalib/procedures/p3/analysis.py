@@ -12,7 +12,12 @@
 4. The round-robin (:func:`~imucalib.procedures.p3.roundrobin.solve_round_robin`): K2 of A, B and
    the test accelerometer, c and c′ with their covariance; the naive K2_T beside it.
 5. The decision: the test accelerometer's K2 passes when its expanded uncertainty (k = 2,
-   Birge-scaled on a misfit) is within :attr:`P3Options.k2_target_g_per_g2`.
+   Birge-scaled on a misfit) is within :attr:`P3Options.k2_target_g_per_g2`
+   (:attr:`P3Result.decision`).
+
+The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
+ProcedureResult`, docs/procedures.md): part of a triad model (K2 of the test accelerometer's
+input axis; no ``calibration``).
 
 Contents
 --------
@@ -34,8 +39,11 @@ import numpy as np
 from imucalib import units
 from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Check, CheckRow, Decision
 from imucalib.models.earth import Site
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.p3.observations import (
     P3Processing,
     P3Window,
@@ -53,8 +61,8 @@ from imucalib.procedures.p3.roundrobin import (
     solve_round_robin,
 )
 
-__all__ = ["AccelerometerScale", "P3Options", "P3Result", "analyze_p3", "build_series",
-           "tumble_scale"]
+__all__ = ["DECISION_RULE", "K2_CHECK", "AccelerometerScale", "P3Options", "P3Result",
+           "analyze_p3", "build_series", "tumble_scale"]
 
 #: Which unit role and configuration each series of (P3.3) comes from.
 SERIES_SOURCES: dict[str, tuple[str, int]] = {
@@ -62,6 +70,12 @@ SERIES_SOURCES: dict[str, tuple[str, int]] = {
     "A3": ("ref-a", 3), "B3": ("ref-b", 3), "T3": ("test", 3)}
 _ROLES = ("ref-a", "ref-b", "test")
 _G_PER_G2 = units.G0_MPS2  # K2 [1/(m/s²)] × g0 = K2 [g/g²]
+#: The name of P3's one check (:attr:`P3Result.decision`).
+K2_CHECK = "expanded uncertainty of K2 (test accelerometer)"
+#: P3's decision rule (docs/p3.md, "Decision").
+DECISION_RULE = ("the test accelerometer passes when the expanded uncertainty of its K2, "
+                 "U = 2σ (k = 2; σ Birge-scaled on a misfit), is within the target "
+                 "k2_target_g_per_g2 (docs/p3.md)")
 
 
 @dataclass(frozen=True)
@@ -253,8 +267,12 @@ def build_series(windows: Mapping[str, Sequence[P3Window]], roles: Mapping[str, 
 
 
 @dataclass(frozen=True)
-class P3Result:
+class P3Result(ResultDefaults):
     """The result of P3 for one test accelerometer (docs/p3.md).
+
+    It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
+    ``calibration`` (K2 of the test accelerometer's input axis, :meth:`triad_parameters`),
+    ``decision`` on U(K2) against the target (:attr:`decision`).
 
     Attributes
     ----------
@@ -297,29 +315,53 @@ class P3Result:
         return (self.estimate.quality, *(s.quality for s in self.series.values()))
 
     @property
-    def passed(self) -> bool:
-        """2σ of K2_T within the target (Birge-scaled on a misfit)."""
-        return 2.0 * self.k2_test_g_per_g2[1] <= self.k2_target_g_per_g2
+    def decision(self) -> Decision:
+        """Pass when U(K2_T) = 2σ (Birge-scaled on a misfit) is within the target.
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, standard uncertainty, unit) of every estimate, SI."""
+        One check (:data:`K2_CHECK`) of one row, U against ``k2_target_g_per_g2`` [g/g²], under
+        :data:`DECISION_RULE`; the misfits that scaled σ in its notes.
+        """
+        u = 2.0 * self.k2_test_g_per_g2[1]
+        ok = bool(u <= self.k2_target_g_per_g2)
+        row = CheckRow("U(K2_T) = 2σ", u, self.k2_target_g_per_g2, "g/g^2", ok,
+                       detail=f"K2_T = {self.k2_test_g_per_g2[0]:.3g} g/g²")
+        check = Check(K2_CHECK, ok, f"U(K2) = 2σ = {u:.2g} g/g² {'within' if ok else 'beyond'}"
+                      f" the target {self.k2_target_g_per_g2:.2g} g/g²", (row,))
+        return Decision(passed=ok, rule=DECISION_RULE, failed=() if ok else (K2_CHECK,),
+                        checks=(check,),
+                        notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
+
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Every estimate, SI: the round-robin's five (P3.3), the naive K2_T, each K1 and K0.
+
+        ``std`` is the σ reported: the round-robin's from its covariance, Birge-scaled by the
+        series' misfits (:func:`~imucalib.procedures.p3.roundrobin.scale_for_misfit`) and its
+        own; the naive K2_T's from its series' scaled σ; K1's and K0's from the tumble's means
+        (with the gravity's Type B σ on K1) or as given. ``std_noise`` is the same σ before
+        any Birge scaling: the round-robin's from
+        :attr:`~imucalib.procedures.p3.roundrobin.RoundRobinEstimate.covariance_unscaled` (the
+        reported estimate's operator on the m's noise-only covariance, K1's Type B σ kept),
+        the naive K2_T's from its series' noise-only σ; K1's and K0's are no fit's (equal).
+        """
         units_of = {"K2_A": "1/(m/s^2)", "K2_B": "1/(m/s^2)", "K2_T": "1/(m/s^2)",
                     "c": "m/(rad/s)^2", "c_loaded": "m/(rad/s)^2"}
-        rows = [(p, self.estimate.value(p), self.estimate.std(p), units_of[p])
+        est = self.estimate
+        rows = [ReportedParameter(p, est.value(p), est.std(p), units_of[p], est.std_unscaled(p))
                 for p in PARAMETERS]
-        rows.append(("K2_T_naive", self.estimate.naive_k2_t, self.estimate.naive_k2_t_std,
-                     "1/(m/s^2)"))
+        rows.append(ReportedParameter("K2_T_naive", est.naive_k2_t, est.naive_k2_t_std,
+                                      "1/(m/s^2)", est.naive_k2_t_noise_std))
         for role in _ROLES:
             sc = self.scales[self.roles[role]]
-            rows += [(f"K1_{role}", sc.k1, sc.k1_std, "1"), (f"K0_{role}", sc.k0, sc.k0_std,
-                                                              "m/s^2")]
+            rows += [ReportedParameter(f"K1_{role}", sc.k1, sc.k1_std, "1", sc.k1_std),
+                     ReportedParameter(f"K0_{role}", sc.k0, sc.k0_std, "m/s^2", sc.k0_std)]
         return rows
 
-    def triad_parameters(self) -> tuple[list[str], np.ndarray, np.ndarray]:
+    def triad_parameters(self) -> TriadParameters:
         """Return K2 of the test accelerometer's input axis as a triad parameter, with its variance.
 
         Named as :mod:`imucalib.models.result` names it (``accel_K2_x``), for
-        :func:`~imucalib.models.combine.combine_triad_parameters`.
+        :func:`~imucalib.models.combine.combine_triad_parameters`; its variance is the reported
+        σ² (the ``K2_T`` row of :meth:`parameter_rows`).
         """
         std = self.estimate.std("K2_T")
         return ([f"accel_K2_{self.input_axis}"], np.array([self.estimate.value("K2_T")]),
@@ -331,14 +373,15 @@ class P3Result:
         k2, k2_std = self.k2_test_g_per_g2
         return {
             "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
-            "roles": dict(self.roles),
+            "decision": self.decision.to_dict(), "roles": dict(self.roles),
             "k2_test_g_per_g2": k2, "k2_test_std_g_per_g2": k2_std,
             "k2_test_naive_g_per_g2": est.naive_k2_t * _G_PER_G2,
             "k2_target_g_per_g2": self.k2_target_g_per_g2,
-            "parameters": [{"name": n, "value": v, "std": s, "unit": u}
-                           for n, v, s, u in self.parameter_rows()],
+            "parameters": [r._asdict() for r in self.parameter_rows()],
             "covariance": {"names": list(PARAMETERS), "matrix": est.covariance.tolist(),
-                           "noise_only": est.covariance_noise.tolist()},
+                           "noise_only": est.covariance_noise.tolist(),
+                           "unscaled": None if est.covariance_unscaled is None
+                           else est.covariance_unscaled.tolist()},
             "round_robin_fit": {"chi2": est.quality.chi2, "dof": est.quality.dof,
                                 "misfit": est.quality.misfit,
                                 "summary": est.quality.summary()},

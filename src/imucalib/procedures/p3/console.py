@@ -22,7 +22,10 @@ __all__ = ["render_p3"]
 
 
 def render_p3(console: Console, result: Any, written: Sequence[Path]) -> None:
-    """Print a P3 result: K2 of the three accelerometers, c and c′, the naive K2, the decision."""
+    """Print a P3 result: K2 of the three accelerometers, c and c′, the naive K2, the decision.
+
+    The decision is the result's :class:`~imucalib.models.decision.Decision` (its verdict).
+    """
     est = result.estimate
     g = units.G0_MPS2 * 1e6  # K2 [1/(m/s²)] → µg/g²
     table = Table("quantity", Column("value", justify="right"),
@@ -46,7 +49,8 @@ def render_p3(console: Console, result: Any, written: Sequence[Path]) -> None:
     console.print(table)
     console.print(est.quality.summary(), highlight=False)
     k2_std = est.std("K2_T") * units.G0_MPS2
-    verdict = "[green]PASS[/]" if result.passed else "[red]FAIL[/]"
-    console.print(f"decision: {verdict} (U(K2) = 2σ = {2 * k2_std:.2g} g/g², target "
-                  f"{result.k2_target_g_per_g2:.2g} g/g²)")
+    decision = result.decision
+    colour = {True: "green", False: "red", None: "yellow"}[decision.passed]
+    console.print(f"decision: [{colour}]{decision.verdict}[/] (U(K2) = 2σ = {2 * k2_std:.2g} "
+                  f"g/g², target {result.k2_target_g_per_g2:.2g} g/g²)")
     print_written(console, written)

@@ -41,7 +41,7 @@ class P3Procedure(ProcedureDefaults):
     plan_options = option_names(P3PlanOptions)
     analysis_options_type = P3AnalysisOptions
     analysis_options = option_names(P3AnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.p3.plan.generate_p3_plan` (its keywords)."""

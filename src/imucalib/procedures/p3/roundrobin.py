@@ -55,7 +55,10 @@ Both fits, each series' and the round-robin's GLS, are solved by
 Misfit (:func:`scale_for_misfit`): a series whose χ² exceeds its 99 % quantile has the σ of
 its m scaled by its Birge ratio, every series by the Birge ratio of the pooled χ² when the pool
 is a misfit; a round-robin misfit (the seven equations inconsistent beyond their σ, ν = 2)
-scales the covariance of the five unknowns by its own (docs/processing-estimation.md).
+scales the covariance of the five unknowns by its own (docs/processing-estimation.md). The
+covariance before either scaling (:attr:`RoundRobinEstimate.covariance_unscaled`) is the
+reported estimate's GLS operator applied to the m's covariance from the means' standard errors
+and the K1's Type B σ alone.
 
 Contents
 --------
@@ -254,6 +257,15 @@ class RoundRobinEstimate:
         m7/r₇², the K2 an analysis ignoring the unbalance reports, and its σ. [1/(m/s²)]
     radii_m : ndarray, shape (7,)
         The radius of each series used in (P3.3). [m]
+    covariance_unscaled : ndarray, shape (5, 5), optional
+        Before any Birge scaling, neither the series' (:func:`scale_for_misfit`) nor the
+        round-robin's: K·C_m⁰·Kᵀ, K = (HᵀC_m⁻¹H)⁻¹HᵀC_m⁻¹ the GLS operator of the estimate
+        (C_m the m's covariance as scaled) and C_m⁰ that covariance from the series'
+        noise-only σ (:func:`series_covariance` ``noise_only``); equal to `covariance_noise`
+        when no series is scaled. None when a series lacks its noise-only σ (then
+        :meth:`std_unscaled` gives `covariance_noise`'s).
+    naive_k2_t_noise_std : float
+        The naive K2_T's σ before the series' scaling. [1/(m/s²)]
     """
 
     values: _F64
@@ -263,6 +275,8 @@ class RoundRobinEstimate:
     naive_k2_t: float
     naive_k2_t_std: float
     radii_m: _F64
+    covariance_unscaled: _F64 | None = None
+    naive_k2_t_noise_std: float = float("nan")
 
     def value(self, name: str) -> float:
         """Return one parameter of :data:`PARAMETERS`."""
@@ -273,15 +287,24 @@ class RoundRobinEstimate:
         i = PARAMETERS.index(name)
         return float(np.sqrt(self.covariance[i, i]))
 
+    def std_unscaled(self, name: str) -> float:
+        """Return one parameter's standard uncertainty before any Birge scaling."""
+        i = PARAMETERS.index(name)
+        cov = self.covariance_noise if self.covariance_unscaled is None \
+            else self.covariance_unscaled
+        return float(np.sqrt(cov[i, i]))
 
-def series_covariance(series: Mapping[str, Series]) -> _F64:
+
+def series_covariance(series: Mapping[str, Series], *, noise_only: bool = False) -> _F64:
     """Return the 7×7 covariance of the m's of :data:`SERIES_NAMES`, Eq. (P3.4).
 
-    Each series' fit variance on the diagonal; m_i·m_j·(σ(K1)/K1)² between series of the same
-    accelerometer (A, B or the test one: the series' first letter).
+    Each series' fit variance on the diagonal (with `noise_only`, its noise-only one,
+    ``m_noise_std``, before :func:`scale_for_misfit`); m_i·m_j·(σ(K1)/K1)² between series of
+    the same accelerometer (A, B or the test one: the series' first letter).
     """
     m = np.array([series[k].m for k in SERIES_NAMES])
-    fit = np.array([series[k].m_fit_std for k in SERIES_NAMES])
+    fit = np.array([series[k].m_noise_std if noise_only else series[k].m_fit_std
+                    for k in SERIES_NAMES])
     rel = np.array([series[k].k1_rel_std for k in SERIES_NAMES])
     same = np.array([[a[0] == b[0] for b in SERIES_NAMES] for a in SERIES_NAMES])
     return np.diag(fit**2) + np.where(same, np.outer(m * rel, m * rel), 0.0)
@@ -334,7 +357,19 @@ def solve_round_robin(series: Mapping[str, Series], *,
                                 "definite (a σ of zero?)") from None
     fit = solve_weighted_lsq(h, m, covariance=cm, param_names=PARAMETERS, group="round-robin",
                              context="round-robin design (P3.3)")
+    cm0 = series_covariance(series, noise_only=True)
+    unscaled: _F64 | None
+    if not np.all(np.isfinite(cm0)):  # a series without its noise-only σ (built by hand)
+        unscaled = None
+    elif np.array_equal(cm0, cm):  # no series scaled
+        unscaled = fit.covariance_noise
+    else:
+        cih = np.linalg.solve(cm, h)
+        k = np.linalg.solve(h.T @ cih, cih.T)  # the GLS operator: values = k·m
+        unscaled = k @ cm0 @ k.T
     return RoundRobinEstimate(values=fit.estimate, covariance=fit.covariance_birge,
                               covariance_noise=fit.covariance_noise, quality=fit.fit_quality,
                               naive_k2_t=float(m[6] / r2[6]),
-                              naive_k2_t_std=float(np.sqrt(cm[6, 6]) / r2[6]), radii_m=radii)
+                              naive_k2_t_std=float(np.sqrt(cm[6, 6]) / r2[6]), radii_m=radii,
+                              covariance_unscaled=unscaled,
+                              naive_k2_t_noise_std=float(np.sqrt(cm0[6, 6]) / r2[6]))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,8 +27,10 @@ from numpy.typing import NDArray
 from imucalib.errors import InsufficientExcitationError, RecordingError
 from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import RANDOM_DRIFT_POSITION
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.common.drift_model import (
     GSensitivityOptions,
     drift_parameter_names,
@@ -41,6 +43,7 @@ from imucalib.procedures.common.static_windows import (
     require_recorded,
 )
 from imucalib.procedures.random_drift.plan import MIN_REPETITIONS
+from imucalib.procedures.random_drift.roles import RANDOM_DRIFT_POSITION
 from imucalib.procedures.random_drift.scatter import (
     Scatter,
     allan_at_interval,
@@ -83,8 +86,12 @@ def fit_accel_bias(windows: list[StaticWindow]) -> tuple[_F64, _F64]:
 
 
 @dataclass(frozen=True)
-class RandomDriftResult:
-    """The random-drift test's result (the results contract of docs/procedures.md).
+class RandomDriftResult(ResultDefaults):
+    """The random-drift test's result (the result contract, docs/procedures.md).
+
+    A :class:`~imucalib.models.procedure_result.ProcedureResult`: a characterisation of the
+    scatter between repetitions, *no decision*; :meth:`triad_parameters` gives the mean
+    coefficients for ``imucalib combine`` (no ``calibration``).
 
     Attributes
     ----------
@@ -97,9 +104,12 @@ class RandomDriftResult:
     drift : ndarray, shape (R, 3, 4)
         D0 [rad/s] and D1..D3 [rad/s per m/s²] of each repetition and gyro axis.
     drift_std : ndarray, shape (R, 3, 4)
-        Their white-noise σ within a repetition.
+        Their σ within a repetition: the drift fit's (docs/g-sensitivity.md, Eqs. (3)–(4)),
+        Birge-scaled where that repetition's fit of that axis is a misfit;
+        :attr:`drift_std_noise` is the σ before that scaling.
     accel_bias, accel_bias_std : ndarray, shape (R, 3)
-        Each repetition's accelerometer biases and σ. [m/s²]
+        Each repetition's accelerometer biases and their white-noise σ (not Birge-scaled,
+        :func:`fit_accel_bias`). [m/s²]
     drift_scatter : list of list of Scatter
         [axis][k]: (1), (2) of D0..D3 over the repetitions.
     accel_zero_stability : list of Scatter
@@ -112,6 +122,12 @@ class RandomDriftResult:
         Mean spacing of the repetitions. [s]
     gravity_mps2 : float
         g used. [m/s²]
+    notes : tuple of str
+        What was assumed.
+    procedure : str
+        ``"random-drift"``.
+    drift_fits : tuple of FitQuality
+        Each repetition's drift fit per gyro axis (R × 3, repetition-major).
     """
 
     unit: str
@@ -128,18 +144,36 @@ class RandomDriftResult:
     allan_accel_mps2: _F64
     interval_s: float
     gravity_mps2: float
-    notes: list[str] = field(default_factory=list)
+    notes: tuple[str, ...] = ()
     procedure: str = "random-drift"
-    passed: bool | None = None
     drift_fits: tuple[FitQuality, ...] = ()
+
+    @property
+    def decision(self) -> Decision:
+        """*No decision*: a characterisation, the plan gives no acceptance limits."""
+        return no_decision("the random-drift test has no acceptance limits: the plan gives "
+                           "none; the scatter over the repetitions, the random drift and the "
+                           "zero stability are reported with their standard uncertainties")
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
         """Each repetition's drift fit per gyro axis: χ²/ν and misfit verdict."""
         return self.drift_fits
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
-        """Mean over the repetitions of D0, G and the accelerometer bias, σ² = s²/R (diagonal)."""
+    @property
+    def drift_std_noise(self) -> _F64:
+        """:attr:`drift_std` before the Birge scaling of a misfit, shape (R, 3, 4)."""
+        scale = np.ones(self.drift_std.shape[:2])
+        if len(self.drift_fits) == scale.size:
+            scale = np.array([q.sigma_scale for q in self.drift_fits]).reshape(scale.shape)
+        return np.asarray(self.drift_std / scale[:, :, None], dtype=np.float64)
+
+    def triad_parameters(self) -> TriadParameters:
+        """Return the mean over the repetitions of D0, G and the accelerometer bias.
+
+        The covariance as reported: diagonal, σ² = s²/R from the scatter s of (1) (no fit,
+        nothing Birge-scaled).
+        """
         r = len(self.repetitions)
         names = [*drift_parameter_names(), *(f"accel_bias_{i}" for i in _AXES)]
         values = np.concatenate([self.drift.mean(axis=0).ravel(), self.accel_bias.mean(axis=0)])
@@ -147,19 +181,32 @@ class RandomDriftResult:
                               self.accel_bias.var(axis=0, ddof=1)]) / r
         return names, values, np.diag(var)
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, standard uncertainty, unit): the scatters, random drifts, stabilities."""
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Return the scatters, random drifts and zero stabilities as reported, SI.
+
+        Returns
+        -------
+        list of ReportedParameter
+            Per gyro axis ``gyro_sigma_D0_i`` … ``gyro_sigma_D3_i`` (the scatter s of (1)) and
+            ``gyro_random_drift_i`` ((3)), then ``accel_zero_stability_i`` ((1) of the
+            accelerometer bias). ``std``: the standard uncertainty of s, u(s) of (1), or of the
+            random drift, (4): from the scatter and the number of repetitions, no fit, so no
+            Birge scaling; ``std_noise``: the same (the two are equal). The means over the
+            repetitions are :meth:`triad_parameters` (in the result file's covariance block).
+        """
         rows = []
         for i, ax in enumerate(_AXES):
             for k, c in enumerate(_COEFFS):
                 sc = self.drift_scatter[i][k]
-                rows.append((f"gyro_sigma_{c}_{ax}", sc.std, sc.std_uncertainty,
-                             "rad/s" if k == 0 else "(rad/s)/(m/s^2)"))
-            rows.append((f"gyro_random_drift_{ax}", float(self.random_drift_rps[i, 0]),
-                         float(self.random_drift_rps[i, 1]), "rad/s"))
+                rows.append(ReportedParameter(f"gyro_sigma_{c}_{ax}", sc.std, sc.std_uncertainty,
+                                              "rad/s" if k == 0 else "(rad/s)/(m/s^2)",
+                                              sc.std_uncertainty))
+            rd, u = float(self.random_drift_rps[i, 0]), float(self.random_drift_rps[i, 1])
+            rows.append(ReportedParameter(f"gyro_random_drift_{ax}", rd, u, "rad/s", u))
         for i, ax in enumerate(_AXES):
             sc = self.accel_zero_stability[i]
-            rows.append((f"accel_zero_stability_{ax}", sc.std, sc.std_uncertainty, "m/s^2"))
+            rows.append(ReportedParameter(f"accel_zero_stability_{ax}", sc.std,
+                                          sc.std_uncertainty, "m/s^2", sc.std_uncertainty))
         return rows
 
     def to_dict(self) -> dict[str, Any]:
@@ -167,9 +214,11 @@ class RandomDriftResult:
         names, values, cov = self.triad_parameters()
         out = {
             "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+            "decision": self.decision.to_dict(),
             "repetitions": self.repetitions, "times_s": self.times_s,
             "interval_s": self.interval_s, "gravity_mps2": self.gravity_mps2,
             "drift": self.drift, "drift_std": self.drift_std,
+            "drift_std_noise": self.drift_std_noise,
             "accel_bias_mps2": self.accel_bias, "accel_bias_std_mps2": self.accel_bias_std,
             "drift_scatter": {ax: {c: vars(self.drift_scatter[i][k])
                                    for k, c in enumerate(_COEFFS)}
@@ -182,7 +231,7 @@ class RandomDriftResult:
             "allan_d0_rps": self.allan_d0_rps, "allan_accel_mps2": self.allan_accel_mps2,
             "parameters": {n: {"value": float(v), "std": float(math.sqrt(cov[k, k]))}
                            for k, (n, v) in enumerate(zip(names, values, strict=True))},
-            "notes": self.notes,
+            "notes": list(self.notes),
         }
         return dict(json_safe(out))  # type: ignore[call-overload]
 
@@ -252,5 +301,6 @@ def analyze_random_drift(recording: Recording | str | os.PathLike[str], *,
         random_drift_rps=rd,
         allan_d0_rps=np.array([allan_at_interval(drift[:, i, 0]) for i in range(3)]),
         allan_accel_mps2=np.array([allan_at_interval(acc[:, i]) for i in range(3)]),
-        interval_s=float(np.mean(np.diff(times))), gravity_mps2=site.gravity_mps2, notes=notes,
+        interval_s=float(np.mean(np.diff(times))), gravity_mps2=site.gravity_mps2,
+        notes=tuple(notes),
         drift_fits=tuple(q for f in fits for q in f.fits))

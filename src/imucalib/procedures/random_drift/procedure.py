@@ -38,7 +38,7 @@ class RandomDriftProcedure(ProcedureDefaults):
     plan_options = option_names(RandomDriftPlanOptions)
     analysis_options_type = RandomDriftAnalysisOptions
     analysis_options = option_names(RandomDriftAnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.random_drift.plan.generate_random_drift_plan`."""

@@ -11,6 +11,10 @@ In the triad model's terms (docs/rate-transfer.md, (RT-9)): E′ = 1 + M_kk, A =
 holds the g-sensitivity along it). :meth:`RateTransferResult.triad_parameters` gives
 ``gyro_M_kk`` (the quadratic term E2 stays in the report: the triad model has no gyro K2).
 
+The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
+ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and *no
+decision* (the rate transfer has no acceptance limits).
+
 Contents
 --------
 :class:`AxisTransfer`, :class:`RateTransferResult`, :func:`analyze_rate_transfer`,
@@ -29,7 +33,10 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.reader import Recording, open_recording
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.common.rate_windows import (
     RateProcessing,
     RateWindow,
@@ -71,6 +78,22 @@ class AxisTransfer:
     line: LineFit
     transfer: TransferFit | None
 
+    @property
+    def nonlinearity(self) -> tuple[float, float, float]:
+        """The nonlinearity (RT-6), its σ as reported and its σ before Birge scaling. [1]
+
+        The σ before scaling is (RT-6a) (:func:`~imucalib.procedures.rate_transfer.fit.
+        nonlinearity_noise_std`). The one reported is it × the Birge factor of the second fit
+        (RT-7) (``sigma_scale``: its Birge ratio when it is a misfit, else 1): that fit models
+        the nonlinear shape, so its misfit says the means scatter beyond their σ. Not the line's
+        (RT-5): the line's misfit is the nonlinearity being measured, and would scale its σ up
+        to the nonlinearity itself. Without a second fit (rates of one sign, < 3 magnitudes),
+        the line's factor, conservatively.
+        """
+        noise = self.line.nonlinearity_noise_std_ppm * 1e-6
+        q = self.line.quality if self.transfer is None else self.transfer.quality
+        return self.line.nonlinearity_ppm * 1e-6, noise * q.sigma_scale, noise
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able summary."""
         out: dict[str, Any] = {
@@ -81,6 +104,8 @@ class AxisTransfer:
             "scale_factor_std": float(np.sqrt(self.line.cov[1, 1])),
             "bias_rps": self.line.bias_rps, "bias_std_rps": float(np.sqrt(self.line.cov[0, 0])),
             "nonlinearity_ppm_fs": self.line.nonlinearity_ppm,
+            "nonlinearity_std_ppm_fs": self.nonlinearity[1] * 1e6,
+            "nonlinearity_noise_std_ppm_fs": self.nonlinearity[2] * 1e6,
             "line_residuals_rps": self.line.residuals_rps.tolist(),
             "line_chi2_per_dof": self.line.quality.reduced_chi2,
             "line_birge_ratio": self.line.quality.birge_ratio,
@@ -132,8 +157,12 @@ def transfer_of_axis(axis: str, windows: Sequence[RateWindow], earth_rate_up_rps
 
 
 @dataclass(frozen=True)
-class RateTransferResult:
+class RateTransferResult(ResultDefaults):
     """The rate transfer of one unit (module docstring).
+
+    It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
+    ``calibration`` (``gyro_M_kk`` only, :meth:`triad_parameters`), ``decision`` *no
+    decision*.
 
     Attributes
     ----------
@@ -161,9 +190,12 @@ class RateTransferResult:
                                                  else (a.transfer.quality,))))
 
     @property
-    def passed(self) -> bool | None:
-        """No acceptance limits: None."""
-        return None
+    def decision(self) -> Decision:
+        """*No decision*: the plan gives no acceptance limits (its misfits in the notes)."""
+        return no_decision("the rate transfer has no acceptance limits (the plan gives none): "
+                           "it measures each gyro's scale factor, bias, nonlinearity, asymmetry "
+                           "and quadratic term (docs/rate-transfer.md)",
+                           notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
 
     def axis(self, name: str) -> AxisTransfer:
         """Return the result of body axis `name`."""
@@ -175,32 +207,54 @@ class RateTransferResult:
     def to_dict(self) -> dict[str, Any]:
         """JSON-able, everything."""
         return {"procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+                "decision": self.decision.to_dict(),
                 "earth_rate_up_rps": self.earth_rate_up_rps, "n_turns": self.n_turns,
                 "axes": [a.to_dict() for a in self.axes], "notes": list(self.notes)}
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, standard uncertainty, SI unit) of every estimate."""
-        rows: list[tuple[str, float, float, str]] = []
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Every estimate, SI, per axis: the line (RT-5)–(RT-6), then the second fit (RT-7).
+
+        ``std`` is the σ reported: a fit's, Birge-scaled when that fit is a misfit (the line's
+        for the scale factor and ``gyro_bias_line``, the second fit's for ``gyro_M_kk``,
+        ``gyro_bias_up``, the asymmetry (RT-8) and E2); the nonlinearity's (RT-6a) scaled by
+        the second fit's factor (:attr:`AxisTransfer.nonlinearity`). ``std_noise`` is the same
+        σ before that scaling: ``std`` / the fit's ``sigma_scale`` (the nonlinearity's (RT-6a)
+        itself). An axis without a second fit gives ``gyro_M_kk`` from the line, as
+        :meth:`triad_parameters` does.
+        """
+        rows: list[ReportedParameter] = []
+
+        def row(name: str, value: float, std: float, unit: str, scale: float
+                ) -> ReportedParameter:
+            return ReportedParameter(name, float(value), float(std), unit, float(std) / scale)
+
         for a in self.axes:
             k, line = a.axis, a.line
-            rows += [(f"gyro_scale_factor_{k}", line.scale_factor,
-                      float(np.sqrt(line.cov[1, 1])), "1"),
-                     (f"gyro_bias_line_{k}", line.bias_rps, float(np.sqrt(line.cov[0, 0])),
-                      "rad/s"),
-                     (f"gyro_nonlinearity_{k}", line.nonlinearity_ppm * 1e-6, float("nan"), "1")]
+            ls = line.quality.sigma_scale
+            nl, nl_std, nl_noise = a.nonlinearity
+            rows += [row(f"gyro_scale_factor_{k}", line.scale_factor,
+                         float(np.sqrt(line.cov[1, 1])), "1", ls),
+                     row(f"gyro_bias_line_{k}", line.bias_rps, float(np.sqrt(line.cov[0, 0])),
+                         "rad/s", ls),
+                     ReportedParameter(f"gyro_nonlinearity_{k}", nl, nl_std, "1", nl_noise)]
             t = a.transfer
-            if t is not None:
-                asym, asym_s = t.asymmetry
-                rows += [(f"gyro_M_{k}{k}", float(t.params[1]) - 1.0, t.std(1), "1"),
-                         (f"gyro_bias_up_{k}", float(t.params[0]), t.std(0), "rad/s"),
-                         (f"gyro_asymmetry_{k}", asym, asym_s, "1"),
-                         (f"gyro_E2_{k}", float(t.params[3]), t.std(3), "s/rad")]
+            if t is None:
+                rows.append(row(f"gyro_M_{k}{k}", line.scale_factor - 1.0,
+                                float(np.sqrt(line.cov[1, 1])), "1", ls))
+                continue
+            ts = t.quality.sigma_scale
+            asym, asym_s = t.asymmetry
+            rows += [row(f"gyro_M_{k}{k}", float(t.params[1]) - 1.0, t.std(1), "1", ts),
+                     row(f"gyro_bias_up_{k}", float(t.params[0]), t.std(0), "rad/s", ts),
+                     row(f"gyro_asymmetry_{k}", asym, asym_s, "1", ts),
+                     row(f"gyro_E2_{k}", float(t.params[3]), t.std(3), "s/rad", ts)]
         return rows
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
-        """``gyro_M_kk`` = E′ − 1 with its variance, for the combined model (RT-9).
+    def triad_parameters(self) -> TriadParameters:
+        """``gyro_M_kk`` = E′ − 1 with its variance as reported, for the combined model (RT-9).
 
         An axis whose rates cannot separate the second fit gives ``gyro_M_kk`` from the line.
+        The variance is the reported σ² of the same row of :meth:`parameter_rows`.
         """
         names: list[str] = []
         blocks: list[tuple[_F64, _F64]] = []

@@ -6,7 +6,8 @@ the vertical Earth rate Ω_U, eq. (RT-1)), y_j the gyro's mean output, σ_j its 
 1. the IEEE straight line (RT-5) y = E0 + E·x, weighted least squares; the scale-factor
    nonlinearity (RT-6) is the largest deviation of a mean from that line, in ppm of the
    full-scale output |E|·max|x| of the rates tested (IEEE Std 952-2020, "scale factor
-   nonlinearity");
+   nonlinearity"), its σ propagated from the means' σ at the largest deviation (RT-6a)
+   (:func:`nonlinearity_noise_std`);
 2. the second fit (RT-7) y = E0′ + E′·x + A·|x| + E2·x²: separate slopes K± = E′ ± A for
    positive and negative rates, the asymmetry (RT-8) (K₊ − K₋)/((K₊ + K₋)/2) = 2A/E′ and the
    quadratic coefficient E2.
@@ -18,11 +19,13 @@ ratio (Eq. (7) there: the covariance reported here is the solver's ``covariance_
 
 Contents
 --------
-:class:`LineFit`, :func:`fit_line`, :func:`fit_rate_transfer`, :class:`TransferFit`
+:class:`LineFit`, :func:`fit_line`, :func:`fit_rate_transfer`, :class:`TransferFit`,
+:func:`nonlinearity_noise_std`
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +35,7 @@ from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality
 
-__all__ = ["LineFit", "TransferFit", "fit_line", "fit_rate_transfer"]
+__all__ = ["LineFit", "TransferFit", "fit_line", "fit_rate_transfer", "nonlinearity_noise_std"]
 
 _F64 = NDArray[np.float64]
 
@@ -61,6 +64,9 @@ class LineFit:
         max |residual| / (|E|·max|x|) · 10⁶. [ppm of full scale]
     quality : FitQuality
         χ²/ν of the line.
+    nonlinearity_noise_std_ppm : float
+        The nonlinearity's σ from the means' σ alone, (RT-6a) (:func:`nonlinearity_noise_std`;
+        not Birge-scaled: the line's misfit is the nonlinearity itself). [ppm of full scale]
     """
 
     bias_rps: float
@@ -69,6 +75,7 @@ class LineFit:
     residuals_rps: _F64
     nonlinearity_ppm: float
     quality: FitQuality
+    nonlinearity_noise_std_ppm: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -134,7 +141,46 @@ def fit_line(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
     full = abs(float(p[1])) * float(np.max(np.abs(x)))
     return LineFit(bias_rps=float(p[0]), scale_factor=float(p[1]), cov=sol.covariance_birge,
                    residuals_rps=r, nonlinearity_ppm=float(np.max(np.abs(r)) / full * 1e6),
-                   quality=sol.fit_quality)
+                   quality=sol.fit_quality,
+                   nonlinearity_noise_std_ppm=nonlinearity_noise_std(x, y, se) * 1e6)
+
+
+def nonlinearity_noise_std(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike) -> float:
+    """Return the σ of the nonlinearity (RT-6) from the means' σ, first order, (RT-6a). [1]
+
+    N = |r_j*|/(|E|·X), r = y − E0 − E·x the residuals of the weighted line (RT-5), j* the
+    largest |r_j|, X = max|x|. Both r = R·y (R = I − A·P, P = (AᵀΣ⁻¹A)⁻¹AᵀΣ⁻¹, A = [1, x],
+    Σ = diag σ_j²) and E = P₂·y are linear in the means, so with j* held fixed
+
+        ∇N = sign(r_j*)·R_j*/(|E|·X) − (N/E)·P₂,   σ_N² = ∇Nᵀ·Σ·∇N                   (RT-6a)
+
+    — the σ of the residual at the largest deviation, √(σ_j*² − a_j*ᵀC_p a_j*) with C_p the
+    line's noise-only covariance, over the full scale (the E term is ~10⁻⁶ of it). It is the
+    spread of N when one deviation stands out from the others by several σ; where two tie (the
+    +ω and −ω means of an even nonlinearity: the quadratic term, the asymmetry) the maximum
+    of the two scatters less (≈ 0.83σ for two equal independent ones), and with no
+    nonlinearity N is the largest of the noisy residuals: there σ_N is an upper bound of the
+    spread (tests/procedures/test_result_contract_classical_a.py, against a Monte Carlo).
+    Not Birge-scaled here (see :attr:`~imucalib.procedures.rate_transfer.analysis.
+    AxisTransfer.nonlinearity`).
+
+    Parameters
+    ----------
+    x_rps, y_rps, se_rps : array_like, shape (n,)
+        Inputs x_j, means y_j and their σ_j. [rad/s]
+    """
+    x, y, se = _inputs(x_rps, y_rps, se_rps)
+    A = np.column_stack([np.ones_like(x), x])
+    Aw = A / se[:, None] ** 2
+    P = np.linalg.solve(A.T @ Aw, Aw.T)  # (2, n): the weighted least squares' operator
+    R = np.eye(x.size) - A @ P
+    r = R @ y
+    j = int(np.argmax(np.abs(r)))
+    e = float(P[1] @ y)
+    full = abs(e) * float(np.max(np.abs(x)))
+    n = abs(float(r[j])) / full
+    grad = math.copysign(1.0, float(r[j])) * R[j] / full - (n / e) * P[1]
+    return float(np.sqrt(np.sum((grad * se) ** 2)))
 
 
 def fit_rate_transfer(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,

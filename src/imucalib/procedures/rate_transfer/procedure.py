@@ -42,7 +42,7 @@ class RateTransferProcedure(ProcedureDefaults):
     plan_options = option_names(RateTransferPlanOptions)
     analysis_options_type = RateTransferAnalysisOptions
     analysis_options = option_names(RateTransferAnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`."""

@@ -16,6 +16,10 @@
    K2_i = (K2 − Kpp)/K1 (the twin's h(u) with u = K1·a_i), combined over the head axes that
    test the same accelerometer by GLS.
 
+The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
+ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and *no
+decision* (the tumble has no acceptance limits).
+
 Contents
 --------
 :class:`TumbleOptions`, :class:`AccelerometerTumble`, :class:`TumbleResult`,
@@ -39,10 +43,12 @@ from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.io.reader import Recording, open_recording
-from imucalib.io.step_roles import TUMBLE_DRIFT, TUMBLE_POSITION
 from imucalib.io.streams import DEVICE_IMU
+from imucalib.models.decision import Decision, no_decision
 from imucalib.models.earth import Site
 from imucalib.models.fit_quality import FitQuality
+from imucalib.models.procedure_result import ResultDefaults, TriadParameters
+from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.tumble.fourier import (
     COEFFICIENTS,
     SIGNATURE_HARMONICS,
@@ -59,6 +65,7 @@ from imucalib.procedures.tumble.observations import (
     TumbleWindow,
     extract_tumble_windows,
 )
+from imucalib.procedures.tumble.roles import TUMBLE_DRIFT, TUMBLE_POSITION
 
 __all__ = ["AccelerometerTumble", "TumbleOptions", "TumbleResult", "analyze_tumble",
            "head_angle_covariance", "tumble_sequences"]
@@ -151,10 +158,15 @@ class AccelerometerTumble:
         """``<sensor>_head_<head axis>``, the suffix of its parameter names."""
         return f"{self.sensor}_head_{self.head_axis}"
 
-    def triad(self, sigma_scale: float = 1.0) -> tuple[list[str], _F64, _F64]:
-        """(T.12): names, values and covariance of b_i, M_ii, M_ip (and K2_i when fitted)."""
+    def triad(self, *, scaled: bool = True) -> tuple[list[str], _F64, _F64]:
+        """(T.12): names, values and covariance of b_i, M_ii, M_ip (and K2_i when fitted).
+
+        The covariance is J·C_q·Jᵀ, C_q Birge-scaled when the fit is a misfit, or with
+        ``scaled=False`` the noise-only one.
+        """
         fit = self.fit
-        q, Cq = fit.q_values, fit.q_covariance * fit.quality.sigma_scale**2
+        q = fit.q_values
+        Cq = fit.q_covariance * fit.quality.sigma_scale**2 if scaled else fit.q_covariance
         idx = {n: k for k, n in enumerate(fit.names)}
         i, p = self.sensor, self.pendulous_axis
         names = [f"accel_bias_{i}", f"accel_M_{i}{i}"]
@@ -177,8 +189,12 @@ class AccelerometerTumble:
 
 
 @dataclass(frozen=True)
-class TumbleResult:
+class TumbleResult(ResultDefaults):
     """The tumble's result for one IMU (docs/tumble.md).
+
+    It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
+    ``calibration`` (it estimates the accelerometers' part of a triad model,
+    :meth:`triad_parameters`), ``decision`` *no decision* (:attr:`decision`).
 
     Attributes
     ----------
@@ -203,7 +219,13 @@ class TumbleResult:
     triad_fit: FitQuality | None = None
     notes: tuple[str, ...] = ()
     procedure: str = "tumble"
-    passed: bool | None = None
+
+    @property
+    def decision(self) -> Decision:
+        """*No decision*: the tumble has no acceptance limits (its misfits in the notes)."""
+        return no_decision("the tumble has no acceptance limits: it estimates the "
+                           "accelerometers' coefficients (docs/tumble.md)",
+                           notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -229,45 +251,84 @@ class TumbleResult:
         k1 = a.fit.value("K1")
         return math.hypot(a.fit.std("K1"), k1 * self.gravity_rel_std)
 
-    def parameter_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, standard uncertainty, unit), SI: every fit, then the triad's."""
+    def parameter_rows(self) -> list[ReportedParameter]:
+        """Every fit's coefficients, then the triad's parameters (T.12), SI.
+
+        ``std`` is the σ reported: a coefficient's from its fit's covariance, Birge-scaled when
+        the fit is a misfit (:class:`~imucalib.procedures.tumble.fourier.TumbleFit`), K1's
+        with the gravity's relative Type B σ added (K1·σ_g/g in quadrature); a triad
+        parameter's from :meth:`triad_parameters`. ``std_noise`` is the same σ before any
+        Birge scaling: a coefficient's from ``fit.covariance_noise`` (K1's with the gravity's
+        Type B term, which is no fit's); a triad parameter's the same combination of the head
+        axes (the weights of the reported GLS mean) applied to each fit's noise-only
+        covariance, not scaled by :attr:`triad_fit`, the gravity's Type B σ on M_ii added.
+        Where no fit is a misfit the two are equal.
+        """
         rows = []
         for a in self.accelerometers:
             for name in a.fit.names:
-                std = self._k1_std(a) if name == "K1" else a.fit.std(name)
-                rows.append((f"{name}_{a.key}", a.fit.value(name), std,
-                             COEFFICIENT_UNITS[name]))
+                if name == "K1":
+                    std = self._k1_std(a)
+                    noise = math.hypot(a.fit.std_noise("K1"),
+                                       a.fit.value("K1") * self.gravity_rel_std)
+                else:
+                    std, noise = a.fit.std(name), a.fit.std_noise(name)
+                rows.append(ReportedParameter(f"{name}_{a.key}", a.fit.value(name), std,
+                                              COEFFICIENT_UNITS[name], noise))
         names, values, cov = self.triad_parameters()
-        for n, v, s in zip(names, values, np.sqrt(np.diag(cov)), strict=True):
-            rows.append((n, float(v), float(s), "m/s^2" if "_bias_" in n else
-                         ("1/(m/s^2)" if "_K2_" in n else "1")))
+        noise_std = np.sqrt(np.diag(self._triad_covariance_noise()))
+        for n, v, s, sn in zip(names, values, np.sqrt(np.diag(cov)), noise_std, strict=True):
+            rows.append(ReportedParameter(n, float(v), float(s), "m/s^2" if "_bias_" in n else
+                                          ("1/(m/s^2)" if "_K2_" in n else "1"), float(sn)))
         return rows
 
-    def triad_parameters(self) -> tuple[list[str], _F64, _F64]:
+    def triad_parameters(self) -> TriadParameters:
         """Return the triad's b_i, M_ii, M_ip, K2_i with covariance, (T.12), head axes combined.
 
         Each (head axis, accelerometer) gives its own; a parameter given by two head axes is
         their GLS mean (independent records), its covariance scaled by the Birge ratio² of
         :attr:`triad_fit` when the head axes disagree beyond their σ (a misfit). The gravity's
-        Type B σ is added to M_ii.
+        Type B σ is added to M_ii. The covariance is the one reported (:meth:`parameter_rows`
+        ``std``).
         """
         names, values, cov = _combine([a.triad() for a in self.accelerometers])
         if self.triad_fit is not None:
             cov = cov * self.triad_fit.sigma_scale**2
+        return names, values, self._add_gravity(names, values, cov)
+
+    def _add_gravity(self, names: Sequence[str], values: _F64, cov: _F64) -> _F64:
+        """Add the gravity's relative Type B σ to each M_ii of `cov` (in place; returned)."""
         for k, n in enumerate(names):
             if n.startswith("accel_M_") and n[-1] == n[-2]:
                 cov[k, k] += ((1.0 + values[k]) * self.gravity_rel_std) ** 2
-        return names, values, cov
+        return cov
+
+    def _triad_covariance_noise(self) -> _F64:
+        """Return the covariance of :meth:`triad_parameters` before Birge scaling.
+
+        The reported GLS mean x̂ = W·t (W = (AᵀC⁻¹A)⁻¹AᵀC⁻¹, C the head axes' covariances as
+        scaled) with C replaced by the noise-only ones: W·C_noise·Wᵀ, plus the gravity's Type B
+        σ; exactly the reported covariance when no fit is a misfit.
+        """
+        scaled = [a.triad() for a in self.accelerometers]
+        if all(not a.fit.quality.misfit for a in self.accelerometers):
+            names, values, cov = _combine(scaled)
+        else:
+            noise = [a.triad(scaled=False) for a in self.accelerometers]
+            names, values, _ = _combine(scaled)
+            cov = _combination_weights(scaled, names)
+            cov = cov @ _block_diag([p[2] for p in noise]) @ cov.T
+        return self._add_gravity(names, values, cov)
 
     def to_dict(self) -> dict[str, Any]:
         """Return the whole result as JSON-able data."""
         names, values, cov = self.triad_parameters()
         return {
             "procedure": self.procedure, "unit": self.unit, "passed": self.passed,
+            "decision": self.decision.to_dict(),
             "method": self.method, "gravity_mps2": self.gravity_mps2,
             "gravity_rel_std": self.gravity_rel_std,
-            "parameters": [{"name": n, "value": v, "std": s, "unit": u}
-                           for n, v, s, u in self.parameter_rows()],
+            "parameters": [r._asdict() for r in self.parameter_rows()],
             "triad": {"names": names, "values": values.tolist(), "covariance": cov.tolist(),
                       "fit": None if self.triad_fit is None else {
                           "chi2": self.triad_fit.chi2, "dof": self.triad_fit.dof,
@@ -299,6 +360,23 @@ def _triad_order(name: str) -> tuple[int, str]:
     return ({"bias": 0, "M": 1, "K2": 2}.get(kind, 3), name)
 
 
+def _combination_design(parts: Sequence[tuple[list[str], _F64, _F64]], names: Sequence[str]
+                        ) -> _F64:
+    """Return A of the combination: row k (the parts' k-th parameter) picks its name."""
+    size = sum(len(p[0]) for p in parts)
+    A = np.zeros((size, len(names)))
+    A[np.arange(size), [list(names).index(n) for p in parts for n in p[0]]] = 1.0
+    return A
+
+
+def _combination_weights(parts: Sequence[tuple[list[str], _F64, _F64]], names: Sequence[str]
+                         ) -> _F64:
+    """W = (AᵀC⁻¹A)⁻¹AᵀC⁻¹ of the GLS mean x̂ = W·t of :func:`_combine_fit` (C of `parts`)."""
+    A = _combination_design(parts, names)
+    CiA = np.linalg.solve(_block_diag([p[2] for p in parts]), A)
+    return np.asarray(np.linalg.solve(A.T @ CiA, CiA.T), dtype=np.float64)
+
+
 def _combine_fit(parts: Sequence[tuple[list[str], _F64, _F64]]
                  ) -> tuple[list[str], LsqSolution | None]:
     """GLS of the parameters several head axes give (the one solver): names and the solution.
@@ -310,8 +388,7 @@ def _combine_fit(parts: Sequence[tuple[list[str], _F64, _F64]]
     if not names:
         return [], None
     t = np.concatenate([p[1] for p in parts])
-    A = np.zeros((t.size, len(names)))
-    A[np.arange(t.size), [names.index(n) for p in parts for n in p[0]]] = 1.0
+    A = _combination_design(parts, names)
     return names, solve_weighted_lsq(A, t, covariance=_block_diag([p[2] for p in parts]),
                                      param_names=names, group=COMBINATION_GROUP,
                                      context="combination of the head axes")

@@ -36,7 +36,7 @@ class TumbleProcedure(ProcedureDefaults):
     plan_options = option_names(TumblePlanOptions)
     analysis_options_type = TumbleAnalysisOptions
     analysis_options = option_names(TumbleAnalysisOptions)
-    outputs = ("report-json", "parameters-csv")
+    outputs = ("result-json", "report-json", "parameters-csv")
 
     def generate_plan(self, **options: Any) -> Plan:
         """Return :func:`~imucalib.procedures.tumble.plan.generate_tumble_plan` (its keywords)."""
