@@ -5,7 +5,7 @@ each way of opening, and their ratio to the floor (plain ``h5py.File`` open, rea
 attributes, close):
 
 - ``h5py``: the floor;
-- ``no probe``: :func:`~imucalib.io.reader.open_recording` with ``probe=False`` (layout, commit
+- ``no probe``: :func:`~imucalib.io.opening.open_recording` with ``probe=False`` (layout, commit
   counts, tables and time bases checked in this process);
 - ``probe``: ``open_recording`` as users get it (the metadata checks first run in a forked child
   with a time limit, see ``docs/recording-format.md``);

@@ -37,7 +37,7 @@ t0 = time.perf_counter()
 out = {}
 if mode == "floor":
     import h5py, numpy as np
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
     with open_recording(path) as rec:
         spans = [(s.valid_start_s, s.valid_end_s) for s in rec.steps
                  if s.role in ("p2.static", "p2.rate") and s.has_valid_window]
@@ -127,7 +127,7 @@ def main() -> None:
         path = args.cache / "p2-16x6-1khz.h5"
         if not path.exists():
             make_recording(path)
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
 
     with open_recording(path) as rec:
         units = [s.unit for s in rec.streams if s.device == "imu"]

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from imucalib import units
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.plan.schema import Plan
 from imucalib.procedures.p3.analysis import P3Options, analyze_p3
 from imucalib.procedures.p3.plan import UNIT_NAMES, generate_p3_plan

@@ -78,7 +78,7 @@ def procedure_of(data: str | os.PathLike[str], name: str | None = None) -> Proce
         A log (not a Recording) without a named procedure, or for one that reads Recordings
         only.
     """
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
     from imucalib.procedures import registry
 
     path = Path(data)
@@ -112,7 +112,7 @@ def provenance_of(path: Path) -> Provenance:
     plan_hash = ""
     if path.suffix.lower() in (".h5", ".hdf5"):
         from imucalib.io.context import RecordingContext
-        from imucalib.io.reader import open_recording
+        from imucalib.io.opening import open_recording
 
         with open_recording(path) as rec:
             plan_hash = RecordingContext.of(rec.metadata).plan_hash

@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     console = Console()
     from imucalib.calibration import calibrate
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
     from imucalib.models.result import CalibrationResult
     from imucalib.plan import describe_plan, write_plan
     from imucalib.procedures import registry

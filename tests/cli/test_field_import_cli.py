@@ -119,7 +119,7 @@ def test_import_reads_a_vendor_log_through_the_same_options(vendor, tmp_path):
                               "--column-map", MAP, "--sample-rate-hz", "200", "--gyro-unit",
                               "deg/s", "--accel-unit", "g"])
     assert res.exit_code == 0, res.output
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
 
     with open_recording(out) as rec:
         unit = next(s.unit for s in rec.streams if s.device == "imu")

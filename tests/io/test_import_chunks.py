@@ -17,7 +17,7 @@ from imucalib.errors import InvalidInputError
 from imucalib.io.csv_import import iter_imu_csv, read_imu_csv
 from imucalib.io.csv_recording import recording_from_csv
 from imucalib.io.import_spec import ImportSpec, iter_imu_table, read_imu_table
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.io.step_file import parse_step_file
 from imucalib.models.correct import correct_imu
 from imucalib.models.result import CalibrationResult, triad_parameter_names

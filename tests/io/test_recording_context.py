@@ -3,13 +3,21 @@ their own; an older recording has them only in its stored plan, and reads the sa
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
 
 from imucalib.calibration import calibrate
-from imucalib.io.context import RecordingContext
-from imucalib.io.reader import open_recording
+from imucalib.io.context import (
+    EQUIPMENT_KEYS,
+    IMU_SPEC_KEYS,
+    IMU_UNIT_KEYS,
+    SPEC_LIMIT_KEYS,
+    RecordingContext,
+)
+from imucalib.io.opening import open_recording
+from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig, SpecLimits
 from imucalib.procedures import registry
 from imucalib.records.api import open_records
 
@@ -36,8 +44,8 @@ def test_a_run_writes_the_facts_and_the_stored_plan_says_the_same(tumble_run):
     assert {"accel_accuracy_g", "gyro_accuracy_dps"} <= set(ctx.imu_spec)
     # a recording made before the runner wrote the keys: the same facts from its plan
     older = {k: v for k, v in meta.items()
-             if k not in ("procedure", "plan_name", "acceptance", "equipment_json",
-                          "imu_spec_json")}
+             if k not in ("procedure", "plan_name", "acceptance", "guard_band_k",
+                          "equipment_json", "imu_spec_json")}
     assert RecordingContext.of(older) == ctx
     assert RecordingContext.of({}) == RecordingContext()
     assert RecordingContext.of({"plan_toml": "not [toml"}) == RecordingContext()
@@ -53,3 +61,54 @@ def test_the_records_get_the_plan_name(tumble_run, tmp_path):
     finally:
         records.close()
     assert run.procedure == "tumble"
+
+
+#: The keys a run writes of its plan's facts besides the plan and its hash.
+CONTEXT_KEYS = ("procedure", "plan_name", "acceptance", "guard_band_k", "equipment_json",
+                "imu_spec_json")
+
+
+def test_the_keys_are_the_plan_tables_fields():
+    """The context carries every field P1 builds its models from (io cannot import plan)."""
+    assert set(SPEC_LIMIT_KEYS) == set(SpecLimits.model_fields)
+    assert set(ImuSpecConfig.model_fields) == {*IMU_SPEC_KEYS, *IMU_UNIT_KEYS, "limits"}
+    assert set(EQUIPMENT_KEYS) <= set(EquipmentConfig.model_fields)
+    assert set(AcceptanceConfig.model_fields) == {"rule", "guard_band_k"}
+
+
+def test_a_p1_run_writes_the_specification_and_the_rule(consumer_run):
+    """The unit, its limits and the guard band are keys of their own; without them (an older
+    recording) the stored plan gives the same facts, fact by fact."""
+    with open_recording(consumer_run) as rec:
+        meta = dict(rec.metadata)
+    assert meta["guard_band_k"] == 2.0 and meta["acceptance"] == "simple"
+    imu = meta["imu_spec_json"]  # decoded by the reader
+    assert imu["grade"] == "consumer" and imu["limits"]["accel_bias_ug"] == 160000.0
+    ctx = RecordingContext.of(meta)
+    assert ctx.imu_unit == {"grade": "consumer"}  # no serial: the plan names none
+    assert ctx.spec_limits == imu["limits"] and set(ctx.spec_limits) == set(SPEC_LIMIT_KEYS)
+    assert ctx.guard_band_k == 2.0 and ctx.imu_table == imu
+    assert RecordingContext.of({k: v for k, v in meta.items() if k not in CONTEXT_KEYS}) == ctx
+    # a run from before the unit and the limits were keys: only they come from the plan
+    between = {**meta, "imu_spec_json": {k: imu[k] for k in IMU_SPEC_KEYS if k in imu}}
+    del between["guard_band_k"]
+    assert RecordingContext.of(between) == ctx
+    # the keys alone, without the plan's TOML
+    assert RecordingContext.of({k: v for k, v in meta.items() if k != "plan_toml"}) == ctx
+
+
+def test_the_metadata_round_trips_as_json_text_or_decoded():
+    ctx = RecordingContext(procedure="p1", plan_name="n", plan_hash="h",
+                           equipment={"table_position_accuracy_arcsec": 3.0},
+                           imu_spec={"accel_accuracy_g": 0.001}, imu_unit={"serial": "S"},
+                           spec_limits={"gyro_bias_dph": 4.0}, acceptance="guarded",
+                           guard_band_k=3.0)
+    meta = ctx.metadata()
+    assert RecordingContext.of(meta) == ctx
+    decoded = {k: json.loads(v) if k.endswith("_json") else v for k, v in meta.items()}
+    assert RecordingContext.of(decoded) == ctx
+    assert RecordingContext().metadata() == {}
+    # text, booleans and non-finite numbers give no fact
+    assert RecordingContext.of({"guard_band_k": "2", "equipment_json": {
+        "table_position_accuracy_arcsec": True, "table_orthogonality_arcsec": float("nan")},
+        "imu_spec_json": {"serial": 7, "limits": {"gyro_bias_dph": "x"}}}) == RecordingContext()

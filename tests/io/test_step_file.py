@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 from imucalib.cli import app
 from imucalib.errors import InvalidInputError
 from imucalib.io.csv_recording import recording_from_csv
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.io.step_file import (
     StepFile,
     parse_step_file,

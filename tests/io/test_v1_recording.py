@@ -121,7 +121,7 @@ def test_p1_calibrates_the_v1_file_without_its_plan(v1_copy, before):
     with h5py.File(v1_copy, "r+") as f:
         del f.attrs["plan_toml"]
     analysis = analyze_p1(v1_copy, options=FAST)
-    assert analysis.observations.plan is None
+    assert not analysis.observations.context.has_plan
     np.testing.assert_allclose(analysis.result.values, before["values"], rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(np.sqrt(np.diag(analysis.result.covariance)), before["sigma"],
                                rtol=1e-9)

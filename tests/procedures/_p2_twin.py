@@ -112,7 +112,7 @@ def true_parameters(path: Path, unit: str, points: list[tuple[int, float]]
     averaged over the point's measuring windows (small temperature reversals while a point
     holds erode it by a few per cent: minor loops of the Duhem model).
     """
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
     from imucalib.models.imu import ImuModel
     from imucalib.models.temperature import hysteresis_state
     from imucalib.procedures.p2.reduction import PARAM_NAMES

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from imucalib import units
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.plan.schema import Plan
 from imucalib.procedures.p3.plan import UNIT_NAMES, generate_p3_plan
 from imucalib.station.runner import RunOptions, run_plan

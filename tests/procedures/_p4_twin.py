@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.plan.schema import Plan
 from imucalib.station.runner import RunOptions, run_plan
 from imucalib.station.sim import SimStation

@@ -18,7 +18,7 @@ import pytest
 from typer.testing import CliRunner
 
 from imucalib.cli import app
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.models.result import CalibrationResult
 from imucalib.procedures import generate_p1_plan
 from imucalib.procedures.p1.analysis import analyze_p1

@@ -26,7 +26,7 @@ import pytest
 from typer.testing import CliRunner
 
 from imucalib.cli import app
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.io.step_file import load_step_file
 from imucalib.plan.schema import Plan
 from imucalib.procedures import registry

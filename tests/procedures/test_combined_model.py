@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.models.combine import combine_triad_parameters
 from imucalib.models.result import CalibrationResult
 from imucalib.plan.schema import Plan

@@ -196,7 +196,7 @@ def test_the_guided_plan_runs_on_the_twin_station_in_the_six_position_form(tmp_p
     path = run_twin(plan, tmp_path / "field.h5")
     r = registry.get("field").analyze(path)
     assert r.accel_form == "six-position" and r.gyro_form == "static only"
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
 
     with open_recording(path) as rec:
         model = rec.truth["imu_models"]["IMU-0001"]

@@ -14,6 +14,18 @@ from imucalib.plan import parse_plan
 from imucalib.procedures.p1.analysis import P1Options, analyze_p1
 
 FAST = P1Options(hash_recording=False)
+#: What a run writes of its plan: the plan, its hash and the facts read from it (io/context.py).
+PLAN_KEYS = ("plan_toml", "plan_hash", "procedure", "plan_name", "acceptance", "guard_band_k",
+             "equipment_json", "imu_spec_json")
+
+
+def _planless_copy(run, path):
+    """A copy of `run` as a recording no plan made: without the plan and its facts."""
+    shutil.copyfile(run, path)
+    with h5py.File(path, "r+") as f:
+        for key in PLAN_KEYS:
+            f.attrs.pop(key, None)
+    return path
 
 
 def test_a_station_run_stores_each_steps_role_tags_and_units(tactical_run):
@@ -31,16 +43,14 @@ def test_a_station_run_stores_each_steps_role_tags_and_units(tactical_run):
 
 
 def test_a_recording_without_its_plan_calibrates_the_same(tactical_run, tmp_path):
-    """Without the plan: the same windows, estimates and Type B (the defaults, which the
-    generated plan also uses); no specification to accept against, so that check is not
-    assessed, and the held-out limits are the generic defaults (the checks still pass)."""
-    bare = tmp_path / "bare.h5"
-    shutil.copyfile(tactical_run, bare)
-    with h5py.File(bare, "r+") as f:
-        del f.attrs["plan_toml"]
+    """Without the plan (and the facts a run writes from it): the same windows, estimates and
+    Type B (the defaults, which the generated plan also uses); no specification to accept
+    against, so that check is not assessed, and the held-out limits are the generic defaults
+    (the checks still pass)."""
+    bare = _planless_copy(tactical_run, tmp_path / "bare.h5")
     with_plan = analyze_p1(tactical_run, options=FAST)
     without = analyze_p1(bare, options=FAST)
-    assert without.observations.plan is None
+    assert not without.observations.context.has_plan and without.observations.imu_spec is None
     np.testing.assert_array_equal(without.result.values, with_plan.result.values)
     np.testing.assert_array_equal(without.result.covariance, with_plan.result.covariance)
     spec_without = {c.name: c for c in without.checks}.pop("specification")
@@ -63,10 +73,8 @@ def test_the_equipment_accuracy_can_be_given_as_options(tactical_run):
 
 
 def test_steps_without_roles_or_a_plan_say_so(tactical_run, tmp_path):
-    bare = tmp_path / "bare.h5"
-    shutil.copyfile(tactical_run, bare)
+    bare = _planless_copy(tactical_run, tmp_path / "bare.h5")
     with h5py.File(bare, "r+") as f:
-        del f.attrs["plan_toml"]
         n = f["steps/role"].shape[0]
         f["steps/role"][:n] = np.full(n, b"", dtype=f["steps/role"].dtype)
         f["steps/tags"][:n] = np.full(n, b"[]", dtype=f["steps/tags"].dtype)

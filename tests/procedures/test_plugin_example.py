@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "imucalib-scale-factor"
 UNIT = "IMU-0001"

@@ -67,7 +67,7 @@ def test_twin_white_noise_scatter_matches_the_per_repetition_sigma(tmp_path):
 def test_twin_grade_noise_scatter_against_the_noise_model(tmp_path):
     path = run_twin(_plan(4, noise="grade"), tmp_path / "g.h5")
     result = analyze_random_drift(path)
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
 
     with open_recording(path) as rec:
         noise = rec.truth["imu_models"][result.unit]["gyro_noise"]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from imucalib.errors import ConfigurationError, MissingSegmentError, SaturationError
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.plan.schema import GuardConfig
 from imucalib.procedures import registry
 from imucalib.procedures.common.reference import site_vectors

@@ -20,7 +20,7 @@ from imucalib.errors import (
     MissingSegmentError,
     RecordingError,
 )
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.plan.schema import Plan
 from imucalib.procedures import registry
 from imucalib.procedures.tumble.analysis import TumbleOptions, TumbleResult, analyze_tumble

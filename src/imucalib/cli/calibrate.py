@@ -342,7 +342,7 @@ def apply(
             return fixed
 
         if data.suffix.lower() in (".h5", ".hdf5"):
-            from imucalib.io.reader import open_recording
+            from imucalib.io.opening import open_recording
 
             if spec != ImportSpec():
                 raise InvalidInputError(f"{data} is a Recording: the import options (--import, "

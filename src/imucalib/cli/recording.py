@@ -77,7 +77,7 @@ def export(
     (``.result.json``) to ``--format`` (the C99 runtime, docs/c-runtime.md).
     """
     from imucalib.exports.streams import export_csv, export_mat
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
     from imucalib.io.step_file import step_file_from_recording, step_file_to_toml
 
     if path.suffix.lower() == ".json" or fmt is not None:
@@ -196,7 +196,7 @@ def _imu_arrays(path: Path, unit: str | None, spec: Any = None) -> tuple[str, An
     from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 
     if path.suffix.lower() in (".h5", ".hdf5"):
-        from imucalib.io.reader import open_recording
+        from imucalib.io.opening import open_recording
         from imucalib.io.streams import DEVICE_IMU
 
         with open_recording(path) as rec:

@@ -20,7 +20,7 @@ __all__ = ["report"]
 
 
 def _analyse(path: Path, imu: str | None) -> Any:
-    from imucalib.io.reader import open_recording
+    from imucalib.io.opening import open_recording
     from imucalib.procedures import registry
 
     with open_recording(path) as rec:

@@ -24,7 +24,8 @@ import numpy as np
 
 from imucalib.conventions import TIME_COLUMN
 from imucalib.errors import InvalidInputError, RecordingError
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 
 __all__ = ["MAT_V5_MAX_BYTES", "export_csv", "export_mat"]
 

@@ -4,9 +4,11 @@ Contents
 --------
 :class:`RecordingWriter`, :class:`StreamSpec`, :class:`ColumnSpec`
     Write a Recording (:mod:`imucalib.io.recording`, which documents the file format).
-:func:`open_recording`, :class:`Recording`, :class:`StreamInfo`, :class:`StreamData`,
-:class:`StepRecord`, :class:`LogEvent`
-    Read one (:mod:`imucalib.io.reader`).
+:func:`open_recording`
+    Open one for reading, after checking its layout and time bases (:mod:`imucalib.io.opening`).
+:class:`Recording`, :class:`StreamInfo`, :class:`StreamData`, :class:`StepRecord`,
+:class:`LogEvent`
+    Read it (:mod:`imucalib.io.reader`).
 :class:`EventKind`
     The kinds of station event in a Recording's log: remount, swap, load
     (:mod:`imucalib.io.events`).
@@ -20,14 +22,8 @@ A stream or a step of it is exported to CSV or MAT by :mod:`imucalib.exports.str
 from __future__ import annotations
 
 from imucalib.io.events import EventKind
-from imucalib.io.reader import (
-    LogEvent,
-    Recording,
-    StepRecord,
-    StreamData,
-    StreamInfo,
-    open_recording,
-)
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import LogEvent, Recording, StepRecord, StreamData, StreamInfo
 from imucalib.io.recording import (
     FORMAT_NAME,
     FORMAT_VERSION,

@@ -1,52 +1,100 @@
 """What a recording says about its calibration, read in one place: :class:`RecordingContext`.
 
-A station run writes, besides the plan it ran (``plan_toml``, kept as provenance), the facts
-an analysis, a report or the records need as metadata keys of their own (docs/recording-format.md):
-the ``procedure``, the ``plan_name`` and ``plan_hash``, the equipment accuracies
-(``equipment_json``), the IMU's specification (``imu_spec_json``) and the decision rule
-(``acceptance``); an import from a CSV and its step file writes the same keys. A recording made
-before the runner wrote them (format v2 of an earlier version) has them only inside its stored
-plan: :meth:`RecordingContext.of` then reads that TOML as plain data. Nothing else parses the
-stored plan for these facts.
+A station run writes, besides the plan it ran (``plan_toml``, kept as provenance only), the
+facts an analysis, a report or the records need as metadata keys of their own
+(docs/recording-format.md, "Root attributes"): the ``procedure``, the ``plan_name`` and
+``plan_hash``, the equipment accuracies (``equipment_json``), the IMU's specification
+(``imu_spec_json``: the unit's identity, its held-out accuracies and gyro noise, and its
+per-parameter limits under ``"limits"``, the plan's ``[imu]`` table) and the decision rule
+(``acceptance`` and ``guard_band_k``); an import from a CSV and its step file writes the keys
+its step file gives. A recording made before the runner wrote a fact as a key of its own has it
+only inside its stored plan: :meth:`RecordingContext.of` then reads that TOML as plain data,
+fact by fact. Nothing else parses the stored plan for these facts.
+
+The facts are plain values (this package sits below :mod:`imucalib.plan`): a procedure builds
+its configuration models from them (P1: :mod:`imucalib.procedures.p1.observations`).
 
 Contents
 --------
 :class:`RecordingContext`
+    The facts, :meth:`~RecordingContext.of` a recording's metadata, :meth:`~RecordingContext.
+    of_plan` a plan given as plain data, and the :meth:`~RecordingContext.metadata` keys that
+    carry them.
+:data:`EQUIPMENT_KEYS`, :data:`IMU_SPEC_KEYS`, :data:`IMU_UNIT_KEYS`, :data:`SPEC_LIMIT_KEYS`
+    Which entries of the plan's tables it carries.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["RecordingContext"]
+__all__ = ["EQUIPMENT_KEYS", "IMU_SPEC_KEYS", "IMU_UNIT_KEYS", "SPEC_LIMIT_KEYS",
+           "RecordingContext"]
 
 #: The equipment accuracies a calibration uses (plan table ``[equipment]``).
 EQUIPMENT_KEYS = ("table_position_accuracy_arcsec", "table_orthogonality_arcsec")
-#: The IMU specification a calibration checks against (plan table ``[imu]``).
+#: The numbers of the IMU specification (plan table ``[imu]``): held-out accuracies, gyro noise.
 IMU_SPEC_KEYS = ("accel_accuracy_g", "gyro_accuracy_dps", "gyro_noise_dps")
+#: The identity of the unit under test (plan table ``[imu]``).
+IMU_UNIT_KEYS = ("serial", "model", "maker", "grade")
+#: The per-parameter specification limits (plan table ``[imu.limits]``; the fields of
+#: :class:`imucalib.plan.schema.SpecLimits`, which tests/io/test_recording_context.py checks).
+SPEC_LIMIT_KEYS = ("accel_bias_ug", "accel_scale_ppm", "accel_misalignment_urad",
+                   "gyro_bias_dph", "gyro_scale_ppm", "gyro_misalignment_urad",
+                   "gyro_g_sensitivity_dph_per_g", "gyro_arw_deg_rth", "accel_vrw_ug_rthz")
+
+
+def _text(value: Any) -> str:
+    """Return `value` as text, ``""`` when it is absent or empty."""
+    return str(value) if value else ""
+
+
+def _number(value: Any) -> float | None:
+    """Return `value` as a float when it is a finite number (not a bool), else None."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        try:  # an HDF5 attribute comes back as a NumPy scalar
+            value = value.item() if hasattr(value, "item") else None
+        except (TypeError, ValueError):
+            return None
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return None
+    return float(value) if math.isfinite(value) else None
 
 
 def _numbers(table: Any, keys: tuple[str, ...]) -> dict[str, float]:
     """Return the numeric entries of `table` among `keys` (booleans and text left out)."""
     if not isinstance(table, Mapping):
         return {}
-    return {k: float(table[k]) for k in keys
-            if isinstance(table.get(k), int | float) and not isinstance(table.get(k), bool)}
+    return {k: v for k in keys if (v := _number(table.get(k))) is not None}
 
 
-def _json_table(text: Any) -> dict[str, Any]:
-    """Return a ``*_json`` metadata value as a dict ({} when absent or not an object)."""
-    if not text:
+def _texts(table: Any, keys: tuple[str, ...]) -> dict[str, str]:
+    """Return the non-empty text entries of `table` among `keys`."""
+    if not isinstance(table, Mapping):
+        return {}
+    return {k: v for k in keys if isinstance(v := table.get(k), str) and v}
+
+
+def _json_table(value: Any) -> dict[str, Any]:
+    """Return a ``*_json`` metadata value as a dict ({} when absent or not an object).
+
+    :attr:`imucalib.io.reader.Recording.metadata` has decoded it already; a metadata mapping
+    made by hand may hold the JSON text.
+    """
+    if isinstance(value, Mapping):
+        return dict(value)
+    if not value:
         return {}
     try:
-        value = json.loads(str(text))
+        decoded = json.loads(str(value))
     except json.JSONDecodeError:
         return {}
-    return value if isinstance(value, dict) else {}
+    return decoded if isinstance(decoded, dict) else {}
 
 
 @dataclass(frozen=True)
@@ -62,9 +110,15 @@ class RecordingContext:
     equipment : dict of str to float
         The equipment accuracies (:data:`EQUIPMENT_KEYS`) that were given.
     imu_spec : dict of str to float
-        The IMU specification (:data:`IMU_SPEC_KEYS`) that was given.
+        The numbers of the IMU specification (:data:`IMU_SPEC_KEYS`) that were given.
+    imu_unit : dict of str to str
+        The unit's identity in its specification (:data:`IMU_UNIT_KEYS`) that was given.
+    spec_limits : dict of str to float
+        The per-parameter specification limits (:data:`SPEC_LIMIT_KEYS`) that were given.
     acceptance : str
         The decision rule (``"simple"``, ``"guarded"``); ``""`` when not given.
+    guard_band_k : float or None
+        k of a guarded rule (the guard band in standard uncertainties); None when not given.
     """
 
     procedure: str = ""
@@ -72,45 +126,98 @@ class RecordingContext:
     plan_hash: str = ""
     equipment: dict[str, float] = field(default_factory=dict)
     imu_spec: dict[str, float] = field(default_factory=dict)
+    imu_unit: dict[str, str] = field(default_factory=dict)
+    spec_limits: dict[str, float] = field(default_factory=dict)
     acceptance: str = ""
+    guard_band_k: float | None = None
+
+    @property
+    def has_plan(self) -> bool:
+        """Whether the recording names the plan it was made from (its hash alone gives no fact)."""
+        return bool(self.plan_name)
+
+    @classmethod
+    def of_plan(cls, plan: Mapping[str, Any], plan_hash: str = "") -> RecordingContext:
+        """Read the context from a plan given as plain data.
+
+        Parameters
+        ----------
+        plan : mapping
+            A parsed plan TOML, or ``Plan.model_dump(mode="json")``: its ``procedure``,
+            ``name`` and the tables ``[equipment]``, ``[imu]`` (with ``[imu.limits]``) and
+            ``[acceptance]``. Entries of another type, and tables that are missing, give no
+            fact; nothing is validated.
+        plan_hash : str
+            The plan's hash (a plan does not hold its own).
+        """
+        imu = plan.get("imu")
+        acceptance = plan.get("acceptance")
+        acceptance = acceptance if isinstance(acceptance, Mapping) else {}
+        rule = acceptance.get("rule")
+        return cls(procedure=_text(plan.get("procedure")), plan_name=_text(plan.get("name")),
+                   plan_hash=plan_hash,
+                   equipment=_numbers(plan.get("equipment"), EQUIPMENT_KEYS),
+                   imu_spec=_numbers(imu, IMU_SPEC_KEYS), imu_unit=_texts(imu, IMU_UNIT_KEYS),
+                   spec_limits=_numbers(imu.get("limits") if isinstance(imu, Mapping) else None,
+                                        SPEC_LIMIT_KEYS),
+                   acceptance=rule if isinstance(rule, str) else "",
+                   guard_band_k=_number(acceptance.get("guard_band_k")))
 
     @classmethod
     def of(cls, metadata: Mapping[str, Any]) -> RecordingContext:
         """Read the context from a recording's metadata (its own keys; else its stored plan).
 
-        A stored plan that is not valid TOML counts as no plan (the analysis that needs the
-        plan itself says so).
+        Each fact (the procedure, the plan's name and hash, the equipment accuracies, the
+        specification's numbers, the unit's identity, the limits, the rule, the guard band)
+        comes from the recording's own key when that gives it, else from the stored plan
+        (``plan_toml``, read as plain data): a recording written before the runner wrote a fact
+        gives it as its plan states it. A stored plan that is not valid TOML counts as no plan.
         """
-        plan: dict[str, Any] = {}
+        planned = RecordingContext()
         text = metadata.get("plan_toml")
         if text:
             try:
-                plan = tomllib.loads(str(text))
+                planned = cls.of_plan(tomllib.loads(str(text)))
             except tomllib.TOMLDecodeError:
-                plan = {}
+                pass
+        imu = _json_table(metadata.get("imu_spec_json"))
+        own = cls(procedure=_text(metadata.get("procedure")),
+                  plan_name=_text(metadata.get("plan_name")),
+                  plan_hash=_text(metadata.get("plan_hash")),
+                  equipment=_numbers(_json_table(metadata.get("equipment_json")),
+                                     EQUIPMENT_KEYS),
+                  imu_spec=_numbers(imu, IMU_SPEC_KEYS), imu_unit=_texts(imu, IMU_UNIT_KEYS),
+                  spec_limits=_numbers(imu.get("limits"), SPEC_LIMIT_KEYS),
+                  acceptance=_text(metadata.get("acceptance")),
+                  guard_band_k=_number(metadata.get("guard_band_k")))
+        return cls(procedure=own.procedure or planned.procedure,
+                   plan_name=own.plan_name or planned.plan_name,
+                   plan_hash=own.plan_hash or planned.plan_hash,
+                   equipment=own.equipment or planned.equipment,
+                   imu_spec=own.imu_spec or planned.imu_spec,
+                   imu_unit=own.imu_unit or planned.imu_unit,
+                   spec_limits=own.spec_limits or planned.spec_limits,
+                   acceptance=own.acceptance or planned.acceptance,
+                   guard_band_k=(own.guard_band_k if own.guard_band_k is not None
+                                 else planned.guard_band_k))
 
-        def text_of(key: str, fallback: Any) -> str:
-            value = metadata.get(key)
-            return str(value) if value else (str(fallback) if fallback else "")
+    @property
+    def imu_table(self) -> dict[str, Any]:
+        """The IMU specification as the plan's ``[imu]`` table: identity, numbers, ``limits``."""
+        table: dict[str, Any] = {**self.imu_unit, **self.imu_spec}
+        if self.spec_limits:
+            table["limits"] = dict(self.spec_limits)
+        return table
 
-        acceptance = plan.get("acceptance")
-        rule = acceptance.get("rule") if isinstance(acceptance, Mapping) else None
-        equipment = _numbers(_json_table(metadata.get("equipment_json")), EQUIPMENT_KEYS) or \
-            _numbers(plan.get("equipment"), EQUIPMENT_KEYS)
-        imu_spec = _numbers(_json_table(metadata.get("imu_spec_json")), IMU_SPEC_KEYS) or \
-            _numbers(plan.get("imu"), IMU_SPEC_KEYS)
-        return cls(procedure=text_of("procedure", plan.get("procedure")),
-                   plan_name=text_of("plan_name", plan.get("name")),
-                   plan_hash=text_of("plan_hash", None),
-                   equipment=equipment, imu_spec=imu_spec,
-                   acceptance=text_of("acceptance", rule))
-
-    def metadata(self) -> dict[str, str]:
+    def metadata(self) -> dict[str, str | float]:
         """Return the metadata keys that carry this context (what a run or an import writes)."""
-        out = {"procedure": self.procedure, "plan_name": self.plan_name,
-               "plan_hash": self.plan_hash, "acceptance": self.acceptance}
+        out: dict[str, str | float] = {
+            "procedure": self.procedure, "plan_name": self.plan_name,
+            "plan_hash": self.plan_hash, "acceptance": self.acceptance}
+        if self.guard_band_k is not None:
+            out["guard_band_k"] = self.guard_band_k
         if self.equipment:
             out["equipment_json"] = json.dumps(self.equipment)
-        if self.imu_spec:
-            out["imu_spec_json"] = json.dumps(self.imu_spec)
-        return {k: v for k, v in out.items() if v}
+        if imu := self.imu_table:
+            out["imu_spec_json"] = json.dumps(imu)
+        return {k: v for k, v in out.items() if v != ""}

@@ -55,6 +55,7 @@ from imucalib.conventions import (
 )
 from imucalib.errors import InvalidInputError
 from imucalib.io._schema import ColumnSpec, StreamSpec
+from imucalib.io.context import RecordingContext
 from imucalib.io.csv_import import DEFAULT_CHUNK_ROWS, iter_imu_csv
 from imucalib.io.hashing import file_sha256
 from imucalib.io.import_spec import ImportSpec, iter_imu_table
@@ -251,15 +252,15 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
         meta["table_feedback"] = TABLE_FEEDBACK_RECONSTRUCTED
     if steps.latitude_deg is not None:
         meta["latitude_deg"] = steps.latitude_deg
-    equipment = {k: v for k, v in (
-        ("table_position_accuracy_arcsec", steps.table_position_accuracy_arcsec),
-        ("table_orthogonality_arcsec", steps.table_orthogonality_arcsec)) if v is not None}
-    imu_spec = {k: v for k, v in (("accel_accuracy_g", steps.accel_accuracy_g),
-                              ("gyro_accuracy_dps", steps.gyro_accuracy_dps)) if v is not None}
-    if equipment:
-        meta["equipment_json"] = json.dumps(equipment)
-    if imu_spec:
-        meta["imu_spec_json"] = json.dumps(imu_spec)
+    # what the step file gives of the context, in the keys a run writes (io/context.py)
+    context = RecordingContext(
+        equipment={k: float(v) for k, v in (
+            ("table_position_accuracy_arcsec", steps.table_position_accuracy_arcsec),
+            ("table_orthogonality_arcsec", steps.table_orthogonality_arcsec)) if v is not None},
+        imu_spec={k: float(v) for k, v in (("accel_accuracy_g", steps.accel_accuracy_g),
+                                           ("gyro_accuracy_dps", steps.gyro_accuracy_dps))
+                  if v is not None})
+    meta.update(context.metadata())
 
     counter = None if file_counter else _counter(t, rate_hz)
     n = t.size

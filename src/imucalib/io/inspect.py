@@ -24,7 +24,7 @@ import numpy as np
 
 from imucalib.conventions import COUNTER_COLUMN, TIME_COLUMN
 from imucalib.io.events import EventKind
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -225,7 +225,7 @@ def summarize_recording(path: str | Path, *, chunk_samples: int = 1 << 18) -> Re
     Raises
     ------
     RecordingFormatError, RecordingCorruptError
-        From :func:`~imucalib.io.reader.open_recording`.
+        From :func:`~imucalib.io.opening.open_recording`.
     """
     with open_recording(path) as rec:
         streams = [_scan_stream(rec, info, chunk_samples) for info in rec.streams]

@@ -2,31 +2,27 @@
 
 Contents
 --------
-:func:`open_recording`
-    Open a Recording (a context manager), including one a crashed writer left open.
 :class:`Recording`
     The opened file: ``metadata``, ``streams``, ``read_stream``, ``iter_stream``, ``steps``,
     ``read_step``, ``log``, ``events``, ``truth``, ``read_truth_stream``, ``to_dataframe``.
+    Made by :func:`~imucalib.io.opening.open_recording`, which checks the file first.
 :class:`StreamInfo`, :class:`StreamData`, :class:`StepRecord`, :class:`LogEvent`
     What it returns.
 
 Time windows are half-open: ``t_start_s <= time_s < t_end_s``. They are located by bisection on
 the ``time_s`` dataset (single-element reads, then one block), so only the rows needed are read.
-The format is described in :mod:`imucalib.io.recording`.
+The format is described in :mod:`imucalib.io.recording` and ``docs/recording-format.md``.
 
-Opening validates the file (:mod:`imucalib.io._validate`): the layout, the commit counts, the
-committed rows of the steps and log, and every stream's committed time base. The layout is first
-read in a forked child process with a time limit (:mod:`imucalib.io._probe`), because damaged
-HDF5 metadata can make the HDF5 library hang or crash. Every problem, and every h5py exception
-met later while reading, becomes a :class:`~imucalib.errors.RecordingError` with one line naming
-the file, what was found and what was expected.
+Opening (:mod:`imucalib.io.opening`) validates the layout, the commit counts, the committed rows
+of the steps and log and every stream's time base; every h5py exception met later while reading
+becomes a :class:`~imucalib.errors.RecordingCorruptError` with one line naming the file, what was
+found and what was expected.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,18 +34,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.conventions import TIME_COLUMN
-from imucalib.errors import (
-    CalibrationError,
-    InvalidInputError,
-    RecordingCorruptError,
-    RecordingError,
-    RecordingOpenForWriteError,
-)
-from imucalib.io._open import open_h5
-from imucalib.io._probe import run_probe
+from imucalib.errors import CalibrationError, InvalidInputError
 from imucalib.io._schema import (
     COMMIT_GROUP,
-    FORMAT_VERSION,
     LOG_FIELDS,
     LOG_GROUP,
     STEPS_GROUP,
@@ -65,24 +52,13 @@ from imucalib.io._schema import (
 )
 from imucalib.io._search import scan_sorted_dataset, search_sorted_dataset
 from imucalib.io._v1 import v1_plan, v1_role_and_tags
-from imucalib.io._validate import (
-    H5PY_ERRORS,
-    Layout,
-    check_layout,
-    check_root,
-    check_time_bases,
-    damaged,
-    from_h5py,
-    h5call,
-    parse_columns,
-    touch_all,
-)
+from imucalib.io._validate import H5PY_ERRORS, Layout, damaged, from_h5py, parse_columns
 from imucalib.io.events import EventKind, as_event_kind, event_kind
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo", "open_recording"]
+__all__ = ["LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo"]
 
 #: Window ends from which :meth:`Recording.iter_windows` finds its rows by one pass over the
 #: time column rather than a search per end (a search costs a few small reads).
@@ -201,153 +177,15 @@ class _Layout:
         return f"{self.device}/{self.unit}"
 
 
-def open_recording(path: str | os.PathLike[str], *, strict: bool = False, probe: bool = True,
-                   probe_timeout_s: float | None = None) -> Recording:
-    """Open a Recording for reading, after checking its layout and time bases.
-
-    A file left open by a crashed (or still running) writer is opened in SWMR-read mode and
-    ``recording.was_open_for_write`` is set; it then shows every row flushed before the crash.
-
-    Opening validates the file (see ``docs/recording-format.md``): root attributes, groups,
-    commit counts, stream columns, the committed rows of the steps and log, and every stream's
-    committed ``time_s`` (finite, never decreasing, in ``[0, 1e9]`` s). Any problem raises a
-    typed error naming the file, what was found and what was expected.
-
-    Parameters
-    ----------
-    path : str or Path
-        The ``.h5`` file.
-    strict : bool
-        Refuse a file a writer left open instead of reading it.
-    probe : bool
-        Read the file's metadata first in a forked child process that is killed after
-        `probe_timeout_s` (damaged HDF5 metadata can make the HDF5 library hang or crash; the
-        probe turns that into :class:`RecordingCorruptError`). It costs about 20 ms
-        (docs/recording-format.md, "Cost of opening").
-    probe_timeout_s : float, optional
-        Time limit of the probe [s]; default :data:`imucalib.io._probe.PROBE_TIMEOUT_S` (10 s).
-
-    Returns
-    -------
-    Recording
-        Use it as a context manager, or call :meth:`Recording.close`.
-
-    Raises
-    ------
-    RecordingError
-        If the file does not exist.
-    RecordingFormatError
-        A foreign HDF5 file (the message names what it holds) or a newer ``format_version``.
-    RecordingCorruptError
-        A truncated, garbage or damaged file; the message says what is wrong and, where it
-        helps, suggests ``imucalib recover``.
-    RecordingOpenForWriteError
-        With ``strict=True``, for a file a writer left open.
-    """
-    rec, _ = _open(Path(path), strict=strict, probe=probe, probe_timeout_s=probe_timeout_s,
-                   lenient=False)
-    return rec
-
-
-def open_damaged(path: Path, *, probe: bool = True, probe_timeout_s: float | None = None
-                 ) -> tuple[Recording, RecordingCorruptError | None]:
-    """Open a Recording even if its layout or time bases are damaged (for recovery; private).
-
-    Returns the Recording (its cached layout is empty when damaged, so that it reads the file
-    as it is) and the damage found, if any. Foreign, newer, unopenable files and files that
-    make HDF5 hang or crash still raise.
-    """
-    return _open(path, strict=False, probe=probe, probe_timeout_s=probe_timeout_s, lenient=True)
-
-
-def _checked_layout(p: Path, f: h5py.File, lenient: bool
-                    ) -> Layout | RecordingCorruptError:
-    try:
-        return check_layout(p, f)
-    except RecordingCorruptError as exc:
-        if not lenient:
-            raise
-        return exc
-
-
-def _probe_work(p: Path, lenient: bool) -> Callable[[Callable[[str], None]],
-                                                   Layout | RecordingCorruptError]:
-    """Make the work of a probe's child: the layout check, with `lenient` (recovery) a walk.
-
-    The reader reads nothing the layout check and the root attributes do not cover; recovery
-    also copies every dataset's attributes, so it walks the whole file first.
-    """
-    def work(progress: Callable[[str], None]) -> Layout | RecordingCorruptError:
-        f, _ = _open_h5(p)
-        progress("the root attributes")
-        _root_version(p, f, lenient)  # a foreign file goes no further
-        if lenient:
-            touch_all(f, progress)
-        else:
-            h5call(p, "the root attributes", lambda: dict(f.attrs.items()))
-        progress("the layout (groups, commit counts, stream columns, steps, log, truth)")
-        return _checked_layout(p, f, lenient)
-    return work
-
-
-def _root_version(p: Path, f: h5py.File, lenient: bool) -> int:
-    """Return the format version; with `lenient`, a damaged one counts as the current one."""
-    try:
-        return check_root(p, f)
-    except RecordingCorruptError:
-        if not lenient:
-            raise
-        return FORMAT_VERSION
-
-
-def _open_h5(p: Path) -> tuple[h5py.File, bool]:
-    try:
-        return open_h5(p)
-    except H5PY_ERRORS as exc:
-        if isinstance(exc, RecordingError) or not from_h5py(exc):
-            raise
-        raise RecordingCorruptError(f"{p} cannot be opened by HDF5 ({exc}); it is damaged"
-                                    ) from exc
-
-
-def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, lenient: bool
-          ) -> tuple[Recording, RecordingCorruptError | None]:
-    found = run_probe(p, _probe_work(p, lenient), timeout_s=probe_timeout_s) if probe else None
-    f, was_open = _open_h5(p)
-    try:
-        if strict and was_open:
-            raise RecordingOpenForWriteError(
-                f"{p} is still marked open for writing (its writer crashed, was killed while "
-                f"closing, or is still running); `imucalib run --resume {p}` finishes a station "
-                f"run (it recovers and closes the file first), `imucalib recover {p}` copies "
-                "what was flushed into a cleanly closed file, or open it with strict=False to "
-                "read it in SWMR mode")
-        if found is None:
-            found = _checked_layout(p, f, lenient)
-        damage = found if isinstance(found, RecordingCorruptError) else None
-        layout = None if isinstance(found, RecordingCorruptError) else found
-        if layout is not None:
-            try:
-                check_time_bases(p, f, layout.streams)
-            except RecordingCorruptError as exc:
-                if not lenient:
-                    raise
-                damage, layout = exc, None
-        version = (layout.format_version if layout is not None
-                   else _root_version(p, f, lenient))
-        rec = Recording(f, p, version, was_open_for_write=was_open, layout=layout)
-    except BaseException:
-        f.close()
-        raise
-    return rec, damage
-
-
 def _decode_text_array(values: NDArray[Any]) -> list[str]:
     return [decode_text(v) for v in values.tolist()]
 
 
 class Recording:
-    """An opened Recording (thin: it reads on demand). Make it with :func:`open_recording`."""
+    """An opened Recording (thin: it reads on demand).
+
+    Make it with :func:`~imucalib.io.opening.open_recording`.
+    """
 
     def __init__(self, file: h5py.File, path: Path, format_version: int, *,
                  was_open_for_write: bool, layout: Layout | None = None) -> None:

@@ -72,7 +72,7 @@ Appended rows are buffered in memory and written in large blocks. :meth:`Recordi
 when the buffers exceed ``buffer_limit_bytes``) writes every buffer, flushes HDF5, then
 commits the row counts. A writer killed at any moment loses at most what was appended after its
 last completed flush; the file then refuses a normal HDF5 open (its "open for write" flag stays
-set) but :func:`imucalib.io.reader.open_recording` reads it in SWMR mode, and
+set) but :func:`imucalib.io.opening.open_recording` reads it in SWMR mode, and
 :func:`imucalib.io.recover.recover_recording` copies it into a cleanly closed file. The flush
 makes data durable against the process dying (SIGKILL), not against power loss (no fsync).
 """
@@ -346,7 +346,7 @@ class RecordingWriter:
         RecordingFormatError, RecordingCorruptError, RecordingError
             If it is not a readable Recording of this format.
         """
-        from imucalib.io.reader import open_recording
+        from imucalib.io.opening import open_recording
         from imucalib.io.recover import compact_recording
 
         if not isinstance(compression, _Keep) and compression not in COMPRESSIONS:

@@ -12,7 +12,7 @@ The original is never modified. Each stream is copied up to its committed row co
 ``/commit`` entry of the format in :mod:`imucalib.io.recording`), capped by the shortest of its
 columns so that they stay aligned, and cut before the first row whose ``time_s`` is not finite,
 negative, implausibly late or decreasing; rows a writer had not committed, or that cannot be
-read, are dropped and reported. Damage that :func:`~imucalib.io.reader.open_recording` refuses is
+read, are dropped and reported. Damage that :func:`~imucalib.io.opening.open_recording` refuses is
 mended where it can be without inventing data: a missing ``/steps`` or ``/log`` is written empty,
 missing step fields get empty values, a ``commanded`` that is not JSON is cleared (and ``tags`` or
 ``units`` that are not JSON lists of strings), an unknown step
@@ -84,7 +84,8 @@ from imucalib.io.compression import (
     copy_filter_kwargs,
     needs_plugin,
 )
-from imucalib.io.reader import Recording, open_damaged, open_recording
+from imucalib.io.opening import open_damaged, open_recording
+from imucalib.io.reader import Recording
 
 __all__ = ["RecoveredStream", "RecoveryReport", "compact_recording", "recover_recording"]
 
@@ -596,7 +597,7 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
     RecordingError
         If `out_path` exists (and not `overwrite`), or the copy fails verification.
     RecordingFormatError, RecordingCorruptError
-        If the original cannot be read at all (see :func:`~imucalib.io.reader.open_recording`).
+        If the original cannot be read at all (see :func:`~imucalib.io.opening.open_recording`).
     """
     src = Path(path)
     out = Path(out_path) if out_path is not None else src.with_name(f"{src.stem}.recovered.h5")
@@ -643,7 +644,7 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
 
     The copy is written beside the original (``.<name>.compact.partial``), checked as
     :func:`recover_recording` checks its copies (every check of
-    :func:`~imucalib.io.reader.open_recording`, every column's SHA-256), and only then
+    :func:`~imucalib.io.opening.open_recording`, every column's SHA-256), and only then
     replaces the original (:func:`os.replace`, atomic on POSIX filesystems). A process killed
     before that leaves the original untouched (and the partial file behind). This is how a
     :class:`~imucalib.io.recording.RecordingWriter` compresses a file when it closes it, and

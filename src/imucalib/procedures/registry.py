@@ -20,9 +20,11 @@ kept (:func:`problems` says so; ``imucalib procedures`` lists it).
 
 Which procedure a recording belongs to (:func:`identify`): its steps' roles when they carry
 them (a role ``"p1.accel-position"`` names procedure ``p1``: the part before the first dot), else
-the ``procedure`` field of the plan stored in its metadata. Which roles exist is each
-procedure's ``roles`` (its folder's ``roles.py``): :func:`check_roles` refuses a role that its
-procedure does not have, where step roles come from outside a plan (a step file).
+the procedure its plan names (the recording's context,
+:class:`~imucalib.io.context.RecordingContext`: the ``procedure`` key a run writes, or its
+stored plan's). Which roles exist is each procedure's ``roles`` (its folder's ``roles.py``):
+:func:`check_roles` refuses a role that its procedure does not have, where step roles come from
+outside a plan (a step file).
 
 Contents
 --------
@@ -345,7 +347,7 @@ def identify(recording: Recording) -> str:
         return by_role
     context = RecordingContext.of(recording.metadata)
     if not context.procedure:
-        if not recording.metadata.get("plan_toml"):
+        if not context.has_plan:
             raise ConfigurationError(f"{path} holds no plan: `imucalib calibrate` needs a "
                                      "recording made by `imucalib run`")
         raise ConfigurationError(f"{path}: its plan names no procedure; name it: `imucalib "

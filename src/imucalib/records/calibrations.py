@@ -35,7 +35,7 @@ def record_calibration(result: ProcedureResult, recording: Path | None, *, db: s
         plan_name, plan_hash = "", ""
         if recording is not None and recording.suffix.lower() in (".h5", ".hdf5"):
             from imucalib.io.context import RecordingContext
-            from imucalib.io.reader import open_recording
+            from imucalib.io.opening import open_recording
 
             with open_recording(recording) as rec:
                 context = RecordingContext.of(rec.metadata)

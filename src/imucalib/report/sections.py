@@ -84,7 +84,8 @@ def recording_facts(recording: Any) -> dict[str, Any]:
     """Metadata and the IMU temperature range of a Recording (open, or a path), else {}."""
     if recording is None:
         return {}
-    from imucalib.io.reader import Recording, open_recording
+    from imucalib.io.opening import open_recording
+    from imucalib.io.reader import Recording
 
     if isinstance(recording, Recording):
         return _read_facts(recording)

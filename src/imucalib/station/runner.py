@@ -62,10 +62,10 @@ from typing import Any, Protocol
 from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io import StreamSpec
-from imucalib.io.context import EQUIPMENT_KEYS, IMU_SPEC_KEYS, RecordingContext
+from imucalib.io.context import RecordingContext
 from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.events import EventKind
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.recover import recover_recording
 from imucalib.io.streams import (
@@ -332,12 +332,8 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
     except StorageFullError:
         _disconnect(station)
         raise
-    context = RecordingContext(
-        procedure=plan.procedure or "", plan_name=plan.name, plan_hash=plan_hash(plan),
-        equipment={k: float(getattr(plan.equipment, k)) for k in EQUIPMENT_KEYS},
-        imu_spec={k: float(v) for k in IMU_SPEC_KEYS
-                  if (v := getattr(plan.imu, k, None)) is not None},
-        acceptance=plan.acceptance.rule)
+    # the plan's facts as keys of their own (read by io/context.py; plan_toml is provenance)
+    context = RecordingContext.of_plan(plan.model_dump(mode="json"), plan_hash(plan))
     meta: dict[str, str | int | float | bool] = {
         **context.metadata(),
         "plan_toml": plan_to_toml(plan), "plan_hash": plan_hash(plan),

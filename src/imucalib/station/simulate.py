@@ -25,7 +25,8 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from imucalib.errors import ConfigurationError
-from imucalib.io.reader import StepRecord, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import StepRecord
 from imucalib.plan.bounds import format_validation_error
 from imucalib.plan.budget import (
     RecordingEstimate,

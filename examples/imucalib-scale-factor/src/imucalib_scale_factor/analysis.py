@@ -40,7 +40,8 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib import __version__ as imucalib_version
 from imucalib.estimation import solve_weighted_lsq
 from imucalib.io.hashing import file_sha256
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.procedure_result import ResultDefaults

@@ -66,7 +66,8 @@ from imucalib.analysis.allan import TauSpec
 from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import InvalidInputError
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults

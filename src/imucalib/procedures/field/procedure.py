@@ -65,7 +65,8 @@ class FieldProcedure(ProcedureDefaults):
         InvalidInputError
             An unknown option, an unreadable log (naming the column and row).
         """
-        from imucalib.io.reader import Recording, open_recording
+        from imucalib.io.opening import open_recording
+        from imucalib.io.reader import Recording
         from imucalib.procedures.common.static_intervals import (
             log_from_frame,
             log_from_recording,

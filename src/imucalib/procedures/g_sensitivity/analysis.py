@@ -25,7 +25,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters

@@ -6,8 +6,9 @@ fit of the chosen model (:mod:`.fit`), then the verification of
 
 - residuals of the calibration windows against P1's limits (docs/p1.md, rule 5: 0.002 g,
   0.1 °/s) and a χ² test of their means (rule 5: a too-simple model fails it);
-- accuracy at the held-out positions and rates after compensation (rule 7: the plan's IMU
-  specification, 0.01 g and 0.5 °/s by default);
+- accuracy at the held-out positions and rates after compensation (rule 7: the IMU
+  specification the recording states, :class:`~imucalib.io.context.RecordingContext`; 0.01 g
+  and 0.5 °/s by default);
 - repeatability over the repetitions (rule 6: CV ≤ 1 % for scale factors, spread within 3σ for
   parameters near zero);
 - the Kalman refinement of the same observations (P1 step 4), reported with its largest
@@ -46,7 +47,7 @@ from imucalib.analysis.verification import (
 )
 from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.io.hashing import file_sha256
-from imucalib.io.reader import open_recording
+from imucalib.io.opening import open_recording
 from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
@@ -96,9 +97,10 @@ class P1Options:
     significance : float
         p-value of the χ² test below which the model is too simple.
     accel_accuracy_g, gyro_accuracy_dps : float or None
-        Held-out limits; None: the ``[imu]`` values of the plan stored in the recording, or
-        without one the defaults of :class:`~imucalib.plan.schema.ImuSpecConfig` (0.01 g,
-        0.5 °/s).
+        Held-out limits; None: the recording's IMU specification (its context,
+        :class:`~imucalib.io.context.RecordingContext`: the plan's ``[imu]`` as the run wrote
+        it), or without one the defaults of :class:`~imucalib.plan.schema.ImuSpecConfig`
+        (0.01 g, 0.5 °/s).
     repeatability_cv : float
         CV limit of scale factors (P1 rule 6: 1 %; docs/p1.md).
     repeatability_k : float
@@ -109,13 +111,14 @@ class P1Options:
         Add the equipment accuracy (table position accuracy and axis perpendicularity, uniform
         distributions) to the misalignment variances (GUM Type B).
     table_position_accuracy_arcsec, table_orthogonality_arcsec : float or None
-        The equipment accuracy for `type_b`; None: the ``[equipment]`` values of the plan stored
-        in the recording, or without one the defaults of
+        The equipment accuracy for `type_b`; None: the recording's (its context: the plan's
+        ``[equipment]``, or an import's step file), or without one the defaults of
         :class:`~imucalib.plan.schema.EquipmentConfig` (10″, 5″). [″]
     acceptance : {"simple", "guarded"} or None
-        The decision rule; None: the plan's ``[acceptance]`` (simple without a plan).
+        The decision rule; None: the recording's (its context: the plan's ``[acceptance]``),
+        simple without one.
     guard_band_k : float or None
-        k of a guarded rule; None: the plan's (2).
+        k of a guarded rule; None: the recording's, else 2.
     """
 
     model: Literal["triad", "per-axis"] = "triad"
@@ -263,10 +266,10 @@ def _result(fit: P1Fit, obs: P1Observations, opt: P1Options, provenance: Provena
 
 def _equipment(obs: P1Observations, opt: P1Options) -> tuple[float, float, str]:
     """Return the table position accuracy and perpendicularity [″], and where they come from."""
-    eq = (obs.plan.equipment if obs.plan is not None else obs.equipment or EquipmentConfig())
+    eq = obs.equipment or EquipmentConfig()
     pos, perp = opt.table_position_accuracy_arcsec, opt.table_orthogonality_arcsec
     source = ("P1Options" if pos is not None and perp is not None
-              else "the plan's [equipment]" if obs.plan is not None
+              else "the plan's [equipment]" if obs.context.has_plan
               else "the recording's equipment_json" if obs.equipment is not None
               else "defaults: the recording holds no plan")
     return (eq.table_position_accuracy_arcsec if pos is None else pos,
@@ -274,15 +277,15 @@ def _equipment(obs: P1Observations, opt: P1Options) -> tuple[float, float, str]:
 
 
 def _imu_spec(obs: P1Observations) -> ImuSpecConfig:
-    """Return the IMU specification of the stored plan, the recording's, or the defaults."""
-    return obs.plan.imu if obs.plan is not None else obs.imu_spec or ImuSpecConfig()
+    """Return the IMU specification the recording states, or the defaults."""
+    return obs.imu_spec or ImuSpecConfig()
 
 
 def _acceptance(obs: P1Observations, opt: P1Options) -> tuple[str, float]:
-    """Return the decision rule and guard-band k: the options', else the plan's."""
-    plan = obs.plan.acceptance if obs.plan is not None else AcceptanceConfig()
-    return (opt.acceptance or plan.rule,
-            opt.guard_band_k if opt.guard_band_k is not None else plan.guard_band_k)
+    """Return the decision rule and guard-band k: the options', else the recording's."""
+    stated = obs.acceptance or AcceptanceConfig()
+    return (opt.acceptance or stated.rule,
+            opt.guard_band_k if opt.guard_band_k is not None else stated.guard_band_k)
 
 
 #: Display unit and SI value of one unit, and the SpecLimits field, per parameter kind.
@@ -344,7 +347,7 @@ def _add_type_b(names: tuple[str, ...], cov: np.ndarray, obs: P1Observations,
     text = (f"Type B (GUM): table position accuracy {pos_arcsec:g}″ and "
             f"axis perpendicularity {perp_arcsec:g}″ (uniform) added to the "
             "accelerometer and gyro misalignment variances")
-    if obs.plan is None or source == "P1Options":
+    if not obs.context.has_plan or source == "P1Options":
         text += f" ({source})"
     return out, text
 
@@ -501,12 +504,11 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
     with open_recording(p) as rec:
         obs = extract_p1_observations(rec, sensor_id, processing=opt.processing,
                                       progress=progress)
-        meta = rec.metadata
     gyro_w = gyro_windows(obs, "calibration", None)
     spec = _imu_spec(obs)
     rule, guard_k = _acceptance(obs, opt)
     prov = Provenance(
-        plan_hash=str(meta.get("plan_hash", "")),
+        plan_hash=obs.context.plan_hash,
         recording_sha256=file_sha256(p) if opt.hash_recording else "",
         recording=str(p.name), software_version=__version__,
         created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),

@@ -44,9 +44,11 @@ step without a role gets the one its tags imply (:func:`~imucalib.io.step_roles.
 plans written before roles, and version 1 recordings, whose reader does the same). A rate
 step's spinning axis and rate come from its ``commanded`` state (``axis``, ``rate_dps``); when
 the recording does not give them (an import), from the table feedback: the axis turning
-fastest and its measured mean rate. The plan stored in the recording is not needed; when
-present it supplies the IMU specification and equipment accuracies that
-:func:`~imucalib.procedures.p1.analyze_p1` uses (``P1Options`` otherwise).
+fastest and its measured mean rate. The plan stored in the recording is not read: the
+recording's context (:class:`~imucalib.io.context.RecordingContext`: the keys a run writes, or
+for an older recording its stored plan read as plain data) gives the procedure that tags imply
+roles under, and the IMU specification, equipment accuracies and decision rule that
+:func:`~imucalib.procedures.p1.analyze_p1` uses (``P1Options`` or the defaults otherwise).
 
 Contents
 --------
@@ -68,12 +70,12 @@ from numpy.typing import NDArray
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import InvalidInputError, RecordingError
+from imucalib.io.context import RecordingContext
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.io.step_roles import role_from_tags
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
-from imucalib.plan.io import parse_plan
-from imucalib.plan.schema import EquipmentConfig, ImuSpecConfig, Plan
+from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.common.noise import estimate_noise, window_mean_se
 from imucalib.procedures.common.reference import axis_vector as _axis_vector
 from imucalib.procedures.common.reference import (
@@ -243,15 +245,15 @@ class WindowObservation:
 class P1Observations:
     """Every usable window of one IMU in a P1 Recording, with the site and processing facts.
 
-    ``plan`` is the plan stored in the recording, or None when it holds none (the analysis then
-    takes the IMU specification and equipment accuracies from its options, from ``equipment``
-    and ``imu_spec``, or their defaults). ``equipment`` and ``imu_spec`` are what a recording
-    without a plan states in its ``equipment_json`` and ``imu_spec_json`` metadata (an import
-    from CSV and a step file, docs/import.md); None when it states nothing.
+    ``context`` is what the recording says about its calibration
+    (:class:`~imucalib.io.context.RecordingContext`: the keys a run writes, an older
+    recording's stored plan, what an import's step file gives, docs/import.md). ``equipment``,
+    ``imu_spec`` and ``acceptance`` are the equipment accuracies, the IMU specification and the
+    decision rule it states, as the plan's models; None when it states nothing (the analysis
+    then takes them from its options or the models' defaults).
     """
 
     sensor_id: str
-    plan: Plan | None
     windows: tuple[WindowObservation, ...]
     gravity_mps2: float
     earth_rate_t_rps: _F64
@@ -264,6 +266,8 @@ class P1Observations:
     noise: dict[str, NoiseModel] = field(default_factory=dict)
     equipment: EquipmentConfig | None = None
     imu_spec: ImuSpecConfig | None = None
+    acceptance: AcceptanceConfig | None = None
+    context: RecordingContext = field(default_factory=RecordingContext)
 
     def select(self, *, kind: str | None = None, role: str | None = None,
                repetition: int | None = None, tag: str | None = None
@@ -367,30 +371,36 @@ def _commanded_number(step: StepRecord, key: str) -> float | None:
     return None
 
 
-_Config = TypeVar("_Config", EquipmentConfig, ImuSpecConfig)
+_Config = TypeVar("_Config", EquipmentConfig, ImuSpecConfig, AcceptanceConfig)
 
 
-def _recorded_config(rec: Recording, key: str, model: type[_Config]) -> _Config | None:
-    """Return the configuration a recording without a plan states in metadata `key`, or None."""
-    if not rec.metadata.get(key):
+def _stated(rec: Recording, what: str, model: type[_Config], table: Mapping[str, Any]
+            ) -> _Config | None:
+    """Return the configuration the recording's context states (`table`), or None if none."""
+    if not table:
         return None
     try:
-        return model.model_validate(_meta_json(rec, key))
+        return model.model_validate(table)
     except ValueError as exc:
-        raise RecordingError(f"{rec.path}: metadata {key} is not a valid "
+        raise RecordingError(f"{rec.path}: the recorded {what} is not a valid "
                              f"{model.__name__}: {exc}") from exc
 
 
-def _stored_plan(rec: Recording) -> Plan | None:
-    """Return the plan stored in the recording (``plan_toml``), or None."""
-    text = rec.metadata.get("plan_toml")
-    return parse_plan(str(text), f"{rec.path} (plan_toml)") if text else None
+def _stated_configs(rec: Recording, context: RecordingContext
+                    ) -> tuple[EquipmentConfig | None, ImuSpecConfig | None,
+                               AcceptanceConfig | None]:
+    """Return the equipment accuracies, IMU specification and decision rule `context` states."""
+    rule = {**({"rule": context.acceptance} if context.acceptance else {}),
+            **({"guard_band_k": context.guard_band_k}
+               if context.guard_band_k is not None else {})}
+    return (_stated(rec, "equipment accuracy", EquipmentConfig, context.equipment),
+            _stated(rec, "IMU specification", ImuSpecConfig, context.imu_table),
+            _stated(rec, "decision rule", AcceptanceConfig, rule))
 
 
 class _Extractor:
-    def __init__(self, rec: Recording, sensor_id: str, opt: P1Processing,
-                 plan: Plan | None) -> None:
-        self.rec, self.sensor, self.opt, self.plan = rec, sensor_id, opt, plan
+    def __init__(self, rec: Recording, sensor_id: str, opt: P1Processing) -> None:
+        self.rec, self.sensor, self.opt = rec, sensor_id, opt
         meta = rec.metadata
         tables = [s for s in rec.streams if s.device == DEVICE_TABLE]
         if not tables:
@@ -655,14 +665,15 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
             raise InvalidInputError(f"{rec.path} has {len(imus)} IMU streams {imus}; name one "
                                     "with `sensor_id`")
         sensor_id = imus[0]
-    plan = _stored_plan(rec)
-    steps = [(step, _step_role(step, plan.procedure if plan else "")) for step in rec.steps
+    context = RecordingContext.of(rec.metadata)
+    steps = [(step, _step_role(step, context.procedure)) for step in rec.steps
              if step.concerns(sensor_id)]
-    if plan is None and not any(role for _, role in steps):
+    if not context.has_plan and not any(role for _, role in steps):
         raise RecordingError(f"{rec.path} holds no plan (plan_toml) and none of its steps has a "
                              f"P1 role ({', '.join(P1_ROLES)}) or P1 tags: nothing says which "
                              "windows calibrate and which verify")
-    ex = _Extractor(rec, sensor_id, opt, plan)
+    equipment, imu_spec, acceptance = _stated_configs(rec, context)
+    ex = _Extractor(rec, sensor_id, opt)
     windows: list[WindowObservation] = []
     skipped: list[str] = []
     for i, (step, role) in enumerate(steps, start=1):
@@ -687,15 +698,13 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     else:
         notes.append("no long static record: standard errors from each window's own Allan "
                      "variance (uncertain by about a factor of two)")
-    return P1Observations(sensor_id=sensor_id, plan=ex.plan, windows=tuple(windows),
+    return P1Observations(sensor_id=sensor_id, windows=tuple(windows),
                           gravity_mps2=ex.g, earth_rate_t_rps=ex.earth_t,
                           latitude_deg=ex.latitude_deg, heading_deg=ex.heading_deg,
                           sample_rate_hz=ex.sample_rate_hz, cutoff_hz=ex.cutoff_hz,
                           notes=tuple(notes), skipped=tuple(skipped), noise=noise,
-                          equipment=(None if plan is not None else
-                                     _recorded_config(rec, "equipment_json", EquipmentConfig)),
-                          imu_spec=(None if plan is not None else
-                                    _recorded_config(rec, "imu_spec_json", ImuSpecConfig)))
+                          equipment=equipment, imu_spec=imu_spec, acceptance=acceptance,
+                          context=context)
 
 
 def _with_model_se(w: WindowObservation, noise: Mapping[str, NoiseModel]) -> WindowObservation:

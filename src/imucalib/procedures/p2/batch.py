@@ -46,7 +46,8 @@ from imucalib.errors import (
     MissingSegmentError,
 )
 from imucalib.io.hashing import file_sha256
-from imucalib.io.reader import Recording, StepRecord, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording, StepRecord
 from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults

@@ -38,7 +38,8 @@ import numpy as np
 
 from imucalib import units
 from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 from imucalib.models.decision import Check, CheckRow, Decision
 from imucalib.models.earth import Site
 from imucalib.models.fit_quality import FitQuality

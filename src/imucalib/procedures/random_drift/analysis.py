@@ -26,7 +26,8 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError, RecordingError
 from imucalib.estimation.linear import solve_weighted_lsq
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 from imucalib.models.decision import Decision, no_decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters

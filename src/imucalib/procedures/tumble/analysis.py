@@ -42,7 +42,8 @@ from imucalib import units
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError, MissingSegmentError, RecordingError
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
-from imucalib.io.reader import Recording, open_recording
+from imucalib.io.opening import open_recording
+from imucalib.io.reader import Recording
 from imucalib.io.streams import DEVICE_IMU
 from imucalib.models.decision import Decision, no_decision
 from imucalib.models.earth import Site
