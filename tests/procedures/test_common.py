@@ -11,7 +11,7 @@ import pytest
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError, MissingSegmentError
 from imucalib.estimation import build_triad_design
-from imucalib.procedures.common.design import TRIAD_TERMS, build_design
+from imucalib.estimation.designs import TRIAD_TERMS, build_design
 from imucalib.procedures.common.noise import estimate_noise, window_mean_se
 from imucalib.procedures.common.reference import (
     rate_inputs_b,

@@ -28,7 +28,8 @@ Contents
     :func:`fit_temperature_model` → :class:`TemperatureModelFit`, :func:`check_held_out`,
     :func:`predict_temperature_model`, :func:`to_temperature_dependence`.
 :mod:`imucalib.estimation.designs`
-    :func:`build_triad_design` → :class:`LinearDesign`, :data:`SIX_POSITION_UP_B`,
+    :func:`build_design` (the one triad design builder, by model term) and its 12-parameter
+    case :func:`build_triad_design` → :class:`LinearDesign`, :data:`SIX_POSITION_UP_B`,
     :data:`TRIAD_PARAMETER_NAMES`.
 :mod:`imucalib.estimation.gravity_norm` (imported on its own)
     :func:`~imucalib.estimation.gravity_norm.fit_gravity_norm` (the accelerometer triad from
@@ -54,6 +55,7 @@ from imucalib.estimation.designs import (
     SIX_POSITION_UP_B,
     TRIAD_PARAMETER_NAMES,
     LinearDesign,
+    build_design,
     build_triad_design,
 )
 from imucalib.estimation.kalman import (
@@ -104,6 +106,7 @@ __all__ = [
     "TemperaturePolynomial",
     "TemperaturePrediction",
     "TriadCrlb",
+    "build_design",
     "build_triad_design",
     "check_held_out",
     "compute_crlb",

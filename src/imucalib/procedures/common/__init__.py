@@ -12,8 +12,6 @@ Contents
     once-per-revolution harmonic.
 :mod:`~imucalib.procedures.common.noise`
     The noise model of window means (:func:`estimate_noise`, :func:`window_mean_se`).
-:mod:`~imucalib.procedures.common.design`
-    :func:`build_design`: the triad design per observation and model term.
 :mod:`~imucalib.procedures.common.static_windows`
     Static window means of all six IMU channels with their reference inputs.
 :mod:`~imucalib.procedures.common.drift_model`

@@ -13,7 +13,7 @@ neglected, per axis i:
     accelerometer  y = b + (I + M)·f            (12 parameters; six positions, 18 observations)
     gyro           y = b + (I + M)·ω + G·f      (21 parameters with g-sensitivity, else 12)
     as z = y − x = b + M·x (+ G·f), rows ordered by window then axis, built by
-    :func:`~imucalib.procedures.common.design.build_design` (docs/p1.md).
+    :func:`~imucalib.estimation.designs.build_design` (docs/p1.md).
 
 Observations are window means weighted by their standard errors (correlated noise included), so
 the covariance is not rescaled by the residuals (known noise); the fit's χ² then tests the model.
@@ -39,9 +39,9 @@ from imucalib import units
 from imucalib.conventions import AXES
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation import compute_window_mean_covariance, solve_weighted_lsq
+from imucalib.estimation.designs import build_design
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names
-from imucalib.procedures.common.design import build_design
 from imucalib.procedures.p1.observations import P1Observations, WindowObservation
 
 __all__ = [

@@ -10,7 +10,7 @@ equation):
 - :func:`closed_form`: the patent's reduction, averages and differences of the window means,
   Eqs. (P2.4)–(P2.9), with σ by linear propagation of the means' standard errors;
 - :func:`least_squares`: all windows in one weighted least-squares fit of the triad model
-  (the framework's design, :func:`~imucalib.procedures.common.design.build_design`), the
+  (the framework's design, :func:`~imucalib.estimation.designs.build_design`), the
   accelerometer by Gauss–Newton because the centripetal term multiplies the scale matrix,
   Eq. (P2.10), with χ²/ν and the Birge scaling of a misfit; every linear (and Gauss–Newton)
   step is solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
@@ -47,9 +47,9 @@ from numpy.typing import NDArray
 
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
+from imucalib.estimation.designs import build_design
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
-from imucalib.procedures.common.design import build_design
 
 __all__ = [
     "LEVER_ARM_MODES",
@@ -363,7 +363,7 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
     ``"ignore"`` the turning rows as if gravity alone. Then the gyro: Eq. (P2.1) for the 12
     turning windows, z = ȳ − x with x = u_o·(ω + Ω_U) and the specific force f_o = g·u_o −
     ω²·P_o·r̂ of the g-sensitivity term, the design of
-    :func:`~imucalib.procedures.common.design.build_design` (bias, scale-misalignment,
+    :func:`~imucalib.estimation.designs.build_design` (bias, scale-misalignment,
     g-sensitivity). r̂'s own uncertainty enters the gyro only through G·ω²·P_o·r̂, a
     second-order term, and is not propagated.
 
