@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from imucalib.estimation.combine import combine_triad_parameters
 from imucalib.io.opening import open_recording
-from imucalib.models.combine import combine_triad_parameters
 from imucalib.models.result import CalibrationResult
 from imucalib.plan.schema import Plan
 from imucalib.procedures import registry

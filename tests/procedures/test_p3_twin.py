@@ -162,7 +162,7 @@ def test_nominal_radii_and_a_drift_term_are_options(p3_runs):
 def test_the_test_accelerometer_k2_joins_a_combined_model(p3_runs):
     """P3's K2 of the test unit's x accelerometer, in the triad's name, fused with another
     (less precise) estimate of the same K2 and the rest of a triad by combine_triad_parameters."""
-    from imucalib.models.combine import TriadPart, combine_triad_parameters
+    from imucalib.estimation.combine import TriadPart, combine_triad_parameters
     from imucalib.models.result import triad_parameter_names
 
     _, _, result = errors_and_z(p3_runs[1], p3_plan(1))

@@ -3,7 +3,7 @@
 ``combine`` fuses the triad parameters several tests estimated (the tumble's accelerometer
 parameters, the rate transfer's gyro biases and scale factors, the installation test's gyro
 misalignments, the g-sensitivity test's G …) into one triad model of the unit by generalised
-least squares (:func:`~imucalib.models.combine.combine_triad_parameters`, docs/procedures.md,
+least squares (:func:`~imucalib.estimation.combine.combine_triad_parameters`, docs/procedures.md,
 "Combining tests"), and writes it as a result file that ``apply``, ``export``, ``report`` and
 the records take. ``schema result`` prints the JSON Schema of the result file (format version
 4, :func:`~imucalib.models.result_document.result_schema`).
@@ -42,7 +42,7 @@ def combine(
     G and K2 optional, all or none): a parameter two tests give gets their weighted mean, and
     their χ² says whether they agree (a misfit scales the σ by the Birge ratio).
     """
-    from imucalib.models.combine import TriadPart, combine_triad_parameters
+    from imucalib.estimation.combine import TriadPart, combine_triad_parameters
     from imucalib.models.decision import no_decision
     from imucalib.models.result import Provenance
     from imucalib.models.result_document import (

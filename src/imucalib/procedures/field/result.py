@@ -229,7 +229,7 @@ class FieldResult(ResultDefaults):
         return rows + list(self.extra_rows)
 
     def triad_parameters(self) -> TriadParameters:
-        """(names, values, covariance Birge-scaled) for :func:`~imucalib.models.combine`."""
+        """(names, values, covariance Birge-scaled) for :func:`~imucalib.estimation.combine`."""
         cal = self.result
         return list(cal.param_names), cal.values.copy(), cal.covariance_scaled.copy()
 

@@ -361,7 +361,7 @@ class P3Result(ResultDefaults):
         """Return K2 of the test accelerometer's input axis as a triad parameter, with its variance.
 
         Named as :mod:`imucalib.models.result` names it (``accel_K2_x``), for
-        :func:`~imucalib.models.combine.combine_triad_parameters`; its variance is the reported
+        :func:`~imucalib.estimation.combine.combine_triad_parameters`; its variance is the reported
         σ² (the ``K2_T`` row of :meth:`parameter_rows`).
         """
         std = self.estimate.std("K2_T")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
-from imucalib.models.combine import TriadPart, combine_triad_parameters
+from imucalib.estimation.combine import TriadPart, combine_triad_parameters
 from imucalib.models.result import (
     CalibrationResult,
     triad_parameter_names,

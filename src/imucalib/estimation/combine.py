@@ -14,7 +14,10 @@ of θ (the union of the names). A parameter estimated by one test only keeps its
 variance; one estimated by two (a gyro bias from the rate transfer and from the g-sensitivity
 test) gets their weighted mean, and χ² = rᵀC⁻¹r of (C.1) tests whether the tests agree
 (ν = rows − parameters): a misfit (99 % quantile) is reported and the covariance scaled by the
-Birge ratio, as every fit of the project does (docs/processing-estimation.md).
+Birge ratio, as every fit of the project does (docs/processing-estimation.md). (C.2) is solved by
+the project's one weighted least-squares solver (:func:`~imucalib.estimation.linear.
+solve_weighted_lsq`, generalised least squares through the Cholesky factor of the full
+covariance).
 
 The result is a :class:`~imucalib.models.result.CalibrationResult` of model ``"triad"``:
 every triad that appears must be complete (its 12 bias and M names; G and K2 are optional
@@ -36,6 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.models.fit_quality import assess_fit
 from imucalib.models.result import (
     CalibrationResult,
@@ -141,18 +145,14 @@ def combine_triad_parameters(parts: Sequence[TriadPart | Any], *, sensor_id: str
     h = np.zeros((y.size, len(order)))
     for r, j in rows:
         h[r, j] = 1.0
-    # Eq. (C.2) by hand: models sits below estimation in the layers of docs/architecture.md, so
-    # the one solver (estimation.linear.solve_weighted_lsq) is out of reach here
+    # Eq. (C.2): the one weighted least-squares solver, with the parts' full covariance
     try:
-        chol = np.linalg.cholesky(c)
-    except np.linalg.LinAlgError:
-        raise InvalidInputError("a part's covariance is not positive definite") from None
-    hw = np.linalg.solve(chol, h)
-    yw = np.linalg.solve(chol, y)
-    cov = np.linalg.inv(hw.T @ hw)
-    theta = cov @ hw.T @ yw
-    resid = yw - hw @ theta
-    chi2, dof = float(resid @ resid), int(y.size - len(order))
+        sol = solve_weighted_lsq(h, y, param_names=order, covariance=c, group="combined",
+                                 context="the parts' selection matrix")
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"the parts cannot be combined: {exc}") from exc
+    theta, cov = sol.estimate, np.array(sol.covariance_noise)
+    chi2, dof = sol.chi2, sol.dof
     # one group per triad, so that CalibrationResult.sigma_scale (by name prefix) applies the
     # fusion's Birge ratio to every parameter it scaled: the χ² of (C.1) is one test of all
     quality = tuple(assess_fit(triad, chi2, dof) for triad in ("accel", "gyro")
