@@ -86,7 +86,10 @@ STATIC_STEP_KINDS = ("static", "allan")
 _FORMAT_NAME = "imucalib-noise-characterization"
 _SI_UNIT = {"gyro": "rad/s", "accel": "m/s^2"}
 #: Why a noise characterisation decides nothing.
-NO_DECISION_REASON = "a noise characterisation has no acceptance limits"
+NO_DECISION_REASON = ("a noise characterisation has no acceptance limits: it reports each noise "
+                      "term with its standard uncertainty and judges none; the unit's white-noise "
+                      "limits ([imu.limits] gyro_arw_deg_rth, accel_vrw_ug_rthz) are judged by "
+                      "P1 on its static record (docs/noise.md)")
 
 
 @dataclass(frozen=True, eq=False)

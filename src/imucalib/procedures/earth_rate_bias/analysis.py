@@ -7,7 +7,9 @@ Static window means of every ``earth-rate-bias.position`` step
 window is "horizontal" when the reference gravity on it is below 0.1 g, "up" (or "down") above
 0.9 g (below −0.9 g); windows are grouped by fixture pose (tag ``pose=``). The up/down bias,
 free of g-sensitivity and of the Earth rate through the scale factor, is the one handed on as the
-triad's gyro bias.
+triad's gyro bias, and the one decided on: against the unit's gyro bias limit (the recording's
+``[imu.limits] gyro_bias_dph``, the plan's ``[acceptance]`` rule), *no decision* when the
+specification gives none (:mod:`~imucalib.procedures.common.spec_decision`).
 
 Contents
 --------
@@ -18,7 +20,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,10 +28,11 @@ import numpy as np
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording
-from imucalib.models.decision import Decision, no_decision
+from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.reported import ReportedParameter
+from imucalib.procedures.common.spec_decision import Specification, decide_triad
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
@@ -85,8 +88,8 @@ class EarthRateBiasResult(ResultDefaults):
     """The Earth-rate bias test's result (the result contract, docs/procedures.md).
 
     A :class:`~imucalib.models.procedure_result.ProcedureResult`: the gyro biases, part of the
-    triad model (no ``calibration``; :meth:`triad_parameters` for ``imucalib combine``), *no
-    decision*, no fit with redundancy.
+    triad model (no ``calibration``; :meth:`triad_parameters` for ``imucalib combine``),
+    decided against the unit's gyro bias limit (:attr:`decision`), no fit with redundancy.
 
     Attributes
     ----------
@@ -102,6 +105,8 @@ class EarthRateBiasResult(ResultDefaults):
         What was assumed; the axes whose methods differ by more than 3 σ.
     procedure : str
         ``"earth-rate-bias"``.
+    specification : Specification
+        The unit's limits and the decision rule the recording states (none: no decision).
     """
 
     unit: str
@@ -110,13 +115,19 @@ class EarthRateBiasResult(ResultDefaults):
     windows: list[StaticWindow]
     notes: tuple[str, ...] = ()
     procedure: str = "earth-rate-bias"
+    specification: Specification = field(default_factory=Specification)
 
     @property
     def decision(self) -> Decision:
-        """*No decision*: the plan gives no acceptance limits."""
-        return no_decision("the Earth-rate bias test has no acceptance limits: the plan gives "
-                           "none; both methods' biases are reported with their standard "
-                           "uncertainties and compared (z)")
+        """The up/down biases against the specification's gyro bias limit.
+
+        Its check ``specification`` under the recording's rule (docs/earth-rate-bias.md,
+        "Decision"); *no decision* when the specification gives no ``gyro_bias_dph``.
+        """
+        return decide_triad(self.specification, self.triad_parameters(),
+                            test="the Earth-rate bias test",
+                            what="both methods' biases are reported with their standard "
+                                 "uncertainties and compared (z) (docs/earth-rate-bias.md)")
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -240,4 +251,5 @@ def analyze_earth_rate_bias(recording: Recording | str | os.PathLike[str], *,
     notes += [f"gyro {_AXES[k]}: the methods differ by {a.z:.1f} σ" for k, a in enumerate(axes)
               if abs(a.z) > 3]
     return EarthRateBiasResult(unit=name, axes=axes, latitude_deg=site.latitude_deg,
-                               windows=windows, notes=tuple(notes))
+                               windows=windows, notes=tuple(notes),
+                               specification=Specification.of_metadata(recording.metadata))

@@ -49,8 +49,10 @@ __all__ = ["NO_DECISION_REASON", "FieldResult", "accel_matrix", "field_decision"
 _F64 = NDArray[np.float64]
 
 #: Why a field calibration decides nothing (docs/field.md).
-NO_DECISION_REASON = ("a field calibration has no acceptance limits: it reports the triad "
-                      "model and each fit's χ²/ν (docs/field.md)")
+NO_DECISION_REASON = ("a field calibration has no acceptance limits: its poses and turns are "
+                      "made by hand against no reference standard, so it judges no "
+                      "specification limit; it reports the triad model and each fit's χ²/ν "
+                      "(docs/field.md)")
 #: The group of the static gyro fit (FL.2) in :attr:`FieldResult.quality`.
 _STATIC_GYRO_GROUP = "gyro (static poses)"
 

@@ -10,6 +10,10 @@ is taken as known (:attr:`GSensitivityOptions.scale_misalignment`, nominal zero)
 standard uncertainty per element (:attr:`GSensitivityOptions.scale_misalignment_std`, 1e-3 by
 default, a rate test's worst case), propagated through the full covariance (2).
 
+The decision: D0 and G against the unit's specification (the recording's ``[imu.limits]``
+``gyro_bias_dph`` and ``gyro_g_sensitivity_dph_per_g``, the plan's ``[acceptance]`` rule), *no
+decision* when it gives neither (:mod:`~imucalib.procedures.common.spec_decision`).
+
 Contents
 --------
 :class:`GSensitivityOptions`, :class:`GSensitivityResult`, :func:`analyze_g_sensitivity`
@@ -19,7 +23,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -27,7 +31,7 @@ from numpy.typing import NDArray
 
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording
-from imucalib.models.decision import Decision, no_decision
+from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.reported import ReportedParameter
@@ -37,6 +41,7 @@ from imucalib.procedures.common.drift_model import (
     drift_parameter_names,
     fit_windows,
 )
+from imucalib.procedures.common.spec_decision import Specification, decide_triad
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
@@ -56,7 +61,8 @@ class GSensitivityResult(ResultDefaults):
     """The g-sensitivity test's result (the result contract, docs/procedures.md).
 
     A :class:`~imucalib.models.procedure_result.ProcedureResult`: part of the gyro triad model
-    (no ``calibration``; :meth:`triad_parameters` for ``imucalib combine``), *no decision*.
+    (no ``calibration``; :meth:`triad_parameters` for ``imucalib combine``), decided against
+    the unit's gyro bias and g-sensitivity limits (:attr:`decision`).
 
     Attributes
     ----------
@@ -73,6 +79,8 @@ class GSensitivityResult(ResultDefaults):
         What was assumed; each misfit's summary.
     procedure : str
         ``"g-sensitivity"``.
+    specification : Specification
+        The unit's limits and the decision rule the recording states (none: no decision).
     """
 
     unit: str
@@ -82,13 +90,21 @@ class GSensitivityResult(ResultDefaults):
     latitude_deg: float
     notes: tuple[str, ...] = ()
     procedure: str = "g-sensitivity"
+    specification: Specification = field(default_factory=Specification)
 
     @property
     def decision(self) -> Decision:
-        """*No decision*: the plan gives no acceptance limits (each misfit in its notes)."""
-        return no_decision("the g-sensitivity test has no acceptance limits: the plan gives "
-                           "none; D0 and G are reported with their standard uncertainties",
-                           notes=tuple(f.summary() for f in self.fit.fits if f.misfit))
+        """D0 and G against the specification's gyro bias and g-sensitivity limits.
+
+        Its check ``specification`` under the recording's rule (docs/g-sensitivity.md,
+        "Decision"); *no decision* when the specification gives neither ``gyro_bias_dph`` nor
+        ``gyro_g_sensitivity_dph_per_g``. Each misfit in its notes.
+        """
+        return decide_triad(self.specification, self.triad_parameters(),
+                            test="the g-sensitivity test",
+                            what="D0 and G are reported with their standard uncertainties "
+                                 "(docs/g-sensitivity.md)",
+                            notes=tuple(f.summary() for f in self.fit.fits if f.misfit))
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -190,4 +206,5 @@ def analyze_g_sensitivity(recording: Recording | str | os.PathLike[str], *,
     notes += [f.summary() for f in fit.fits if f.misfit]
     return GSensitivityResult(unit=name, fit=fit, windows=windows,
                               gravity_mps2=site.gravity_mps2, latitude_deg=site.latitude_deg,
-                              notes=tuple(notes))
+                              notes=tuple(notes),
+                              specification=Specification.of_metadata(rec.metadata))

@@ -11,8 +11,10 @@ columns from the least-squares form (the diagonal belongs to the rate transfer, 
 also see the nonlinearity).
 
 The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
-ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and *no
-decision* (the installation test has no acceptance limits).
+ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and a
+decision on the off-diagonal ``gyro_M_ij`` against the unit's gyro misalignment limit (the
+recording's ``[imu.limits] gyro_misalignment_urad``, the plan's ``[acceptance]`` rule), *no
+decision* when the specification gives none (:mod:`~imucalib.procedures.common.spec_decision`).
 
 Contents
 --------
@@ -22,7 +24,7 @@ Contents
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -30,11 +32,12 @@ from numpy.typing import NDArray
 
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording
-from imucalib.models.decision import Decision, no_decision
+from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.reported import ReportedParameter
 from imucalib.procedures.common.rate_windows import RateProcessing, extract_rate_windows
+from imucalib.procedures.common.spec_decision import Specification, decide_triad
 from imucalib.procedures.installation.misalignment import (
     Misalignment,
     closed_form_misalignment,
@@ -54,7 +57,7 @@ class InstallationResult(ResultDefaults):
 
     It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
     ``calibration`` (the off-diagonal ``gyro_M_ij`` only, :meth:`triad_parameters`),
-    ``decision`` *no decision*.
+    ``decision`` against the unit's gyro misalignment limit (:attr:`decision`).
 
     Attributes
     ----------
@@ -67,6 +70,8 @@ class InstallationResult(ResultDefaults):
         ``"installation"``.
     notes : tuple of str
         What the reader must know (the least-squares fit's misfit).
+    specification : Specification
+        The unit's limits and the decision rule the recording states (none: no decision).
     """
 
     unit: str
@@ -76,6 +81,7 @@ class InstallationResult(ResultDefaults):
     n_turns: int
     procedure: str = "installation"
     notes: tuple[str, ...] = ()
+    specification: Specification = field(default_factory=Specification)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -84,11 +90,17 @@ class InstallationResult(ResultDefaults):
 
     @property
     def decision(self) -> Decision:
-        """*No decision*: the plan gives no acceptance limits (a misfit in its notes)."""
-        return no_decision("the installation test has no acceptance limits (the plan gives "
-                           "none): it measures the gyro triad's misalignment "
-                           "(docs/installation.md)",
-                           notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
+        """The off-diagonal ``gyro_M_ij`` (least squares) against the misalignment limit.
+
+        Its check ``specification`` under the recording's rule (docs/installation.md,
+        "Decision"); *no decision* when the specification gives no ``gyro_misalignment_urad``.
+        A misfit in its notes.
+        """
+        return decide_triad(self.specification, self.triad_parameters(),
+                            test="the installation test",
+                            what="it measures the gyro triad's misalignment "
+                                 "(docs/installation.md)",
+                            notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
 
     @property
     def agreement_sigma(self) -> float:
@@ -178,4 +190,5 @@ def analyze_installation(recording: Recording | str | os.PathLike[str], *,
     misfit = () if lsq.quality is None or not lsq.quality.misfit else (lsq.quality.summary(),)
     return InstallationResult(
         unit=name, closed_form=closed, lsq=lsq,
-        earth_rate_up_rps=earth_up, n_turns=len(windows), notes=misfit)
+        earth_rate_up_rps=earth_up, n_turns=len(windows), notes=misfit,
+        specification=Specification.of_metadata(recording.metadata))

@@ -59,6 +59,7 @@ from imucalib.models.result import (
 )
 from imucalib.models.triad import correct_triad
 from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
+from imucalib.procedures.common.spec_decision import spec_field
 from imucalib.procedures.p1.fit import (
     P1Fit,
     TriadFit,
@@ -288,29 +289,6 @@ def _acceptance(obs: P1Observations, opt: P1Options) -> tuple[str, float]:
             opt.guard_band_k if opt.guard_band_k is not None else stated.guard_band_k)
 
 
-#: Display unit and SI value of one unit, and the SpecLimits field, per parameter kind.
-_SPEC_KINDS: dict[tuple[str, str], tuple[str, float, str]] = {
-    ("accel", "bias"): ("µg", units.UG, "accel_bias_ug"),
-    ("accel", "scale"): ("ppm", units.PPM, "accel_scale_ppm"),
-    ("accel", "misalignment"): ("µrad", units.URAD, "accel_misalignment_urad"),
-    ("gyro", "bias"): ("°/h", units.DEG_PER_H, "gyro_bias_dph"),
-    ("gyro", "scale"): ("ppm", units.PPM, "gyro_scale_ppm"),
-    ("gyro", "misalignment"): ("µrad", units.URAD, "gyro_misalignment_urad"),
-    ("gyro", "g-sensitivity"): ("(°/h)/g", units.DEG_PER_H / units.G0_MPS2,
-                                "gyro_g_sensitivity_dph_per_g"),
-}
-
-
-def _spec_kind(name: str) -> str:
-    triad_symbol = name.split("_")
-    symbol, axes = triad_symbol[1], triad_symbol[2]
-    if symbol in ("bias", "b"):
-        return "bias"
-    if symbol == "K" or (symbol == "M" and axes[0] == axes[1]):
-        return "scale"
-    return "misalignment" if symbol == "M" else "g-sensitivity"
-
-
 def _specification_rows(result: CalibrationResult, obs: P1Observations, spec: ImuSpecConfig
                         ) -> list[tuple[str, float, float, float | None, str]]:
     """Each specified quantity in its display unit: (label, value, u, limit, unit)."""
@@ -318,8 +296,10 @@ def _specification_rows(result: CalibrationResult, obs: P1Observations, spec: Im
     std = result.std(scaled=True)  # honest under misfit (docs/processing-estimation.md)
     rows: list[tuple[str, float, float, float | None, str]] = []
     for name in result.param_names:
-        kind = _spec_kind(name)
-        unit, scale, field_name = _SPEC_KINDS[(name.split("_")[0], kind)]
+        spec_of = spec_field(name)  # the limit that bounds it (procedures/common/spec_decision)
+        if spec_of is None:
+            continue
+        unit, scale, field_name = spec_of
         value = result.value(name) - (1.0 if name.split("_")[1] == "K" else 0.0)
         rows.append((name, value / scale, std[name] / scale, getattr(lim, field_name), unit))
     for triad, field_name, scale, unit in (

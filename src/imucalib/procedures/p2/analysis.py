@@ -21,7 +21,11 @@ into
    after compensation at the reference input (1 g, |ω|) must be within the specification's
    accuracy (``imu.accel_accuracy_g``, ``imu.gyro_accuracy_dps``), and the closed form must
    agree with least squares within :data:`AGREEMENT_LIMIT` σ; a unit that could not be
-   calibrated fails with its error.
+   calibrated fails with its error. The held-out consistency of the temperature models
+   (:data:`HELD_OUT_CHECK`: each model's max|z| ≤ :data:`HELD_OUT_Z_LIMIT` and p ≥
+   :data:`HELD_OUT_ALPHA` at the held-out points) is one of the decision's checks, named with
+   every model that fails it, but not part of the rule: its verdict is None and the decision's
+   notes say why (docs/p2.md, "The decision").
 
 The unit's result is a :class:`~imucalib.models.procedure_result.ProcedureResult`
 (docs/procedures.md, "The result contract"): its parameters are the calibration's at T0 with
@@ -31,7 +35,8 @@ the σ of Eq. (P2.12) and, beside them, the same σ before any Birge scaling
 Contents
 --------
 :class:`P2Options`, :class:`PointResult`, :class:`P2UnitResult`, :func:`analyze_unit`,
-:func:`assemble_point`, :func:`failed_unit`, :data:`AGREEMENT_LIMIT`, :data:`DECISION_RULE`.
+:func:`assemble_point`, :func:`failed_unit`, :data:`AGREEMENT_LIMIT`, :data:`DECISION_RULE`,
+:data:`HELD_OUT_CHECK`, :data:`HELD_OUT_Z_LIMIT`, :data:`HELD_OUT_ALPHA`.
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ from typing import Any, Final, Literal
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import stats
 
 from imucalib import __version__
 from imucalib import units as u
@@ -86,8 +92,9 @@ from imucalib.procedures.p2.reduction import (
     least_squares,
 )
 
-__all__ = ["AGREEMENT_LIMIT", "DECISION_RULE", "P2Options", "P2UnitResult", "PointResult",
-           "analyze_unit", "assemble_point", "failed_unit"]
+__all__ = ["AGREEMENT_LIMIT", "DECISION_RULE", "HELD_OUT_ALPHA", "HELD_OUT_CHECK",
+           "HELD_OUT_Z_LIMIT", "P2Options", "P2UnitResult", "PointResult", "analyze_unit",
+           "assemble_point", "failed_unit"]
 
 _F64 = NDArray[np.float64]
 
@@ -99,6 +106,12 @@ DECISION_RULE: Final = (
     "compensation, at the held-out temperature points (the calibration points when none is "
     "held out), within the plan's accuracy; the closed form agrees with least squares within "
     f"{AGREEMENT_LIMIT:g} σ")
+#: The name of the check of the temperature models at the held-out points (not in the rule).
+HELD_OUT_CHECK: Final = "held-out consistency of the temperature models"
+#: A model is consistent at the held-out points when every |z_i| ≤ this (Eq. (10)) ...
+HELD_OUT_Z_LIMIT: Final = 3.0
+#: ... and the p-value of their χ² (Eq. (11)) is at least this.
+HELD_OUT_ALPHA: Final = 0.01
 
 
 @dataclass(frozen=True)
@@ -302,10 +315,65 @@ class P2UnitResult:
                                 (CheckRow("largest |closed form − least squares|", worst,
                                           AGREEMENT_LIMIT, "σ", ok),)))
         misfits = sum(m.quality.misfit for m in self.models.values())
-        notes = ((f"the temperature models of {misfits} parameter(s) are misfits: their σ are "
-                  "Birge-scaled by √(χ²/ν)",) if misfits else ())
+        notes = [f"the temperature models of {misfits} parameter(s) are misfits: their σ are "
+                 "Birge-scaled by √(χ²/ν)"] if misfits else []
+        if self.held_out:
+            held, note = self._held_out_check()
+            checks.append(held)
+            if note:
+                notes.append(note)
         return Decision(passed=self.passed, rule=DECISION_RULE, failed=tuple(self.reasons),
-                        checks=tuple(checks), notes=notes)
+                        checks=tuple(checks), notes=tuple(notes))
+
+    @property
+    def held_out_inconsistent(self) -> tuple[str, ...]:
+        """The parameters whose temperature model is NOT consistent at the held-out points."""
+        return tuple(n for n, c in self.held_out.items() if not c.consistent)
+
+    def _held_out_check(self) -> tuple[Check, str]:
+        """Return the check :data:`HELD_OUT_CHECK` (verdict None: not in the rule) and its note.
+
+        Its rows: each model NOT consistent at the held-out points, with its max|z| against
+        :data:`HELD_OUT_Z_LIMIT` where that is what fails, else its χ² p-value against
+        :data:`HELD_OUT_ALPHA`. The note (empty when every model is consistent) names them and
+        says why the verdict does not count them, and whether their number is beyond what
+        chance gives: each model is tested on its own, at a false-alarm rate q of at most
+        α + ν_h·2Φ(−3), so among n models about n·q fail by chance (a binomial tail below
+        :data:`HELD_OUT_ALPHA` says more than chance).
+        """
+        bad = self.held_out_inconsistent
+        n = len(self.held_out)
+        rows = []
+        for name in bad:
+            c = self.held_out[name]
+            z = float(np.max(np.abs(c.normalised_residuals)))
+            detail = f"max|z| {z:.2g}, χ² = {c.chi2:.3g} (ν = {c.dof}), p = {c.p_value:.2g}"
+            rows.append(CheckRow(name, z, HELD_OUT_Z_LIMIT, "|z|", False, detail)
+                        if z > HELD_OUT_Z_LIMIT else
+                        CheckRow(f"{name} (p-value)", c.p_value, HELD_OUT_ALPHA, "", False,
+                                 detail))
+        why = ("not part of P2's rule (docs/p2.md, \"The decision\"): the verdict judges the "
+               "error left after compensation at the held-out points")
+        if not bad:
+            return Check(HELD_OUT_CHECK, None, f"all {n} temperature models consistent at the "
+                         f"held-out points (max|z| ≤ {HELD_OUT_Z_LIMIT:g}, p ≥ "
+                         f"{HELD_OUT_ALPHA:g}); {why}"), ""
+        dof = max(c.dof for c in self.held_out.values())
+        rate = min(1.0, HELD_OUT_ALPHA + dof * 2.0 * float(stats.norm.sf(HELD_OUT_Z_LIMIT)))
+        tail = float(stats.binom.sf(len(bad) - 1, n, rate))
+        named = ", ".join(bad[:8]) + (", …" if len(bad) > 8 else "")
+        summary = (f"{len(bad)} of {n} temperature models NOT consistent at the held-out "
+                   f"points ({named}): they do not predict the held-out estimates within their "
+                   f"uncertainty; {why}")
+        chance = (f"more than chance gives (about {n * rate:.2g} of {n} by chance, binomial "
+                  f"p = {tail:.2g}): these models' uncertainties understate their error "
+                  "between the calibration points" if tail < HELD_OUT_ALPHA else
+                  f"within what chance gives (about {n * rate:.2g} of {n} by chance, "
+                  f"binomial p = {tail:.2g})")
+        note = (f"{HELD_OUT_CHECK}: {len(bad)} of {n} NOT consistent ({named}); not counted "
+                f"in the verdict: P2's rule judges the error left after compensation "
+                f"(docs/p2.md); {chance}")
+        return Check(HELD_OUT_CHECK, None, summary, tuple(rows)), note
 
     def parameter_rows(self) -> list[ReportedParameter]:
         """Return every parameter at T0: value, σ of Eq. (P2.12), SI unit, σ before scaling.
@@ -516,7 +584,7 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
                 models[name], t_h, [p.least_squares.values[i] for p in held],
                 [math.sqrt(p.least_squares.covariance_scaled()[i, i]) for p in held],
                 temperature_rate_degc_ps=r_h if opt.rate_term else None,
-                leg=l_h if use_leg else None)
+                leg=l_h if use_leg else None, limit=HELD_OUT_Z_LIMIT, alpha=HELD_OUT_ALPHA)
     judged = held or cal
     errors = _compensated_error(models, judged, obs, opt, use_leg)
     accel_lim, gyro_lim = _limits(opt)

@@ -21,7 +21,8 @@ file).
 Contents
 --------
 :class:`P2BatchResult`, :data:`BATCH_DECISION_RULE`, :func:`analyze_p2`,
-:func:`analyze_unit_file`, :func:`analyze_units_file`, :func:`summary_rows`, :func:`batch_json`.
+:func:`analyze_unit_file`, :func:`analyze_units_file`, :func:`summary_rows`, :func:`batch_json`,
+:func:`held_out_units`.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ from imucalib.errors import (
 from imucalib.io.hashing import file_sha256
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording, StepRecord
-from imucalib.models.decision import Decision
+from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults
 from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
@@ -57,7 +58,7 @@ from imucalib.procedures.p2.reduction import PARAM_NAMES
 from imucalib.procedures.p2.roles import P2_SOAK
 
 __all__ = ["BATCH_DECISION_RULE", "P2BatchResult", "analyze_p2", "analyze_unit_file",
-           "analyze_units_file", "batch_json", "summary_rows"]
+           "analyze_units_file", "batch_json", "held_out_units", "summary_rows"]
 
 #: The decision rule of a batch (docs/p2.md, "The decision").
 BATCH_DECISION_RULE = "a P2 array or lot passes when every unit passes P2's acceptance"
@@ -89,9 +90,22 @@ class P2BatchResult(ResultDefaults):
 
     @property
     def decision(self) -> Decision:
-        """Pass when every unit passes; ``failed`` names the units that did not."""
+        """Pass when every unit passes; ``failed`` names the units that did not.
+
+        One check per unit (``unit <name>``: its verdict, why it failed, how many of its
+        temperature models are NOT consistent at the held-out points); a note counts the units
+        with such models (not part of P2's rule, docs/p2.md "The decision").
+        """
         failed = tuple(r.unit for r in self.results if not r.passed)
-        return Decision(passed=not failed, rule=BATCH_DECISION_RULE, failed=failed)
+        checks = tuple(Check(f"unit {r.unit}", r.passed, _unit_summary(r))
+                       for r in self.results)
+        held = held_out_units(self)
+        notes = ((f"{len(held)} of {len(self.results)} unit(s) have temperature models NOT "
+                  f"consistent at the held-out points ({', '.join(held)}): not part of P2's "
+                  "rule (docs/p2.md, \"The decision\"); each unit's decision names them",)
+                 if held else ())
+        return Decision(passed=not failed, rule=BATCH_DECISION_RULE, failed=failed,
+                        checks=checks, notes=notes)
 
     @property
     def notes(self) -> tuple[str, ...]:
@@ -109,8 +123,27 @@ class P2BatchResult(ResultDefaults):
                 "summary": summary_rows(self), "units": [r.to_dict() for r in self.results]}
 
 
+def _unit_summary(r: P2UnitResult) -> str:
+    """One unit's verdict in a few words: why it failed, its inconsistent held-out models."""
+    text = {True: "PASS", False: "FAIL", None: "NO DECISION"}[r.passed]
+    if r.reasons:
+        text += ": " + "; ".join(r.reasons)
+    if r.held_out_inconsistent:
+        text += (f" ({len(r.held_out_inconsistent)} of {len(r.held_out)} temperature models NOT "
+                 "consistent at the held-out points, not part of the rule)")
+    return text
+
+
+def held_out_units(batch: P2BatchResult) -> tuple[str, ...]:
+    """Return the units with a temperature model NOT consistent at the held-out points."""
+    return tuple(r.unit for r in batch.results if r.held_out_inconsistent)
+
+
 def summary_rows(batch: P2BatchResult) -> list[dict[str, Any]]:
     """One row per unit: pass/fail, the compensated errors, the worst parameters, the error.
+
+    ``held_out_inconsistent`` names the parameters whose temperature model is NOT consistent at
+    the held-out points (not part of P2's rule; docs/p2.md, "The decision").
 
     The worst parameters are those whose value at T0 lies furthest from nominal in units of the
     lot's spread (|x − median| / (1.4826·MAD)), the three largest; empty for fewer than three
@@ -134,7 +167,8 @@ def summary_rows(batch: P2BatchResult) -> list[dict[str, Any]]:
         rows.append({"unit": r.unit, "passed": r.passed,
                      "accel_error_mps2": r.compensated_error.get("accel_mps2"),
                      "gyro_error_rps": r.compensated_error.get("gyro_rps"),
-                     "worst_parameters": worst, "error": r.error})
+                     "worst_parameters": worst, "error": r.error,
+                     "held_out_inconsistent": list(r.held_out_inconsistent)})
     return rows
 
 

@@ -72,11 +72,11 @@ def write_batch_summary(batch: Any, folder: Path, stem: str) -> list[Path]:
     with open(table, "w", encoding="utf-8", newline="") as fh:
         writer = csv.writer(fh, lineterminator="\n")
         writer.writerow(["unit", "passed", "accel_error_mps2", "gyro_error_rps",
-                         "worst_parameters", "error"])
+                         "worst_parameters", "error", "held_out_inconsistent"])
         for row in rows:
             writer.writerow([row["unit"], row["passed"], row["accel_error_mps2"],
                              row["gyro_error_rps"], "; ".join(row["worst_parameters"]),
-                             row["error"]])
+                             row["error"], "; ".join(row["held_out_inconsistent"])])
     written = [summary, table]
     if sum(r.result is not None for r in batch.results) >= 2:
         from imucalib.procedures.p2.figures import save_lot_figure

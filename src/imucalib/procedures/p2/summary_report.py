@@ -69,7 +69,7 @@ def summary_report(batch: Any, *, recordings: Sequence[Any] | None = None,
         Sections: the units, equipment, environment, process, the per-unit table with each
         unit's report id, the lot figure, and the conclusion (docs/reporting.md).
     """
-    from imucalib.procedures.p2.batch import summary_rows
+    from imucalib.procedures.p2.batch import held_out_units, summary_rows
     from imucalib.procedures.p2.figures import save_lot_figure
 
     issued = issued_now()
@@ -90,6 +90,11 @@ def summary_report(batch: Any, *, recordings: Sequence[Any] | None = None,
             (report_ids or {}).get(str(row["unit"])) or report_id(unit_result)
             if unit_result.result is not None else row["error"]))
     n_pass = sum(1 for r in batch.results if r.passed)
+    held = held_out_units(batch)
+    held_text = ((f"{len(held)} of {len(batch.results)} unit(s) have temperature models NOT "
+                  f"consistent at the held-out points ({', '.join(held)}): each unit's report "
+                  "names them; P2's rule does not judge them (docs/p2.md, \"The decision\").",)
+                 if held else ())
     failed = [r.unit for r in batch.results if not r.passed]
     kind, article = ("production lot", "a") if batch.unit == "lot" else ("array", "an")
     units_table = ReportTable("units", ("unit", "recording"),
@@ -108,7 +113,7 @@ def summary_report(batch: Any, *, recordings: Sequence[Any] | None = None,
             "are those whose value at T0 lies furthest from the lot's median, in robust "
             "standard deviations (1.4826·MAD), the three largest (three or more units).",)),
         Section(SECTION_TITLES[4],
-                (f"{n_pass} of {len(batch.results)} unit(s) pass.",),
+                (f"{n_pass} of {len(batch.results)} unit(s) pass.", *held_text),
                 (ReportTable("per unit", ("unit", "decision", "accel error after compensation",
                                           "gyro error after compensation",
                                           "furthest from the lot", "unit report id"),
@@ -120,7 +125,9 @@ def summary_report(batch: Any, *, recordings: Sequence[Any] | None = None,
     ]
     verdict = "PASS" if batch.passed else "FAIL"
     conclusion = [f"Decision: {verdict}: {n_pass} of {len(batch.results)} unit(s) pass"
-                  + (f"; failed or not calibrated: {', '.join(failed)}." if failed else ".")]
+                  + (f"; failed or not calibrated: {', '.join(failed)}" if failed else "")
+                  + (f"; {len(held)} unit(s) with temperature models NOT consistent at the "
+                     "held-out points (not part of P2's rule)" if held else "") + "."]
     conclusion.append("This summary is not a certificate of any unit: each unit's own report "
                       "(its id in the table) is, once reviewed.")
     if failed:

@@ -9,6 +9,13 @@ against [1, f_x, f_y, f_z], weighted by the windows' standard errors); then over
 the scatter of every coefficient, the gyro random drift 2.7·√Σσ² and the accelerometer zero
 stability (docs/random-drift.md, Eqs. (1)–(5)).
 
+The decision: the means over the repetitions (D0, G, the accelerometer bias: what
+:meth:`RandomDriftResult.triad_parameters` hands on) against the unit's specification (the
+recording's ``[imu.limits]`` ``gyro_bias_dph``, ``gyro_g_sensitivity_dph_per_g``,
+``accel_bias_ug``, the plan's ``[acceptance]`` rule); the scatters, the random drift and the zero
+stability have no specification limit. *No decision* when it gives none of those
+(:mod:`~imucalib.procedures.common.spec_decision`).
+
 Contents
 --------
 :class:`RandomDriftResult`, :func:`analyze_random_drift`
@@ -18,7 +25,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -28,7 +35,7 @@ from imucalib.errors import InsufficientExcitationError, RecordingError
 from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording
-from imucalib.models.decision import Decision, no_decision
+from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.reported import ReportedParameter
@@ -37,6 +44,7 @@ from imucalib.procedures.common.drift_model import (
     drift_parameter_names,
     fit_windows,
 )
+from imucalib.procedures.common.spec_decision import Specification, decide_triad
 from imucalib.procedures.common.static_windows import (
     StaticWindow,
     extract_static_windows,
@@ -91,8 +99,9 @@ class RandomDriftResult(ResultDefaults):
     """The random-drift test's result (the result contract, docs/procedures.md).
 
     A :class:`~imucalib.models.procedure_result.ProcedureResult`: a characterisation of the
-    scatter between repetitions, *no decision*; :meth:`triad_parameters` gives the mean
-    coefficients for ``imucalib combine`` (no ``calibration``).
+    scatter between repetitions; :meth:`triad_parameters` gives the mean coefficients for
+    ``imucalib combine`` (no ``calibration``), decided against the unit's limits
+    (:attr:`decision`).
 
     Attributes
     ----------
@@ -129,6 +138,8 @@ class RandomDriftResult(ResultDefaults):
         ``"random-drift"``.
     drift_fits : tuple of FitQuality
         Each repetition's drift fit per gyro axis (R × 3, repetition-major).
+    specification : Specification
+        The unit's limits and the decision rule the recording states (none: no decision).
     """
 
     unit: str
@@ -148,13 +159,23 @@ class RandomDriftResult(ResultDefaults):
     notes: tuple[str, ...] = ()
     procedure: str = "random-drift"
     drift_fits: tuple[FitQuality, ...] = ()
+    specification: Specification = field(default_factory=Specification)
 
     @property
     def decision(self) -> Decision:
-        """*No decision*: a characterisation, the plan gives no acceptance limits."""
-        return no_decision("the random-drift test has no acceptance limits: the plan gives "
-                           "none; the scatter over the repetitions, the random drift and the "
-                           "zero stability are reported with their standard uncertainties")
+        """The mean D0, G and accelerometer bias against the specification's limits.
+
+        Its check ``specification`` under the recording's rule (docs/random-drift.md,
+        "Decision"); *no decision* when the specification gives none of ``gyro_bias_dph``,
+        ``gyro_g_sensitivity_dph_per_g``, ``accel_bias_ug`` (the scatter, the random drift and
+        the zero stability have no specification limit). Each misfit in its notes.
+        """
+        return decide_triad(self.specification, self.triad_parameters(),
+                            test="the random-drift test",
+                            what="the scatter over the repetitions, the random drift and the "
+                                 "zero stability are reported with their standard "
+                                 "uncertainties (docs/random-drift.md)",
+                            notes=tuple(q.summary() for q in self.drift_fits if q.misfit))
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -304,4 +325,5 @@ def analyze_random_drift(recording: Recording | str | os.PathLike[str], *,
         allan_accel_mps2=np.array([allan_at_interval(acc[:, i]) for i in range(3)]),
         interval_s=float(np.mean(np.diff(times))), gravity_mps2=site.gravity_mps2,
         notes=tuple(notes),
-        drift_fits=tuple(q for f in fits for q in f.fits))
+        drift_fits=tuple(q for f in fits for q in f.fits),
+        specification=Specification.of_metadata(recording.metadata))

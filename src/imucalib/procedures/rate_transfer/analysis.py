@@ -12,8 +12,10 @@ holds the g-sensitivity along it). :meth:`RateTransferResult.triad_parameters` g
 ``gyro_M_kk`` (the quadratic term E2 stays in the report: the triad model has no gyro K2).
 
 The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
-ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and *no
-decision* (the rate transfer has no acceptance limits).
+ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and a
+decision on ``gyro_M_kk`` against the unit's gyro scale-factor limit (the recording's
+``[imu.limits] gyro_scale_ppm``, the plan's ``[acceptance]`` rule), *no decision* when the
+specification gives none (:mod:`~imucalib.procedures.common.spec_decision`).
 
 Contents
 --------
@@ -34,7 +36,7 @@ from numpy.typing import NDArray
 from imucalib.errors import InsufficientExcitationError
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording
-from imucalib.models.decision import Decision, no_decision
+from imucalib.models.decision import Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.reported import ReportedParameter
@@ -43,6 +45,7 @@ from imucalib.procedures.common.rate_windows import (
     RateWindow,
     extract_rate_windows,
 )
+from imucalib.procedures.common.spec_decision import Specification, decide_triad
 from imucalib.procedures.rate_transfer.fit import (
     LineFit,
     TransferFit,
@@ -162,8 +165,8 @@ class RateTransferResult(ResultDefaults):
     """The rate transfer of one unit (module docstring).
 
     It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
-    ``calibration`` (``gyro_M_kk`` only, :meth:`triad_parameters`), ``decision`` *no
-    decision*.
+    ``calibration`` (``gyro_M_kk`` only, :meth:`triad_parameters`), ``decision`` against the
+    unit's gyro scale-factor limit (:attr:`decision`).
 
     Attributes
     ----------
@@ -174,6 +177,9 @@ class RateTransferResult(ResultDefaults):
     n_turns : int
     procedure : str
         ``"rate-transfer"``.
+    notes : tuple of str
+    specification : Specification
+        The unit's limits and the decision rule the recording states (none: no decision).
     """
 
     unit: str
@@ -182,6 +188,7 @@ class RateTransferResult(ResultDefaults):
     n_turns: int
     procedure: str = "rate-transfer"
     notes: tuple[str, ...] = field(default=())
+    specification: Specification = field(default_factory=Specification)
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -192,11 +199,18 @@ class RateTransferResult(ResultDefaults):
 
     @property
     def decision(self) -> Decision:
-        """*No decision*: the plan gives no acceptance limits (its misfits in the notes)."""
-        return no_decision("the rate transfer has no acceptance limits (the plan gives none): "
-                           "it measures each gyro's scale factor, bias, nonlinearity, asymmetry "
-                           "and quadratic term (docs/rate-transfer.md)",
-                           notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
+        """Each ``gyro_M_kk`` against the specification's gyro scale-factor limit.
+
+        Its check ``specification`` under the recording's rule (docs/rate-transfer.md,
+        "Decision"); *no decision* when the specification gives no ``gyro_scale_ppm`` (the
+        nonlinearity, asymmetry and quadratic term have no specification limit). Each misfit in
+        its notes.
+        """
+        return decide_triad(self.specification, self.triad_parameters(),
+                            test="the rate transfer",
+                            what="it measures each gyro's scale factor, bias, nonlinearity, "
+                                 "asymmetry and quadratic term (docs/rate-transfer.md)",
+                            notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
 
     def axis(self, name: str) -> AxisTransfer:
         """Return the result of body axis `name`."""
@@ -304,6 +318,7 @@ def analyze_rate_transfer(recording: Recording | str | os.PathLike[str], *,
                  for a in sorted({w.axis for w in windows}))
     return RateTransferResult(
         unit=name, axes=axes, earth_rate_up_rps=earth_up, n_turns=len(windows),
+        specification=Specification.of_metadata(recording.metadata),
         notes=("means over whole table revolutions (encoder angle); σ from the pooled white "
                "noise of 1 s block means; input = table rate + vertical Earth rate "
                "(docs/rate-transfer.md)",))

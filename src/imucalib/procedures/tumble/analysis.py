@@ -17,8 +17,11 @@
    test the same accelerometer by GLS.
 
 The result satisfies the result contract (:class:`~imucalib.models.procedure_result.
-ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and *no
-decision* (the tumble has no acceptance limits).
+ProcedureResult`, docs/procedures.md): part of a triad model (no ``calibration``), and a
+decision on the triad's parameters against the unit's specification (the recording's
+``[imu.limits]``: accelerometer bias, scale factor, misalignment; the plan's ``[acceptance]``
+rule), *no decision* when the specification gives none of those limits
+(:mod:`~imucalib.procedures.common.spec_decision`).
 
 Contents
 --------
@@ -45,11 +48,12 @@ from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.io.opening import open_recording
 from imucalib.io.reader import Recording
 from imucalib.io.streams import DEVICE_IMU
-from imucalib.models.decision import Decision, no_decision
+from imucalib.models.decision import Decision
 from imucalib.models.earth import Site
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults, TriadParameters
 from imucalib.models.reported import ReportedParameter
+from imucalib.procedures.common.spec_decision import Specification, decide_triad
 from imucalib.procedures.tumble.fourier import (
     COEFFICIENTS,
     SIGNATURE_HARMONICS,
@@ -195,7 +199,8 @@ class TumbleResult(ResultDefaults):
 
     It satisfies :class:`~imucalib.models.procedure_result.ProcedureResult`: no
     ``calibration`` (it estimates the accelerometers' part of a triad model,
-    :meth:`triad_parameters`), ``decision`` *no decision* (:attr:`decision`).
+    :meth:`triad_parameters`), ``decision`` against the unit's specification
+    (:attr:`decision`).
 
     Attributes
     ----------
@@ -209,6 +214,8 @@ class TumbleResult(ResultDefaults):
     triad_fit : FitQuality or None
         χ² of the combination of the head axes' triad parameters (T.12).
     notes : tuple of str
+    specification : Specification
+        The unit's limits and the decision rule the recording states (none: no decision).
     """
 
     unit: str
@@ -220,13 +227,20 @@ class TumbleResult(ResultDefaults):
     triad_fit: FitQuality | None = None
     notes: tuple[str, ...] = ()
     procedure: str = "tumble"
+    specification: Specification = field(default_factory=Specification)
 
     @property
     def decision(self) -> Decision:
-        """*No decision*: the tumble has no acceptance limits (its misfits in the notes)."""
-        return no_decision("the tumble has no acceptance limits: it estimates the "
-                           "accelerometers' coefficients (docs/tumble.md)",
-                           notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
+        """The triad's b_i, M_ii, M_ip against the specification's accelerometer limits.
+
+        Its check ``specification`` under the recording's rule (docs/tumble.md, "Decision");
+        *no decision* when the specification gives no accelerometer bias, scale-factor or
+        misalignment limit (K2 has none). Each misfit in its notes.
+        """
+        return decide_triad(self.specification, self.triad_parameters(), test="the tumble",
+                            what="it estimates the accelerometers' coefficients "
+                                 "(docs/tumble.md)",
+                            notes=tuple(q.summary() for q in self.fit_quality if q.misfit))
 
     @property
     def fit_quality(self) -> tuple[FitQuality, ...]:
@@ -579,7 +593,8 @@ def _analyze(rec: Recording, opt: TumbleOptions,
         progress(1.0)
     return TumbleResult(unit=unit, gravity_mps2=g, gravity_rel_std=g_rel,
                         accelerometers=tuple(accels), method=opt.method, windows=tuple(windows),
-                        triad_fit=triad_fit, notes=tuple(notes))
+                        triad_fit=triad_fit, notes=tuple(notes),
+                        specification=Specification.of_metadata(rec.metadata))
 
 
 def _combination_quality(accels: Sequence[AccelerometerTumble]) -> FitQuality | None:
