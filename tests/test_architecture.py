@@ -20,7 +20,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "imucalib"
 #: Layer of each top-level module or package (docs/architecture.md, "Layers").
 RANK = {
     "errors": 0,
-    "units": 1, "conventions": 1, "_checks": 1, "_lazy": 1,
+    "units": 1, "conventions": 1, "_checks": 1, "_lazy": 1, "config": 1,
     "models": 2,
     "io": 3, "processing": 3, "estimation": 3, "analysis": 3,
     "plan": 4,

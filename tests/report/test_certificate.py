@@ -120,11 +120,13 @@ def test_a_review_from_the_records_is_shown(certificate):
     doc = build_report(certificate.analysis, result_id=7,
                        review={"reviewer": "qa-lead", "approved": True, "comment": "ok",
                                "reviewed_utc": "2026-01-02 10:00 UTC"})
-    assert doc.report_id.endswith("-R7")
+    assert doc.report_id == certificate.doc.report_id  # the records id is not in the report id
+    assert dict(doc.certificate.tables[0].rows)["records"] == "result 7"
     conclusion = " ".join(doc.section("6.").paragraphs)
     assert "approved by qa-lead on 2026-01-02 10:00 UTC: ok" in conclusion
-    assert "Authorisation: authorised (qa-lead)" in conclusion
-    assert "not reviewed" not in conclusion
+    assert ("Authorisation: released — authorised by qa-lead, decision approve, on "
+            "2026-01-02 10:00 UTC: ok.") in conclusion
+    assert "not reviewed" not in conclusion and doc.watermark == ""
     with pytest.raises(InvalidInputError, match="reviewer"):
         build_report(certificate.analysis, review={"approved": True})
 
@@ -187,8 +189,9 @@ def test_a_noise_characterisation_gets_its_noise_tables_and_allan_figures(tmp_pa
     doc = build_report(result)
     assert [s.title for s in doc.sections] == list(SECTION_TITLES)
     results = doc.section("5.")
-    assert [t.header[2:] for t in results.tables] == [("gyro_x", "gyro_y", "gyro_z"),
-                                                      ("accel_x", "accel_y", "accel_z")]
+    assert [t.header[2:] for t in results.tables[:2]] == [("gyro_x", "gyro_y", "gyro_z"),
+                                                          ("accel_x", "accel_y", "accel_z")]
+    assert results.tables[2].title.startswith("uncertainty budget")  # the certificate's
     assert len(results.figures) == 2 and all(f.png.startswith(b"\x89PNG") for f in results.figures)
     arw = dict((row[0], row[2:]) for row in results.tables[0].rows)["Angle random walk"]
     # white noise σ at rate f: ARW = σ/√f [rad/√s] = σ/√f · (180/π) · 60 [°/√h]

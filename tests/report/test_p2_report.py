@@ -156,8 +156,8 @@ def test_the_cli_reports_an_array_and_a_records_run_with_its_review(small, tmp_p
     # recorded as `imucalib calibrate` records it (the analysis made once, in the fixture)
     assert "recorded run 1, result(s) 1, 2, 3" in record_calibration(small.batch, recording,
                                                                       db=db)
-    assert runner.invoke(app, ["records", "review", "2", "--who", "qa-lead", "--approve",
-                               "--db", db]).exit_code == 0
+    assert runner.invoke(app, ["records", "review", "2", "--user", "qa-lead", "--decision",
+                               "approve", "--db", db]).exit_code == 0
     run = runner.invoke(app, ["report", "--run", "1", "--db", db, "--out",
                               str(tmp_path / "rep"), "--format", "html"])
     assert run.exit_code == 0, run.output
@@ -165,11 +165,13 @@ def test_the_cli_reports_an_array_and_a_records_run_with_its_review(small, tmp_p
     assert set(pages) == {"arr.U0.p2.report.html", "arr.U1.p2.report.html",
                           "arr.U2.p2.report.html", "arr.array.p2.summary.report.html"}
     u1 = pages["arr.U1.p2.report.html"]
-    assert re.search(r"IMUCAL-P2-U1-[0-9a-f]{12}-R2", u1)
+    assert re.search(r"IMUCAL-P2-U1-[0-9a-f]{12}\b", u1)
+    assert not re.search(r"IMUCAL-P2-U1-[0-9a-f]{12}-R", u1)  # one id in every path
+    assert "<td>records</td><td>run 1, result 2</td>" in u1  # the records ids, not in the id
     assert "approved by qa-lead" in u1
     assert "Review status: not reviewed (records result 1 has no review)" in \
         pages["arr.U0.p2.report.html"]
-    assert re.search(r"IMUCAL-P2-U1-[0-9a-f]{12}-R2", pages["arr.array.p2.summary.report.html"])
+    assert re.search(r"IMUCAL-P2-U1-[0-9a-f]{12}", pages["arr.array.p2.summary.report.html"])
     # the recording changed since it was recorded: refused, naming both hashes
     with open(recording, "ab") as fh:
         fh.write(b"\0")

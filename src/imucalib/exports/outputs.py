@@ -165,16 +165,18 @@ _INTRINSICS: dict[str, _IntrinsicsWriter] = {
 
 def _report(fmt: str) -> _Writer:
     def writer(result: Any, folder: Path, stem: str, *,
-               provenance: Provenance | None = None) -> list[Path]:
+               provenance: Provenance | None = None,
+               recording: Path | None = None) -> list[Path]:
         from imucalib.exports.report import build_report
 
-        recording = None
         prov = provenance or (result.calibration.provenance
                               if result.calibration is not None else None)
         name = Path(prov.recording).name if prov is not None and prov.recording else ""
-        if (name and Path(name).suffix.lower() in (".h5", ".hdf5")
+        if recording is not None and recording.suffix.lower() not in (".h5", ".hdf5"):
+            recording = None  # a user's CSV log is no Recording: not read again
+        if (recording is None and name and Path(name).suffix.lower() in (".h5", ".hdf5")
                 and (folder / name).is_file()):  # written beside the recording (the demo)
-            recording = folder / name  # (a user's CSV log is no Recording: not read again)
+            recording = folder / name
         document = build_report(result, recording=recording)
         return [_write_document(document, fmt, folder / f"{stem}.report")]
 
@@ -255,7 +257,8 @@ def formats_of(procedure: str) -> dict[str, _Writer]:
 def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
                   formats: Sequence[str] | None = None, *, name: str,
                   temperature_degc: float | None = None,
-                  provenance: Provenance | None = None) -> list[Path]:
+                  provenance: Provenance | None = None,
+                  recording: str | os.PathLike[str] | None = None) -> list[Path]:
     """Name and write the output files of a procedure result (module docstring).
 
     Parameters
@@ -277,6 +280,10 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
     provenance : Provenance, optional
         Where the result came from (the recording, its SHA-256, the plan hash), for the result
         document and the report; default: its calibration's.
+    recording : path, optional
+        The Recording analysed, for the report (its environment, the run's facts, the station:
+        a twin's result is not traceable); default: the one of the provenance's name in
+        `folder`, if it is there.
 
     Returns
     -------
@@ -317,7 +324,10 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
     for fmt in chosen:
         if temperature_degc is not None:  # only TEMPERATURE_FORMATS here (checked above)
             written += _INTRINSICS[fmt](result, out, stem, temperature_degc=temperature_degc)
-        elif fmt in ("result-json", "report-pdf", "report-html"):
+        elif fmt in ("report-pdf", "report-html"):
+            written += _PROVENANCED[fmt](result, out, stem, provenance=provenance,
+                                         recording=None if recording is None else Path(recording))
+        elif fmt == "result-json":
             written += _PROVENANCED[fmt](result, out, stem, provenance=provenance)
         else:
             written += writers[fmt](result, out, stem)

@@ -56,11 +56,15 @@ def default_url() -> str:
 
 
 def resolve_url(url: str | None = None) -> str:
-    """Return the database URL: `url`, else ``$IMUCALIB_DB``, else :func:`default_url`.
+    """Return the database URL: `url`, else ``$IMUCALIB_DB``, else the configuration's.
 
-    A bare file path (no ``://``) is taken as an SQLite file.
+    The laboratory configuration's ``[records] database`` (:mod:`imucalib.config`), else
+    :func:`default_url`. A bare file path (no ``://``) is taken as an SQLite file.
     """
-    chosen = url or os.environ.get(ENV_VAR) or default_url()
+    from imucalib.config import load_config
+
+    chosen = (url or os.environ.get(ENV_VAR) or load_config().records.database
+              or default_url())
     if "://" not in chosen:
         chosen = f"sqlite:///{Path(chosen).expanduser().resolve()}"
     return chosen

@@ -14,6 +14,10 @@ Contents
     :class:`ReportContent` (a procedure's sections 1–5).
 :mod:`imucalib.report.sections`
     The shared sections: object, equipment and traceability, environment, conclusion, appendix.
+:mod:`imucalib.report.certificate`
+    The certificate every report is: its heading, the equipment with certificates, the
+    uncertainty budget, the authorisation or DRAFT, from plain facts
+    (:class:`~imucalib.report.certificate.CertificateFacts`).
 :mod:`imucalib.report.content_generic`
     Sections 1–5 of any result with parameters (a procedure without content of its own).
 :mod:`imucalib.report.pdf`, :mod:`imucalib.report.html`

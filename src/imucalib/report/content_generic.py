@@ -92,13 +92,20 @@ def content(result: ProcedureResult, meta: Mapping[str, Any], *, description: st
     table = ReportTable(f"{result.procedure} results of {result.unit}",
                         ("parameter", "value", f"U (k = {COVERAGE_FACTOR:g})", "unit"),
                         tuple(_rows(result)))
-    passed = result.decision.passed
-    decision = {None: f"No conformity decision was made ({result.decision.rule}).",
-                True: "Every assessed check passed.", False: "A check failed."}[passed]
-    reasons = list(result.decision.failed)
+    verdict = result.decision
+    passed = verdict.passed
+    decision = (f"No conformity decision was made ({verdict.rule})." if passed is None
+                else verdict.summary())
+    reasons = list(verdict.failed)
     process, misfit = _process(result, description, documentation)
     details = dict(prov.details) if prov is not None else {}
     tables = [table]
+    if verdict.checks:  # the decision's checks, as the result file keeps them
+        from imucalib.report.sections import yes_no
+
+        tables.append(ReportTable("checks of the decision", ("check", "verdict", "summary"),
+                                  tuple((c.name, yes_no(c.passed), c.summary)
+                                        for c in verdict.checks)))
     if cal is not None and cal.temperature_models:
         tables.append(temperature_model_table(cal))
         process.append(f"The parameters hold at T0 = {cal.reference_temperature_degc:g} °C; "
@@ -109,7 +116,9 @@ def content(result: ProcedureResult, meta: Mapping[str, Any], *, description: st
                           statement=traceability),
         environment_section(meta, {}),
         Section(SECTION_TITLES[3], tuple(process)),
-        Section(SECTION_TITLES[4], (u_paragraph(), *reasons), tuple(tables)),
+        Section(SECTION_TITLES[4], (u_paragraph(), *reasons,
+                                    *((f"Decision rule: {verdict.rule}.",)
+                                      if passed is not None else ())), tuple(tables)),
     )
-    recs = recommendations(passed, reasons, (), misfit)
+    recs = recommendations(passed, reasons, verdict.not_assessed, misfit)
     return ReportContent(sections, decision, passed, tuple(recs), prov)

@@ -22,11 +22,18 @@ report"):
 
 Appendix: the plan's name and hash, the recording's file name and SHA-256, the software version.
 
+Before section 1 stands the certificate's heading, and the sections carry the certificate's
+parts a procedure does not make (the laboratory, the customer, the calibration and issue dates,
+the equipment with certificates, the uncertainty budget, the operator and the authorisation or
+DRAFT status, "the results relate only to the item calibrated"): :mod:`imucalib.report.certificate`
+and its :class:`~imucalib.report.certificate.CertificateFacts`.
+
 The unique id (:func:`report_id`) is ``IMUCAL-<PROCEDURE>-<serial>-<hash>``, ``<hash>`` the first
 12 hex digits of the SHA-256 of the result's canonical JSON without the analysis time
 (``created_utc``), so the same result — the same recording analysed again by the same software
-with the same options — always gets the same id and two results never one, followed by
-``-R<id>`` when the result is in the records database.
+with the same options — always gets the same id and two results never one: the report written at
+calibration time, ``imucalib report RESULT`` and ``imucalib report --run N`` carry the same id
+(the records ids are stated in the certificate's heading, not in the id).
 
 Each procedure's sections 1–5 are its :class:`ReportContent`, made by the procedure's
 ``report_content`` hook (:class:`~imucalib.procedures.common.procedure.Procedure`; a procedure
@@ -55,9 +62,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, NoReturn, TypeAlias
+from typing import TYPE_CHECKING, Any, NoReturn, TypeAlias
 
 from imucalib.models.procedure_result import ProcedureResult
+
+if TYPE_CHECKING:
+    from imucalib.report.certificate import CertificateFacts
 
 __all__ = ["COVERAGE_FACTOR", "SECTION_TITLES", "ContentBuilder", "ReportContent",
            "ReportDocument", "ReportFigure", "ReportTable", "ReviewStatus", "Section",
@@ -124,10 +134,15 @@ class ReportDocument:
     issued_utc: str
     sections: tuple[Section, ...]
     passed: bool | None = None
+    #: The certificate's heading, before section 1 (:mod:`imucalib.report.certificate`).
+    certificate: Section | None = None
+    #: Across every page ("DRAFT" until released); "" for none.
+    watermark: str = ""
 
     def section(self, title_start: str) -> Section:
         """Return the section whose title starts with `title_start` (KeyError if none)."""
-        for s in self.sections:
+        for s in (*((self.certificate,) if self.certificate is not None else ()),
+                  *self.sections):
             if s.title.startswith(title_start):
                 return s
         raise KeyError(title_start)
@@ -148,19 +163,19 @@ def _without_analysis_time(data: Any) -> Any:
     return data
 
 
-def report_id(result: ProcedureResult, *, result_id: int | None = None) -> str:
-    """Return the report's unique id (module docstring): ``IMUCAL-P1-<serial>-<hash>[-R<id>]``.
+def report_id(result: ProcedureResult) -> str:
+    """Return the report's unique id (module docstring): ``IMUCAL-P1-<serial>-<hash>``.
 
     The hash is of the result's ``to_dict()`` without analysis times, so a result read back
-    from its file (whose ``details`` are that dict) gets the id of the report written with it.
+    from its file (whose ``details`` are that dict) gets the id of the report written with it,
+    and the records' ids do not enter it: every path that reports a result gives one id.
     """
     from imucalib.models.result_document import json_data
 
     body = _without_analysis_time(json_data(result.to_dict()))
     digest = hashlib.sha256(_canonical_json(body).encode("utf-8")).hexdigest()[:12]
     serial = re.sub(r"[^A-Za-z0-9]+", "-", str(result.unit or "unit")).strip("-")
-    text = f"IMUCAL-{str(result.procedure).upper()}-{serial or 'unit'}-{digest}"
-    return text if result_id is None else f"{text}-R{int(result_id)}"
+    return f"IMUCAL-{str(result.procedure).upper()}-{serial or 'unit'}-{digest}"
 
 
 @dataclass(frozen=True)
@@ -182,6 +197,9 @@ class ReportContent:
         ``created_utc`` for the appendix (any of them may be missing).
     plan : Plan, optional
         The plan, for its name in the appendix.
+    type_b : mapping of str to float, optional
+        The Type B standard uncertainty [SI] the analysis added to each parameter (a parameter
+        absent: none), for the uncertainty budget; None: the procedure does not itemise it.
     """
 
     sections: tuple[Section, ...]
@@ -190,6 +208,7 @@ class ReportContent:
     recommendations: tuple[str, ...]
     provenance: Any
     plan: Any = None
+    type_b: Mapping[str, float] | None = None
 
 
 #: A procedure's ``report_content(result, meta) -> ReportContent`` hook: `meta` the facts of the
@@ -203,7 +222,8 @@ def issued_now() -> str:
 
 
 def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = None,
-                    review: Any = None, result_id: int | None = None) -> ReportDocument:
+                    review: Any = None, result_id: int | None = None,
+                    facts: CertificateFacts | None = None) -> ReportDocument:
     """Assemble the report of a procedure result from its procedure's content (module docstring).
 
     Parameters
@@ -218,11 +238,18 @@ def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = No
         Its procedure's ``report_content`` hook (:data:`ContentBuilder`): sections 1–5.
     recording : Recording or path, optional
         The recording analysed: its metadata and temperature column fill the environment
-        section. Without it the conditions during the run are said to be unstated.
+        section, the run's facts (operator, start, equipment) and the station (a twin's result
+        is not traceable). Without it the conditions during the run are said to be unstated.
     review : ReviewStatus, records ``ReviewView``, mapping, or a sequence of them, optional
         The result's reviews from the records database; without: "not reviewed".
     result_id : int, optional
-        The result's id in the records database (appended to the report id).
+        The result's id in the records database (stated in the certificate's heading; the
+        report id is the same with or without it).
+    facts : CertificateFacts, optional
+        What the certificate states beyond the result (the laboratory, the customer, the
+        records' run, equipment and release; :mod:`imucalib.report.certificate`); default:
+        none (a laboratory "not stated"), the recording's run facts, and a DRAFT unless the
+        reviews release it.
 
     Returns
     -------
@@ -234,7 +261,10 @@ def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = No
         A result the report cannot describe (no parameters, a unit that failed to calibrate,
         a batch), or a malformed review.
     """
+    from dataclasses import replace
+
     from imucalib.errors import InvalidInputError
+    from imucalib.report import certificate as cert
     from imucalib.report import sections as common
 
     if result.members:
@@ -246,14 +276,78 @@ def assemble_report(result: Any, content: ContentBuilder, *, recording: Any = No
     meta = common.recording_facts(recording)
     made = content(result, meta)
     reviews = common.reviews_of(review)
-    sections = [*made.sections,
-                common.conclusion_section(made.decision, made.passed,
-                                          list(made.recommendations), reviews, result_id),
-                common.appendix(meta, made.plan, made.provenance, ())]
-    rid = report_id(result, result_id=result_id)
+    given = facts if facts is not None else cert.CertificateFacts()
+    if given.records_result_id is None and result_id is not None:
+        given = replace(given, records_result_id=int(result_id))
+    if given.release is None:
+        given = replace(given, release=cert.release_from_reviews(reviews))
+    done = cert.complete(given, meta)
+    sim = cert.simulated(meta)
+    rid = report_id(result)
+    issued = issued_now()
+    prov = result.provenance
+    details = dict(prov.details) if prov is not None else {}
+    stated = details.get("unit") if isinstance(details.get("unit"), Mapping) else {}
+    item = cert.identity(str(result.unit), meta, stated or {})
+    sections = [_completed(s, i, done, item, result, made, sim)
+                for i, s in enumerate(made.sections)]
+    released = done.release is not None and done.release.released
+    sections += [common.conclusion_section(made.decision, made.passed,
+                                           list(made.recommendations), reviews,
+                                           done.records_result_id,
+                                           closing=cert.authorisation_lines(done)),
+                 common.appendix(meta, made.plan, made.provenance, ())]
+    verdict = {None: "no conformity decision", True: "PASS", False: "FAIL"}[made.passed]
+    heading = cert.certificate_section(report_id=rid, issued=issued, facts=done, item=item,
+                                       procedure=str(result.procedure), decision=verdict,
+                                       sim=sim)
     title = f"Calibration report {rid}: {str(result.procedure).upper()} of {result.unit}"
-    return ReportDocument(title=title, report_id=rid, issued_utc=issued_now(),
-                          sections=tuple(sections), passed=made.passed)
+    return ReportDocument(title=title, report_id=rid, issued_utc=issued,
+                          sections=tuple(sections), passed=made.passed, certificate=heading,
+                          watermark="" if released else "DRAFT")
+
+
+def _completed(section: Section, index: int, facts: CertificateFacts, item: Mapping[str, str],
+               result: Any, made: ReportContent, sim: bool | None) -> Section:
+    """Add the certificate's parts to the procedure's section `index` (0 … 4)."""
+    from dataclasses import replace
+
+    from imucalib.report import certificate as cert
+
+    if index == 0:  # the identification: what the result leaves blank, the recording says
+        tables = tuple(ReportTable(t.title, t.header, tuple(
+            (r[0], item[r[0]]) if len(r) == 2 and r[0] in ("model", "maker")
+            and r[1] in ("", "—") and item[r[0]] != cert.NOT_STATED else r for r in t.rows))
+            if t.title == "identification" else t for t in section.tables)
+        return replace(section, tables=tables)
+    if index == 1:  # equipment with certificates; a twin's result is never traceable
+        table, lines = cert.equipment_table(facts)
+        paragraphs = list(section.paragraphs)
+        if sim and not any("NOT traceable" in p for p in paragraphs):
+            from imucalib.report.sections import traceability
+
+            paragraphs.insert(0, traceability("digital-twin"))
+        return replace(section, paragraphs=(*paragraphs, *lines),
+                       tables=section.tables + ((table,) if table is not None else ()))
+    if index == 2 and (facts.site or facts.environment):
+        rows = (*((f"laboratory site: {k}", v) for k, v in facts.site), *facts.environment)
+        return replace(section, tables=(
+            *section.tables, ReportTable("laboratory site and the run's environment (records)",
+                                         ("quantity", "value"), tuple(rows))))
+    if index == 4 and facts.show_budget:
+        table = cert.budget_table(result.parameter_rows(), made.type_b)
+        if not table.rows:
+            return section
+        note = ("The uncertainty budget: Type A from the fit of the data (the noise), Type B "
+                "the station's contribution the analysis adds, the model misfit the Birge "
+                "scaling of an inconsistent fit (√(u² − u₀²), u₀ the uncertainty before the "
+                "scaling by √(χ²/ν)); they add in quadrature to the combined u, and U = 2u."
+                + ("" if made.type_b is not None else
+                   " This procedure does not itemise a Type B term (a dash): its Type A column "
+                   "holds the whole uncertainty before the misfit scaling."))
+        return replace(section, paragraphs=(*section.paragraphs, note),
+                       tables=(*section.tables, table))
+    return section
 
 
 def no_summary_report(procedure: str) -> NoReturn:

@@ -1,9 +1,10 @@
 """The calibration report as one self-contained HTML page: :func:`write_report_html`.
 
 The same :class:`~imucalib.report.document.ReportDocument` as the PDF
-(:mod:`imucalib.report.pdf`): the unique id in the page's header and footer, the six sections
-and the appendix, tables as ``<table>``, figures embedded as base64 PNG (``data:`` URIs), so
-the file needs nothing beside it.
+(:mod:`imucalib.report.pdf`): the unique id in the page's header and footer, the certificate's
+heading, the six sections and the appendix, tables as ``<table>``, figures embedded as base64
+PNG (``data:`` URIs), so the file needs nothing beside it. A report not released carries a
+DRAFT banner under its header and "DRAFT" across the page.
 
 Contents
 --------
@@ -31,18 +32,31 @@ th, td { border: 1px solid #aaa; padding: 2px 6px; text-align: left; vertical-al
 th { background: #f2f2f2; }
 figure img { max-width: 100%; }
 figcaption { font-size: 12px; }
+.draft-banner { background: #b71c1c; color: #fff; font-weight: bold; padding: 0.4em 0.8em;
+                margin: 0.5em 0; }
+.watermark { position: fixed; top: 35%; left: 15%; font-size: 140px; font-weight: bold;
+             color: rgba(183, 28, 28, 0.10); transform: rotate(-30deg); pointer-events: none; }
 """
 
 
 def render_report_html(document: ReportDocument) -> str:
     """Return the report as an HTML document (module docstring)."""
     rid = escape(document.report_id)
+    mark = escape(document.watermark)
     parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-             f"<title>{escape(document.title)}</title><style>{_STYLE}</style></head><body>",
-             f'<header>Report <span class="report-id">{rid}</span></header>',
-             f"<h1>{escape(document.title)}</h1>",
-             f"<p>Report id: {rid}. Issued {escape(document.issued_utc)}.</p>"]
-    for section in document.sections:
+             f"<title>{escape(document.title)}</title><style>{_STYLE}</style></head>"
+             + "<body>",
+             f'<header>Report <span class="report-id">{rid}</span>'
+             + (f" — {mark}" if mark else "") + "</header>"]
+    if mark:
+        parts.append(f'<div class="watermark" aria-hidden="true">{mark}</div>')
+        parts.append(f'<div class="draft-banner">{mark}: not released — this report is not a '
+                     "certificate until a reviewer has released it.</div>")
+    parts += [f"<h1>{escape(document.title)}</h1>",
+              f"<p>Report id: {rid}. Issued {escape(document.issued_utc)}.</p>"]
+    shown = (*((document.certificate,) if document.certificate is not None else ()),
+             *document.sections)
+    for section in shown:
         parts.append(f"<section><h2>{escape(section.title)}</h2>")
         parts += [f"<p>{escape(p)}</p>" for p in section.paragraphs]
         for table in section.tables:

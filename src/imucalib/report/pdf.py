@@ -4,6 +4,9 @@ Every page carries the report's unique id in its header and ``page n of N`` in i
 (ISO/IEC 17025:2017 §7.8.2.1 b: "a unique identification ... on each page ... and a clear
 identification of the end"); N is known only after the whole document is laid out, so the
 page furniture is drawn by a canvas that keeps every page until the end (:class:`_NumberedCanvas`).
+A report not released (a DRAFT, :attr:`~imucalib.report.document.ReportDocument.watermark`)
+carries "DRAFT" across every page and in every header. The certificate's heading
+(:mod:`imucalib.report.certificate`) comes first, before section 1.
 Text is set in DejaVu Sans (shipped with matplotlib), which has the µ, °, σ, χ and ± the tables
 use. reportlab and matplotlib are imported inside the functions.
 
@@ -45,7 +48,7 @@ def _register_fonts() -> None:
     addMapping(_FONT, 1, 1, _FONT_BOLD)
 
 
-def _numbered_canvas(report_id: str, title: str) -> Any:
+def _numbered_canvas(report_id: str, title: str, watermark: str = "") -> Any:
     from reportlab.lib.units import mm
     from reportlab.pdfgen import canvas
 
@@ -65,8 +68,18 @@ def _numbered_canvas(report_id: str, title: str) -> Any:
             for n, state in enumerate(self._pages, start=1):
                 self.__dict__.update(state)
                 width, height = self._pagesize
+                if watermark:
+                    self.saveState()
+                    self.setFillColorRGB(0.8, 0.1, 0.1)
+                    self.setFillAlpha(0.15)
+                    self.setFont(_FONT_BOLD, 120)
+                    self.translate(width / 2, height / 2)
+                    self.rotate(50)
+                    self.drawCentredString(0, -40, watermark)
+                    self.restoreState()
                 self.setFont(_FONT, 8)
-                self.drawString(15 * mm, height - 10 * mm, f"Report {report_id}")
+                self.drawString(15 * mm, height - 10 * mm, f"Report {report_id}"
+                                + (f" — {watermark}" if watermark else ""))
                 self.drawRightString(width - 15 * mm, height - 10 * mm, title[:70])
                 self.line(15 * mm, height - 11.5 * mm, width - 15 * mm, height - 11.5 * mm)
                 self.drawString(15 * mm, 8 * mm, f"{report_id}")
@@ -125,7 +138,13 @@ def write_report_pdf(document: ReportDocument, path: str | os.PathLike[str]) -> 
     story: list[Any] = [Paragraph(escape(document.title), title),
                         Paragraph(escape(f"Report id: {document.report_id}. Issued "
                                          f"{document.issued_utc}."), body)]
-    for section in document.sections:
+    if document.watermark:
+        story.append(Paragraph(f"<b>{escape(document.watermark)}</b>: "
+                               + escape("not released — this report is not a certificate "
+                                        "until a reviewer has released it."), body))
+    shown = (*((document.certificate,) if document.certificate is not None else ()),
+             *document.sections)
+    for section in shown:
         story.append(Paragraph(escape(section.title), head))
         story += [Paragraph(escape(p), body) for p in section.paragraphs]
         for table in section.tables:
@@ -147,5 +166,6 @@ def write_report_pdf(document: ReportDocument, path: str | os.PathLike[str]) -> 
                                        Paragraph(escape(fig.caption), cell)]))
         story.append(Spacer(1, 3 * mm))
     story.append(Paragraph(escape(f"End of report {document.report_id}."), body))
-    doc.build(story, canvasmaker=_numbered_canvas(document.report_id, document.title))
+    doc.build(story, canvasmaker=_numbered_canvas(document.report_id, document.title,
+                                                  document.watermark))
     return out

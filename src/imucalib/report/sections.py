@@ -11,7 +11,7 @@ Contents
 :func:`recommendations`, :func:`conclusion_section`, :func:`appendix`, :func:`u_paragraph`,
 :func:`traceability`, :func:`reviews_of`, :func:`expanded_cells`, :func:`parameter_table`,
 :func:`figure_of`, :func:`yes_no`, :func:`recording_facts`, :func:`json_field`,
-:func:`plan_name`, :func:`temperature_model_table`
+:func:`plan_name`, :func:`temperature_model_table`, :data:`TRACEABILITY_NOT_STATED`
 """
 
 from __future__ import annotations
@@ -37,9 +37,9 @@ from imucalib.report.document import (
 )
 from imucalib.report.numbers import round_pair
 
-__all__ = ["appendix", "conclusion_section", "environment_section", "equipment_section",
-           "expanded_cells", "figure_of", "json_field", "object_section", "parameter_table",
-           "plan_name", "recommendations", "recording_facts", "reviews_of",
+__all__ = ["TRACEABILITY_NOT_STATED", "appendix", "conclusion_section", "environment_section",
+           "equipment_section", "expanded_cells", "figure_of", "json_field", "object_section",
+           "parameter_table", "plan_name", "recommendations", "recording_facts", "reviews_of",
            "temperature_model_table", "traceability", "u_paragraph", "yes_no"]
 
 
@@ -151,16 +151,23 @@ def object_section(unit: Mapping[str, Any], serial: str) -> Section:
                    (ReportTable("identification", ("item", "value"), rows),))
 
 
+#: The traceability statement of a report that does not know the station (no recording given).
+TRACEABILITY_NOT_STATED = (
+    "Traceability: not stated. The recording was not given to this report, so the station "
+    "that made the result is not known here (a result of the digital twin is not traceable to "
+    "the SI); report the recording (imucalib report RECORDING, or --run N) for the statement.")
+
+
 def traceability(station_kind: str, *, reference: bool = True) -> str:
     """Return the traceability statement of a station kind (an honest line for the twin)."""
-    if not reference:
-        return ("Traceability: a noise characterisation uses no reference quantity; its values "
-                "come from the unit's own output and the recording's time base, whose accuracy "
-                "bounds theirs.")
     if station_kind == "digital-twin":
         return ("Traceability: this calibration was made on the digital twin (a simulated "
                 "station). Its references are simulated and are NOT traceable to the SI; the "
                 "report documents the method, not a calibration of a physical unit.")
+    if not reference:
+        return ("Traceability: a noise characterisation uses no reference quantity; its values "
+                "come from the unit's own output and the recording's time base, whose accuracy "
+                "bounds theirs.")
     return ("Traceability: the references are the rotation table's angle and rate (traceable to "
             "the SI through the table's own calibration certificate, to be kept with the "
             "equipment records) and local gravity (normal gravity at the site's latitude and "
@@ -174,7 +181,9 @@ def equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
 
     The traceability statement is that of the station kind (:func:`traceability`; `reference`
     false: a measurement without a reference quantity), or `statement` when the procedure's
-    references are its own (a field calibration by hand: gravity and whole turns).
+    references are its own (a field calibration by hand: gravity and whole turns); a recording
+    of the digital twin is never traceable, whatever the procedure; without the recording
+    (`meta` empty) and without a statement of its own, traceability is not stated.
     """
     station = json_field(meta, "station_json")
     kind = str(station.get("kind") or meta.get("source") or "—")
@@ -190,7 +199,14 @@ def equipment_section(meta: Mapping[str, Any], plan: Any, software: str, *,
             rows.append((key.replace("_", " "), f"{value:g}" if isinstance(value, float)
                          else str(value)))
     rows.append(("software", f"imucalib {software}"))
-    text = statement if statement is not None else traceability(kind, reference=reference)
+    if kind == "digital-twin":
+        text = traceability(kind)
+    elif statement is not None:
+        text = statement
+    elif not meta:
+        text = TRACEABILITY_NOT_STATED
+    else:
+        text = traceability(kind, reference=reference)
     return Section(SECTION_TITLES[1], (text,),
                    (ReportTable("equipment", ("item", "value"), tuple(rows)),))
 
@@ -251,8 +267,14 @@ def recommendations(passed: bool | None, failed: Iterable[str], not_assessed: It
 
 
 def conclusion_section(decision_text: str, passed: bool | None, recs: list[str],
-                       reviews: tuple[ReviewStatus, ...], result_id: int | None) -> Section:
-    """Section 6: the decision, recommendations, review and authorisation status."""
+                       reviews: tuple[ReviewStatus, ...], result_id: int | None,
+                       closing: Sequence[str] | None = None) -> Section:
+    """Section 6: the decision, recommendations, the reviews and the authorisation.
+
+    `closing`: the certificate's operator, authorisation (or DRAFT) and statements
+    (:func:`imucalib.report.certificate.authorisation_lines`), which replace the one-line
+    authorisation status of a report without them.
+    """
     verdict = {None: "no conformity decision", True: "PASS", False: "FAIL"}[passed]
     text = decision_text if decision_text.startswith(verdict) else f"{verdict}. {decision_text}"
     paragraphs = [f"Decision: {text}".strip()]
@@ -260,13 +282,17 @@ def conclusion_section(decision_text: str, passed: bool | None, recs: list[str],
     if reviews:
         paragraphs += [f"Review: {r.text()}." for r in reviews]
         last = reviews[-1]
-        paragraphs.append("Authorisation: " + ("authorised" if last.approved else
-                                               "NOT authorised") + f" ({last.reviewer}).")
+        if closing is None:
+            paragraphs.append("Authorisation: " + ("authorised" if last.approved else
+                                                   "NOT authorised") + f" ({last.reviewer}).")
     else:
         where = ("" if result_id is None else
                  f" (records result {result_id} has no review)")
-        paragraphs.append(f"Review status: not reviewed{where}. Authorisation: not authorised "
-                          "— this report is not a certificate until it has been reviewed.")
+        paragraphs.append(f"Review status: not reviewed{where}."
+                          + (" Authorisation: not authorised — this report is not a "
+                             "certificate until it has been reviewed." if closing is None
+                             else ""))
+    paragraphs += list(closing or ())
     return Section(SECTION_TITLES[5], tuple(paragraphs))
 
 

@@ -85,11 +85,15 @@ class P1Procedure(ProcedureDefaults):
     def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
         """Return P1's sections 1–5 of the report (:mod:`imucalib.procedures.p1.report`).
 
-        A result read back from its JSON file (no observations) gets the generic ones.
+        A result read back from its JSON file (no observations) gets the generic ones, with
+        P1's Type B terms for the uncertainty budget.
         """
-        from imucalib.procedures.p1.report import content
+        from dataclasses import replace
 
-        return content(result, meta) or super().report_content(result, meta)
+        from imucalib.procedures.p1.report import content, type_b_terms
+
+        return content(result, meta) or replace(super().report_content(result, meta),
+                                                type_b=type_b_terms(result))
 
     def render_console(self, console: Console, result: Any, written: Sequence[Path]) -> None:
         """Print the parameters, the checks and the decision (:mod:`.p1.console`)."""

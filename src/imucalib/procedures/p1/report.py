@@ -12,6 +12,8 @@ Allan deviation curves (docs/p1.md, docs/reporting.md).
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -32,7 +34,33 @@ from imucalib.report.sections import (
     yes_no,
 )
 
-__all__ = ["content"]
+__all__ = ["content", "type_b_terms"]
+
+#: The note of the analysis that states its Type B terms (``analysis._add_type_b``).
+_TYPE_B_NOTE = re.compile(r"Type B \(GUM\): table position accuracy ([0-9.eE+-]+)″ and "
+                          r"axis perpendicularity ([0-9.eE+-]+)″")
+
+
+def type_b_terms(result: Any) -> dict[str, float]:
+    """Return the Type B standard uncertainty [rad] P1 added to each parameter (uncertainty budget).
+
+    The table's position accuracy a (accelerometer misalignments) and its axes'
+    perpendicularity (gyro misalignments), uniform: u = a/√3 (docs/p1.md); read from the
+    result's notes, so a result read back from its file gives the same as the analysis. No
+    note (Type B off): none.
+    """
+    from imucalib import units
+
+    found = next((m for n in result.notes if (m := _TYPE_B_NOTE.search(str(n)))), None)
+    if found is None:
+        return {}
+    u_pos, u_perp = (float(found.group(i)) * units.ARCSEC / math.sqrt(3.0) for i in (1, 2))
+    out = {}
+    for row in result.parameter_rows():
+        parts = row.name.split("_")
+        if len(parts) == 3 and parts[1] == "M" and parts[2][0] != parts[2][1]:
+            out[row.name] = u_pos if parts[0] == "accel" else u_perp
+    return out
 
 
 def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
@@ -112,5 +140,5 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
                 equipment_section(meta, plan, prov.software_version),
                 environment_section(meta, site), process, results]
     return ReportContent(tuple(sections), analysis.decision.summary(), analysis.decision.passed,
-                         tuple(recs), prov, plan)
+                         tuple(recs), prov, plan, type_b=type_b_terms(analysis))
 
