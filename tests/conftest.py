@@ -26,6 +26,11 @@ def _records_database(tmp_path_factory: pytest.TempPathFactory) -> None:
     import os
 
     os.environ["IMUCALIB_DB"] = str(tmp_path_factory.mktemp("records") / "records.db")
+    os.environ.pop("IMUCALIB_USER", None)     # who is acting: only what a test says
+    # the laboratory configuration: none (an empty file), not a ./imucalib.toml or the user's
+    empty = tmp_path_factory.mktemp("config") / "imucalib.toml"
+    empty.write_text("", encoding="utf-8")
+    os.environ["IMUCALIB_CONFIG"] = str(empty)
 
 
 # --- the order of the run (``make test`` runs ``pytest -n 2``; pyproject sets ``--dist worksteal``)

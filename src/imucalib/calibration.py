@@ -9,7 +9,9 @@
    several recordings analysed as one (a P2 production lot), with the options it takes;
 3. the output files: the formats the procedure lists (or those asked for), named
    ``<name>.<unit>.<procedure><suffix>`` (:func:`~imucalib.exports.outputs.write_outputs`);
-4. the records: the result and the run behind it, unless ``record=False``
+4. the records: the result, in the run that recorded the data (found by the recording's
+   SHA-256; a re-analysis is the result's next version; data no run recorded get a run of
+   their own), unless ``record=False``
    (:func:`~imucalib.records.calibrations.record_calibration`, docs/records.md).
 
 The terminal is not part of it: a caller prints the result with the procedure's
@@ -128,7 +130,7 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
               out: str | os.PathLike[str] | None = None, name: str | None = None,
               formats: Sequence[str] | Callable[[ProcedureResult], Sequence[str]] | None = None,
               record: bool = True, db: str | None = None, operator: str = "",
-              progress: Callable[[float], None] | None = None) -> Calibration:
+              progress: Callable[[float], None] | None = None, reason: str = "") -> Calibration:
     """Analyse `data` with its procedure, write the output files and record the result.
 
     Parameters
@@ -159,6 +161,10 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
         Who calibrated, for the records.
     progress : callable, optional
         Given the fraction of the analysis done (the procedure's measure).
+    reason : str
+        Why the data are analysed again, when the records already hold this procedure's result
+        of the same recording (the new result is its next version, docs/records.md "One
+        calibration, one run"); default: an automatic reason naming the options.
 
     Raises
     ------
@@ -183,7 +189,7 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
         chosen = formats(result) if callable(formats) else formats
         written = write_outputs(result, folder, chosen, name=name or path.stem,
                                 provenance=None if result.calibration is not None
-                                else provenance_of(path))
+                                else provenance_of(path), recording=path)
     except OSError as exc:
         raise InvalidInputError(f"cannot write the outputs into {folder}: "
                                 f"{exc.strerror or exc}") from exc
@@ -192,7 +198,8 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
         from imucalib.records.calibrations import record_calibration
 
         try:
-            line = record_calibration(result, path, db=db, operator=operator)
+            line = record_calibration(result, path, db=db, operator=operator, reason=reason,
+                                      options=options)
         except CalibrationError as exc:
             error = exc
     return Calibration(procedure=proc, result=result, written=tuple(written), record=line,

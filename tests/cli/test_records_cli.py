@@ -50,8 +50,8 @@ def test_calibrations_are_recorded_queried_reviewed_amended_verified_and_backed_
     first_row = next(line for line in res.output.splitlines() if line.count("│") >= 5)
     assert "µg" in first_row and f"{ug:+.0f}"[:3] in first_row.replace(" ", "")
     first_id = rows[0]["result_id"]
-    res = runner.invoke(app, ["records", "review", str(first_id), "--who", "A. Auditor",
-                              "--comment", "ok", "--db", db])
+    res = runner.invoke(app, ["records", "review", str(first_id), "--user", "A. Auditor",
+                              "--decision", "approve", "--comment", "ok", "--db", db])
     assert res.exit_code == 0 and "approved by A. Auditor" in res.output
     # the certificate of that result carries its review (imucalib report, docs/reporting.md)
     import pypdf
@@ -61,7 +61,8 @@ def test_calibrations_are_recorded_queried_reviewed_amended_verified_and_backed_
                               "-o", str(pdf)])
     assert res.exit_code == 0, res.output
     text = " ".join(page.extract_text() for page in pypdf.PdfReader(pdf).pages)
-    assert "A. Auditor" in text and f"-R{first_id}" in text
+    flat = " ".join(text.split())
+    assert "A. Auditor" in text and f"records run 1, result {first_id}" in flat
     assert "uses no rotation table" in text                # a field calibration's references
     res = runner.invoke(app, ["records", "amend", str(first_id), str(first), "--reason",
                               "re-analysed", "--db", db])

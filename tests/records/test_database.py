@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from sqlalchemy import create_engine, text
+from sqlalchemy import create_engine, inspect, text
 
 from imucalib.errors import RecordsError
 from imucalib.records import engine as records_engine
@@ -59,8 +59,9 @@ def test_a_newer_schema_is_refused(records_url):
     with engine.begin() as conn:
         conn.execute(text("UPDATE alembic_version SET version_num = '9999'"))
     engine.dispose()
-    with pytest.raises(RecordsError, match=r"schema revision 9999, newer than this software "
-                                           r"knows \(newest 0001\); upgrade imucalib"):
+    head = records_engine.head_revision()
+    with pytest.raises(RecordsError, match=rf"schema revision 9999, newer than this software "
+                                           rf"knows \(newest {head}\); upgrade imucalib"):
         open_records(records_url)
 
 
@@ -83,3 +84,67 @@ def test_reopening_keeps_the_records(records_url, make_result):
     with open_records(records_url) as rec:
         assert [h.serial for h in rec.history("IMU-1")] == ["IMU-1"]
         assert rec.verify() == []
+
+
+def test_a_revision_0001_database_is_upgraded_with_its_records_intact(records_url, make_result,
+                                                                      monkeypatch):
+    """A database made by the first schema (no users) opens: the users tables are added and
+    every row recorded before keeps its hash (docs/records.md, "The schema")."""
+    from alembic import command
+
+    from imucalib.records.api import Records
+
+    engine = records_engine.make_engine(records_url)
+    with engine.connect() as conn, conn.begin():
+        command.upgrade(records_engine._alembic_config(conn), "0001")
+    old = Records(engine)                       # the records as imucalib wrote them at 0001
+    monkeypatch.setattr("imucalib.records.users.check_operator", lambda _s, op: op)  # no users
+    lab = old.add_station("lab 1")
+    table = old.add_equipment(lab, "rate table", serial="T-1", certificate="C-1")
+    run = old.record_run(plan_name="p1", operator="ana", station=lab, equipment=[table])
+    rid = old.record_result(run, make_result("IMU-1"), passed=True)
+    with engine.begin() as conn:                # a review as revision 0001 stored it
+        conn.execute(text("INSERT INTO reviews (id, seq, prev_hash, row_hash, created_utc, "
+                          "result_id, reviewer, reviewed_utc, approved, comment) SELECT 1, 1, "
+                          "'', '', created_utc, id, 'bo', created_utc, (1 = 1), 'ok' "
+                          "FROM results"))
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT version_num FROM alembic_version")).scalar() == "0001"
+        assert not inspect(conn).has_table("users")
+    engine.dispose()
+    _rehash_reviews(records_url)
+    with open_records(records_url) as rec:
+        before = {h.table: h for h in rec.heads()}
+        assert rec.verify(recordings=False) == []
+        assert rec.users() == [] and before["users"].seq == 0
+        assert rec.release_status(rid).decision == "approve"
+        rec.add_user("Ada Admin", "AA", "admin")
+        rec.add_user("Rae Reviewer", "RR", "reviewer", by="Ada Admin")
+        rec.review(rid, "Rae Reviewer", approved=True)
+        assert rec.release_status(rid).released
+        after = {h.table: h for h in rec.heads()}
+        assert all(after[t] == before[t] for t in ("units", "stations", "equipment", "runs",
+                                                   "results"))
+        assert rec.verify(recordings=False) == []
+    engine = create_engine(records_url)
+    with engine.connect() as conn:
+        version = conn.execute(text("SELECT version_num FROM alembic_version")).scalar()
+    engine.dispose()
+    assert version == records_engine.head_revision()
+
+
+def _rehash_reviews(url):
+    """Give the hand-inserted review its chain hash (Eq. (R.1)), as 0001's code did."""
+    from sqlalchemy.orm import Session
+
+    from imucalib.records.canonical import GENESIS
+    from imucalib.records.chain import expected_hash
+    from imucalib.records.schema import Review
+
+    engine = create_engine(url)
+    with Session(engine) as session:
+        row = session.get(Review, 1)
+        row.prev_hash = GENESIS
+        row.row_hash = expected_hash(session, row, GENESIS)
+        session.commit()
+    engine.dispose()

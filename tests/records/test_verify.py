@@ -131,3 +131,51 @@ def test_a_removed_equipment_link_is_named(records, make_result, recording_file)
     run, _, _ = _populate(records, make_result, recording_file)
     _sql(records, "DELETE FROM run_equipment WHERE run_id = :i", i=run)
     assert [(p.table, p.key) for p in records.verify()] == [("runs", run)]
+
+
+def _users(records):
+    records.add_user("Ada Admin", "AA", "admin")
+    records.add_user("Rae Reviewer", "RR", "reviewer", by="Ada Admin")
+    records.add_user("Oli Operator", "OO", "operator", by="Ada Admin")
+    records.disable_user("Oli Operator", "left", by="Ada Admin")
+    records.enable_user("Oli Operator", "back", by="Ada Admin")
+    assert records.verify() == []
+
+
+def test_an_edited_or_deleted_user_is_named(records):
+    _users(records)
+    _sql(records, "UPDATE users SET role = 'admin' WHERE name = 'Oli Operator'")
+    problems = records.verify()
+    assert [(p.table, p.key) for p in problems] == [("users", 3)]
+    assert "(edited)" in problems[0].what
+    _sql(records, "UPDATE users SET role = 'operator' WHERE name = 'Oli Operator'")
+    assert records.verify() == []
+    _sql(records, "DELETE FROM users WHERE name = 'Rae Reviewer'")
+    problems = records.verify()
+    assert [(p.table, p.key) for p in problems] == [("users", 2), ("users", 3)]
+    assert "missing (deleted)" in problems[0].what and "chain broken" in problems[1].what
+
+
+def test_a_deleted_or_edited_user_event_is_named(records):
+    _users(records)
+    _sql(records, "UPDATE user_events SET reason = 'forged' WHERE seq = 2")
+    assert [(p.table, p.key) for p in records.verify()] == [("user_events", 2)]
+    _sql(records, "UPDATE user_events SET reason = 'back' WHERE seq = 2")
+    records.disable_user("Rae Reviewer", "moved", by="Ada Admin")
+    heads = records.heads()
+    assert {h.table: h.seq for h in heads}["user_events"] == 3
+    _sql(records, "DELETE FROM user_events WHERE seq = 3")   # a last row: only an anchor sees
+    assert records.verify() == []
+    assert [(p.table, p.key) for p in records.verify(anchors=heads)] == [("user_events", 3)]
+    _sql(records, "DELETE FROM user_events WHERE seq = 1")   # Oli's disable: the chain breaks
+    problems = records.verify()
+    assert [(p.table, p.key) for p in problems] == [("user_events", 1), ("user_events", 2)]
+    assert "missing (deleted)" in problems[0].what and "chain broken" in problems[1].what
+
+
+def test_an_edited_reviewer_or_decision_is_named(records, make_result, recording_file):
+    _, _, reviews = _populate(records, make_result, recording_file)
+    _sql(records, "UPDATE reviews SET reviewer = 'Rae Reviewer' WHERE id = :i", i=reviews[0])
+    _sql(records, "UPDATE reviews SET approved = :f WHERE id = :i", f=False, i=reviews[2])
+    assert [(p.table, p.key) for p in records.verify()] == [("reviews", reviews[0]),
+                                                            ("reviews", reviews[2])]

@@ -29,6 +29,7 @@ Commands
 ``schema result``                  the JSON Schema of the result file (format version 4)
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 ``records list|show|history|…``    the calibration records database (docs/records.md)
+``users add|list|disable|enable``  the people who act on the records and their roles
 ``report RESULT|RECORDING``        the calibration report (certificate) as PDF or HTML; an
                                    array's units and summary; ``--run N`` from the records
 """
@@ -51,6 +52,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     run,
     station,
     twin,
+    users,
 )
 from imucalib.cli._app import app, err_console, fail
 from imucalib.errors import CalibrationError

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import getpass
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -222,6 +221,16 @@ def calibrate(
                      "data directory; docs/records.md).")] = None,
     no_record: Annotated[bool, typer.Option(
         "--no-record", help="Do not record the result in the records database.")] = False,
+    reason: Annotated[str, typer.Option(
+        "--reason", help="Why the data are analysed again (recorded with the result's new "
+                         "version; default: the options given).")] = "",
+    config: Annotated[Path | None, typer.Option(
+        "--config", help="The laboratory configuration (default: $IMUCALIB_CONFIG, else "
+                         "./imucalib.toml, else the user's; docs/configuration.md).")] = None,
+    user: Annotated[str | None, typer.Option(
+        "--user", help="Who analyses (a registered user once the records have users; "
+                       "default: $IMUCALIB_USER, else the configuration's [operator] default; "
+                       "docs/records.md).")] = None,
     *,
     import_options: ImportOptions,
 ) -> None:
@@ -233,7 +242,9 @@ def calibrate(
     the test accelerometer's K2 on the centrifuge with the unbalance removed. A CSV is
     calibrated through its step file (--steps), or, a hand-held log, by `calibrate field
     DATA.csv` with the import options of `imucalib segments` (docs/field.md). The result is
-    recorded in the records database (docs/records.md; ``--no-record`` skips it).
+    recorded in the records database, in the run that recorded the data (``imucalib run``;
+    data no run recorded get a run of their own); a second analysis of the same data is the
+    result's next version, with ``--reason`` (docs/records.md; ``--no-record`` skips it).
     """
     from imucalib.calibration import calibrate as run_pipeline
     from imucalib.calibration import procedure_of
@@ -276,10 +287,15 @@ def calibrate(
                           "the step file)" if table else ""), highlight=False)
         proc = procedure_of(recording, procedure_name)
         options = analysis_options(proc, recording, model, extra, settings or ())
-        with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
-            done = run_pipeline(recording, procedure=proc.name, options=options, unit=imu,
-                                more=tuple(more or ()), out=out, record=not no_record, db=db,
-                                operator=getpass.getuser(), progress=update)
+        from imucalib.cli._user import acting_user
+        from imucalib.config import use_config
+
+        with use_config(config):
+            who, who_note = acting_user(user, db=db, record=not no_record, action="calibrate")
+            with progress_bar(f"calibrate {recording.name}", quiet=quiet) as update:
+                done = run_pipeline(recording, procedure=proc.name, options=options, unit=imu,
+                                    more=tuple(more or ()), out=out, record=not no_record,
+                                    db=db, operator=who, progress=update, reason=reason)
     except CalibrationError as exc:
         raise fail(exc) from exc
     done.procedure.render_console(console, done.result, done.written)
@@ -287,6 +303,8 @@ def calibrate(
         raise fail(done.record_error)
     if done.record is not None:
         console.print(done.record, highlight=False, soft_wrap=True)
+    if who_note:
+        console.print(who_note, highlight=False, soft_wrap=True, markup=False)
     if done.result.passed is False:
         raise typer.Exit(code=1)
 

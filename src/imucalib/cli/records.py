@@ -1,9 +1,9 @@
 """``imucalib records …``: the calibration records database (docs/records.md).
 
 ``list``, ``runs``, ``show``, ``history``, ``drift``, ``due``, ``review``, ``amend``, ``verify``,
-``backup``, ``restore`` and ``add-equipment``; every command takes ``--db URL`` (default
-``$IMUCALIB_DB``, else ``records.db`` in the user's data directory) and the listing ones
-``--json``. ``imucalib calibrate`` records by default through
+``backup``, ``restore``, ``add-equipment``, ``recertify`` and ``equipment``; every command
+takes ``--db URL`` (default ``$IMUCALIB_DB``, else ``records.db`` in the user's data directory)
+and the listing ones ``--json``. ``imucalib calibrate`` records by default through
 :func:`imucalib.records.calibrations.record_calibration`.
 """
 
@@ -107,14 +107,81 @@ def runs(plan: Annotated[str, typer.Argument(help="A plan's name or hash.")], db
 
 
 @records_app.command()
-def show(result_id: Annotated[int, typer.Argument(help="Result id.")], db: Db = None) -> None:
-    """Print one result: its parameters, run, reviews (JSON)."""
+def show(result_id: Annotated[int, typer.Argument(help="Result id.")], db: Db = None,
+         as_json: Annotated[bool, typer.Option(
+             "--json", help="Print JSON: result, run, equipment, reviews, release and the "
+                            "stored result document.")] = False) -> None:
+    """Print one result, its run, its reviews and whether it is released.
+
+    The run: plan, operator, station, the equipment used with its certificates, start and end.
+    """
     try:
         with _open(db) as records:
-            doc = records.result_document(result_id)
+            entry = records.result(result_id)
+            run = records.run(entry.run_id)
+            known = {e.equipment_id: e for e in records.equipment(current_only=False)}
+            release = records.release_status(result_id)
+            doc = records.result_document(result_id) if as_json else {}
     except CalibrationError as exc:
         raise fail(exc) from exc
-    console.print_json(json.dumps(_jsonable(doc), default=str))
+    equipment = [known[i] for i in run.equipment_ids if i in known]
+    if as_json:
+        console.print_json(json.dumps(_jsonable({
+            "result": entry, "run": run, "equipment": equipment, "reviews": entry.reviews,
+            "release": release, "document": doc}), default=str))
+        return
+    _show_text(entry, run, equipment, release)
+
+
+def _utc_text(value: Any) -> str:
+    return "—" if value is None else f"{value:%Y-%m-%d %H:%M:%S} UTC"
+
+
+def _show_text(entry: Any, run: Any, equipment: list[Any], release: Any) -> None:
+    from imucalib.report.console import display_parameter
+
+    verdict = {True: "PASS", False: "FAIL", None: "no decision"}[entry.passed]
+    state = ("current" if entry.current else f"amended by result {entry.replaced_by}")
+    lines = [f"result {entry.result_id}: unit {entry.serial}, procedure {entry.procedure}, "
+             f"version {entry.version} ({state}), {verdict}; calibrated "
+             f"{_utc_text(entry.calibrated_utc)}, recorded {_utc_text(entry.created_utc)}"]
+    if entry.replaces is not None:
+        lines.append(f"  replaces result {entry.replaces}: {entry.amendment_reason}")
+    lines += [f"run {run.run_id}: plan {run.plan_name or '—'}"
+              f"{f' ({run.plan_hash[:12]}…)' if run.plan_hash else ''}, procedure "
+              f"{run.procedure or '—'}, operator {run.operator or '—'}, station "
+              f"{run.station or '—'}, imucalib {run.software_version or '—'}"
+              f"{', unplanned' if getattr(run, 'unplanned', False) else ''}",
+              f"  started {_utc_text(run.started_utc)}, ended {_utc_text(run.ended_utc)}",
+              f"  recording {run.recording_path or '—'}"
+              f"{f' (sha256 {run.recording_sha256[:16]}…)' if run.recording_sha256 else ''}"]
+    if run.environment:
+        lines.append(f"  environment {json.dumps(run.environment, sort_keys=True)}")
+    for line in lines:
+        console.print(line, highlight=False, soft_wrap=True)
+    params = Table("parameter", "value", "std", "unit", title="parameters (σ as reported)")
+    for p in entry.parameters:
+        params.add_row(p.name, *display_parameter(p.name, p.value, p.std, p.unit))
+    console.print(params)
+    if equipment:
+        table = Table("id", "kind", "model", "serial", "certificate", "calibrated_on", "due_on",
+                      title=f"equipment of run {run.run_id}")
+        for e in equipment:
+            table.add_row(str(e.equipment_id), e.kind, e.model, e.serial, e.certificate,
+                          str(e.calibrated_on or "—"), str(e.due_on or "—"))
+        console.print(table)
+    else:
+        console.print(f"equipment of run {run.run_id}: none recorded", highlight=False)
+    if entry.reviews:
+        table = Table("review", "reviewer", "reviewed_utc", "decision", "comment",
+                      title=f"reviews of result {entry.result_id}")
+        for r in entry.reviews:
+            table.add_row(str(r.review_id), r.reviewer, _utc_text(r.reviewed_utc), r.decision,
+                          r.comment)
+        console.print(table)
+    else:
+        console.print(f"reviews of result {entry.result_id}: none", highlight=False)
+    console.print(release.text(), highlight=False, soft_wrap=True)
 
 
 @records_app.command()
@@ -210,19 +277,116 @@ def add_equipment(kind: Annotated[str, typer.Option(help="rate-table, chamber, c
                   highlight=False)
 
 
-@records_app.command()
-def review(result_id: Annotated[int, typer.Argument(help="Result id.")],
-           who: Annotated[str, typer.Option(help="Reviewer's name.")],
-           approve: Annotated[bool, typer.Option("--approve/--reject")] = True,
-           comment: Annotated[str, typer.Option()] = "", db: Db = None) -> None:
-    """Record a review (approval or rejection) of a result."""
+def _day(text: str, option: str) -> date:
     try:
+        return date.fromisoformat(text)
+    except ValueError:
+        raise InvalidInputError(f"{option} wants a date YYYY-MM-DD; got {text!r}") from None
+
+
+@records_app.command()
+def recertify(equipment_id: Annotated[int, typer.Argument(
+                  metavar="EQUIPMENT_ID", help="The equipment's id (`records equipment`).")],
+              certificate: Annotated[str, typer.Option(help="The new certificate's number.")],
+              calibrated_on: Annotated[str, typer.Option(
+                  help="When it was calibrated (YYYY-MM-DD).")],
+              due_on: Annotated[str, typer.Option(help="Its new due date (YYYY-MM-DD).")],
+              db: Db = None) -> None:
+    """Record a renewed certificate: a new row that replaces the old one, which is kept.
+
+    The new certificate is what `run` checks and `records due --equipment` reads; `records
+    equipment --all` shows the history.
+    """
+    try:
+        cal_day = _day(calibrated_on, "--calibrated-on")
+        due_day = _day(due_on, "--due-on")
+        if not certificate.strip():
+            raise InvalidInputError("--certificate must name the new certificate; got ''")
+        if due_day <= cal_day:
+            raise InvalidInputError(f"--due-on {due_day} must come after --calibrated-on "
+                                    f"{cal_day}")
         with _open(db) as records:
-            rid = records.review(result_id, who, approve, comment)
+            new_id = records.recertify_equipment(equipment_id, certificate.strip(), cal_day,
+                                                 due_day)
+            eq = next(e for e in records.equipment() if e.equipment_id == new_id)
     except CalibrationError as exc:
         raise fail(exc) from exc
-    console.print(f"review {rid}: result {result_id} {'approved' if approve else 'rejected'} "
-                  f"by {who}", highlight=False)
+    console.print(f"equipment {new_id} replaces equipment {equipment_id}: {eq.kind} {eq.model} "
+                  f"{eq.serial} at {eq.station or '—'}, certificate {eq.certificate}, "
+                  f"calibrated {cal_day}, due {due_day}", highlight=False, soft_wrap=True)
+
+
+@records_app.command("equipment")
+def list_equipment(db: Db = None, as_json: Json = False,
+                   every: Annotated[bool, typer.Option(
+                       "--all", help="Every certificate, replaced ones too (the history).")]
+                   = False,
+                   station: Annotated[str | None, typer.Option(
+                       help="Only this station's equipment.")] = None) -> None:
+    """List the registered equipment: each current certificate (--all: with its history)."""
+    try:
+        with _open(db) as records:
+            rows = records.equipment(current_only=not every)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    if station is not None:
+        rows = [e for e in rows if e.station == station]
+    successor = {e.replaces: e.equipment_id for e in rows if e.replaces is not None}
+    today = date.today()
+    listed = [{**_jsonable(e),
+               "status": (f"replaced by {successor[e.equipment_id]}"
+                          if e.equipment_id in successor
+                          else "overdue" if e.due_on is not None and e.due_on < today
+                          else "no due date" if e.due_on is None else "current")}
+              for e in rows]
+    if as_json:
+        console.print_json(json.dumps(listed))
+        return
+    table = Table(*(cols := ["equipment_id", "station", "kind", "model", "serial",
+                             "certificate", "calibrated_on", "due_on", "replaces", "status"]),
+                  title="equipment" + (" (every certificate)" if every else ""))
+    for row in listed:
+        table.add_row(*("" if row.get(c) is None else str(row[c]) for c in cols))
+    console.print(table)
+
+
+DECISIONS = ("approve", "reject")
+
+
+@records_app.command()
+def review(result_id: Annotated[int, typer.Argument(help="Result id.")],
+           decision: Annotated[str | None, typer.Option(
+               help="approve or reject (required: a review has no default).")] = None,
+           comment: Annotated[str, typer.Option(
+               help="What was checked, or why rejected (required to reject).")] = "",
+           user: Annotated[str | None, typer.Option(
+               "--user", help="The reviewer: a user's name or initials (default "
+                              "$IMUCALIB_USER).")] = None,
+           db: Db = None) -> None:
+    """Record a review (approve or reject) of a result's current version.
+
+    Once the database has users the reviewer must be an active reviewer or admin who is not
+    the run's operator; an approval by such a reviewer releases the result (docs/records.md,
+    "Users and roles").
+    """
+    from imucalib.records.users import USER_ENV, resolve_user
+
+    if decision not in DECISIONS:
+        got = "none given" if decision is None else f"got {decision!r}"
+        raise fail(InvalidInputError(f"--decision must be approve or reject ({got}); a review "
+                                     "has no default decision"))
+    try:
+        with _open(db) as records:
+            who = resolve_user(records, user, action="review a result")
+            if not who:
+                raise InvalidInputError(f"name the reviewer: pass --user NAME or set {USER_ENV}")
+            rid = records.review(result_id, who, decision == "approve", comment)
+            status = records.release_status(result_id)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"review {rid}: result {result_id} "
+                  f"{'approved' if decision == 'approve' else 'rejected'} by {who}; "
+                  f"{status.text()}", highlight=False, soft_wrap=True)
 
 
 @records_app.command()

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import getpass
 import sys
 import time
 from datetime import UTC, datetime
@@ -120,7 +119,8 @@ def run(
         "--db", help="Records database (default: $IMUCALIB_DB, else records.db in the user's "
                      "data directory; docs/records.md).")] = None,
     no_record: Annotated[bool, typer.Option(
-        "--no-record", help="Do not record the run in the records database.")] = False,
+        "--no-record", help="Do not record the run in the records database (the "
+                            "equipment's due dates are checked all the same).")] = False,
     override_due: Annotated[str | None, typer.Option(
         "--override-due", help="Run although the station's equipment is overdue for "
                                "calibration; the reason is recorded with the run.")] = None,
@@ -129,13 +129,21 @@ def run(
 
     On a terminal, stderr shows a live view of the station and a progress bar: station time
     done of the plan's least station time, with an ETA. The run is recorded in the records
-    database (``--no-record`` skips it); a station whose registered equipment is overdue for
-    calibration is refused unless ``--override-due REASON``.
+    database with its plan, operator, station, equipment, start and end times and recording
+    hash (``--no-record`` skips it); ``imucalib calibrate`` of the recording attaches its result
+    to that run. A station whose registered equipment is overdue for calibration is refused,
+    with or without ``--no-record``, unless ``--override-due REASON`` (recorded with the run
+    and in the recording).
     """
+    from imucalib.cli._user import acting_user
     from imucalib.plan import load_plan
     from imucalib.station.runner import resume_run, run_plan
 
-    who = operator or getpass.getuser()
+    try:
+        who, who_note = acting_user(operator, db=db, record=not no_record,
+                                    action="run a plan")
+    except CalibrationError as exc:
+        raise fail(exc) from exc
     op: Operator
     if yes:
         op = AutoOperator(who)
@@ -174,7 +182,8 @@ def run(
                 raise ConfigurationError("give a PLAN file, or --resume FILE")
             plan = load_plan(plan_path)
             station_name = "sim" if station == "sim" else Path(station).stem
-            equipment = [] if no_record else _check_due(db, station_name, override_due)
+            equipment, overdue = _check_due(db, station_name, override_due,
+                                            create=not no_record)
             if not yes and not sys.stdin.isatty() and any(
                     s.kind == "operator-check" for s in plan.steps):
                 raise ConfigurationError(
@@ -193,8 +202,12 @@ def run(
             except OSError as exc:
                 raise ConfigurationError(f"cannot create {path.parent}: "
                                          f"{exc.strerror or exc}") from exc
+            started = datetime.now(UTC)
             with live_view or _nothing():
-                summary = run_plan(plan, st, path, options=options)
+                summary = run_plan(plan, st, path, options=options,
+                                   extra_metadata=_run_metadata(who, equipment, overdue,
+                                                                override_due))
+            ended = datetime.now(UTC)
     except CalibrationError as exc:
         raise fail(exc) from exc
     except KeyboardInterrupt:
@@ -212,34 +225,98 @@ def run(
                     recording=summary.path, operator=who,
                     station=station_name if equipment else None,
                     equipment=[e.equipment_id for e in equipment],
-                    environment={"status": summary.status, "override_due": override_due or ""})
+                    environment=_run_environment(summary.status, overdue, override_due),
+                    started_utc=started, ended_utc=ended)
                 console.print(f"recorded run {run_id} in {records.url}", highlight=False,
                               soft_wrap=True)
         except CalibrationError as exc:
             raise fail(exc) from exc
+    if who_note:
+        console.print(who_note, highlight=False, soft_wrap=True, markup=False)
     if summary.status != "done":
         raise typer.Exit(code=1)
 
 
-def _check_due(db: str | None, station_name: str, override: str | None) -> list[Any]:
-    """Return the station's current equipment; refuse overdue equipment unless overridden."""
+def _equipment_row(e: Any) -> dict[str, Any]:
+    """One piece of equipment as the run's environment and its recording describe it."""
+    return {"equipment_id": e.equipment_id, "kind": e.kind, "model": e.model,
+            "serial": e.serial, "certificate": e.certificate,
+            "calibrated_on": e.calibrated_on.isoformat() if e.calibrated_on else None,
+            "due_on": e.due_on.isoformat() if e.due_on else None}
+
+
+def _run_environment(status: str, overdue: list[Any], override: str | None) -> dict[str, Any]:
+    """Return the run's ``environment_json``: its status and, when used, the due override."""
+    env: dict[str, Any] = {"opened_by": "run", "status": status,
+                           "override_due": (override or "").strip() if overdue else ""}
+    if overdue:
+        env["overdue_equipment"] = [_equipment_row(e) for e in overdue]
+    return env
+
+
+def _run_metadata(who: str, equipment: list[Any], overdue: list[Any],
+                  override: str | None) -> dict[str, str]:
+    """Return what the recording keeps of the run for the records.
+
+    ``calibrate`` of a recording no run recorded (``run --no-record``) opens its run from these
+    (docs/records.md, "One calibration, one run").
+    """
+    import json
+
+    meta = {"run_operator": who}
+    if equipment:
+        meta["station_equipment_json"] = json.dumps([_equipment_row(e) for e in equipment])
+    if overdue:
+        meta["override_due"] = (override or "").strip()
+    return meta
+
+
+def _check_due(db: str | None, station_name: str, override: str | None, *,
+               create: bool = True) -> tuple[list[Any], list[Any]]:
+    """Return the station's current equipment and the overdue part of it.
+
+    Overdue equipment is refused unless `override` gives a reason. With ``create=False``
+    (``run --no-record``) the check is made all the same, but a records database that does not
+    exist yet (an SQLite file not there: nothing is registered) is not created.
+    """
     from datetime import date
 
     from imucalib.records import open_records
 
+    if not create and not _records_exist(db):
+        return [], []
     with open_records(db) as records:
         mine = [e for e in records.equipment() if e.station == station_name]
     overdue = [e for e in mine if e.due_on is not None and e.due_on < date.today()]
-    if overdue and not override:
-        names = "; ".join(f"{e.kind} {e.model} {e.serial} (certificate {e.certificate or '?'}, "
-                          f"due {e.due_on})" for e in overdue)
+    if overdue and not (override or "").strip():
+        names = "; ".join(f"{e.kind} {e.model} {e.serial} (equipment {e.equipment_id}, "
+                          f"certificate {e.certificate or '?'}, due {e.due_on})"
+                          for e in overdue)
         raise ConfigurationError(f"station {station_name!r} has equipment overdue for "
-                                 f"calibration: {names}; recalibrate it, or pass "
-                                 "--override-due REASON (recorded with the run)")
+                                 f"calibration: {names}; once recalibrated, record its new "
+                                 "certificate (`imucalib records recertify EQUIPMENT_ID "
+                                 "--certificate NUM --calibrated-on DATE --due-on DATE`), or "
+                                 "pass --override-due REASON (recorded with the run)")
     if overdue:
         err_console.print(f"[yellow]warning:[/] running with overdue equipment: {override}",
                           highlight=False)
-    return mine
+    return mine, overdue
+
+
+def _records_exist(db: str | None) -> bool:
+    """Return False only for an SQLite records file that is not there (nothing registered)."""
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import ArgumentError
+
+    from imucalib.records.engine import resolve_url
+
+    try:
+        url = make_url(resolve_url(db))
+    except ArgumentError:
+        return True                    # open_records names what is wrong with it
+    if url.get_backend_name() != "sqlite" or url.database in (None, "", ":memory:"):
+        return True
+    return Path(url.database).exists()
 
 
 class _nothing:  # noqa: N801 - a no-op context manager

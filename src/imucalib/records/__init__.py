@@ -1,4 +1,4 @@
-"""The calibration records database: units, stations, equipment, runs, results, reviews.
+"""The calibration records database: units, stations, equipment, runs, results, reviews, users.
 
 Every row is chained by hash to the one before it in its table, nothing is updated or deleted
 (an amendment is a new version), and :meth:`Records.verify` names every edited or deleted row and
@@ -12,6 +12,8 @@ Contents
     The SQLAlchemy models; :mod:`imucalib.records.migrations` the Alembic revisions.
 :mod:`imucalib.records.canonical`, :mod:`imucalib.records.chain`, :mod:`imucalib.records.verify`
     The hash chain: canonical form, append, verification.
+:mod:`imucalib.records.users`
+    Users and roles, who is acting (:func:`resolve_user`), the review control and release.
 :mod:`imucalib.records.views`
     What the queries return.
 :mod:`imucalib.records.engine`
@@ -31,6 +33,7 @@ from imucalib._lazy import lazy_getattr
 if TYPE_CHECKING:
     from imucalib.records.api import DEFAULT_INTERVAL_DAYS, Records, open_records
     from imucalib.records.engine import ENV_VAR, default_url, resolve_url
+    from imucalib.records.users import ROLES, USER_ENV, resolve_user
     from imucalib.records.views import (
         ChainHead,
         DriftPoint,
@@ -39,18 +42,25 @@ if TYPE_CHECKING:
         HistoryEntry,
         ParameterRow,
         Problem,
+        ReleaseStatus,
         ReviewView,
         RunView,
+        UserEventView,
+        UserView,
     )
 
-__all__ = ["DEFAULT_INTERVAL_DAYS", "ENV_VAR", "ChainHead", "DriftPoint", "DueUnit",
-           "EquipmentView", "HistoryEntry", "ParameterRow", "Problem", "Records", "ReviewView",
-           "RunView", "default_url", "open_records", "resolve_url"]
+__all__ = ["DEFAULT_INTERVAL_DAYS", "ENV_VAR", "ROLES", "USER_ENV", "ChainHead", "DriftPoint",
+           "DueUnit", "EquipmentView", "HistoryEntry", "ParameterRow", "Problem", "Records",
+           "ReleaseStatus", "ReviewView", "RunView", "UserEventView", "UserView", "default_url",
+           "open_records", "resolve_url", "resolve_user"]
 
 _API, _ENGINE, _VIEWS = "imucalib.records.api", "imucalib.records.engine", "imucalib.records.views"
+_USERS = "imucalib.records.users"
 __getattr__ = lazy_getattr(__name__, {
     "DEFAULT_INTERVAL_DAYS": _API, "Records": _API, "open_records": _API,
     "ENV_VAR": _ENGINE, "default_url": _ENGINE, "resolve_url": _ENGINE,
     **dict.fromkeys(("ChainHead", "DriftPoint", "DueUnit", "EquipmentView", "HistoryEntry",
-                     "ParameterRow", "Problem", "ReviewView", "RunView"), _VIEWS),
+                     "ParameterRow", "Problem", "ReleaseStatus", "ReviewView", "RunView",
+                     "UserEventView", "UserView"), _VIEWS),
+    "ROLES": _USERS, "USER_ENV": _USERS, "resolve_user": _USERS,
 })

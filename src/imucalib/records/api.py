@@ -1,4 +1,4 @@
-"""The calibration records: append units, stations, equipment, runs, results, reviews; query them.
+"""The records: append and query units, stations, equipment, runs, results, reviews, users.
 
 Contents
 --------
@@ -15,8 +15,10 @@ Due rules (docs/records.md, "Due rules")
 ----------------------------------------
 (R.4) a unit's due date = the date of its last calibration + its interval (its own
       ``recal_interval_days``, else the `interval_days` asked for); the last calibration is the
-      latest run date (``started_utc``, else the result's ``created_utc``) among its current
-      results whose decision is not a fail; a unit with none is due now;
+      latest calibration date (:func:`calibration_date`: its run's ``started_utc``, else its
+      ``ended_utc``, else the ``created_utc`` of the result's first version, so that an
+      amendment or a re-analysis keeps it) among its current results whose decision is not a
+      fail; a unit with none is due now;
 (R.5) a piece of equipment is due when its current certificate's ``due_on`` ≤ the date asked
       (a missing ``due_on`` is due).
 """
@@ -54,6 +56,7 @@ from imucalib.records.schema import (
     RunEquipment,
     Station,
     Unit,
+    User,
 )
 from imucalib.records.views import (
     ChainHead,
@@ -63,8 +66,10 @@ from imucalib.records.views import (
     HistoryEntry,
     ParameterRow,
     Problem,
+    ReleaseStatus,
     ReviewView,
     RunView,
+    UserView,
 )
 
 __all__ = ["DEFAULT_INTERVAL_DAYS", "Records", "open_records"]
@@ -116,6 +121,30 @@ def parameter_rows(result: ProcedureResult | CalibrationResult) -> list[Paramete
             else result.parameter_rows())
     return [ParameterRow(r.name, float(r.value), float(r.std), r.unit) for r in rows
             if math.isfinite(r.value) and math.isfinite(r.std)]
+
+
+def _first_version(session: Session, res: Result) -> Result:
+    """Return the first version (version 1) of `res`, following ``replaces_id`` back."""
+    first, seen = res, {res.id}
+    while first.replaces_id is not None and first.replaces_id not in seen:
+        earlier = session.get(Result, first.replaces_id)
+        if earlier is None:
+            break
+        seen.add(earlier.id)
+        first = earlier
+    return first
+
+
+def calibration_date(session: Session, run: Run, res: Result) -> datetime:
+    """Return a result's calibration date (UTC): its run's, which no new version changes.
+
+    The run's ``started_utc``, else its ``ended_utc``, else (a run with no times: one opened by
+    ``calibrate`` for a recording no run recorded) the ``created_utc`` of the result's first
+    version. An amendment or a re-analysis (version n + 1, in the same run) therefore keeps the
+    date of the calibration it corrects, and the due date (R.4) with it.
+    """
+    return (_utc(run.started_utc) or _utc(run.ended_utc)
+            or _as_utc(_first_version(session, res).created_utc))
 
 
 class Records:
@@ -325,6 +354,8 @@ class Records:
         ids = sorted({int(i) for i in equipment})
 
         def work(session: Session) -> int:
+            from imucalib.records.users import check_operator
+
             station_id = self._station_id(session, station)
             for eq in ids:
                 if session.get(Equipment, eq) is None:
@@ -332,7 +363,8 @@ class Records:
             run = chain.append(session, Run(
                 plan_name=plan_name, plan_hash=plan_hash, procedure=procedure,
                 recording_path=path, recording_sha256=sha, environment_json=env_text,
-                operator=operator, software_version=software_version or _software_version(),
+                operator=check_operator(session, operator),
+                software_version=software_version or _software_version(),
                 station_id=station_id, started_utc=_utc(started_utc),
                 ended_utc=_utc(ended_utc)), equipment=ids)
             session.add_all(RunEquipment(run_id=run.id, equipment_id=eq) for eq in ids)
@@ -430,19 +462,163 @@ class Records:
                                        reason=reason, unit_id=old.unit_id)
         return self._run(work, write=True)
 
+    def record_analysis(self, run_id: int, result: Any, passed: bool | None = None,
+                        verification: Mapping[str, Any] | None = None, *,
+                        serial: str | None = None, reason: str = "") -> tuple[int, int | None]:
+        """Record a unit's result of a run: version 1, or the next version of its current one.
+
+        The first analysis of a unit in run `run_id` is version 1 (as :meth:`record_result`);
+        a further analysis by the same procedure in the same run (a re-analysis of the same
+        recording) is the next version of the unit's current result of that procedure there:
+        it ``replaces`` it, with `reason` (who and why) as its ``amendment_reason``. One
+        transaction, so two analyses at once cannot both become version 1.
+
+        Returns
+        -------
+        (int, int or None)
+            The new result's id, and the id of the result it replaces (None for version 1).
+
+        Raises
+        ------
+        RecordsError
+            An unknown run, or a re-analysis with an empty `reason`.
+        """
+        serial = serial or (result.sensor_id if isinstance(result, CalibrationResult)
+                            else str(result.unit))
+        if not serial:
+            raise InvalidInputError("the result names no unit: give `serial` or a result with "
+                                    "`sensor_id`")
+
+        def work(session: Session) -> tuple[int, int | None]:
+            if session.get(Run, run_id) is None:
+                raise RecordsError(f"no run with id {run_id} in the records")
+            unit_id = self._get_or_create(session, serial)
+            chain.lock(session, Result)
+            mine = session.scalars(select(Result).where(
+                Result.run_id == run_id, Result.unit_id == unit_id,
+                Result.procedure == str(result.procedure)).order_by(Result.seq)).all()
+            replaced = set(session.scalars(select(Result.replaces_id).where(
+                Result.replaces_id.in_([r.id for r in mine]))))
+            current = [r for r in mine if r.id not in replaced]
+            if not current:
+                return self._append_result(session, run_id=run_id, serial=serial,
+                                           result=result, passed=passed,
+                                           verification=verification, version=1,
+                                           replaces=None, reason="", unit_id=unit_id), None
+            old = current[-1]
+            if not reason.strip():
+                raise RecordsError(f"run {run_id} already holds result {old.id} of unit "
+                                   f"{serial!r}; a re-analysis needs a reason; got an empty one")
+            return self._append_result(session, run_id=run_id, serial=serial, result=result,
+                                       passed=passed, verification=verification,
+                                       version=old.version + 1, replaces=old.id,
+                                       reason=reason, unit_id=unit_id), old.id
+        return self._run(work, write=True)
+
     def review(self, result_id: int, who: str, approved: bool, comment: str = "",
                when: datetime | None = None) -> int:
-        """Record a review of a result and return its id."""
+        """Record a review (approval or rejection) of a result and return its id.
+
+        The review control (docs/records.md, "Users and roles"; rules (U.1), (U.3) of
+        :mod:`imucalib.records.users`): only the current version of a result is reviewed, a
+        rejection needs a `comment`, and, once the database has users, `who` must be an active
+        user with role reviewer or admin who is not the operator of the result's run.
+
+        Raises
+        ------
+        RecordsError
+            An unknown or amended result, or a reviewer the control refuses (named, with why).
+        InvalidInputError
+            An empty `who`, or a rejection without a comment.
+        """
+        from imucalib.records import users
+
+        who = who.strip()
         if not who:
             raise InvalidInputError("`who` must name the reviewer; got ''")
 
         def work(session: Session) -> int:
-            if session.get(Result, result_id) is None:
-                raise RecordsError(f"no result with id {result_id} in the records")
+            name = users.check_review(session, result_id, who, bool(approved), comment)
             return chain.append(session, Review(
-                result_id=result_id, reviewer=who, approved=bool(approved), comment=comment,
+                result_id=result_id, reviewer=name, approved=bool(approved), comment=comment,
                 reviewed_utc=_utc(when) or datetime.now(UTC))).id
         return self._run(work, write=True)
+
+    def release_status(self, result_id: int) -> ReleaseStatus:
+        """Return whether a result is released, and by whom, when, with what decision.
+
+        Released: the latest review of the result's current version approves it, made by a
+        user who was then an active reviewer or admin and is not the run's operator (rule
+        (U.4) of :mod:`imucalib.records.users`). An amended result is not released (its
+        ``current_id`` names the version that may be).
+
+        Raises
+        ------
+        RecordsError
+            An unknown result.
+        """
+        from imucalib.records import users
+
+        return self._run(lambda s: users.release_status(s, result_id), write=False)
+
+    # --- users ------------------------------------------------------------------------------
+    def add_user(self, name: str, initials: str = "", role: str = "operator", *,
+                 by: str | None = None) -> int:
+        """Add a user (role operator, engineer, reviewer or admin) and return its id.
+
+        Parameters
+        ----------
+        by : str, optional
+            Who is adding (recorded as ``added_by``). Needed once the database has users: an
+            active user, and an admin once an active admin exists (rule (U.2) of
+            :mod:`imucalib.records.users`).
+
+        Raises
+        ------
+        RecordsError
+            A name already used (ignoring case), or an actor the rule refuses.
+        InvalidInputError
+            An empty name or an unknown role.
+        """
+        from imucalib.records import users
+
+        return self._run(lambda s: users.add_user(s, name, initials, role, by), write=True)
+
+    def disable_user(self, name: str, reason: str, *, by: str | None = None) -> int:
+        """Disable a user (a new ``user_events`` row; the user stays); return the event's id.
+
+        A disabled user can no longer act; what they did stays valid. The last active user and
+        the last active admin cannot be disabled. `by` as in :meth:`add_user`.
+        """
+        from imucalib.records import users
+
+        return self._run(lambda s: users.change_user(s, name, "disable", reason, by),
+                         write=True)
+
+    def enable_user(self, name: str, reason: str, *, by: str | None = None) -> int:
+        """Enable a disabled user again (a new ``user_events`` row); return the event's id."""
+        from imucalib.records import users
+
+        return self._run(lambda s: users.change_user(s, name, "enable", reason, by),
+                         write=True)
+
+    def users(self) -> list[UserView]:
+        """Return every user (active or not), in the order they were added."""
+        from imucalib.records import users
+
+        return self._run(users.users_of, write=False)
+
+    def user(self, name: str) -> UserView:
+        """Return the user called `name` (RecordsError if there is none)."""
+        from imucalib.records import users
+
+        def work(session: Session) -> UserView:
+            row = session.scalars(select(User).where(User.name == name)).first()
+            if row is None:
+                known = ", ".join(u.name for u in users.users_of(session)) or "none"
+                raise RecordsError(f"no user named {name!r} in the records; users: {known}")
+            return users.user_view(session, row)
+        return self._run(work, write=False)
 
     # --- queries ----------------------------------------------------------------------------
     def units(self) -> list[str]:
@@ -482,7 +658,7 @@ class Records:
             out.append(HistoryEntry(
                 result_id=res.id, run_id=res.run_id, serial=unit.serial,
                 procedure=res.procedure, model=res.model, version=res.version,
-                calibrated_utc=_utc(run.started_utc) or _as_utc(res.created_utc),
+                calibrated_utc=calibration_date(session, run, res),
                 created_utc=_as_utc(res.created_utc), passed=res.passed,
                 replaces=res.replaces_id, replaced_by=successor,
                 amendment_reason=res.amendment_reason,
@@ -576,7 +752,7 @@ class Records:
                         continue
                     run = session.get(Run, res.run_id)
                     assert run is not None
-                    when = _utc(run.started_utc) or _as_utc(res.created_utc)
+                    when = calibration_date(session, run, res)
                     if best is None or when > best[0]:
                         best = (when, res.id)
                 if best is None:
@@ -625,6 +801,28 @@ class Records:
             if row is None:
                 raise RecordsError(f"no run with id {run_id} in the records")
             return self._run_view(session, row)
+        return self._run(work, write=False)
+
+    def run_of_recording(self, sha256: str,
+                         path: str | os.PathLike[str] | None = None) -> RunView | None:
+        """Return the run that recorded a recording, known by its SHA-256 (None: none did).
+
+        This is how ``calibrate`` finds the run a recording belongs to (docs/records.md, "One
+        calibration, one run"): the bytes decide, not the file's name or folder. Among several
+        runs of the same bytes (records made before calibrations were attached to their run)
+        the one at the same absolute `path` is taken, else the first recorded.
+        """
+        if not sha256:
+            return None
+        want = "" if path is None else str(Path(path).expanduser().resolve())
+
+        def work(session: Session) -> RunView | None:
+            rows = session.scalars(select(Run).where(Run.recording_sha256 == sha256)
+                                   .order_by(Run.seq)).all()
+            if not rows:
+                return None
+            same = [r for r in rows if want and r.recording_path == want]
+            return self._run_view(session, (same or list(rows))[0])
         return self._run(work, write=False)
 
     @staticmethod

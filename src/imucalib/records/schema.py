@@ -5,7 +5,7 @@ Contents
 :class:`Base`
     The declarative base; ``Base.metadata`` is what the migrations create.
 :class:`Unit`, :class:`Station`, :class:`Equipment`, :class:`Run`, :class:`Result`,
-:class:`Review`
+:class:`Review`, :class:`User`, :class:`UserEvent`
     The chained tables: each row carries ``seq`` (1, 2, … per table, equal to its ``id``),
     ``prev_hash`` and ``row_hash`` (docs/records.md, Eqs. (R.1)–(R.3)).
 :class:`RunEquipment`, :class:`ResultParameter`
@@ -15,7 +15,8 @@ Contents
 
 Nothing here is ever updated or deleted by :class:`~imucalib.records.api.Records`: an amendment
 is a new :class:`Result` whose ``replaces_id`` names the one it replaces, a new certificate a new
-:class:`Equipment` row whose ``replaces_id`` names the old one. JSON documents (a unit's
+:class:`Equipment` row whose ``replaces_id`` names the old one, a disabled user a new
+:class:`UserEvent` row. JSON documents (a unit's
 specification, a run's environment, a result's verification and full result document) are
 stored as canonical JSON text (:func:`imucalib.records.canonical.canonical_json`), so that the
 text hashed is the text stored.
@@ -50,6 +51,8 @@ __all__ = [
     "RunEquipment",
     "Station",
     "Unit",
+    "User",
+    "UserEvent",
 ]
 
 #: Constraint names Alembic can find again (the migrations use the same convention).
@@ -179,5 +182,32 @@ class Review(_Chained, Base):
     comment: Mapped[str] = mapped_column(Text, default="")
 
 
-#: The chained tables, in the order verify checks them.
-CHAINED: Final[tuple[type[_Chained], ...]] = (Unit, Station, Equipment, Run, Result, Review)
+class User(_Chained, Base):
+    """A person of the laboratory who acts on the records (docs/records.md, "Users and roles").
+
+    ``role`` is one of ``operator``, ``engineer``, ``reviewer``, ``admin``; ``added_by`` the
+    user who added this one ("" for the first). A user is active from this row on until a
+    :class:`UserEvent` disables them (rows are never updated).
+    """
+
+    __tablename__ = "users"
+    name: Mapped[str] = mapped_column(String(200), unique=True)
+    initials: Mapped[str] = mapped_column(String(20), default="")
+    role: Mapped[str] = mapped_column(String(20))
+    added_by: Mapped[str] = mapped_column(String(200), default="")
+
+
+class UserEvent(_Chained, Base):
+    """A change of a user's state: ``disable`` or ``enable``, why, and by whom."""
+
+    __tablename__ = "user_events"
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id"), index=True)
+    event: Mapped[str] = mapped_column(String(20))
+    reason: Mapped[str] = mapped_column(Text, default="")
+    by_user: Mapped[str] = mapped_column(String(200), default="")
+
+
+#: The chained tables, in the order verify checks them (and PostgreSQL takes their locks;
+#: a new table is appended, so the lock keys of the others stay).
+CHAINED: Final[tuple[type[_Chained], ...]] = (Unit, Station, Equipment, Run, Result, Review,
+                                              User, UserEvent)

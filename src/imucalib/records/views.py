@@ -3,7 +3,8 @@
 Contents
 --------
 :class:`ParameterRow`, :class:`ReviewView`, :class:`HistoryEntry`, :class:`DriftPoint`,
-:class:`DueUnit`, :class:`EquipmentView`, :class:`RunView`, :class:`Problem`, :class:`ChainHead`
+:class:`DueUnit`, :class:`EquipmentView`, :class:`RunView`, :class:`Problem`, :class:`ChainHead`,
+:class:`UserView`, :class:`UserEventView`, :class:`ReleaseStatus`
 """
 
 from __future__ import annotations
@@ -13,7 +14,8 @@ from datetime import date, datetime
 from typing import Any
 
 __all__ = ["ChainHead", "DriftPoint", "DueUnit", "EquipmentView", "HistoryEntry",
-           "ParameterRow", "Problem", "ReviewView", "RunView"]
+           "ParameterRow", "Problem", "ReleaseStatus", "ReviewView", "RunView", "UserEventView",
+           "UserView"]
 
 
 @dataclass(frozen=True)
@@ -36,6 +38,11 @@ class ReviewView:
     reviewed_utc: datetime
     approved: bool
     comment: str
+
+    @property
+    def decision(self) -> str:
+        """``"approve"`` or ``"reject"``."""
+        return "approve" if self.approved else "reject"
 
 
 @dataclass(frozen=True)
@@ -129,6 +136,16 @@ class RunView:
     ended_utc: datetime | None
     result_ids: tuple[int, ...]
 
+    @property
+    def opened_by(self) -> str:
+        """``"run"`` (``imucalib run``) or ``"calibrate"`` (data no run recorded); "" if older."""
+        return str(self.environment.get("opened_by", ""))
+
+    @property
+    def unplanned(self) -> bool:
+        """True for a run ``calibrate`` opened for data no plan produced (a log, a CSV)."""
+        return bool(self.environment.get("unplanned", False))
+
 
 @dataclass(frozen=True)
 class Problem:
@@ -159,3 +176,77 @@ class ChainHead:
     table: str
     seq: int
     row_hash: str
+
+
+@dataclass(frozen=True)
+class UserEventView:
+    """A change of a user's state (``disable`` or ``enable``): when, why, by whom."""
+
+    event: str
+    reason: str
+    by: str
+    utc: datetime
+
+
+@dataclass(frozen=True)
+class UserView:
+    """A user of the records: name, initials, role, and whether active now.
+
+    ``events`` are the user's state changes, oldest first; ``active`` is the state after the
+    last of them (a new user is active).
+    """
+
+    user_id: int
+    name: str
+    initials: str
+    role: str
+    active: bool
+    added_utc: datetime
+    added_by: str
+    events: tuple[UserEventView, ...] = ()
+
+
+@dataclass(frozen=True)
+class ReleaseStatus:
+    """Whether a result is released, by whom, when, with what decision.
+
+    Released: the latest review of its current version approves it and was made by an
+    authorised reviewer (docs/records.md, "Users and roles", rule (U.4)).
+
+    Attributes
+    ----------
+    result_id : int
+        The result asked about.
+    current_id : int
+        Its current version (``result_id`` unless it was amended).
+    released : bool
+    decision : str or None
+        ``"approve"``, ``"reject"``, or None (no review of the current version).
+    reviewer, reviewer_initials, reviewer_role : str
+        Of that latest review ("" when none, or the reviewer is not a registered user).
+    reviewed_utc : datetime or None
+    comment : str
+    review_id : int or None
+    authorised : bool
+        The latest review's reviewer was, when reviewing, an active user with role reviewer or
+        admin, other than the run's operator.
+    reason : str
+        One line: why released or why not.
+    """
+
+    result_id: int
+    current_id: int
+    released: bool
+    decision: str | None
+    reviewer: str
+    reviewer_initials: str
+    reviewer_role: str
+    reviewed_utc: datetime | None
+    comment: str
+    review_id: int | None
+    authorised: bool
+    reason: str
+
+    def text(self) -> str:
+        """One line for a report or the terminal: ``"released: approved by …"`` or why not."""
+        return f"{'released' if self.released else 'not released'}: {self.reason}"
