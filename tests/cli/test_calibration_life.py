@@ -3,9 +3,9 @@
 Users (an admin, an operator, a reviewer) are registered; the operator runs a P1 plan on the
 twin with the station's registered rate table and calibrates the recording, which attaches the
 result to the same run; the operator's own approval is refused; the reviewer approves, which
-releases the certificate; ``report --run N`` then gives the released certificate with the same
-id as the draft written at calibration time, the equipment's serial and certificate number,
-the operator and the reviewer, the calibration and issue dates, the uncertainty budget, the
+releases the certificate; ``report --run N`` then gives the released certificate with the
+customer named at the run, the same id as the draft written at calibration time, the
+equipment's serial and certificate number, the operator and the reviewer, the calibration and issue dates, the uncertainty budget, the
 statement that the results relate only to the item, the decision and, the station being the
 twin, that the results are not traceable. The records rows are read back with ``records show``.
 """
@@ -57,7 +57,7 @@ def test_plan_run_calibrate_review_release_report(tmp_path: Path, monkeypatch):
                                   str(tmp_path / "x.h5"), "--yes", "--db", db])
     assert refused.exit_code == 2 and refused.output.startswith("error: ")
     ran = _ok(["run", plan, "--station", "sim", "--out", rec, "--yes", "--db", db,
-               "--operator", "Oli Operator"])
+               "--operator", "Oli Operator", "--customer", "Acme Robotics GmbH"])
     (run_id,) = re.findall(r"recorded run (\d+)", ran)
     done = runner.invoke(app, ["calibrate", str(rec), "--out", str(out), "--db", db, "--user",
                                "OO"])
@@ -83,7 +83,7 @@ def test_plan_run_calibrate_review_release_report(tmp_path: Path, monkeypatch):
     assert not any("DRAFT" in p for p in pages)
     for n, page in enumerate(pages, start=1):
         assert rid in page and f"page {n} of {len(pages)}" in page
-    for fact in ("T-4711", "DKD-2026-042", "Oli Operator", "Rae Reviewer",
+    for fact in ("T-4711", "DKD-2026-042", "Oli Operator", "Rae Reviewer", "Acme Robotics GmbH",
                  "The results relate only to the item calibrated", "not traceable",
                  "Type A", "Type B", "U (k = 2)", date.today().isoformat()):
         assert fact.lower() in released.lower(), fact

@@ -124,6 +124,9 @@ def run(
     override_due: Annotated[str | None, typer.Option(
         "--override-due", help="Run although the station's equipment is overdue for "
                                "calibration; the reason is recorded with the run.")] = None,
+    customer: Annotated[str | None, typer.Option(
+        "--customer", help="Who the calibration is for (recorded with the run and in the "
+                           "recording; the certificate states it).")] = None,
 ) -> None:
     """Run a plan on the twin or on real equipment, writing a crash-safe recording.
 
@@ -206,7 +209,7 @@ def run(
             with live_view or _nothing():
                 summary = run_plan(plan, st, path, options=options,
                                    extra_metadata=_run_metadata(who, equipment, overdue,
-                                                                override_due))
+                                                                override_due, customer))
             ended = datetime.now(UTC)
     except CalibrationError as exc:
         raise fail(exc) from exc
@@ -225,7 +228,8 @@ def run(
                     recording=summary.path, operator=who,
                     station=station_name if equipment else None,
                     equipment=[e.equipment_id for e in equipment],
-                    environment=_run_environment(summary.status, overdue, override_due),
+                    environment=_run_environment(summary.status, overdue, override_due,
+                                                 customer),
                     started_utc=started, ended_utc=ended)
                 console.print(f"recorded run {run_id} in {records.url}", highlight=False,
                               soft_wrap=True)
@@ -245,17 +249,20 @@ def _equipment_row(e: Any) -> dict[str, Any]:
             "due_on": e.due_on.isoformat() if e.due_on else None}
 
 
-def _run_environment(status: str, overdue: list[Any], override: str | None) -> dict[str, Any]:
-    """Return the run's ``environment_json``: its status and, when used, the due override."""
+def _run_environment(status: str, overdue: list[Any], override: str | None,
+                     customer: str | None = None) -> dict[str, Any]:
+    """Return the run's ``environment_json``: its status, the customer and any due override."""
     env: dict[str, Any] = {"opened_by": "run", "status": status,
                            "override_due": (override or "").strip() if overdue else ""}
+    if customer and customer.strip():
+        env["customer"] = customer.strip()
     if overdue:
         env["overdue_equipment"] = [_equipment_row(e) for e in overdue]
     return env
 
 
 def _run_metadata(who: str, equipment: list[Any], overdue: list[Any],
-                  override: str | None) -> dict[str, str]:
+                  override: str | None, customer: str | None = None) -> dict[str, str]:
     """Return what the recording keeps of the run for the records.
 
     ``calibrate`` of a recording no run recorded (``run --no-record``) opens its run from these
@@ -264,6 +271,8 @@ def _run_metadata(who: str, equipment: list[Any], overdue: list[Any],
     import json
 
     meta = {"run_operator": who}
+    if customer and customer.strip():
+        meta["customer"] = customer.strip()
     if equipment:
         meta["station_equipment_json"] = json.dumps([_equipment_row(e) for e in equipment])
     if overdue:
