@@ -4,10 +4,11 @@ Users (an admin, an operator, a reviewer) are registered; the operator runs a P1
 twin with the station's registered rate table and calibrates the recording, which attaches the
 result to the same run; the operator's own approval is refused; the reviewer approves, which
 releases the certificate; ``report --run N`` then gives the released certificate with the
-customer named at the run, the same id as the draft written at calibration time, the
-equipment's serial and certificate number, the operator and the reviewer, the calibration and
-issue dates, the uncertainty budget, the statement that the results relate only to the item, the decision and, the station being the
-twin, that the results are not traceable. The records rows are read back with ``records show``.
+customer named at the run, the same id as the draft written at calibration time, the equipment's
+serial and certificate number, the operator and the reviewer, the calibration and issue dates,
+the uncertainty budget, the statement that the results relate only to the item, the decision
+and, the station being the twin, that the results are not traceable. The records rows are read
+back with ``records show``.
 """
 
 from __future__ import annotations
