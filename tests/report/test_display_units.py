@@ -46,3 +46,12 @@ def test_a_triad_parameter_keeps_its_kind_whatever_unit_it_is_given():
     assert display_unit("accel_b_x", "1") == ("µg", 1e-6 * G0)
     unit, scale = display_unit("gyro_bias_x", "")
     assert unit == "°/h" and math.isclose(scale, math.pi / 180 / 3600)
+
+
+def test_a_scale_error_is_shown_as_it_is_not_as_a_deviation_from_one():
+    """The Earth-rate test's scale error ŝ (docs/earth-rate-bias.md, (6)) is K − 1 already."""
+    value, sigma, unit = display_parameter("gyro_scale_error_from_earth_rate_x", 2.0e-4, 1.0e-5,
+                                           "1")
+    assert unit == "ppm" and value.startswith("+200") and sigma == "10"
+    # a scale factor K is shown as its deviation from 1
+    assert display_parameter("gyro_K_x", 1.0 + 2.0e-4, 1.0e-5, "1")[0].startswith("+200")

@@ -152,7 +152,7 @@ class EarthRateBiasResult(ResultDefaults):
         list of ReportedParameter
             Per axis: ``gyro_bias_i`` (up/down (2), the one handed on),
             ``gyro_bias_i_four_position`` (1), ``gyro_half_difference_i`` (3),
-            ``latitude_from_gyro_i`` (4) [deg], ``gyro_scale_from_earth_rate_i`` (6) [1].
+            ``latitude_from_gyro_i`` (4) [deg], ``gyro_scale_error_from_earth_rate_i`` (6) [1].
             ``std``: the σ of the closed forms, propagated from the windows' standard errors;
             ``std_noise``: the same σ (no fit, so no Birge scaling: the two are equal).
         """
@@ -162,7 +162,7 @@ class EarthRateBiasResult(ResultDefaults):
                                     (f"gyro_bias_{i}_four_position", a.four_position, "rad/s"),
                                     (f"gyro_half_difference_{i}", a.half_difference, "rad/s"),
                                     (f"latitude_from_gyro_{i}", a.latitude_deg, "deg"),
-                                    (f"gyro_scale_from_earth_rate_{i}", a.scale, "1")):
+                                    (f"gyro_scale_error_from_earth_rate_{i}", a.scale, "1")):
                 rows.append(ReportedParameter(name, est.value_rps, est.std_rps, unit,
                                               est.std_rps))
         return rows
