@@ -9,8 +9,8 @@ bias as a random walk ḃ = σ_b·w(t) (docs/noise.md §5). From the Allan fits
 
 one number per triad: the largest axis (``combine="max"``, conservative) or the RMS over axes. A
 random walk that the fit did not detect is given as its 1σ scale (the uncertainty of the absent
-term) and noted: a filter needs a non-zero value. The files are written by
-:mod:`imucalib.procedures.allan.noise_exports`.
+term) and noted: a filter needs a non-zero value. The noise characterisation's own output
+formats write the files (docs/noise.md, §5 "Exports").
 
 Contents
 --------

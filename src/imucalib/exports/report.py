@@ -127,9 +127,8 @@ def build_summary_report(batch: Any, *, recordings: Any = None,
                          report_ids: Mapping[str, str] | None = None) -> ReportDocument:
     """Build the summary report of a batch, an array or a production lot (one line per unit).
 
-    The ``summary_report`` hook of `batch`'s procedure (P2:
-    :func:`~imucalib.procedures.p2.summary_report.summary_report`, docs/reporting.md, "The
-    summary of an array or a lot"), with the same arguments: the `recordings` analysed (for
+    The ``summary_report`` hook of `batch`'s procedure (docs/reporting.md, "The summary of an
+    array or a lot"), with the same arguments: the `recordings` analysed (for
     the environment section) and each unit's `report_ids` as issued.
 
     Raises

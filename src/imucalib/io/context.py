@@ -12,7 +12,7 @@ only inside its stored plan: :meth:`RecordingContext.of` then reads that TOML as
 fact by fact. Nothing else parses the stored plan for these facts.
 
 The facts are plain values (this package sits below :mod:`imucalib.plan`): a procedure builds
-its configuration models from them (P1: :mod:`imucalib.procedures.p1.observations`).
+its configuration models from them (docs/recording-format.md, "Root attributes").
 
 Contents
 --------

@@ -243,7 +243,7 @@ def _static_hour() -> Scenario:
 
 
 #: P1's roles the built-in P1 scenario gives its steps: data, as a scenario file gives them
-#: (``imucalib.procedures.p1.roles``; the layers keep ``sim`` below the procedures).
+#: (the role strings of docs/p1.md; the layers keep ``sim`` below the procedures).
 _P1_ACCEL_POSITION = "p1.accel-position"
 _P1_GYRO_BIAS = "p1.gyro-bias"
 _P1_GYRO_RATE = "p1.gyro-rate"
