@@ -29,7 +29,7 @@ SHORT = {
     "p1": "--static-s 20 --record-s 5 --settle-s 2 --rate-settle-s 2 --warm-up-s 5 "
           "--revolutions 1 --sample-rate-hz 100",
     "allan": "--record-s 600 --warm-up-s 5 --sample-rate-hz 50",
-    "p2": "--n-imus 1 --static-s 5 --settle-s 2 --sample-rate-hz 50 --revolutions 1 "
+    "p2": "--n-imus 1 --static-s 5 --settle-s 2 --sample-rate-hz 25 --revolutions 1 "
           "--temperatures 0,25,50 --held-out 10 --no-hysteresis --stable-for-s 60 "
           "--resoak-s 30 --ramp-degc-per-min 10",
     "p3": "--rate-record-s 5 --rest-record-s 5 --tumble-record-s 5 --settle-s 2 --n-rates 4 "
@@ -38,7 +38,8 @@ SHORT = {
     "installation": "--revolutions 2 --settle-s 2 --sample-rate-hz 100",
     "g-sensitivity": "--record-s 10 --settle-s 2 --warm-up-s 5 --sample-rate-hz 100",
     "earth-rate-bias": "--record-s 10 --settle-s 2 --warm-up-s 5 --sample-rate-hz 100",
-    "random-drift": "--record-s 10 --settle-s 2 --warm-up-s 5 --sample-rate-hz 100",
+    "random-drift": "--record-s 10 --settle-s 2 --warm-up-s 5 --sample-rate-hz 50 "
+                    "--repetitions 3 --span-s 600",
     "tumble": "--record-s 5 --settle-s 2 --sample-rate-hz 100",
     "field": "--static-s 3 --init-static-s 10 --sample-rate-hz 100",
 }
