@@ -26,4 +26,5 @@ def write_results(url: str, worker: int, count: int, barrier: Barrier) -> None:
             if i % 10 == 0:
                 rec.review(rid, f"worker {worker}", approved=True)
                 rec.get_or_create_unit("SHARED")  # both create it: one wins, the other finds it
-            time.sleep(0.01)  # give the other writer a turn (SQLite's busy wait backs off)
+            time.sleep(0.03)  # give the other writer a turn (SQLite's busy wait backs off;
+            # 10 ms let one writer starve the other on a loaded 2-core machine)
