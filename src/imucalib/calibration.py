@@ -187,9 +187,9 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
     try:
         folder.mkdir(parents=True, exist_ok=True)
         chosen = formats(result) if callable(formats) else formats
+        provenance = None if result.calibration is not None else provenance_of(path)
         written = write_outputs(result, folder, chosen, name=name or path.stem,
-                                provenance=None if result.calibration is not None
-                                else provenance_of(path), recording=path)
+                                provenance=provenance, recording=path)
     except OSError as exc:
         raise InvalidInputError(f"cannot write the outputs into {folder}: "
                                 f"{exc.strerror or exc}") from exc
@@ -198,8 +198,9 @@ def calibrate(data: str | os.PathLike[str], *, procedure: str | None = None,
         from imucalib.records.calibrations import record_calibration
 
         try:
-            line = record_calibration(result, path, db=db, operator=operator, reason=reason,
-                                      options=options)
+            line = record_calibration(
+                result, path, db=db, operator=operator, reason=reason, options=options,
+                recording_sha256=provenance.recording_sha256 if provenance else "")
         except CalibrationError as exc:
             error = exc
     return Calibration(procedure=proc, result=result, written=tuple(written), record=line,

@@ -132,7 +132,8 @@ def _equipment_used(records: Records, described: Any) -> tuple[list[int], str | 
 
 def record_calibration(result: ProcedureResult, recording: Path | None, *, db: str | None,
                        operator: str = "", reason: str = "",
-                       options: Mapping[str, Any] | None = None) -> str:
+                       options: Mapping[str, Any] | None = None,
+                       recording_sha256: str = "") -> str:
     """Record a procedure result in the run of its recording; return one line saying where.
 
     Each unit's result with reported parameters is recorded as its result document (the result
@@ -140,7 +141,8 @@ def record_calibration(result: ProcedureResult, recording: Path | None, *, db: s
     is only noted. The run is the one that recorded `recording` (same SHA-256), else a run
     opened here (module docstring); a unit that already has a result of this procedure in that
     run gets a new version of it, recorded with :func:`reanalysis_reason` (`operator`, `reason`,
-    the analysis `options`).
+    the analysis `options`). `recording_sha256`, when the caller has hashed the recording
+    already (the pipeline's provenance), saves reading it a second time.
     """
     units = list(result.members) or [result]
     recordable = [u for u in units if not u.error and u.parameter_rows()]
@@ -150,8 +152,8 @@ def record_calibration(result: ProcedureResult, recording: Path | None, *, db: s
     from imucalib.io.hashing import file_sha256
     from imucalib.records.api import open_records
 
-    sha = ""
-    if recording is not None and recording.is_file():
+    sha = recording_sha256
+    if not sha and recording is not None and recording.is_file():
         try:
             sha = file_sha256(recording)
         except OSError as exc:
