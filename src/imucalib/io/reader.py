@@ -197,6 +197,8 @@ class Recording:
         self._datasets: dict[str, h5py.Dataset] = {}
         self._layouts: dict[str, _Layout] = {}
         self._commit_entries: list[str] | None = None
+        # the steps table parsed once: a file not open for SWMR reading cannot change under us
+        self._steps_cache: tuple[StepRecord, ...] | None = None
         if layout is not None:  # validated when opened
             self._commit_entries = list(layout.commit_entries)
             for s in layout.streams:
@@ -546,7 +548,19 @@ class Recording:
 
     @property
     def steps(self) -> list[StepRecord]:
-        """The executed steps, in order (those of a version 1 file with derived roles and tags)."""
+        """The executed steps, in order (those of a version 1 file with derived roles and tags).
+
+        Read and parsed once per opened file; a file read while it is written (SWMR) is read
+        again on every access, since its steps change.
+        """
+        if self._steps_cache is not None:
+            return list(self._steps_cache)
+        out = self._read_steps()
+        if not self._file.swmr_mode:
+            self._steps_cache = tuple(out)
+        return out
+
+    def _read_steps(self) -> list[StepRecord]:
         fields = step_fields(self.format_version)
         t = self._guard("the steps table", self._table, STEPS_GROUP, fields)
         v1 = self.format_version < 2

@@ -96,13 +96,13 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
 from imucalib._checks import check_positive
 from imucalib.errors import InvalidInputError
 from imucalib.processing._common import as_columns, as_time, restore_shape
+from imucalib.processing._median_kernel import neighbour_median
 
 __all__ = [
     "MAD_TO_SIGMA",
@@ -432,14 +432,7 @@ def _running_median(x: NDArray[np.float64], h: int
     n, w = x.size, 2 * h + 1
     if n < 2 * w:
         return np.full(n, float(np.median(x))), np.zeros(n)
-    c = np.empty(n)
-    step = 1 << 16  # rows per block: bounded memory
-    for a in range(0, n - 2 * h, step):
-        b = min(a + step, n - 2 * h)
-        win = sliding_window_view(x[a:b + 2 * h], w)
-        nb = np.delete(win, h, axis=1)  # the 2h neighbours, the sample itself left out
-        nb.partition((h - 1, h), axis=1)
-        c[a + h:b + h] = 0.5 * (nb[:, h - 1] + nb[:, h])
+    c = neighbour_median(x, h)  # a sorted window slid along x: O(n·h), no n × 2h copy
     d2 = np.zeros(n)
     d2[2 * h:n - 2 * h] = c[h:n - 3 * h] - 2.0 * c[2 * h:n - 2 * h] + c[3 * h:n - h]
     d2[:2 * h], d2[n - 2 * h:] = d2[2 * h], d2[n - 2 * h - 1]

@@ -85,6 +85,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 from imucalib._checks import as_array, check_positive
+from imucalib.analysis._allan_engine import ArrayPhase, n_terms, sum_overlapping
+from imucalib.analysis.allan import phase_from_rate
 from imucalib.errors import InvalidInputError
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 from imucalib.processing._common import as_columns, as_time
@@ -239,12 +241,19 @@ def compute_window_statistics(
 
 def _overlapping_avar(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]
                       ) -> NDArray[np.float64]:
-    """Overlapping Allan variance of rate samples (n, k) at τ = m·dt; shape (len(ms), k)."""
-    theta = np.concatenate([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0) * dt])
-    out = np.empty((ms.size, x.shape[1]))
-    for i, m in enumerate(ms):
-        d = theta[2 * m:] - 2.0 * theta[m:-m] + theta[: -2 * m]
-        out[i] = np.mean(d * d, axis=0) / (2.0 * (m * dt) ** 2)
+    """Overlapping Allan variance of rate samples (n, k) at τ = m·dt; shape (len(ms), k).
+
+    The one Allan path of the project: the phase sum and the blocked sums of squared second
+    differences of :mod:`imucalib.analysis` (``compute_oadev``'s kernels, NIST SP 1065 Eq. (8)),
+    without its noise identification and confidence intervals, which this fit does not use.
+    """
+    n, k = x.shape
+    count = n_terms("oadev", ms, n + 1)
+    tau = ms * dt
+    out = np.empty((ms.size, k))
+    for j in range(k):
+        phase = phase_from_rate(np.ascontiguousarray(x[:, j]), 1.0 / dt)
+        out[:, j] = sum_overlapping(ArrayPhase(phase), ms, count, 2) / (2.0 * count * tau**2)
     return out
 
 
