@@ -94,8 +94,8 @@ def harmonic_residual_std(values: _F64, angle_rad: _F64) -> _F64:
         The turning axis' angle at each row. [rad]
     """
     A = np.column_stack([np.ones_like(angle_rad), np.sin(angle_rad), np.cos(angle_rad)])
-    coef, *_ = np.linalg.lstsq(A, values, rcond=None)
-    resid = values - A @ coef
+    q, _ = np.linalg.qr(A)  # the projection onto A's columns: lstsq's residual, half the time
+    resid = values - q @ (q.T @ values)
     dof = max(values.shape[0] - 3, 1)
     return np.asarray(np.sqrt(np.sum(resid**2, axis=0) / dof), dtype=np.float64)
 

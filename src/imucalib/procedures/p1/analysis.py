@@ -120,6 +120,9 @@ class P1Options:
         simple without one.
     guard_band_k : float or None
         k of a guarded rule; None: the recording's, else 2.
+    workers : int
+        Processes the windows are reduced in (1: this one); the result is the same bit for bit
+        (:func:`~imucalib.procedures.p1.observations.extract_p1_observations`).
     """
 
     model: Literal["triad", "per-axis"] = "triad"
@@ -139,6 +142,7 @@ class P1Options:
     table_orthogonality_arcsec: float | None = None
     acceptance: Literal["simple", "guarded"] | None = None
     guard_band_k: float | None = None
+    workers: int = 1
 
 
 @dataclass(frozen=True, eq=False)
@@ -483,7 +487,7 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
     p = Path(path)
     with open_recording(p) as rec:
         obs = extract_p1_observations(rec, sensor_id, processing=opt.processing,
-                                      progress=progress)
+                                      progress=progress, workers=opt.workers)
     gyro_w = gyro_windows(obs, "calibration", None)
     spec = _imu_spec(obs)
     rule, guard_k = _acceptance(obs, opt)

@@ -631,7 +631,8 @@ class _Extractor:
 
 def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                             processing: P1Processing | None = None,
-                            progress: Callable[[float], None] | None = None) -> P1Observations:
+                            progress: Callable[[float], None] | None = None,
+                            workers: int = 1) -> P1Observations:
     """Reduce a P1 Recording to window observations of one IMU (module docstring).
 
     Parameters
@@ -645,6 +646,9 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     progress : callable, optional
         Called after each of the IMU's steps with the fraction of them reduced (increasing;
         the last call is 1.0).
+    workers : int
+        Processes the windows are reduced in (1: this one; N > 1: this one and N − 1 spawned
+        ones, :func:`_observe_parallel`). The observations are the same bit for bit.
 
     Returns
     -------
@@ -674,17 +678,24 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                              "windows calibrate and which verify")
     equipment, imu_spec, acceptance = _stated_configs(rec, context)
     ex = _Extractor(rec, sensor_id, opt)
-    windows: list[WindowObservation] = []
     skipped: list[str] = []
-    for i, (step, role) in enumerate(steps, start=1):
+    todo: list[tuple[StepRecord, str]] = []
+    for step, role in steps:
         if step.status != "done" or not step.has_valid_window:
             if step.status in ("invalid", "aborted"):
                 skipped.append(f"step {step.index} ({step.label}): {step.status}"
                                + (f" — {step.note}" if step.note else ""))
         elif role:
+            todo.append((step, role))
+    tick = _Progress(progress, len(steps), len(steps) - len(todo))
+    if workers > 1 and len(todo) > 2:
+        windows = _observe_parallel(ex, todo, workers, tick)
+    else:
+        windows = []
+        for step, role in todo:
             windows.append(ex.observe(step, role))
-        if progress is not None:
-            progress(i / len(steps))
+            tick()
+    tick.finish()
     if not windows:
         why = "; ".join(skipped) if skipped else "no step has a P1 measurement role"
         raise RecordingError(f"{rec.path}: no completed calibration or verification window for "
@@ -705,6 +716,102 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                           notes=tuple(notes), skipped=tuple(skipped), noise=noise,
                           equipment=equipment, imu_spec=imu_spec, acceptance=acceptance,
                           context=context)
+
+
+class _Progress:
+    """Report the fraction of a run's steps done; steps with nothing to reduce count as done."""
+
+    def __init__(self, progress: Callable[[float], None] | None, total: int, done: int) -> None:
+        self.progress, self.total, self.done = progress, max(total, 1), done
+        self.last = 0.0
+
+    def __call__(self, n: int = 1) -> None:
+        self.done += n
+        self._report(min(self.done / self.total, 1.0))
+
+    def finish(self) -> None:
+        self._report(1.0)
+
+    def _report(self, fraction: float) -> None:
+        if self.progress is not None and fraction > self.last:
+            self.last = fraction
+            self.progress(fraction)
+
+
+def _observe_steps(path: str, sensor_id: str, opt: P1Processing, sample_rate_hz: float,
+                   todo: Sequence[tuple[StepRecord, str]]) -> list[WindowObservation]:
+    """Reduce some steps of a recording in a worker process (:func:`_observe_parallel`)."""
+    from imucalib.io.opening import open_recording
+
+    with open_recording(path) as rec:
+        ex = _Extractor(rec, sensor_id, opt)
+        ex.sample_rate_hz = sample_rate_hz  # the parent's: the same time base as in one process
+        return [ex.observe(step, role) for step, role in todo]
+
+
+def _observe_parallel(ex: _Extractor, todo: list[tuple[StepRecord, str]], workers: int,
+                      tick: _Progress) -> list[WindowObservation]:
+    """Reduce the steps in this process and `workers` − 1 spawned ones; the serial result.
+
+    The first step is reduced here first: it fixes what later windows use (the sample rate of
+    a recording that does not state it). The rest go out as jobs of consecutive steps of about
+    equal samples, about four per worker; while the workers start and take jobs from the
+    front, this process takes jobs from the back that no worker has started (a job not yet
+    started can be cancelled), so no core waits for the others' start-up. Every window is
+    reduced by the same code from the same samples and sample rate: the observations equal
+    the serial ones bit for bit (tests/procedures/p1/test_p1_workers.py).
+    """
+    from imucalib.procedures.common.workers import local_pool
+
+    out: dict[int, WindowObservation] = {}
+    first = ex.observe(*todo[0])
+    out[0] = first
+    tick()
+    rest = list(enumerate(todo))[1:]
+    sizes = [max(1, _rows(ex, step)) for _, (step, _) in rest]
+    jobs = _balanced_groups(sizes, 4 * workers)
+    groups = [[rest[i] for i in job] for job in jobs]
+    with local_pool(workers - 1) as pool:
+        futures = [pool.submit(_observe_steps, str(ex.rec.path), ex.sensor, ex.opt,
+                               ex.sample_rate_hz, [item for _, item in group])
+                   for group in groups]
+        try:
+            for g in range(len(groups) - 1, -1, -1):
+                if not futures[g].cancel():
+                    break
+                for i, item in groups[g]:
+                    out[i] = ex.observe(*item)
+                    tick()
+            for g, fut in enumerate(futures):
+                if fut.cancelled():
+                    continue
+                for (i, _), obs in zip(groups[g], fut.result(), strict=True):
+                    out[i] = obs
+                tick(len(groups[g]))
+        except BaseException:
+            for fut in futures:  # a refused window ends the analysis: nothing more to do
+                fut.cancel()
+            raise
+    return [out[i] for i in range(len(todo))]
+
+
+def _rows(ex: _Extractor, step: StepRecord) -> int:
+    i0, i1 = ex.rec.row_range(DEVICE_IMU, ex.sensor, step.valid_start_s, step.valid_end_s)
+    return int(i1 - i0)
+
+
+def _balanced_groups(sizes: Sequence[int], n_groups: int) -> list[list[int]]:
+    """Split indices 0 … len(sizes) − 1 into at most `n_groups` runs of about equal total size."""
+    total = float(sum(sizes))
+    target = total / max(1, min(n_groups, len(sizes)))
+    groups: list[list[int]] = [[]]
+    acc = 0.0
+    for i, size in enumerate(sizes):
+        if groups[-1] and acc + size / 2.0 > target * len(groups):
+            groups.append([])
+        groups[-1].append(i)
+        acc += size
+    return groups
 
 
 def _with_model_se(w: WindowObservation, noise: Mapping[str, NoiseModel]) -> WindowObservation:

@@ -87,3 +87,5 @@ class P1AnalysisOptions:
 
     model: Literal["triad", "per-axis"] = option(
         "triad", help="The model fitted: the full triad model or the procedure's per-axis one.")
+    workers: int = option(1, help="Local processes the windows are reduced in (1: this one); "
+                                  "the result is the same.", min=1)

@@ -64,7 +64,8 @@ class P1Procedure(ProcedureDefaults):
                 progress: Callable[[float], None] | None = None) -> P1Analysis:
         """Run :func:`~imucalib.procedures.p1.analysis.analyze_p1` on a recording.
 
-        `options` may set ``model`` (``"triad"``, the default, or ``"per-axis"``). An open
+        `options` may set ``model`` (``"triad"``, the default, or ``"per-axis"``) and
+        ``workers`` (processes the windows are reduced in). An open
         Recording is analysed through its path (the provenance hashes the file). `progress`,
         when given, is called with the fraction of the steps reduced to observations.
 
@@ -80,7 +81,11 @@ class P1Procedure(ProcedureDefaults):
         if model not in MODELS:
             raise InvalidInputError(f"--model must be 'triad' or 'per-axis'; got {model!r}")
         path = Path(recording.path if hasattr(recording, "path") else recording)
-        return analyze_p1(path, unit, P1Options(model=model), progress=progress)
+        workers = int(opts.get("workers", 1))
+        if workers < 1:
+            raise InvalidInputError(f"--workers must be ≥ 1; got {workers}")
+        return analyze_p1(path, unit, P1Options(model=model, workers=workers),
+                          progress=progress)
 
     def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:
         """Return P1's sections 1–5 of the report (:mod:`imucalib.procedures.p1.report`).

@@ -30,10 +30,9 @@ from __future__ import annotations
 import ctypes
 import dataclasses
 import json
-import multiprocessing
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -52,6 +51,7 @@ from imucalib.io.reader import Recording, StepRecord
 from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults
+from imucalib.procedures.common.workers import local_pool
 from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
@@ -278,29 +278,6 @@ def _chunks(items: list[int], n: int) -> list[list[int]]:
     return [c for c in out if c]
 
 
-def _single_threaded_children() -> dict[str, str | None]:
-    """Ask the worker processes for one thread each (BLAS, OpenMP, Blosc); return the old env.
-
-    Each worker is one core's worth of work: the numerical libraries' own threads would make
-    the processes fight over the cores (bench/bench_p2.py measured the pool slower than one
-    process before this).
-    """
-    keys = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLOSC_NTHREADS",
-            "NUMBA_NUM_THREADS")
-    old = {k: os.environ.get(k) for k in keys}
-    for k in keys:
-        os.environ[k] = "1"
-    return old
-
-
-def _restore(old: dict[str, str | None]) -> None:
-    for k, v in old.items():
-        if v is None:
-            os.environ.pop(k, None)
-        else:
-            os.environ[k] = v
-
-
 def _tasks(paths: Sequence[Path], units: Sequence[str] | None) -> list[tuple[str, str, str]]:
     tasks = []
     for path in paths:
@@ -388,18 +365,11 @@ def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
         for p, sha, run in jobs:
             done(run, analyze_units_file(p, names(run), opt, sha))
     else:
-        # spawn: a forked child would inherit the HDF5 library's and the BLAS threads' state
-        ctx = multiprocessing.get_context("spawn")
-        old = _single_threaded_children()
-        try:
-            with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
-                                     mp_context=ctx) as pool:
-                pending = {pool.submit(analyze_units_file, p, names(run), opt, sha): run
-                           for p, sha, run in jobs}
-                for fut in as_completed(pending):
-                    done(pending[fut], fut.result())
-        finally:
-            _restore(old)
+        with local_pool(min(workers, len(jobs))) as pool:
+            pending = {pool.submit(analyze_units_file, p, names(run), opt, sha): run
+                       for p, sha, run in jobs}
+            for fut in as_completed(pending):
+                done(pending[fut], fut.result())
     return P2BatchResult(recordings=tuple(str(f) for f in files),
                          results=tuple(results[i] for i in range(len(tasks))))
 

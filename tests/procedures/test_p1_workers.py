@@ -1,0 +1,61 @@
+"""P1's windows reduced in several processes give the serial observations bit for bit."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+
+from imucalib.errors import InvalidInputError
+from imucalib.io import open_recording
+from imucalib.procedures import registry
+from imucalib.procedures.p1.observations import _balanced_groups, extract_p1_observations
+
+
+def _fields(obs):
+    return [dataclasses.asdict(w) for w in obs.windows]
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True)
+    if isinstance(a, float) and np.isnan(a):
+        return isinstance(b, float) and np.isnan(b)
+    if isinstance(a, list | tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    return a == b
+
+
+def test_two_workers_give_the_serial_observations_and_progress(consumer_run):
+    fractions: list[float] = []
+    with open_recording(consumer_run) as rec:
+        serial = extract_p1_observations(rec)
+        parallel = extract_p1_observations(rec, workers=2, progress=fractions.append)
+    assert len(parallel.windows) == len(serial.windows) > 3
+    assert _same(_fields(parallel), _fields(serial))
+    assert parallel.sample_rate_hz == serial.sample_rate_hz
+    assert parallel.cutoff_hz == serial.cutoff_hz
+    assert all(b > a for a, b in itertools.pairwise(fractions)) and fractions[-1] == 1.0
+
+
+def test_calibrate_option_workers_gives_the_same_parameters(consumer_run):
+    p1 = registry.get("p1")
+    one = p1.analyze(consumer_run, options={"workers": 1})
+    two = p1.analyze(consumer_run, options={"workers": 2})
+    assert [(r.name, r.value, r.std) for r in one.parameter_rows()] == \
+        [(r.name, r.value, r.std) for r in two.parameter_rows()]
+    with pytest.raises(InvalidInputError, match="--workers must be ≥ 1; got 0"):
+        p1.analyze(consumer_run, options={"workers": 0})
+
+
+@pytest.mark.parametrize(("sizes", "n"), [([5] * 10, 4), ([100, 1, 1, 1, 100, 1], 3),
+                                          ([1], 8), ([3, 3], 1)])
+def test_balanced_groups_cover_every_index_once_in_order(sizes, n):
+    groups = _balanced_groups(sizes, n)
+    assert [i for g in groups for i in g] == list(range(len(sizes)))
+    assert 1 <= len(groups) <= max(1, min(n, len(sizes))) + 1
+    assert all(g for g in groups)
