@@ -406,10 +406,11 @@ def reject_outliers_robust(
         c, margin = _running_median(x, h)
         r = x - c
         med_r = float(np.median(r))
-        s = MAD_TO_SIGMA * float(np.median(np.abs(r - med_r)))
+        dev = np.abs(r - med_r)
+        s = MAD_TO_SIGMA * float(np.median(dev))
         if s <= 0.0:
             s = float(np.std(r, ddof=1))
-        mask[:, j] = np.abs(r - med_r) > k_n * s + margin  # Eq. (2)
+        mask[:, j] = dev > k_n * s + margin  # Eq. (2)
         center[j] = float(np.median(x[~mask[:, j]]))
         scale[j] = s
     iters = np.ones(k, dtype=np.int64)
@@ -535,7 +536,7 @@ def _finish(cols: NDArray[np.float64], one_d: bool, mask: NDArray[np.bool_],
         out = cols[kept].copy()
     else:
         kept = np.ones(n, dtype=bool)
-        out = cols.copy()
+        out = cols  # as_columns' own copy; a flagged sample is filled from kept ones only
         axis = np.arange(n, dtype=np.float64) if t is None else t
         for j in np.flatnonzero(mask.any(axis=0)):
             good = ~mask[:, j]
