@@ -38,6 +38,17 @@ Run:  .venv/bin/python bench/bench_recording.py [--streams 8] [--rows 400000] [-
       .venv/bin/python bench/bench_recording.py --sizes [--p1-repetitions 3]
       [--p1-static-s 3600] [--allan-hours 8]     (compact recordings, before/after)
       .venv/bin/python bench/bench_recording.py --filters   (each filter, per column)
+      .venv/bin/python bench/bench_recording.py --codecs out/p1-run.h5 [--repeat 3]
+      (each codec on copies of a closed recording: size, close, plain-h5py read)
+
+``--codecs FILE`` converts copies of a closed Recording (e.g. ``make demo``'s ``out/p1-run.h5``)
+with each codec as a closing writer does (:func:`~imucalib.io.recover.compact_recording` from
+the uncompressed file: copy, verify, rename), and prints the file size, the time of that
+conversion (best of ``--repeat``), the time the filter alone takes (every stream column written
+from memory with plain h5py, best of ``--repeat``), the time plain h5py takes to read every
+stream column (best of 2 × repeat + 1) and whether a plain h5py without ``hdf5plugin`` reads it
+(a subprocess in which ``import hdf5plugin`` fails). ``gzip-4`` and ``lzf+shuffle`` are
+variants for comparison, not names the writer accepts.
 """
 
 from __future__ import annotations
@@ -53,7 +64,7 @@ import h5py
 import numpy as np
 
 from imucalib.io import ColumnSpec, RecordingWriter, StreamSpec, open_recording
-from imucalib.io.compression import COMPRESSIONS
+from imucalib.io.compression import COMPRESSIONS, DEFAULT_COMPRESSION
 from imucalib.io.recording import DEFAULT_CHUNK_ROWS
 
 COLUMNS = ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps", "accel_x_mps2", "accel_y_mps2",
@@ -147,6 +158,109 @@ def iter_h5py(path: Path, n_streams: int, chunk: int) -> int:
     return total
 
 
+_PLAIN_READ = """
+import sys
+sys.modules["hdf5plugin"] = None  # a plain h5py: no plugin filter
+import h5py
+with h5py.File(sys.argv[1], "r") as f:
+    for base in ("streams", "truth/streams"):
+        if base in f:
+            f[base].visititems(lambda n, o: o[()] if isinstance(o, h5py.Dataset) else None)
+"""
+
+#: The codecs of ``--codecs``: a writer's name, or (label, filter keywords) of a variant.
+CODEC_VARIANTS: dict[str, dict[str, object]] = {
+    "gzip-4": {"compression": "gzip", "compression_opts": 4, "shuffle": True},
+    "lzf+shuffle": {"compression": "lzf", "shuffle": True},
+}
+
+
+def write_columns_h5py(path: Path, columns: dict[str, np.ndarray],
+                      filters: dict[str, object]) -> None:
+    """Write every column with plain h5py in chunks of the Recording's rows, with `filters`."""
+    with h5py.File(path, "w") as f:
+        for name, values in columns.items():
+            f.create_dataset(name, data=values, maxshape=(None,),
+                             chunks=(min(DEFAULT_CHUNK_ROWS, len(values)),), **filters)
+
+
+def read_columns_h5py(path: Path) -> int:
+    """Read every stream column with plain h5py; return the bytes read."""
+    total = 0
+
+    def read(_: str, obj: object) -> None:
+        nonlocal total
+        if isinstance(obj, h5py.Dataset):
+            total += obj[()].nbytes
+
+    with h5py.File(path, "r") as f:
+        for base in ("streams", "truth/streams"):
+            if base in f:
+                f[base].visititems(read)
+    return total
+
+
+def run_codecs(source: Path, repeat: int) -> None:
+    """Each codec on copies of the closed recording `source` (module docstring)."""
+    import shutil
+    import subprocess
+    import sys
+    from unittest import mock
+
+    from imucalib.io import compact_recording
+    from imucalib.io import recover as recover_module
+    from imucalib.io.compression import column_filter_kwargs, ensure_plugin
+
+    ensure_plugin()  # this process reads and writes every codec
+    print(f"codecs on copies of {source} ({source.stat().st_size / 1e6:.1f} MB as given), "
+          f"h5py {h5py.__version__} (HDF5 {h5py.version.hdf5_version}); close = "
+          f"compact_recording from the uncompressed file (copy, verify, rename), best of "
+          f"{repeat}; filter = every stream column written from memory by plain h5py, best of "
+          f"{repeat}; read = plain h5py, every stream column, best of {2 * repeat + 1}")
+    names: list[str | None] = [None, "gzip", "gzip-4", "lzf", "lzf+shuffle", "blosc-lz4",
+                               "blosc-zstd"]
+    with tempfile.TemporaryDirectory() as tmp:
+        base = Path(tmp) / "base.h5"
+        shutil.copyfile(source, base)
+        compact_recording(base, None)
+        payload = read_columns_h5py(base)
+        columns: dict[str, np.ndarray] = {}
+        with h5py.File(base, "r") as f:
+            for group in ("streams", "truth/streams"):
+                if group in f:
+                    f[group].visititems(lambda n, o, g=group: columns.__setitem__(
+                        f"{g}/{n}", o[()]) if isinstance(o, h5py.Dataset) else None)
+        print(f"stream columns: {payload / 1e6:.1f} MB as stored uncompressed "
+              f"(file {base.stat().st_size / 1e6:.1f} MB)")
+        print(f"{'codec':<13} {'size MB':>8} {'ratio':>6} {'close s':>8} {'filter s':>9} "
+              f"{'read s':>7}  plain h5py reads it")
+        for name in names:
+            path = Path(tmp) / f"{name}.h5"
+            t_close = float("inf")
+            for _ in range(repeat):
+                shutil.copyfile(base, path)
+                t0 = time.perf_counter()
+                if name in CODEC_VARIANTS:
+                    with mock.patch.object(recover_module, "column_filter_kwargs",
+                                           lambda _c, kw=CODEC_VARIANTS[name]: dict(kw)):
+                        compact_recording(path, "gzip")
+                else:
+                    compact_recording(path, name)
+                t_close = min(t_close, time.perf_counter() - t0)
+            kwargs = (CODEC_VARIANTS[name] if name in CODEC_VARIANTS
+                      else column_filter_kwargs(name))
+            (t_filter,) = best_times([lambda k=kwargs: write_columns_h5py(
+                Path(tmp) / "filter.h5", columns, k)], repeat)
+            (t_read,) = best_times([lambda p=path: read_columns_h5py(p)], 2 * repeat + 1)
+            plain = subprocess.run([sys.executable, "-c", _PLAIN_READ, str(path)],
+                                   capture_output=True, text=True, check=False)
+            size = path.stat().st_size
+            label = (name or "none") + (" (default)" if name == DEFAULT_COMPRESSION else "")
+            print(f"{label:<13} {size / 1e6:8.1f} {base.stat().st_size / size:6.2f} "
+                  f"{t_close:8.2f} {t_filter:9.2f} {t_read:7.2f}  "
+                  f"{'yes' if plain.returncode == 0 else 'no'}")
+
+
 def best_times(funcs: list[Callable[[], object]], repeat: int) -> list[float]:
     """Best wall time of each function, running them in turn `repeat` times (interleaved, so
     that drifts of the page cache and the allocator affect all alike)."""
@@ -174,7 +288,13 @@ def main() -> None:
     parser.add_argument("--allan-hours", type=float, default=8.0)
     parser.add_argument("--filters", action="store_true",
                         help="each filter's ratio and speed per column of twin IMU data")
+    parser.add_argument("--codecs", type=Path, metavar="FILE",
+                        help="each codec on copies of this closed recording (e.g. "
+                             "out/p1-run.h5): size, close and plain-h5py read times")
     args = parser.parse_args()
+    if args.codecs is not None:
+        run_codecs(args.codecs, args.repeat)
+        return
     if args.filters:
         from compact_cases import column_filters  # bench/compact_cases.py
 
@@ -222,7 +342,8 @@ def main() -> None:
                 path = Path(tmp) / f"c_{comp}.h5"
                 (t,) = best_times([lambda c=comp, p=path: write_imucalib(p, data, args.block, c)],
                                   args.repeat)
-                print(f"  {comp or 'none':<5} {payload / t / 1e6:8.1f} MB/s   file "
+                label = (comp or "none") + (" (default)" if comp == DEFAULT_COMPRESSION else "")
+                print(f"  {label:<16} {payload / t / 1e6:8.1f} MB/s   file "
                       f"{path.stat().st_size / 1e6:8.1f} MB")
 
 

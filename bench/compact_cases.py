@@ -1,12 +1,15 @@
 """Compact recordings against the former layout: the cases of ``bench_recording.py --sizes``.
 
 "Before" is the layout of every recording up to format version 2: each column float64 (the
-counter int64, the flag bool), no compression (``compression=None``). "After" is the new
-default: the IMU's gyro, accelerometer and temperature as int32 counts with their LSB as
+counter int64, the flag bool), no compression (``compression=None``). "After" is the compact
+layout as it was measured for ``docs/recording-format.md`` (*Size and compression*, "Before and
+after"): the IMU's gyro, accelerometer and temperature as int32 counts with their LSB as
 ``scale`` (the twin delivers exact multiples of its LSB), every column Blosc LZ4 after a
-bit-shuffle. Both files hold the same values: the bench checks that reading either returns
-the same values (SHA-256 of every column, with -0.0 counted as 0.0: a count of zero reads back
-as +0.0, which ``np.array_equal`` and every comparison treat as equal).
+bit-shuffle (``compression="blosc-lz4"``, the default then; the default is now gzip, which
+``bench_recording.py --codecs`` compares with it on a closed recording). Both files hold the
+same values: the bench checks that reading either returns the same values (SHA-256 of every
+column, with -0.0 counted as 0.0: a count of zero reads back as +0.0, which ``np.array_equal``
+and every comparison treat as equal).
 """
 
 from __future__ import annotations
@@ -215,7 +218,8 @@ def allan_case(tmp: Path, hours: float, flush_every_s: float | None) -> None:
             spent["before"] += time.perf_counter() - t0
             t0 = time.perf_counter()
             writers["after"] = RecordingWriter(after, streams=[new], overwrite=True,
-                                               flush_interval_s=interval)
+                                               flush_interval_s=interval,
+                                               compression="blosc-lz4")
             spent["after"] += time.perf_counter() - t0
         payload += sum(v.nbytes for v in cols.values())
         n += len(cols["time_s"])
@@ -247,8 +251,9 @@ def run_sizes(p1_repetitions: int, p1_static_s: float, allan_hours: float, repea
     print(f"compact recordings: h5py {h5py.__version__} (HDF5 {h5py.version.hdf5_version}), "
           f"hdf5plugin {hdf5plugin.version}, numpy {np.__version__}, Python "
           f"{platform.python_version()}, {platform.machine()}")
-    print("before: float64 columns, uncompressed (format 2); after: the new defaults (int32 "
-          "counts × LSB for gyro/accel/temperature, Blosc LZ4 + bit-shuffle)")
+    print("before: float64 columns, uncompressed (format 2); after: int32 counts × LSB for "
+          "gyro/accel/temperature, Blosc LZ4 + bit-shuffle (the defaults when the docs' table "
+          "was measured; gzip is the default now: bench_recording.py --codecs)")
     with tempfile.TemporaryDirectory(dir="/tmp") as name:
         tmp = Path(name)
         if p1_repetitions > 0:

@@ -131,10 +131,14 @@ def test_plan_bounds_and_estimate(tmp_path):
     path = plan_file(tmp_path, settle_s=30.0, record_s=600.0)
     result = runner.invoke(app, ["plan", "validate", str(path)])
     assert result.exit_code == 0, result.output
-    assert "recording ≈ 10.6 MB over 631 s (for 1 IMU at the plan's least acquisition rate, " \
-           "100 Hz; a station's IMUs and rates change it)" in " ".join(result.output.split())
+    assert "recording over 631 s (for 1 IMU at the plan's least acquisition rate, 100 Hz; a " \
+           "station's IMUs and rates change it): ≈ 10.6 MB of disk at the most (the file as " \
+           "written, then its compressed copy at close), ≈ 3.94 MB once closed (gzip)" \
+           in " ".join(result.output.split())
     result = runner.invoke(app, ["plan", "show", str(path)])
-    assert result.exit_code == 0 and "recording ≈ 10.6 MB" in result.output
+    shown = " ".join(result.output.split())
+    assert result.exit_code == 0 and "≈ 10.6 MB of disk at the most" in shown
+    assert "≈ 3.94 MB once closed (gzip)" in shown
 
 
 def test_plan_new_refuses_options_beyond_the_bounds(tmp_path):

@@ -7,6 +7,7 @@ import os
 import re
 from collections import namedtuple
 
+import h5py
 import pytest
 
 from imucalib.errors import ConfigurationError, LimitExceededError
@@ -14,6 +15,9 @@ from imucalib.io.recover import compact_recording
 from imucalib.plan import Plan, describe_plan
 from imucalib.plan import budget as budget_module
 from imucalib.plan.budget import (
+    CLOSED_IMU_ROW_BYTES,
+    CLOSED_MOTION_AXIS_BYTES,
+    CLOSED_TIME_BYTES,
     METADATA_BYTES,
     MIN_SETTLE_PHASE_S,
     MOVE_ALLOWANCE_S,
@@ -55,8 +59,14 @@ def test_rows_are_stored_in_whole_chunks():
                                               CHUNK * 24]
     assert est.tables_bytes == STEPS_TABLE + LOG_TABLE + METADATA_BYTES
     assert est.total_bytes == sum(s.bytes for s in est.streams) + est.tables_bytes
-    assert est.describe().startswith("about 22.8 MB over 100 s (0.03 h): imu/IMU-0001 "
-                                     "100,001 rows × 81 B at 1000 Hz")
+    # closed: compressed chunks are stored at their size, so rows × the measured bytes per row
+    assert [s.closed_bytes for s in est.streams] == [
+        math.ceil(100001 * CLOSED_IMU_ROW_BYTES), math.ceil(20001 * CLOSED_IMU_ROW_BYTES),
+        math.ceil(10001 * (CLOSED_TIME_BYTES + 2 * CLOSED_MOTION_AXIS_BYTES)), 101 * 24]
+    assert est.closed_bytes == sum(s.closed_bytes for s in est.streams) + est.tables_bytes
+    assert est.describe().startswith("about 22.8 MB of disk, 4.12 MB once closed (gzip), over "
+                                     "100 s (0.03 h): imu/IMU-0001 100,001 rows × 81 B at "
+                                     "1000 Hz")
 
 
 def test_station_facts_are_checked():
@@ -133,15 +143,20 @@ def test_free_space_is_checked(tmp_path, monkeypatch):
     assert check_free_space(3_000_000, target, replaced_bytes=1_000_000) == 3_500_000
 
 
-def _bounds_the_run(estimate: int, path) -> None:
+def _bounds_the_run(est, path) -> None:
     """The estimate covers the peak of a run (the file as written plus its compressed copy at
-    close) and is close to the file as written: float64 samples assumed, int32 counts written."""
+    close) and is close to the file as written: float64 samples assumed, int32 counts written.
+    The closed file's estimate is close to the file the run closed (gzip by default)."""
+    estimate = est.total_bytes
     compressed = os.path.getsize(path)
+    with h5py.File(path, "r") as f:
+        assert f["streams/imu"][next(iter(f["streams/imu"]))]["time_s"].compression == "gzip"
     compact_recording(path, None)  # the file as it was written, before the close compressed it
     written = os.path.getsize(path)
     assert written + compressed <= estimate
     assert 1.0 <= estimate / written < 1.8
     assert estimate / compressed >= 3.0
+    assert 0.9 <= est.closed_bytes / compressed <= 2.0
 
 
 def test_the_estimate_matches_a_simulated_file(tmp_path):
@@ -150,7 +165,7 @@ def test_the_estimate_matches_a_simulated_file(tmp_path):
                   steps=(StaticStep(kind="static", duration_s=200.0),))
     path = tmp_path / "s.h5"
     simulate_scenario(sc, path)
-    _bounds_the_run(estimate_scenario_recording(sc).total_bytes, path)
+    _bounds_the_run(estimate_scenario_recording(sc), path)
 
 
 def test_the_estimate_matches_a_station_run(tmp_path):
@@ -162,4 +177,4 @@ def test_the_estimate_matches_a_station_run(tmp_path):
     path = tmp_path / "run.h5"
     summary = run_plan(plan, SimStation(plan.twin), path, options=RunOptions(tick_s=2.0))
     assert summary.status == "done", summary.reason
-    _bounds_the_run(estimate_plan_recording(plan).total_bytes, path)
+    _bounds_the_run(estimate_plan_recording(plan), path)

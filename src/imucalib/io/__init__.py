@@ -21,22 +21,27 @@ A stream or a step of it is exported to CSV or MAT by :mod:`imucalib.exports.str
 
 from __future__ import annotations
 
-from imucalib.io.events import EventKind
-from imucalib.io.opening import open_recording
-from imucalib.io.reader import LogEvent, Recording, StepRecord, StreamData, StreamInfo
-from imucalib.io.recording import (
-    FORMAT_NAME,
-    FORMAT_VERSION,
-    ColumnSpec,
-    RecordingWriter,
-    StreamSpec,
-)
-from imucalib.io.recover import (
-    RecoveredStream,
-    RecoveryReport,
-    compact_recording,
-    recover_recording,
-)
+from typing import TYPE_CHECKING
+
+from imucalib._lazy import lazy_getattr
+
+if TYPE_CHECKING:
+    from imucalib.io.events import EventKind
+    from imucalib.io.opening import open_recording
+    from imucalib.io.reader import LogEvent, Recording, StepRecord, StreamData, StreamInfo
+    from imucalib.io.recording import (
+        FORMAT_NAME,
+        FORMAT_VERSION,
+        ColumnSpec,
+        RecordingWriter,
+        StreamSpec,
+    )
+    from imucalib.io.recover import (
+        RecoveredStream,
+        RecoveryReport,
+        compact_recording,
+        recover_recording,
+    )
 
 __all__ = [
     "FORMAT_NAME",
@@ -56,3 +61,16 @@ __all__ = [
     "open_recording",
     "recover_recording",
 ]
+
+#: Module of each public name, imported on first access (PEP 562): importing one module of this
+#: package (the file hash, the step file) imports neither h5py nor the reader.
+__getattr__ = lazy_getattr(__name__, {
+    "EventKind": "imucalib.io.events",
+    "open_recording": "imucalib.io.opening",
+    **dict.fromkeys(("LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo"),
+                    "imucalib.io.reader"),
+    **dict.fromkeys(("FORMAT_NAME", "FORMAT_VERSION", "ColumnSpec", "RecordingWriter",
+                     "StreamSpec"), "imucalib.io.recording"),
+    **dict.fromkeys(("RecoveredStream", "RecoveryReport", "compact_recording",
+                     "recover_recording"), "imucalib.io.recover"),
+})

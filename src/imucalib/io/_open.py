@@ -17,7 +17,6 @@ import h5py
 
 from imucalib import __version__
 from imucalib.errors import RecordingCorruptError, RecordingError, RecordingFormatError
-from imucalib.io import compression as _compression  # noqa: F401  (registers the Blosc filter)
 from imucalib.io._schema import FORMAT_NAME, FORMAT_VERSION, decode_attr
 
 __all__ = ["check_format", "marked_open_for_write", "open_h5"]

@@ -41,6 +41,7 @@ from imucalib.io._validate import (
     h5call,
     touch_all,
 )
+from imucalib.io.compression import register_plugin_filters
 from imucalib.io.reader import Recording
 
 __all__ = ["open_damaged", "open_recording"]
@@ -160,6 +161,7 @@ def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, 
     found = run_probe(p, _probe_work(p, lenient), timeout_s=probe_timeout_s) if probe else None
     f, was_open = _open_h5(p)
     try:
+        register_plugin_filters(f)  # imports hdf5plugin only for a file that needs it (Blosc)
         if strict and was_open:
             raise RecordingOpenForWriteError(
                 f"{p} is still marked open for writing (its writer crashed, was killed while "

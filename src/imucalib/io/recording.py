@@ -28,7 +28,8 @@ Root attributes
     One group per stream (``device``: kind such as ``imu``, ``table``, ``chamber``,
     ``centrifuge``; ``unit``: the physical unit's name, e.g. ``IMU-0001`` or ``main``). Each column
     is a 1-D chunked dataset with unlimited ``maxshape`` (64 Ki rows per chunk; uncompressed while
-    written, Blosc LZ4 with bit-shuffle by default once closed: :mod:`imucalib.io.compression`),
+    written, by default HDF5's shuffle + deflate once closed, which every HDF5 tool reads:
+    :mod:`imucalib.io.compression`),
     attributes ``unit`` (a unit
     string, checked against
     :func:`imucalib.units.parse_unit` or :data:`EXTRA_UNITS`), ``quantity`` (``"si"`` or ``"raw"``)
@@ -223,10 +224,12 @@ class RecordingWriter:
         Replace an existing file; otherwise an existing `path` is an error.
     chunk_rows : int
         Rows per HDF5 chunk of a stream column.
-    compression : {"blosc-lz4", None, "lzf", "gzip", "blosc-zstd"}
-        Column compression of the closed file (:mod:`imucalib.io.compression`): Blosc LZ4
-        after a bit-shuffle by default, ``"gzip"`` (shuffle + deflate) for files that HDF5 tools
-        without the Blosc plugin must read, ``None`` for none. While the file is written its
+    compression : {"gzip", None, "lzf", "blosc-lz4", "blosc-zstd"}
+        Column compression of the closed file (:mod:`imucalib.io.compression`): ``"gzip"``
+        (HDF5's byte shuffle + deflate level 1) by default, which every HDF5 library and tool
+        reads; ``"blosc-lz4"`` or ``"blosc-zstd"`` (Blosc after a bit-shuffle: faster to close
+        and read, but read outside imucalib only where the HDF5 Blosc plugin is installed);
+        ``"lzf"``; ``None`` for none. While the file is written its
         columns are uncompressed (under SWMR every flush would rewrite a compressed chunk in a
         new place and HDF5 never reuses the old one); :meth:`close` then rewrites it compressed
         (:func:`~imucalib.io.recover.compact_recording`: copied, verified, atomically renamed).
@@ -801,8 +804,8 @@ class RecordingWriter:
             except (RecordingError, OSError) as exc:
                 why = str(exc)
         self._compression_skipped = (f"{self._path} is complete but was left uncompressed "
-                                     f"({why}); compress it later with "
-                                     "imucalib.io.compact_recording")
+                                     f"({why}); compress it later with `imucalib compact "
+                                     "FILE` (imucalib.io.compact_recording)")
 
     @property
     def compression_skipped(self) -> str:

@@ -50,6 +50,7 @@ from imucalib.errors import (
     RecordingError,
     RecordingOpenForWriteError,
 )
+from imucalib.io._layout import column_compression
 from imucalib.io._open import marked_open_for_write
 from imucalib.io._schema import (
     COMMIT_GROUP,
@@ -635,7 +636,7 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
                           notes=tuple(copier.notes))
 
 
-def compact_recording(path: str | os.PathLike[str], compression: str | None) -> None:
+def compact_recording(path: str | os.PathLike[str], compression: str | None) -> str | None:
     """Rewrite a cleanly closed Recording in place with another compression of its columns.
 
     The copy holds what every reader of the file sees: each stream's committed rows (rows a
@@ -657,12 +658,20 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
     path : str or Path
         A cleanly closed Recording.
     compression : str or None
-        One of :data:`~imucalib.io.compression.COMPRESSIONS`.
+        One of :data:`~imucalib.io.compression.COMPRESSIONS`. A Blosc compression makes a
+        file of format version 2 version 3 (what a writer stamps on a Blosc file: the readers
+        of version 2 lack the filter) and is refused for a file of version 1.
+
+    Returns
+    -------
+    str or None
+        The compression the file had (:func:`~imucalib.io.compression.compression_of` of its
+        first filtered column; None: uncompressed).
 
     Raises
     ------
     InvalidInputError
-        For an unknown compression.
+        For an unknown compression, or Blosc for a file of format version 1.
     RecordingOpenForWriteError, RecordingFormatError, RecordingCorruptError
         If the file is not a cleanly closed, valid Recording (it is then not touched).
     RecordingError
@@ -680,9 +689,18 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
     try:
         with open_recording(src, strict=True) as rec:
             visible = rec.committed_rows()  # rows past a commit count are shown to no reader
+            had = column_compression(rec._file)[1]
+            stamp = needs_plugin(compression) and rec.format_version < FORMAT_VERSION
+            if stamp and rec.format_version < 2:
+                raise InvalidInputError(
+                    f"{src} is of format version {rec.format_version}, whose step fields "
+                    f"predate the Blosc filter (format version {FORMAT_VERSION}): compress it "
+                    "with 'gzip', 'lzf' or none")
             with h5py.File(tmp, "w", libver="latest") as dst:
                 copier = _copy(rec, dst, filters=column_filter_kwargs(compression),
                                recovered=False)
+                if stamp:  # version 2 readers lack the Blosc filter: they must refuse it
+                    dst.attrs["format_version"] = np.int64(FORMAT_VERSION)
         changed = [f"{t.name}: {t.rows_copied} of {visible.get(t.name)} rows ({t.note})"
                    for t in copier.tables if t.rows_copied != visible.get(t.name)]
         if copier.notes or changed:
@@ -697,3 +715,4 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+    return had

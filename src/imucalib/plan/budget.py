@@ -8,9 +8,10 @@ Contents
     twin station.
 :func:`estimate_recording_bytes`
     A plan and station facts → bytes (an ``int``), for a station run to compare with its free
-    disk space.
+    disk space (the peak: the file as written, then its compressed copy at close).
 :func:`estimate_plan_recording`, :func:`estimate_recording`
-    The same, itemised per stream (:class:`RecordingEstimate`, :class:`StreamEstimate`).
+    The same, itemised per stream (:class:`RecordingEstimate`, :class:`StreamEstimate`), with
+    the size of the closed, compressed file (:attr:`RecordingEstimate.closed_bytes`).
 :func:`check_free_space`
     Refuse (:class:`~imucalib.errors.LimitExceededError`) an estimate larger than the free space
     of the filesystem that will hold the file.
@@ -46,14 +47,27 @@ chunk counts in full. The steps table and the event log are chunked tables too (
 step, about three events per step), and :data:`METADATA_BYTES` covers the HDF5 metadata, the plan
 and the truth.
 
-What it bounds: the room a run needs. A Recording is written uncompressed and compressed when
-it is closed (docs/recording-format.md, "Size and compression"), so the disk holds at the most
-the file as written plus its compressed copy. An IMU that gives counts is written as int32 counts
-(61 bytes a row instead of 81), which the estimate does not assume: against the twin's files the
-estimate is 1.4–1.7 times the file as written and 5–10 times the closed, compressed file, and
-covers the peak (written file plus compressed copy, 0.7–0.9 of the estimate). With float64
-samples (an IMU without counts) the estimate is 0.98–1.0 of the file as written; a close that
-then finds too little room for the copy leaves the file uncompressed and complete.
+What it bounds: the room a run needs (:attr:`RecordingEstimate.total_bytes`, the figure the
+free-space checks use). A Recording is written uncompressed and compressed when it is closed
+(docs/recording-format.md, "Size and compression"), so the disk holds at the most the file as
+written plus its compressed copy. An IMU that gives counts is written as int32 counts (61 bytes a
+row instead of 81), which the estimate does not assume: against the twin's files the estimate is
+1.4–1.7 times the file as written and covers the peak (written file plus compressed copy,
+0.7–0.9 of the estimate). With float64 samples (an IMU without counts) the estimate is 1.0–1.2
+of the file as written, and the peak can exceed it (1.3 times it for a navigation-grade twin
+IMU); a close that then finds too little room for the copy leaves the file uncompressed and
+complete.
+
+The closed file (:attr:`RecordingEstimate.closed_bytes`): the stream columns compressed with the
+default compression (gzip level 1 after a byte shuffle, :mod:`imucalib.io.compression`) take the
+bytes per row measured on the twin's output (:data:`CLOSED_IMU_ROW_BYTES`,
+:data:`CLOSED_MOTION_AXIS_BYTES`, :data:`CLOSED_TIME_BYTES`; compressed chunks are stored at
+their compressed size, not whole), the steps, log and metadata as above (they are not
+compressed), other streams (chamber, the twin's truth) as written. Against the twin's files it
+is 1.1–1.2 times the closed file for a tactical IMU (the P1 run of ``make demo``, a 200 s static
+scenario at 1 kHz), 1.9 times for a consumer one (whose counts compress better); an IMU without
+counts (float64 samples, such as a navigation-grade twin IMU) makes the closed file about 2.5
+times this estimate.
 """
 
 from __future__ import annotations
@@ -69,6 +83,7 @@ from typing import TYPE_CHECKING, Final
 import numpy as np
 
 from imucalib.errors import ConfigurationError, LimitExceededError
+from imucalib.io.compression import DEFAULT_COMPRESSION
 from imucalib.io.recording import (
     DEFAULT_CHUNK_ROWS,
     LOG_CHUNK_ROWS,
@@ -100,6 +115,9 @@ if TYPE_CHECKING:
     from imucalib.plan.equipment import TwinEquipment
 
 __all__ = [
+    "CLOSED_IMU_ROW_BYTES",
+    "CLOSED_MOTION_AXIS_BYTES",
+    "CLOSED_TIME_BYTES",
     "METADATA_BYTES",
     "MIN_SETTLE_PHASE_S",
     "MOVE_ALLOWANCE_S",
@@ -121,6 +139,18 @@ MOVE_ALLOWANCE_S: Final = 1.0
 MIN_SETTLE_PHASE_S: Final = 10.0
 #: Allowance for the HDF5 object headers, chunk indexes, metadata, plan text and truth. [B]
 METADATA_BYTES: Final = 512 * 1024
+#: Bytes of one IMU row in a closed file (default compression: gzip level 1 after a byte
+#: shuffle): six int32 counts at 1.4–1.8 B each, time stamps, device times and counter 0.05–0.17 B
+#: each, temperature and saturation flag a few hundredths. Measured on the twin's tactical IMU
+#: at 1 kHz (10.4 B in the P1 run of ``make demo``, ``out/p1-run.h5``, and in a 200 s static
+#: scenario; a consumer IMU's counts 4.9 B), with ``bench/bench_recording.py --codecs``'s
+#: conversion and ``h5py.Dataset.id.get_storage_size`` per column. [B]
+CLOSED_IMU_ROW_BYTES: Final = 11.0
+#: Bytes per axis of a table's or centrifuge's row in a closed file: the float64 angle
+#: (2.4–3.9 B) and rate (0.1–0.6 B), measured as :data:`CLOSED_IMU_ROW_BYTES`. [B]
+CLOSED_MOTION_AXIS_BYTES: Final = 4.0
+#: Bytes of a motion stream's ``time_s`` per row in a closed file (0.08–0.31 B measured). [B]
+CLOSED_TIME_BYTES: Final = 0.3
 #: Event-log rows per step (start, end, a note) plus a few per run.
 _EVENTS_PER_STEP: Final = 3
 _EVENTS_PER_RUN: Final = 10
@@ -204,7 +234,8 @@ class StreamEstimate:
     rate_hz: float
     rows: int
     row_bytes: int
-    bytes: int
+    bytes: int  # as written: whole chunks of uncompressed rows
+    closed_bytes: int  # in the closed file, compressed with the default compression
 
 
 @dataclass(frozen=True)
@@ -218,7 +249,7 @@ class RecordingEstimate:
     streams : tuple of StreamEstimate
         Each stream's rows and bytes.
     tables_bytes : int
-        Steps table, event log and :data:`METADATA_BYTES`. [B]
+        Steps table, event log and :data:`METADATA_BYTES` (not compressed at close). [B]
     """
 
     duration_s: float
@@ -227,15 +258,25 @@ class RecordingEstimate:
 
     @property
     def total_bytes(self) -> int:
-        """The estimated file size. [B]"""
+        """The disk the run needs, the figure the free-space checks use. [B]
+
+        The file as written, which also covers its compressed copy at close for IMUs that give
+        counts (module docstring).
+        """
         return self.tables_bytes + sum(s.bytes for s in self.streams)
 
+    @property
+    def closed_bytes(self) -> int:
+        """The estimated size of the closed file, compressed with the default compression. [B]"""
+        return self.tables_bytes + sum(s.closed_bytes for s in self.streams)
+
     def describe(self) -> str:
-        """Return one line: the total, the span and the streams."""
+        """Return one line: the disk needed, the closed file, the span and the streams."""
         parts = ", ".join(f"{s.name} {s.rows:,} rows × {s.row_bytes} B at {s.rate_hz:g} Hz"
                           for s in self.streams)
-        return (f"about {format_bytes(self.total_bytes)} over {self.duration_s:,.0f} s "
-                f"({self.duration_s / 3600:.2f} h): {parts}")
+        return (f"about {format_bytes(self.total_bytes)} of disk, "
+                f"{format_bytes(self.closed_bytes)} once closed ({DEFAULT_COMPRESSION}), over "
+                f"{self.duration_s:,.0f} s ({self.duration_s / 3600:.2f} h): {parts}")
 
 
 def format_bytes(n: float) -> str:
@@ -254,11 +295,18 @@ def _chunked(rows: int, row_bytes: int, chunk_rows: int) -> int:
     return math.ceil(rows / chunk_rows) * chunk_rows * row_bytes
 
 
-def _stream(spec: StreamSpec, rate_hz: float, duration_s: float) -> StreamEstimate:
+def _stream(spec: StreamSpec, rate_hz: float, duration_s: float,
+            closed_row_bytes: float | None = None) -> StreamEstimate:
+    """Return one stream's estimate (`closed_row_bytes` None: closed as written)."""
     rows = math.floor(rate_hz * duration_s) + 1
     size = _row_bytes(spec)
+    closed = rows * (size if closed_row_bytes is None else closed_row_bytes)
     return StreamEstimate(spec.name, rate_hz, rows, size,
-                          _chunked(rows, size, DEFAULT_CHUNK_ROWS))
+                          _chunked(rows, size, DEFAULT_CHUNK_ROWS), math.ceil(closed))
+
+
+def _closed_motion_row_bytes(n_axes: int) -> float:
+    return CLOSED_TIME_BYTES + n_axes * CLOSED_MOTION_AXIS_BYTES
 
 
 def _table_bytes(fields: Mapping[str, FieldSpec]) -> int:
@@ -294,16 +342,17 @@ def estimate_recording(duration_s: float, n_steps: int, facts: StationFacts
     streams = []
     for i, rate in enumerate(facts.imu_sample_rates_hz):
         name = f"IMU-{i + 1:04d}"
-        streams.append(_stream(imu_stream_spec(name), rate, duration_s))
+        streams.append(_stream(imu_stream_spec(name), rate, duration_s, CLOSED_IMU_ROW_BYTES))
         if facts.imu_truth:
             streams.append(_stream(imu_truth_stream_spec(name), rate, duration_s))
     if facts.table_axes:
         axes = [f"axis{i}" for i in range(facts.table_axes)]
         streams.append(_stream(motion_stream_spec(DEVICE_TABLE, "main", axes),
-                               facts.feedback_rate_hz, duration_s))
+                               facts.feedback_rate_hz, duration_s,
+                               _closed_motion_row_bytes(facts.table_axes)))
     if facts.centrifuge:
         streams.append(_stream(motion_stream_spec(DEVICE_CENTRIFUGE, "main", ["spin"]),
-                               facts.feedback_rate_hz, duration_s))
+                               facts.feedback_rate_hz, duration_s, _closed_motion_row_bytes(1)))
     if facts.chamber:
         streams.append(_stream(chamber_stream_spec("main"), facts.chamber_rate_hz, duration_s))
     events = _EVENTS_PER_STEP * n_steps + _EVENTS_PER_RUN

@@ -62,6 +62,7 @@ from typing import Any, Protocol
 from imucalib import units
 from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
 from imucalib.io import StreamSpec
+from imucalib.io.compression import COMPRESSIONS
 from imucalib.io.context import RecordingContext
 from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.events import EventKind
@@ -323,6 +324,9 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
         raise InvalidInputError(f"`tick_s` must be > 0; got {opt.tick_s!r}")
     if opt.idle_tick_s is not None and not opt.idle_tick_s > 0:
         raise InvalidInputError(f"`idle_tick_s` must be > 0; got {opt.idle_tick_s!r}")
+    if opt.compression not in COMPRESSIONS:
+        raise InvalidInputError(f"`compression` must be one of {COMPRESSIONS}; "
+                                f"got {opt.compression!r}")
     check_plan_against_station(plan, station)
     if Path(path).exists() and not overwrite:
         raise RecordingError(f"{path} exists; pass overwrite=True to replace it")
@@ -353,7 +357,8 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
                              truth=opt.truth, overwrite=overwrite,
                              truth_streams=(truth_source.truth_stream_specs()
                                             if truth_source is not None else ()),
-                             flush_interval_s=opt.flush_interval_s)
+                             flush_interval_s=opt.flush_interval_s,
+                             compression=opt.compression)
     with writer:
         writer.log_event(station.clock.now_s(), "info", "runner",
                          f"plan {plan.name!r} started on {station.describe().get('kind', '?')}")

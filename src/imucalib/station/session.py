@@ -24,6 +24,7 @@ import numpy as np
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
 from imucalib.errors import DeviceError, RecordingError, StorageFullError
+from imucalib.io.compression import DEFAULT_COMPRESSION
 from imucalib.io.events import EventKind
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.storage import format_bytes
@@ -106,6 +107,11 @@ class RunOptions:
         settling criteria are checked, and a record of a fixed length (whose rows the guards
         still check, every one); by default `tick_s`. The simulated station generates its
         streams per tick, so fewer, longer ticks make it faster. [s]
+    compression : str or None
+        Compression of a new run's Recording once closed
+        (:data:`~imucalib.io.compression.COMPRESSIONS`; default
+        :data:`~imucalib.io.compression.DEFAULT_COMPRESSION`, gzip, which every HDF5 tool
+        reads). A resumed run closes its file with the compression it had.
     """
 
     tick_s: float = 0.5
@@ -116,6 +122,7 @@ class RunOptions:
     station_toml: str = ""
     min_free_bytes: int = 128 << 20
     idle_tick_s: float | None = None
+    compression: str | None = DEFAULT_COMPRESSION
 
 
 class RunSession:
