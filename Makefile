@@ -38,6 +38,7 @@ bench: venv
 	$(BIN)/python bench/bench_p1.py
 	$(BIN)/python bench/bench_p2.py
 	$(BIN)/python bench/bench_import.py
+	$(BIN)/python bench/bench_cli_startup.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

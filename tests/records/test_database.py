@@ -53,6 +53,12 @@ def test_migration_creates_exactly_the_models(records_url):
     assert version == records_engine.head_revision()
 
 
+def test_the_head_revision_constant_is_alembics_head():
+    """``HEAD_REVISION`` lets an up-to-date database open without Alembic: a new migration
+    must move it (else such a database would be left at the old revision)."""
+    assert records_engine.HEAD_REVISION == records_engine.head_revision()
+
+
 def test_a_newer_schema_is_refused(records_url):
     open_records(records_url).close()
     engine = create_engine(records_url)

@@ -8,6 +8,8 @@ Commands
 ``scenarios``                      list the built-in scenarios
 ``inspect FILE``                   summarise a Recording: streams, units, steps, rates, gaps
 ``recover FILE``                   copy out what a crashed writer left in an open Recording
+``compact FILE --compression NAME`` rewrite a closed Recording with another compression (gzip,
+                                   which every HDF5 tool reads; blosc-lz4, blosc-zstd, lzf, none)
 ``export FILE --stream DEV/UNIT``  write a stream (or one step of it) as CSV or MAT
 ``export RESULT --format FMT``     a result for firmware (c-runtime) or other tools (mat, ros-yaml…)
 ``import DATA --steps FILE``       a CSV and its step file as a Recording (docs/import.md)
@@ -118,10 +120,14 @@ def _printed_error(exc_type: type[BaseException], exc: BaseException, tb: object
 
 
 def _exit(code: int) -> None:
-    """Leave with `code`; skip interpreter teardown after HDF5 failed to write a file."""
-    from imucalib.io.recording import abandoned_files
+    """Leave with `code`; skip interpreter teardown after HDF5 failed to write a file.
 
-    if abandoned_files() or _UNRAISABLE:
+    A command that wrote no Recording never imported :mod:`imucalib.io.recording` (nor h5py),
+    so there is nothing of it to ask about (and importing it here would cost every command).
+    """
+    writer = sys.modules.get("imucalib.io.recording")
+    abandoned = writer is not None and writer.abandoned_files()
+    if abandoned or _UNRAISABLE:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)

@@ -10,18 +10,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Protocol
-
-from rich.progress import (
-    BarColumn,
-    Progress,
-    TaskProgressColumn,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
+from typing import TYPE_CHECKING, Protocol
 
 from imucalib.cli._app import err_console
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
 
 __all__ = ["QUIET_HELP", "ProgressUpdate", "make_progress", "progress_bar", "shows_progress"]
 
@@ -47,6 +41,15 @@ def shows_progress(quiet: bool = False) -> bool:
 
 def make_progress() -> Progress:
     """Return a rich Progress on stderr: description, bar, percentage, text, elapsed, ETA."""
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
     return Progress(TextColumn("[bold]{task.description}"), BarColumn(), TaskProgressColumn(),
                     TextColumn("{task.fields[detail]}"), TimeElapsedColumn(),
                     TimeRemainingColumn(), console=err_console, transient=True)

@@ -168,7 +168,8 @@ def calibrate(
                         "first imported into OUT/<name>.imported.h5 (docs/import.md).")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)] = False,
     workers: Annotated[int | None, typer.Option(
-        help="P2: units analysed in parallel on this many local processes.")] = None,
+        help="P1, P2: windows (P1) or units (P2) analysed in parallel on this many local "
+             "processes; the result is the same.")] = None,
     scheduler: Annotated[str | None, typer.Option(
         help="P2: a Dask scheduler address (tcp://host:8786); the workers must see the "
              "recordings at the same paths (the dask extra).")] = None,

@@ -10,11 +10,9 @@ from __future__ import annotations
 import inspect
 import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from pydantic import ValidationError
-from rich.table import Table
 from typer.core import TyperGroup
 
 from imucalib.cli._app import app, console, fail, typer_app
@@ -25,10 +23,10 @@ from imucalib.cli.options_cli import (
     spec_parameters,
 )
 from imucalib.errors import CalibrationError, ConfigurationError
-from imucalib.plan.bounds import format_validation_error
-from imucalib.plan.budget import format_bytes
-from imucalib.plan.schema import Plan
 from imucalib.procedures.common.options import option_specs
+
+if TYPE_CHECKING:
+    from imucalib.plan.schema import Plan
 
 __all__ = ["plan_app"]
 
@@ -37,8 +35,8 @@ app.add_typer(plan_app, name="plan")
 
 
 def _estimate_line(plan: Plan) -> str:
-    """One line: the estimated recording size, and on which station facts it rests."""
-    from imucalib.plan.budget import estimate_plan_recording
+    """One line: the disk a run needs, its closed file's size, and the station facts used."""
+    from imucalib.plan.budget import estimate_plan_recording, format_bytes
 
     est = estimate_plan_recording(plan)
     if plan.twin is not None:
@@ -50,7 +48,12 @@ def _estimate_line(plan: Plan) -> str:
         basis = (f"for 1 IMU at the plan's least acquisition rate, "
                  f"{plan.equipment.acquisition_rate_min_hz:g} Hz; a station's IMUs and rates "
                  "change it")
-    return f"recording ≈ {format_bytes(est.total_bytes)} over {est.duration_s:,.0f} s ({basis})"
+    from imucalib.io.compression import DEFAULT_COMPRESSION
+
+    return (f"recording over {est.duration_s:,.0f} s ({basis}): ≈ "
+            f"{format_bytes(est.total_bytes)} of disk at the most (the file as written, then its "
+            f"compressed copy at close), ≈ {format_bytes(est.closed_bytes)} once closed "
+            f"({DEFAULT_COMPRESSION})")
 
 
 @plan_app.command("validate")
@@ -70,6 +73,8 @@ def validate(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -
 @plan_app.command("show")
 def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> None:
     """Print the expanded step list with each step's least duration and the total."""
+    from rich.table import Table
+
     from imucalib.plan import describe_plan, load_plan
 
     try:
@@ -91,7 +96,10 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
 
 def _write_new_plan(procedure: str, out: Path, given: dict[str, Any]) -> None:
     """Generate `procedure`'s plan from the options `given`, write it to `out`, say so."""
+    from pydantic import ValidationError
+
     from imucalib.plan import describe_plan, write_plan
+    from imucalib.plan.bounds import format_validation_error
     from imucalib.procedures import registry
 
     try:

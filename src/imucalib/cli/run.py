@@ -6,21 +6,21 @@ import sys
 import time
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.console import Group
-from rich.live import Live
-from rich.table import Table
 
 from imucalib.cli._app import app, console, err_console, fail
 from imucalib.cli._progress import make_progress, shows_progress
 from imucalib.errors import CalibrationError, ConfigurationError
-from imucalib.plan.io import plan_hash
-from imucalib.plan.schema import Plan
-from imucalib.station.devices import Station
-from imucalib.station.operator import AutoOperator, Operator, OperatorAnswer
-from imucalib.station.runner import RunOptions, RunStatus, RunSummary
+
+if TYPE_CHECKING:  # imported where used: `imucalib --help` does not load the station
+    from rich.table import Table
+
+    from imucalib.plan.schema import Plan
+    from imucalib.station.devices import Station
+    from imucalib.station.operator import Operator, OperatorAnswer
+    from imucalib.station.runner import RunStatus, RunSummary
 
 __all__ = ["run"]
 
@@ -32,6 +32,8 @@ class _PromptOperator:
         self.who = who
 
     def confirm(self, item: str) -> OperatorAnswer:
+        from imucalib.station.operator import OperatorAnswer
+
         ok = typer.confirm(f"[operator check] {item} — confirmed?", default=False)
         return OperatorAnswer(ok, self.who)
 
@@ -57,6 +59,8 @@ def make_station(spec: str, plan: Plan, start_time_s: float = 0.0) -> tuple[Stat
 
 
 def _view(status: RunStatus) -> Table:
+    from rich.table import Table
+
     table = Table(show_header=False, title=f"imucalib run — {status.plan}", title_justify="left")
     table.add_column(style="bold")
     table.add_column()
@@ -127,6 +131,13 @@ def run(
     customer: Annotated[str | None, typer.Option(
         "--customer", help="Who the calibration is for (recorded with the run and in the "
                            "recording; the certificate states it).")] = None,
+    compression: Annotated[str | None, typer.Option(
+        "--compression", metavar="NAME",
+        help="Compression of the recording once closed: gzip (the default; every HDF5 tool "
+             "reads it: h5py, MATLAB, HDFView, Octave), blosc-lz4 or blosc-zstd (faster to "
+             "close and read, but readable outside imucalib only with the HDF5 Blosc plugin), "
+             "lzf or none (docs/recording-format.md, Size and compression). A resumed run "
+             "keeps its recording's.")] = None,
 ) -> None:
     """Run a plan on the twin or on real equipment, writing a crash-safe recording.
 
@@ -138,11 +149,16 @@ def run(
     with or without ``--no-record``, unless ``--override-due REASON`` (recorded with the run
     and in the recording).
     """
+    from rich.console import Group
+    from rich.live import Live
+
     from imucalib.cli._user import acting_user
-    from imucalib.plan import load_plan
-    from imucalib.station.runner import resume_run, run_plan
+    from imucalib.plan import load_plan, plan_hash
+    from imucalib.station.operator import AutoOperator
+    from imucalib.station.runner import RunOptions, resume_run, run_plan
 
     try:
+        codec = _compression_option(compression, resume)
         who, who_note = acting_user(operator, db=db, record=not no_record,
                                     action="run a plan")
     except CalibrationError as exc:
@@ -171,7 +187,7 @@ def run(
             live_view.update(Group(_view(status), bar), refresh=True)
 
     tick = tick_s if tick_s is not None else (2.0 if station == "sim" else 0.5)
-    options = RunOptions(tick_s=tick, operator=op, on_status=on_status)
+    options = RunOptions(tick_s=tick, operator=op, on_status=on_status, compression=codec)
     try:
         if resume is not None:
             def factory(plan: Plan, start_time_s: float) -> Station:
@@ -239,6 +255,24 @@ def run(
         console.print(who_note, highlight=False, soft_wrap=True, markup=False)
     if summary.status != "done":
         raise typer.Exit(code=1)
+
+
+def _compression_option(name: str | None, resume: Path | None) -> str | None:
+    """Return the compression ``--compression`` names (none given: the default).
+
+    Refused with ``--resume``: a resumed run keeps its recording's compression.
+    """
+    from imucalib.errors import InvalidInputError
+    from imucalib.io.compression import DEFAULT_COMPRESSION, compression_from_name
+
+    if name is None:
+        return DEFAULT_COMPRESSION
+    if resume is not None:
+        raise InvalidInputError(
+            "--compression is for a new run; a resumed run closes its recording with the "
+            "compression it had (convert it afterwards: `imucalib compact FILE --compression "
+            "NAME`)")
+    return compression_from_name(name, "--compression")
 
 
 def _equipment_row(e: Any) -> dict[str, Any]:

@@ -27,26 +27,31 @@ Contents
 
 from __future__ import annotations
 
-from imucalib.models.imu import GRADES, THERMAL_GRADES, GradeSpec, ImuModel, sample_imu_model
-from imucalib.models.noise import (
-    NoiseGenerator,
-    NoiseModel,
-    compute_theoretical_adev,
-    simulate_noise,
-)
-from imucalib.models.sensor import OutputChain, SensorSpec, apply_output_chain
-from imucalib.models.temperature import (
-    TemperatureDependence,
-    evaluate_parameter,
-    hysteresis_state,
-)
-from imucalib.models.triad import (
-    PARAMETER_NAMES,
-    TriadKind,
-    TriadModel,
-    apply_triad,
-    correct_triad,
-)
+from typing import TYPE_CHECKING
+
+from imucalib._lazy import lazy_getattr
+
+if TYPE_CHECKING:
+    from imucalib.models.imu import GRADES, THERMAL_GRADES, GradeSpec, ImuModel, sample_imu_model
+    from imucalib.models.noise import (
+        NoiseGenerator,
+        NoiseModel,
+        compute_theoretical_adev,
+        simulate_noise,
+    )
+    from imucalib.models.sensor import OutputChain, SensorSpec, apply_output_chain
+    from imucalib.models.temperature import (
+        TemperatureDependence,
+        evaluate_parameter,
+        hysteresis_state,
+    )
+    from imucalib.models.triad import (
+        PARAMETER_NAMES,
+        TriadKind,
+        TriadModel,
+        apply_triad,
+        correct_triad,
+    )
 
 __all__ = [
     "GRADES",
@@ -70,3 +75,20 @@ __all__ = [
     "sample_imu_model",
     "simulate_noise",
 ]
+
+_IMU, _NOISE, _SENSOR = "imucalib.models.imu", "imucalib.models.noise", "imucalib.models.sensor"
+_TEMPERATURE, _TRIAD = "imucalib.models.temperature", "imucalib.models.triad"
+
+#: Module of each public name, imported on first access (PEP 562): importing one module of this
+#: package (the result file's reader, a result) does not import the others.
+__getattr__ = lazy_getattr(__name__, {
+    **dict.fromkeys(("GRADES", "THERMAL_GRADES", "GradeSpec", "ImuModel", "sample_imu_model"),
+                    _IMU),
+    **dict.fromkeys(("NoiseGenerator", "NoiseModel", "compute_theoretical_adev",
+                     "simulate_noise"), _NOISE),
+    **dict.fromkeys(("OutputChain", "SensorSpec", "apply_output_chain"), _SENSOR),
+    **dict.fromkeys(("TemperatureDependence", "evaluate_parameter", "hysteresis_state"),
+                    _TEMPERATURE),
+    **dict.fromkeys(("PARAMETER_NAMES", "TriadKind", "TriadModel", "apply_triad",
+                     "correct_triad"), _TRIAD),
+})

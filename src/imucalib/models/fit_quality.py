@@ -36,8 +36,6 @@ import math
 from dataclasses import dataclass
 from typing import Final
 
-from scipy import stats
-
 from imucalib.errors import InvalidInputError
 
 __all__ = ["EXPECTED_RANGE", "MISFIT_QUANTILE", "FitQuality", "assess_fit"]
@@ -155,6 +153,8 @@ def assess_fit(group: str, chi2: float, dof: int, *,
 @functools.lru_cache(maxsize=4096)
 def _quantiles(dof: int, quantile: float) -> tuple[float, float, float]:
     """χ²_ν⁻¹(q_lo)/ν, χ²_ν⁻¹(q_hi)/ν and the threshold χ²_ν⁻¹(q) of Eqs. (1)–(2) (cached)."""
+    from scipy import stats  # imported when used: reading a result file needs no scipy
+
     lo, hi = EXPECTED_RANGE
     return (float(stats.chi2.ppf(lo, dof)) / dof, float(stats.chi2.ppf(hi, dof)) / dof,
             float(stats.chi2.ppf(quantile, dof)))

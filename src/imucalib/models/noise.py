@@ -64,7 +64,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import linalg, signal, special
 
 from imucalib import units
 from imucalib._checks import as_array, check_positive
@@ -345,6 +344,8 @@ def compute_theoretical_adev(model: NoiseModel, tau_s: ArrayLike) -> NDArray[np.
     tau = as_array(tau_s, "tau_s").reshape(-1, 1)
     if np.any(tau <= 0):
         raise InvalidInputError(f"`tau_s` must be > 0; got minimum {tau.min()}")
+    from scipy import special  # imported when used: importing this module stays cheap
+
     m = model
     avar = (3 * m.quantization**2 / tau**2 + m.white_density**2 / tau
             + m.random_walk**2 * tau / 3 + m.rate_ramp**2 * tau**2 / 2)
@@ -549,6 +550,8 @@ class NoiseGenerator:
                               m.markov_sigma[ax] ** 2 * -math.expm1(-2 * dt / tc[ax]))
             # lfilter's state s' = F·s + G·u (transposed direct form II); P = F·P·Fᵀ + G·Gᵀ
             grow = np.array([beta[1] + phi * beta[0], beta[2]])
+            from scipy import linalg  # imported when used: importing this module stays cheap
+
             cov = linalg.solve_discrete_lyapunov(np.array([[phi, 1.0], [0.0, 0.0]]),
                                                  np.outer(grow, grow))
             val, vec = np.linalg.eigh(cov)
@@ -599,6 +602,8 @@ class NoiseGenerator:
         blk, z = self._block, self._z
         self._normals.fill(z.reshape(-1))
         arma = []  # axes with a full-rate Markov term: ARMA(1, 2) on the same deviates
+        if self._arma:
+            from scipy import signal  # imported when used: importing this module stays cheap
         for ax, b, a, state in self._arma:
             y, state[:] = signal.lfilter(b, a, z[ax], zi=state)
             arma.append((ax, y))

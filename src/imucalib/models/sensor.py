@@ -38,7 +38,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import signal
 
 from imucalib._checks import as_samples3, check_positive
 from imucalib.errors import ConfigurationError, InvalidInputError
@@ -192,6 +191,8 @@ class OutputChain:
         if x.shape[0] == 0:
             return OutputChainResult(values=x.copy(), saturated=np.zeros(x.shape, dtype=bool))
         if spec.bandwidth_hz is not None:
+            from scipy import signal  # imported when used: importing this module stays cheap
+
             if self._sos is None:
                 self._sos = signal.butter(2, spec.bandwidth_hz, fs=self.sample_rate_hz,
                                           output="sos")

@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from datetime import UTC, date, datetime, timedelta
 from pathlib import Path
-from typing import Any, Final, TypeVar
+from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 from sqlalchemy import Engine, or_, select
 from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError
@@ -40,9 +40,6 @@ from sqlalchemy.orm import Session
 
 from imucalib.errors import InvalidInputError, RecordsError
 from imucalib.io.hashing import file_sha256
-from imucalib.models.procedure_result import ProcedureResult, calibration_rows
-from imucalib.models.result import CalibrationResult
-from imucalib.models.result_document import result_document
 from imucalib.records import chain
 from imucalib.records.canonical import canonical_json
 from imucalib.records.engine import BEGIN_OPTION, make_engine, resolve_url, safe_url, upgrade
@@ -71,6 +68,10 @@ from imucalib.records.views import (
     RunView,
     UserView,
 )
+
+if TYPE_CHECKING:  # the result models (numpy) are imported where a result is recorded
+    from imucalib.models.procedure_result import ProcedureResult
+    from imucalib.models.result import CalibrationResult
 
 __all__ = ["DEFAULT_INTERVAL_DAYS", "Records", "open_records"]
 
@@ -117,6 +118,9 @@ def parameter_rows(result: ProcedureResult | CalibrationResult) -> list[Paramete
     as not estimated: P3's nominal radii, say) is left out of the parameter rows; the result's
     stored document keeps it.
     """
+    from imucalib.models.procedure_result import calibration_rows
+    from imucalib.models.result import CalibrationResult
+
     rows = (calibration_rows(result) if isinstance(result, CalibrationResult)
             else result.parameter_rows())
     return [ParameterRow(r.name, float(r.value), float(r.std), r.unit) for r in rows
@@ -378,6 +382,9 @@ class Records:
                        unit_id: int | None = None) -> int:
         if session.get(Run, run_id) is None:
             raise RecordsError(f"no run with id {run_id} in the records")
+        from imucalib.models.result import CalibrationResult
+        from imucalib.models.result_document import result_document
+
         rows = parameter_rows(result)
         if isinstance(result, CalibrationResult):
             document, model = result.to_dict(), result.model
@@ -418,6 +425,8 @@ class Records:
             The unit; default the result's (``unit``, a CalibrationResult's ``sensor_id``). A
             new serial adds the unit.
         """
+        from imucalib.models.result import CalibrationResult
+
         serial = serial or (result.sensor_id if isinstance(result, CalibrationResult)
                             else str(result.unit))
         if not serial:
@@ -483,6 +492,8 @@ class Records:
         RecordsError
             An unknown run, or a re-analysis with an empty `reason`.
         """
+        from imucalib.models.result import CalibrationResult
+
         serial = serial or (result.sensor_id if isinstance(result, CalibrationResult)
                             else str(result.unit))
         if not serial:
