@@ -40,9 +40,10 @@ filter HDF5 lacks is opened (:func:`register_plugin_filters`, called by
 from __future__ import annotations
 
 import sys
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
-import h5py
+if TYPE_CHECKING:  # h5py is imported where a file is touched: `plan show` needs none
+    import h5py
 
 from imucalib.errors import InvalidInputError, RecordingError
 
@@ -118,6 +119,8 @@ def ensure_plugin() -> None:
 
 def _lacks_filter(ds: h5py.Dataset) -> bool:
     """Whether a dataset's pipeline holds a filter this process's HDF5 does not have."""
+    import h5py
+
     plist = ds.id.get_create_plist()
     return any(not h5py.h5z.filter_avail(plist.get_filter(i)[0])
                for i in range(plist.get_nfilters()))
@@ -139,6 +142,8 @@ def register_plugin_filters(f: h5py.File) -> bool:
     """
     if sys.modules.get("hdf5plugin") is not None:
         return True
+    import h5py
+
     found: list[Any] = []
 
     def visit(_: str, obj: Any) -> Any:
@@ -213,6 +218,8 @@ def copy_filter_kwargs(src: h5py.Dataset) -> dict[str, Any]:
     if src.fletcher32:
         kwargs["fletcher32"] = True
     if "compression" not in kwargs:
+        import h5py
+
         known = {str(h5py.h5z.FILTER_DEFLATE), str(h5py.h5z.FILTER_LZF),
                  str(h5py.h5z.FILTER_SHUFFLE), str(h5py.h5z.FILTER_FLETCHER32),
                  "gzip", "lzf", "shuffle", "fletcher32"}
