@@ -54,7 +54,7 @@ def test_nan_samples_in_a_window(p1_tools, tmp_path):
         i0, _ = rec.row_range("imu", "IMU-0001", step.valid_start_s, step.valid_end_s)
     with h5py.File(path, "r+") as f:
         f["streams/imu/IMU-0001/accel_x_mps2"][i0 + 5] = np.nan
-    with pytest.raises(InvalidInputError, match=rf"step {step.index}: IMU window holds NaN"):
+    with pytest.raises(InvalidInputError, match=rf"step {step.index}: the window holds NaN"):
         analyze_p1(path, options=FAST)
 
 

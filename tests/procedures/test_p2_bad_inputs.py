@@ -85,9 +85,9 @@ def test_options_and_plans_refuse_bad_values():
 
 
 def test_cli_refuses_p2_options_on_other_procedures_and_bad_p2_options(tmp_path, consumer_run):
-    res = CliRunner().invoke(app, ["calibrate", str(consumer_run), "--workers", "2",
+    res = CliRunner().invoke(app, ["calibrate", str(consumer_run), "--lever-arm", "cancel",
                                    "--out", str(tmp_path)])
-    assert res.exit_code == 2 and "does not take --workers" in res.output
+    assert res.exit_code == 2 and "does not take --lever-arm" in res.output
     res = CliRunner().invoke(app, ["plan", "new", "p1", "-o", str(tmp_path / "x.toml"),
                                    "--n-imus", "4"])
     assert res.exit_code == 2 and "plan new p2 --n-imus" in res.output

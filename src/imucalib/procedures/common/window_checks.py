@@ -14,7 +14,8 @@ pooled_white_density` and T the window's span.
 
 Contents
 --------
-:class:`WindowLimits`, :data:`MIN_WINDOW_SAMPLES`, :func:`checked_samples`,
+:class:`WindowLimits`, :class:`BlockNoiseLimits`, :data:`MIN_WINDOW_SAMPLES`,
+:func:`checked_samples`,
 :func:`pooled_white_se`
 """
 
@@ -31,7 +32,8 @@ from imucalib.errors import InvalidInputError, MissingSegmentError, SaturationEr
 from imucalib.io.reader import StreamData
 from imucalib.procedures.common.noise import pooled_white_density
 
-__all__ = ["MIN_WINDOW_SAMPLES", "WindowLimits", "checked_samples", "pooled_white_se"]
+__all__ = ["MIN_WINDOW_SAMPLES", "BlockNoiseLimits", "WindowLimits", "checked_samples",
+           "pooled_white_se"]
 
 _F64 = NDArray[np.float64]
 
@@ -41,9 +43,7 @@ MIN_WINDOW_SAMPLES = 10
 
 @dataclass(frozen=True)
 class WindowLimits:
-    """What a window may lose to dropouts, and the noise blocks of its standard error.
-
-    A procedure's processing options extend it with their own fields.
+    """What a window may lose to dropouts: every procedure's processing options extend it.
 
     Attributes
     ----------
@@ -51,15 +51,35 @@ class WindowLimits:
         Samples lost to dropouts a window may miss (fraction of those expected).
     max_gap_s : float
         Longest single dropout in a window. [s]
-    noise_block_s : float
-        Length of the blocks whose means' scatter gives the white-noise density. [s]
     """
 
     max_lost_fraction: float = 0.01
     max_gap_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.max_lost_fraction) and 0.0 <= self.max_lost_fraction <= 1.0):
+            raise InvalidInputError(f"`max_lost_fraction` must be in [0, 1]; got "
+                                    f"{self.max_lost_fraction!r}")
+        if not (math.isfinite(self.max_gap_s) and self.max_gap_s >= 0.0):
+            raise InvalidInputError(f"`max_gap_s` must be ≥ 0; got {self.max_gap_s!r}")
+
+
+@dataclass(frozen=True)
+class BlockNoiseLimits(WindowLimits):
+    """The window limits and the noise blocks of the pooled standard error, Eq. (W.1).
+
+    For the procedures whose standard errors are :func:`pooled_white_se`'s.
+
+    Attributes
+    ----------
+    noise_block_s : float
+        Length of the blocks whose means' scatter gives the white-noise density. [s]
+    """
+
     noise_block_s: float = 1.0
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if not (math.isfinite(self.noise_block_s) and self.noise_block_s > 0):
             raise InvalidInputError(f"`noise_block_s` must be positive; got "
                                     f"{self.noise_block_s!r}")

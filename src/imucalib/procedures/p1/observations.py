@@ -84,7 +84,9 @@ from imucalib.procedures.common.reference import (
     static_inputs_b,
     table_rotation,
 )
+from imucalib.procedures.common.window_checks import WindowLimits, checked_samples
 from imucalib.procedures.common.windows import RunningMoments as _Moments
+from imucalib.procedures.common.windows import counter_times
 from imucalib.procedures.common.windows import harmonic_residual_std as _harmonic_residual_std
 from imucalib.procedures.common.windows import table_angle_at as _angle_at
 from imucalib.procedures.p1.roles import (
@@ -99,7 +101,6 @@ from imucalib.processing import (
     compute_integer_revolution_window,
     compute_window_statistics,
     lowpass_zero_phase,
-    reconstruct_time_base,
     reject_outliers_3sigma,
     reject_outliers_grubbs,
     reject_outliers_robust,
@@ -117,11 +118,17 @@ __all__ = [
 ]
 
 _F64 = NDArray[np.float64]
+#: The IMU columns a window reads: the samples, the counter of the time base and dropouts, and
+#: the saturation flags.
+_IMU_READ = (*GYRO_COLUMNS, *ACCEL_COLUMNS, "counter", "saturated")
 
 
 @dataclass(frozen=True)
-class P1Processing:
+class P1Processing(WindowLimits):
     """Settings of the processing chain (docs/p1.md, processing rules 1–3).
+
+    The window limits (:class:`~imucalib.procedures.common.window_checks.WindowLimits`:
+    ``max_lost_fraction``, ``max_gap_s``: what a window may lose to dropouts) and:
 
     Attributes
     ----------
@@ -428,24 +435,23 @@ class _Extractor:
 
     def imu_window(self, step_index: int) -> tuple[_F64, _F64, _Flagged]:
         """Return (time, values (n, 6): gyro then accel, outliers removed) of a step."""
-        data = self.rec.read_step(step_index, DEVICE_IMU, self.sensor,
-                                  [*GYRO_COLUMNS, *ACCEL_COLUMNS, "counter"])
-        if len(data) < 10:
-            raise RecordingError(f"step {step_index}: only {len(data)} IMU samples in its valid "
-                                 "window")
+        data = self.rec.read_step(step_index, DEVICE_IMU, self.sensor, _IMU_READ)
         return self.clean(step_index, data)
 
     def clean(self, step_index: int, data: Any) -> tuple[_F64, _F64, _Flagged]:
-        """Time base from the counter and outlier rejection of one block of IMU rows."""
-        values = np.column_stack([data.columns[c] for c in (*GYRO_COLUMNS, *ACCEL_COLUMNS)])
-        if not np.all(np.isfinite(values)):
-            raise InvalidInputError(f"step {step_index}: IMU window holds NaN or inf samples")
-        fs_nominal = self.sample_rate_hz if self.sample_rate_hz > 0 else None
-        base = reconstruct_time_base(data.columns["counter"], data.time_s,
-                                     nominal_rate_hz=fs_nominal)
-        t = base.time_s
+        """Check one block of IMU rows, give it the counter's time base, reject outliers.
+
+        The shared window reader's checks (:func:`~imucalib.procedures.common.window_checks.
+        checked_samples`: samples, finiteness, saturation; :func:`~imucalib.procedures.common.
+        windows.counter_times`: counter and dropouts within the limits).
+        """
+        where = f"step {step_index}"
+        values = checked_samples(where, data, (*GYRO_COLUMNS, *ACCEL_COLUMNS))
+        t, period, _ = counter_times(where, data.columns["counter"], data.time_s,
+                                     max_lost_fraction=self.opt.max_lost_fraction,
+                                     max_gap_s=self.opt.max_gap_s, reconstruct=True)
         if self.sample_rate_hz <= 0:
-            self.sample_rate_hz = base.sample_rate_hz
+            self.sample_rate_hz = 1.0 / period
         flagged = _Flagged()
         test, method = self.opt.outlier_test, self.opt.outlier_method
         if test != "none":
@@ -494,8 +500,7 @@ class _Extractor:
         align = math.nan
         t_first = t_last = math.nan
         fb = self.rec.read_step(step.index, DEVICE_TABLE, self.table.unit)
-        for block in self.rec.iter_stream(DEVICE_IMU, self.sensor, CHUNK_ROWS,
-                                          [*GYRO_COLUMNS, *ACCEL_COLUMNS, "counter"],
+        for block in self.rec.iter_stream(DEVICE_IMU, self.sensor, CHUNK_ROWS, _IMU_READ,
                                           step.valid_start_s, step.valid_end_s):
             if len(block) < 10:
                 continue

@@ -45,13 +45,13 @@ from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
 from imucalib.procedures.common.noise import FLICKER_FACTOR, window_mean_se
 from imucalib.procedures.common.reference import site_vectors
-from imucalib.procedures.common.windows import table_angle_at
+from imucalib.procedures.common.window_checks import WindowLimits, checked_samples
+from imucalib.procedures.common.windows import counter_times, table_angle_at
 from imucalib.procedures.p2.reduction import orientation_of
 from imucalib.procedures.p2.roles import P2_RATE, P2_STATIC
 from imucalib.processing import (
     compute_integer_revolution_window,
     compute_window_statistics,
-    reconstruct_time_base,
 )
 
 __all__ = ["P2Processing", "P2Window", "UnitObservations", "extract_unit_observations",
@@ -62,15 +62,14 @@ _COLUMNS = (*GYRO_COLUMNS, *ACCEL_COLUMNS)
 
 
 @dataclass(frozen=True)
-class P2Processing:
+class P2Processing(WindowLimits):
     """Processing options of P2's window reduction (module docstring).
+
+    The window limits (:class:`~imucalib.procedures.common.window_checks.WindowLimits`:
+    ``max_lost_fraction``, ``max_gap_s``) and:
 
     Attributes
     ----------
-    max_lost_fraction : float
-        Samples lost to dropouts a window may miss (fraction of those expected).
-    max_gap_s : float
-        Longest single dropout in a window. [s]
     orientation_tolerance : float
         How far (in g) a static mean may be from ±g on its up axis and from 0 on the others.
     gravity_mps2 : float or None
@@ -81,8 +80,6 @@ class P2Processing:
         the pool's median needs a handful, and the fit is most of a window's reduction time.
     """
 
-    max_lost_fraction: float = 0.01
-    max_gap_s: float = 0.5
     orientation_tolerance: float = 0.25
     gravity_mps2: float | None = None
     noise_windows: int = 8
@@ -214,37 +211,20 @@ class _Reducer:
     def read(self, step: StepRecord, point: int, data: StreamData
              ) -> tuple[_F64, _F64, _F64, int]:
         """Return (counter times, values (n, 6), temperatures, samples lost) of a window."""
-        if len(data) < 10:
-            raise MissingSegmentError(f"{where(self.unit, point, None, step)}: only {len(data)} "
-                                      "samples in its valid window")
-        values = np.column_stack([data.columns[c] for c in _COLUMNS])
+        here = where(self.unit, point, None, step)
+        values = checked_samples(here, data, _COLUMNS)
         temp = np.asarray(data.columns[TEMPERATURE_COLUMN], dtype=np.float64)
-        if not (np.all(np.isfinite(values)) and np.all(np.isfinite(temp))):
-            raise InvalidInputError(f"{where(self.unit, point, None, step)}: the window holds "
-                                    "NaN or infinite samples")
-        counter = np.asarray(data.columns["counter"], dtype=np.int64)
-        steps = np.diff(counter)
-        if np.any(steps <= 0):
-            raise InvalidInputError(f"{where(self.unit, point, None, step)}: the sample counter "
-                                    "repeats or goes backwards in the window")
-        if step.role == P2_RATE:
-            # a turn's mean weights samples by the table angle at their own instants: the
-            # counter's time base (receive-time jitter removed)
-            base = reconstruct_time_base(counter, data.time_s)
-            t, period = base.time_s, base.sample_period_s
-        else:  # a static mean needs no instants: the receive times serve
-            t = np.asarray(data.time_s, dtype=np.float64)
-            period = float(t[-1] - t[0]) / float(counter[-1] - counter[0])
+        if not np.all(np.isfinite(temp)):
+            raise InvalidInputError(f"{here}: the window holds NaN or infinite samples")
+        # a turn's mean weights samples by the table angle at their own instants: the counter's
+        # time base (receive-time jitter removed); a static mean needs no instants
+        t, period, lost = counter_times(
+            where(self.unit, point, float(np.mean(temp)), step), data.columns["counter"],
+            data.time_s,
+            max_lost_fraction=self.opt.max_lost_fraction, max_gap_s=self.opt.max_gap_s,
+            reconstruct=step.role == P2_RATE)
         if self.sample_rate_hz <= 0.0 and period > 0:
             self.sample_rate_hz = 1.0 / period
-        lost = int(np.sum(steps - 1))
-        expected = len(data) + lost
-        longest = float(np.max(steps) - 1) * period
-        if lost > self.opt.max_lost_fraction * expected or longest > self.opt.max_gap_s:
-            raise MissingSegmentError(
-                f"{where(self.unit, point, float(np.mean(temp)), step)}: {lost} of {expected} "
-                f"samples lost to dropouts (longest gap {longest:.3g} s; at most "
-                f"{self.opt.max_lost_fraction:.0%} and {self.opt.max_gap_s:g} s are accepted)")
         return t, values, temp, lost
 
     def reduce(self, step: StepRecord, point: int, leg: str, held: bool, data: StreamData,
@@ -359,7 +339,7 @@ def extract_unit_observations(rec: Recording, unit: str, *,
     # open: one decompression per chunk (Recording.iter_windows)
     imu_rows = rec.iter_windows(DEVICE_IMU, unit,
                                 [(s.valid_start_s, s.valid_end_s) for s in usable],
-                                [*_COLUMNS, "counter", TEMPERATURE_COLUMN])
+                                [*_COLUMNS, "counter", "saturated", TEMPERATURE_COLUMN])
     table_rows = rec.iter_windows(DEVICE_TABLE, red.table.unit,
                                   [(s.valid_start_s, s.valid_end_s) for s in usable
                                    if s.role == P2_RATE], [red.angle_col, red.rate_col])

@@ -49,7 +49,7 @@ from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.io.streams import DEVICE_CENTRIFUGE, DEVICE_IMU, axis_columns
 from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.window_checks import (
-    WindowLimits,
+    BlockNoiseLimits,
     checked_samples,
     pooled_white_se,
 )
@@ -65,10 +65,10 @@ WINDOW_ROLES = (P3_TUMBLE, P3_REST, P3_RATE)
 
 
 @dataclass(frozen=True)
-class P3Processing(WindowLimits):
+class P3Processing(BlockNoiseLimits):
     """Processing options of P3's window reduction (module docstring).
 
-    The window limits (:class:`~imucalib.procedures.common.window_checks.WindowLimits`) and
+    The window limits (:class:`~imucalib.procedures.common.window_checks.BlockNoiseLimits`) and
 
     Attributes
     ----------

@@ -43,7 +43,7 @@ from imucalib.plan.fixture_poses import FIXTURE_AXES, rot_pm_for_pose
 from imucalib.procedures.common.noise import block_variance
 from imucalib.procedures.common.reference import static_inputs_b
 from imucalib.procedures.common.window_checks import (
-    WindowLimits,
+    BlockNoiseLimits,
     checked_samples,
     pooled_white_se,
 )
@@ -57,10 +57,10 @@ WINDOW_ROLES = (TUMBLE_POSITION, TUMBLE_DRIFT)
 
 
 @dataclass(frozen=True)
-class TumbleProcessing(WindowLimits):
+class TumbleProcessing(BlockNoiseLimits):
     """Options of the window reduction (module docstring).
 
-    The window limits (:class:`~imucalib.procedures.common.window_checks.WindowLimits`; a
+    The window limits (:class:`~imucalib.procedures.common.window_checks.BlockNoiseLimits`; a
     static record's dropouts are limited by their fraction, not by the longest gap), with
     `max_lost_fraction` in [0, 1).
     """
