@@ -37,6 +37,7 @@ bench: venv
 	$(BIN)/python bench/bench_drivers.py
 	$(BIN)/python bench/bench_p1.py
 	$(BIN)/python bench/bench_p2.py
+	$(BIN)/python bench/bench_analysis.py
 	$(BIN)/python bench/bench_import.py
 	$(BIN)/python bench/bench_cli_startup.py
 
