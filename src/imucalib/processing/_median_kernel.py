@@ -16,9 +16,9 @@ outlier rule uses (h = 4).
 
 For h = 4, the outlier rule's default, the 8 neighbours go through a 19-comparator sorting
 network instead (branch-free min/max: about 4 ns a sample against 23 for the sorted window and
-107 for the partition on the project's 2-core machine, ``bench/bench_analysis.py --kernels``). The numba kernels are compiled on first use
-(cached on disk); without numba the numpy path of :func:`_neighbour_median_np` gives the same
-values.
+107 for the partition on the project's 2-core machine, ``bench/bench_analysis.py --kernels``).
+The numba kernels are compiled on first use (cached on disk); without numba the numpy path of
+:func:`_neighbour_median_np` gives the same values.
 """
 
 from __future__ import annotations

@@ -43,6 +43,7 @@ References
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,7 +58,7 @@ from imucalib.processing.segmentation import (
     _runs,
 )
 
-__all__ = ["Rotation", "StaticDetection", "detect_static_and_rotations"]
+__all__ = ["Rotation", "StaticDetection", "detect_for_thresholds", "detect_static_and_rotations"]
 
 _MIN_WINDOW = 5
 #: The initial interval is refused when its accelerometer variance exceeds this multiple of the
@@ -194,14 +195,46 @@ def detect_static_and_rotations(
         or one not at rest (its accelerometer variance over 25 times the 10th percentile of the
         windowed variance).
     """
+    return detect_for_thresholds(time_s, gyro_rps, accel_mps2, window_s=window_s,
+                                 init_static_s=init_static_s,
+                                 threshold_factors=[threshold_factor],
+                                 min_static_s=min_static_s,
+                                 min_rotation_deg=min_rotation_deg)[0]
+
+
+def detect_for_thresholds(
+    time_s: ArrayLike,
+    gyro_rps: ArrayLike,
+    accel_mps2: ArrayLike,
+    *,
+    threshold_factors: Sequence[float],
+    window_s: float = 0.5,
+    init_static_s: float = 2.0,
+    min_static_s: float = 1.0,
+    min_rotation_deg: float = 5.0,
+) -> list[StaticDetection]:
+    """Run :func:`detect_static_and_rotations` for several threshold factors k at once.
+
+    The moving variances and the initial interval's reference depend on the samples and the
+    window, not on k: they are computed once and shared (an automatic choice of k tries eight;
+    recomputing them was most of a field calibration's time, docs/performance.md). Each
+    detection equals the one :func:`detect_static_and_rotations` gives for its k.
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`detect_static_and_rotations`, for any k.
+    """
+    ks = [check_positive(k, "threshold_factor") for k in threshold_factors]
+    for k in ks:
+        if k <= 1.0:
+            raise InvalidInputError(f"`threshold_factor` (--static-threshold) must be > 1; "
+                                    f"got {k}")
     t = as_time(time_s, "time_s")
     gyro = as_array(gyro_rps, "gyro_rps", shape=(t.size, 3))
     accel = as_array(accel_mps2, "accel_mps2", shape=(t.size, 3))
     win = check_positive(window_s, "window_s")
     t_init = check_positive(init_static_s, "init_static_s")
-    k = check_positive(threshold_factor, "threshold_factor")
-    if k <= 1.0:
-        raise InvalidInputError(f"`threshold_factor` (--static-threshold) must be > 1; got {k}")
     min_static = check_positive(min_static_s, "min_static_s")
     min_rot = np.deg2rad(check_positive(min_rotation_deg, "min_rotation_deg"))
     if t.size < 2:
@@ -235,6 +268,16 @@ def detect_static_and_rotations(
             f"{init_a:.3g} (m/s²)² is {init_a / quiet:.3g} times that of the quietest windows; "
             "the detector needs the log to begin with the IMU still (Tedaldi's initial static "
             "interval): shorten `init_static_s` (--init-static-s) or trim the log")
+    return [_detect(t, gyro, accel, var_a, var_g, init_a, init_g, w, k, min_static, min_rot)
+            for k in ks]
+
+
+def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np.float64],
+            var_a: NDArray[np.float64], var_g: NDArray[np.float64], init_a: float,
+            init_g: float, w: int, k: float, min_static: float, min_rot: float
+            ) -> StaticDetection:
+    """Detect with one threshold factor k: steps 2–4 of the module docstring."""
+    var_a, var_g = var_a.copy(), var_g.copy()  # each detection holds its own curves
     thr_a, thr_g = k * init_a, k * init_g
     still = (var_a < thr_a) & (var_g < thr_g)
     still &= ~_edges(t.size, w)

@@ -200,16 +200,17 @@ def find_intervals(log: FieldLog, *, threshold_factor: float | None,
         Fewer than two static intervals with the given k, or with every candidate.
     """
     from imucalib.estimation.gravity_norm import fit_gravity_norm
-    from imucalib.processing.static_detector import detect_static_and_rotations
+    from imucalib.processing.static_detector import detect_for_thresholds
 
-    def detect(k: float) -> StaticDetection:
-        return detect_static_and_rotations(
+    def detect(ks: Sequence[float]) -> list[StaticDetection]:
+        # the moving variances are computed once for all k (docs/performance.md)
+        return detect_for_thresholds(
             log.time_s, log.gyro_rps, log.accel_mps2, window_s=window_s,
-            init_static_s=init_static_s, threshold_factor=k, min_static_s=min_static_s,
+            init_static_s=init_static_s, threshold_factors=ks, min_static_s=min_static_s,
             min_rotation_deg=min_rotation_deg)
 
     if threshold_factor is not None:
-        found = detect(threshold_factor)
+        (found,) = detect([threshold_factor])
         if len(found.static) < 2:
             raise MissingSegmentError(
                 f"{log.source}: {len(found.static)} static interval(s) found with the "
@@ -219,8 +220,7 @@ def find_intervals(log: FieldLog, *, threshold_factor: float | None,
         return found
     best: tuple[tuple[float, int, float], StaticDetection] | None = None
     tried = []
-    for k in candidates:
-        found = detect(k)
+    for k, found in zip(candidates, detect(candidates), strict=True):
         tried.append(f"k={k:g}: {len(found.static)}")
         if len(found.static) < 2:
             continue
