@@ -11,7 +11,8 @@ import pytest
 from imucalib.errors import InvalidInputError
 from imucalib.io import open_recording
 from imucalib.procedures import registry
-from imucalib.procedures.p1.observations import _balanced_groups, extract_p1_observations
+from imucalib.procedures.common.workers import balanced_groups
+from imucalib.procedures.p1.observations import extract_p1_observations
 
 
 def _fields(obs):
@@ -55,7 +56,28 @@ def test_calibrate_option_workers_gives_the_same_parameters(consumer_run):
 @pytest.mark.parametrize(("sizes", "n"), [([5] * 10, 4), ([100, 1, 1, 1, 100, 1], 3),
                                           ([1], 8), ([3, 3], 1)])
 def test_balanced_groups_cover_every_index_once_in_order(sizes, n):
-    groups = _balanced_groups(sizes, n)
+    groups = balanced_groups(sizes, n)
     assert [i for g in groups for i in g] == list(range(len(sizes)))
     assert 1 <= len(groups) <= max(1, min(n, len(sizes))) + 1
     assert all(g for g in groups)
+
+
+def test_share_with_workers_returns_the_items_in_order_and_counts_them():
+    from imucalib.procedures.common.workers import share_with_workers
+
+    items = list(range(30))
+    counted: list[int] = []
+    # `sorted` is a picklable function of a job (an ascending run of items) that returns it
+    got = share_with_workers(items, [1] * 30, 2, here=lambda x: x, there=sorted,
+                             done=counted.append)
+    assert got == items and sum(counted) == 30
+
+
+def test_share_with_workers_stops_at_an_error_here():
+    from imucalib.procedures.common.workers import share_with_workers
+
+    def here(x: int) -> int:
+        raise InvalidInputError(f"item {x} refused")
+
+    with pytest.raises(InvalidInputError, match="refused"):
+        share_with_workers(list(range(40)), [1] * 40, 2, here=here, there=sorted)

@@ -59,6 +59,7 @@ Contents
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -759,64 +760,26 @@ def _observe_parallel(ex: _Extractor, todo: list[tuple[StepRecord, str]], worker
     """Reduce the steps in this process and `workers` − 1 spawned ones; the serial result.
 
     The first step is reduced here first: it fixes what later windows use (the sample rate of
-    a recording that does not state it). The rest go out as jobs of consecutive steps of about
-    equal samples, about four per worker; while the workers start and take jobs from the
-    front, this process takes jobs from the back that no worker has started (a job not yet
-    started can be cancelled), so no core waits for the others' start-up. Every window is
-    reduced by the same code from the same samples and sample rate: the observations equal
-    the serial ones bit for bit (tests/procedures/p1/test_p1_workers.py).
+    a recording that does not state it). The rest are shared with the workers
+    (:func:`~imucalib.procedures.common.workers.share_with_workers`, jobs of about equal
+    samples). Every window is reduced by the same code from the same samples and sample rate:
+    the observations equal the serial ones bit for bit (tests/procedures/test_p1_workers.py).
     """
-    from imucalib.procedures.common.workers import local_pool
+    from imucalib.procedures.common.workers import share_with_workers
 
-    out: dict[int, WindowObservation] = {}
     first = ex.observe(*todo[0])
-    out[0] = first
     tick()
-    rest = list(enumerate(todo))[1:]
-    sizes = [max(1, _rows(ex, step)) for _, (step, _) in rest]
-    jobs = _balanced_groups(sizes, 4 * workers)
-    groups = [[rest[i] for i in job] for job in jobs]
-    with local_pool(workers - 1) as pool:
-        futures = [pool.submit(_observe_steps, str(ex.rec.path), ex.sensor, ex.opt,
-                               ex.sample_rate_hz, [item for _, item in group])
-                   for group in groups]
-        try:
-            for g in range(len(groups) - 1, -1, -1):
-                if not futures[g].cancel():
-                    break
-                for i, item in groups[g]:
-                    out[i] = ex.observe(*item)
-                    tick()
-            for g, fut in enumerate(futures):
-                if fut.cancelled():
-                    continue
-                for (i, _), obs in zip(groups[g], fut.result(), strict=True):
-                    out[i] = obs
-                tick(len(groups[g]))
-        except BaseException:
-            for fut in futures:  # a refused window ends the analysis: nothing more to do
-                fut.cancel()
-            raise
-    return [out[i] for i in range(len(todo))]
+    rest = todo[1:]
+    there = functools.partial(_observe_steps, str(ex.rec.path), ex.sensor, ex.opt,
+                              ex.sample_rate_hz)
+    return [first, *share_with_workers(rest, [max(1, _rows(ex, step)) for step, _ in rest],
+                                       workers, here=lambda item: ex.observe(*item),
+                                       there=there, done=tick)]
 
 
 def _rows(ex: _Extractor, step: StepRecord) -> int:
     i0, i1 = ex.rec.row_range(DEVICE_IMU, ex.sensor, step.valid_start_s, step.valid_end_s)
     return int(i1 - i0)
-
-
-def _balanced_groups(sizes: Sequence[int], n_groups: int) -> list[list[int]]:
-    """Split indices 0 … len(sizes) − 1 into at most `n_groups` runs of about equal total size."""
-    total = float(sum(sizes))
-    target = total / max(1, min(n_groups, len(sizes)))
-    groups: list[list[int]] = [[]]
-    acc = 0.0
-    for i, size in enumerate(sizes):
-        if groups[-1] and acc + size / 2.0 > target * len(groups):
-            groups.append([])
-        groups[-1].append(i)
-        acc += size
-    return groups
 
 
 def _with_model_se(w: WindowObservation, noise: Mapping[str, NoiseModel]) -> WindowObservation:
