@@ -165,3 +165,14 @@ def test_without_users_a_review_still_needs_a_name_and_a_decision(tmp_path, monk
     monkeypatch.setenv("IMUCALIB_USER", "bo")
     out = _ok("records", "review", "1", "--decision", "approve", "--db", db)
     assert "approved by bo; not released:" in out and "no users were registered" in out
+
+
+def test_without_a_name_the_os_account_is_named_and_the_note_says_where(consumer_run, tmp_path,
+                                                                          monkeypatch):
+    monkeypatch.delenv("IMUCALIB_USER", raising=False)
+    (tmp_path / "lab.toml").write_text("", encoding="utf-8")  # no [operator] default
+    monkeypatch.setenv("IMUCALIB_CONFIG", str(tmp_path / "lab.toml"))
+    done = runner.invoke(app, ["calibrate", str(consumer_run), "--out", str(tmp_path / "o"),
+                               "--no-record"])
+    assert done.exit_code in (0, 1), done.output
+    assert "note: named in the result as" in done.output and "recorded as" not in done.output

@@ -59,6 +59,7 @@ def acting_user(given: str | None, *, db: str | None, record: bool, action: str
                      if n and n.strip()), "")
     if not name:
         name = getpass.getuser()
-        return name, (f"note: recorded as {name!r} (the OS account): name who acts with "
+        done = "recorded" if record else "named in the result"
+        return name, (f"note: {done} as {name!r} (the OS account): name who acts with "
                       f"--user, ${USER_ENV} or the configuration's [operator] default")
     return name, ""
