@@ -135,6 +135,11 @@ def _windows(ms: I64, order: int) -> tuple[I64, I64]:
 CHAIN = 3
 
 
+#: Terms (over all τ) below which the overlapping sums run in the calling thread: handing a short
+#: window's sums to the pool cost more than they take (the window statistics of P1 and P2).
+PARALLEL_SUM_MIN = 1 << 20
+
+
 def _job_groups(n_terms: I64) -> list[I64]:
     """Split the jobs (τ values, ascending) between the worker threads.
 
@@ -144,6 +149,8 @@ def _job_groups(n_terms: I64) -> list[I64]:
     """
     n_jobs = int(n_terms.size)
     workers = _worker_count() if backend_name() == "numba" else 1
+    if int(n_terms.sum()) < PARALLEL_SUM_MIN:  # a window's few terms: the pool costs more
+        workers = 1
     k = max(1, min(workers, -(-n_jobs // CHAIN)))
     if k == 1:
         return [np.arange(n_jobs, dtype=np.int64)]
