@@ -142,11 +142,23 @@ def consumer_run(tmp_path_factory) -> Path:
     return run_twin(p1_plan("consumer", 5), tmp_path_factory.mktemp("p1") / "c.h5")
 
 
+def small_plan_file(folder: Path, name: str = "cli-run") -> Path:
+    """A P1 plan of a few minutes (one repetition, 100 Hz, a consumer unit), written as TOML."""
+    from imucalib.plan import write_plan
+
+    plan = generate_p1_plan(name=name, grade="consumer", rates_dps=(-90.0, 0.0, 90.0),
+                            held_out_rates_dps=(), revolutions=1, static_s=5.0, settle_s=2.0,
+                            record_s=2.0, rate_settle_s=2.0, repetitions=1, warm_up_s=2.0,
+                            sample_rate_hz=100.0, seed=3)
+    return write_plan(plan, folder / "plan.toml")
+
+
 @pytest.fixture(scope="session")
 def p1_tools() -> SimpleNamespace:
     """The helpers above, for test modules (which cannot import conftest by name)."""
     return SimpleNamespace(p1_plan=p1_plan, run_twin=run_twin,
-                           write_planless_recording=write_planless_recording)
+                           write_planless_recording=write_planless_recording,
+                           small_plan_file=small_plan_file)
 
 
 # --- a hand-held log (tests/processing/test_static_detector.py, tests/cli/test_field_import_cli.py)

@@ -7,8 +7,6 @@ from typer.testing import CliRunner
 
 from imucalib.cli import app
 from imucalib.io import open_recording
-from imucalib.plan import write_plan
-from imucalib.procedures import generate_p1_plan
 
 runner = CliRunner()
 
@@ -20,16 +18,8 @@ def wide_console(monkeypatch):
     monkeypatch.setattr(_app.console, "width", 240)
 
 
-def small_plan(tmp_path):
-    plan = generate_p1_plan(name="cli-run", grade="consumer", rates_dps=(-90.0, 0.0, 90.0),
-                            held_out_rates_dps=(), revolutions=1, static_s=5.0, settle_s=2.0,
-                            record_s=2.0, rate_settle_s=2.0, repetitions=1, warm_up_s=2.0,
-                            sample_rate_hz=100.0, seed=3)
-    return write_plan(plan, tmp_path / "plan.toml")
-
-
-def test_run_on_the_twin_with_the_live_view(tmp_path):
-    plan = small_plan(tmp_path)
+def test_run_on_the_twin_with_the_live_view(tmp_path, p1_tools):
+    plan = p1_tools.small_plan_file(tmp_path)
     result = runner.invoke(app, ["run", str(plan), "--station", "sim", "--out",
                                  str(tmp_path / "runs"), "--yes", "--operator", "A. Tester"])
     assert result.exit_code == 0, result.output
@@ -41,8 +31,8 @@ def test_run_on_the_twin_with_the_live_view(tmp_path):
         assert any(e.source == "operator:A. Tester" for e in rec.log)
 
 
-def test_operator_checks_need_a_terminal_or_yes(tmp_path):
-    plan = small_plan(tmp_path)
+def test_operator_checks_need_a_terminal_or_yes(tmp_path, p1_tools):
+    plan = p1_tools.small_plan_file(tmp_path)
     result = runner.invoke(app, ["run", str(plan), "--out", str(tmp_path / "runs"),
                                  "--no-live"])
     assert result.exit_code == 2
@@ -60,8 +50,8 @@ def test_run_errors(args, message):
     assert result.exit_code == 2 and message in result.output
 
 
-def test_station_file_errors_name_the_field(tmp_path):
-    plan = small_plan(tmp_path)
+def test_station_file_errors_name_the_field(tmp_path, p1_tools):
+    plan = p1_tools.small_plan_file(tmp_path)
     bad = tmp_path / "lab.toml"
     bad.write_text('name = "lab"\n[table]\nkind = "contraves"\ntransport = "tcp://127.0.0.1:1"\n')
     result = runner.invoke(app, ["run", str(plan), "--station", str(bad), "--yes", "--no-live",

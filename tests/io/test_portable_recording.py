@@ -23,10 +23,8 @@ from typer.testing import CliRunner
 from imucalib.cli import app
 from imucalib.io import compact_recording, open_recording, recover_recording
 from imucalib.io.compression import BLOSC_FILTER_ID, DEFAULT_COMPRESSION, compression_of
-from imucalib.plan import write_plan
 from imucalib.plan.equipment import ImuConfig, TableConfig
 from imucalib.plan.schema import StaticStep
-from imucalib.procedures import generate_p1_plan
 from imucalib.sim.scenario import Scenario
 from imucalib.station.simulate import simulate_scenario
 
@@ -229,16 +227,8 @@ def test_recover_command_takes_a_compression(twin_file, tmp_path):
     assert _codecs(report.output) == {"gzip"}
 
 
-def _small_plan(tmp_path: Path) -> Path:
-    plan = generate_p1_plan(name="cli-codec", grade="consumer", rates_dps=(-90.0, 0.0, 90.0),
-                            held_out_rates_dps=(), revolutions=1, static_s=5.0, settle_s=2.0,
-                            record_s=2.0, rate_settle_s=2.0, repetitions=1, warm_up_s=2.0,
-                            sample_rate_hz=100.0, seed=3)
-    return write_plan(plan, tmp_path / "plan.toml")
-
-
-def test_run_writes_the_compression_asked(tmp_path):
-    plan = _small_plan(tmp_path)
+def test_run_writes_the_compression_asked(tmp_path, p1_tools):
+    plan = p1_tools.small_plan_file(tmp_path, "cli-codec")
     out = tmp_path / "run.h5"
     result = runner.invoke(app, ["run", str(plan), "--out", str(out), "--yes", "--no-live",
                                  "--no-record", "--compression", "blosc-lz4"])
@@ -255,9 +245,9 @@ def test_run_writes_the_compression_asked(tmp_path):
     ["compact", "FILE", "--compression", "zip"],
     ["recover", "FILE", "--compression", "zip"],
 ])
-def test_a_bad_compression_is_one_error_line(twin_file, tmp_path, args):
-    args = [str(_small_plan(tmp_path)) if a == "PLAN" else str(twin_file) if a == "FILE" else a
-            for a in args]
+def test_a_bad_compression_is_one_error_line(twin_file, tmp_path, args, p1_tools):
+    names = {"PLAN": str(p1_tools.small_plan_file(tmp_path, "cli-codec")), "FILE": str(twin_file)}
+    args = [names.get(a, a) for a in args]
     result = runner.invoke(app, args)
     assert result.exit_code == 2, result.output
     assert result.stderr == f"error: {BAD_NAME}\n"
