@@ -42,7 +42,7 @@ from imucalib.estimation import compute_window_mean_covariance, solve_weighted_l
 from imucalib.estimation.designs import build_design
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names
-from imucalib.procedures.p1.observations import P1Observations, WindowObservation
+from imucalib.procedures.p1.windows import P1Observations, WindowObservation
 
 __all__ = [
     "MIN_EXCITATION",
