@@ -9,6 +9,7 @@ gyro's M and G·Qᵀ for its g-sensitivity (Eq. (FL.1) of docs/field.md).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -25,14 +26,39 @@ def frame_rotation(model: ImuModel) -> tuple[np.ndarray, np.ndarray]:
     return u @ s, s @ q
 
 
+def model_at(model: ImuModel, temperature_degc: float) -> ImuModel:
+    """`model` with its temperature-dependent parameters fixed at their values at a temperature."""
+    if model.gyro.temperature is None and model.accel.temperature is None:
+        return model
+    p = model.parameters_at(temperature_degc)
+    ax = "xyz"
+
+    def fixed(triad: Any, kind: str) -> Any:
+        bias = np.array([p[f"{kind}_bias_{i}"] for i in ax])
+        m = np.array([[p[f"{kind}_M_{i}{j}"] for j in ax] for i in ax])
+        return dataclasses.replace(triad, bias=bias, scale_misalignment=m, temperature=None)
+
+    return dataclasses.replace(model, gyro=fixed(model.gyro, "gyro"),
+                               accel=fixed(model.accel, "accel"))
+
+
+def static_temperature_degc(session: Any) -> float:
+    """The IMU's mean true temperature over the session's static samples. [°C]"""
+    still = np.zeros(session.time_s.size, dtype=bool)
+    for p in session.statics:
+        still |= (session.time_s >= p.start_time_s) & (session.time_s <= p.stop_time_s)
+    return float(np.mean(session.temperature_degc[still]))
+
+
 def session_bias_drift(session: Any) -> tuple[np.ndarray, np.ndarray]:
     """The mean over the session's static samples of output − deterministic model (gyro, accel).
 
     With the grade's noise the biases wander (bias instability, random walk): the session's
     mean bias is b + this (the white part averages out), what a calibration of that session
-    can see.
+    can see. A session whose IMU warms (a temperature-dependent truth) is taken at its statics'
+    mean temperature (:func:`model_at`): the biases' drift with it is then in this mean too.
     """
-    model = session.model
+    model = model_at(session.model, static_temperature_degc(session))
     still = np.zeros(session.time_s.size, dtype=bool)
     for p in session.statics:
         still |= (session.time_s >= p.start_time_s) & (session.time_s <= p.stop_time_s)
@@ -47,8 +73,11 @@ def field_truth(model: ImuModel, *, six_position: bool = False,
                 session: Any = None) -> dict[str, float]:
     """The truth by the names of the field result's triad model (SI).
 
-    With `session`, the biases are the session's mean biases (:func:`session_bias_drift`).
+    With `session`, the biases are the session's mean biases (:func:`session_bias_drift`), and a
+    temperature-dependent truth is taken at the statics' mean temperature.
     """
+    if session is not None:
+        model = model_at(model, static_temperature_degc(session))
     a, g = model.accel, model.gyro
     drift_g, drift_a = session_bias_drift(session) if session is not None else (
         np.zeros(3), np.zeros(3))

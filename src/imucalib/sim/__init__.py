@@ -42,11 +42,13 @@ from imucalib.sim.fixture import (
 )
 from imucalib.sim.hand_motion import HandMotion, HandMove, HandSegment
 from imucalib.sim.handheld import (
+    HARSH,
     HandheldSession,
     HandRotation,
     StaticPose,
     WrittenCsv,
     handheld_session,
+    harsh_handheld_session,
     write_session_csv,
 )
 from imucalib.sim.kinematics import (
@@ -70,6 +72,7 @@ from imucalib.sim.table import (
 
 __all__ = [
     "BUILTIN_SCENARIOS",
+    "HARSH",
     "HEXAHEDRAL_FACES",
     "HEXAHEDRAL_FACE_NAMES",
     "AxisSpec",
@@ -112,6 +115,7 @@ __all__ = [
     "earth_rate_n_rps",
     "gravity_n_mps2",
     "handheld_session",
+    "harsh_handheld_session",
     "hexahedral_fixture",
     "imu_temperature_degc",
     "load_scenario",

@@ -30,6 +30,23 @@ Session
    of 0.2–0.5 s halfway (at s ~ U(0.35, 0.65)), and a tremor of amplitude ``tremor_deg`` at
    U(6, 10) Hz about a random axis (about the vertical in a full turn: the IMU lies on the desk).
 
+Harsher sessions, as real hands and sensors give them (:data:`HARSH`,
+:func:`harsh_handheld_session`):
+
+4. With ``rotation_deg`` the poses are not faces: pose k is pose k − 1 turned by an angle
+   α ~ U(rotation_deg) about a random axis u of the body (φ = α·u, so 90–180° turns about any
+   axis), and its face is the body axis nearest the vertical.
+5. With ``bump_probability`` a pose is knocked, with that chance, partway through its static
+   (at U(0.3, 0.7) of it): a jolt of U(0.1, 0.3) s turns it by U(1, 5)° about a random axis,
+   and it rests in the new attitude (two statics of the same pose index, the rotation between
+   them marked ``bump``).
+6. ``gyro_bias_dps`` replaces the grade's gyro biases by U(−b, b) per axis; ``gyro_range_dps``
+   narrows the gyro's full scale (a fast hand turn then clips, as on a ±250 °/s part).
+7. ``warmup_degc`` warms the IMU during the session, T(t) = T₀ + ΔT·(1 − e^(−t/τ)) with
+   τ = ``warmup_tau_s`` (self-heating after power-up), and the truth is drawn with the grade's
+   typical temperature dependence (:func:`~imucalib.models.imu.sample_imu_model`), so that the
+   biases drift with it: the true parameters at a time are ``model.parameters_at(T(t))``.
+
 The IMU turns about its own origin at a fixed place (no translation): its specific force is
 gravity seen in the body, its rate ω_tb plus Earth rate
 (:func:`~imucalib.sim.kinematics.compute_imu_kinematics` with the hand attitude as the
@@ -37,18 +54,23 @@ platform). Statics are exactly still relative to the Earth.
 
 Randomness
 ----------
-One seed gives the session: a :class:`numpy.random.SeedSequence` of ``seed`` spawns three
-children, the IMU's truth (:func:`~imucalib.models.imu.sample_imu_model`), the motion, and the
-synthesiser's noise.
+One seed gives the session: a :class:`numpy.random.SeedSequence` of ``seed`` spawns four
+children, the IMU's truth (:func:`~imucalib.models.imu.sample_imu_model`), the motion, the
+synthesiser's noise, and the replaced gyro biases (the first three as before the fourth was
+added, so a seed gives the same gentle session as it always did).
 
 CSV layouts (:func:`write_session_csv`)
 ---------------------------------------
 ``"imucal"``: ``t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z``, time in s, accelerometer in m/s², gyro
 in °/s (the imucal layout of :mod:`imucalib.io.csv_layouts`, read with no options).
 ``"counts"``: a 2-line preamble, then ``sample;gx;gy;gz;ax;ay;az`` (semicolons), a sample
-counter and integer counts raw = round(value·scale + offset) clipped to [0, 2^bits − 1] (gyro
-value in °/s, accelerometer in g), as an MPU-6050 class part logged by a microcontroller; read
-back with the options in :attr:`WrittenCsv.cli_args` (``--gyro-unit counts --gyro-scale …``).
+counter and integer counts raw = round(value·scale + offset) clipped to [0, 2^bits − 1]
+(unsigned) or [−2^(bits−1), 2^(bits−1) − 1] (``signed``) (gyro value in °/s, accelerometer in
+g), as an MPU-6050 class part logged by a microcontroller; read back with the options in
+:attr:`WrittenCsv.cli_args` (``--gyro-unit counts --gyro-scale …``).
+``"imu_tk"``: imu_tk's two text files (Tedaldi et al. 2014), no header, blank-separated
+``time x y z`` rows: the gyro's at the path given (rad/s), the accelerometer's beside it with
+``_acc`` before the suffix (m/s²); read back with ``--accel-file`` and the units.
 """
 
 from __future__ import annotations
@@ -56,9 +78,11 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from types import MappingProxyType
+from typing import Any, Final, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -78,8 +102,8 @@ from imucalib.sim.hand_motion import HandMotion, HandMove, HandSegment
 from imucalib.sim.kinematics import ImuKinematics, compute_imu_kinematics
 from imucalib.sim.synth import ClockSpec, ImuSynthesizer, SimImu
 
-__all__ = ["FACES", "HandRotation", "HandheldSession", "StaticPose", "WrittenCsv",
-           "handheld_session", "write_session_csv"]
+__all__ = ["FACES", "HARSH", "HandRotation", "HandheldSession", "StaticPose", "WrittenCsv",
+           "handheld_session", "harsh_handheld_session", "write_session_csv"]
 
 _F64 = NDArray[np.float64]
 #: The face cycle of the poses: the body axis pointing up.
@@ -89,6 +113,19 @@ _AXIS = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0),
 _UP_T = np.array([0.0, 0.0, 1.0])
 _PAUSE_S = (0.2, 0.5)
 _TREMOR_HZ = (6.0, 10.0)
+_BUMP_S = (0.1, 0.3)
+_BUMP_DEG = (1.0, 5.0)
+
+#: A session as real hands and consumer sensors give it (module docstring, items 4–7): 40
+#: poses of 2–5 s after a 50 s rest, each reached by a 90–180° turn about any axis in 1–3 s
+#: with tremor and pauses, no full turns, a pose knocked now and then, gyro biases up to
+#: 5 °/s, a ±500 °/s gyro, and the IMU warming by 4 °C.
+HARSH: Final[Mapping[str, Any]] = MappingProxyType({
+    "n_poses": 40, "static_s": (2.0, 5.0), "rotation_s": (1.0, 3.0), "init_static_s": 50.0,
+    "full_turns": False, "rotation_deg": (90.0, 180.0), "tremor_deg": 1.0,
+    "pause_probability": 0.4, "bump_probability": 0.1, "gyro_bias_dps": 5.0,
+    "gyro_range_dps": 500.0, "warmup_degc": 4.0, "warmup_tau_s": 300.0,
+})
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,6 +174,8 @@ class HandRotation:
     angle_rad : float
         The signed angle: ±2π for a full turn (+ counter-clockwise seen from above), ‖φ‖
         otherwise. [rad]
+    bump : bool
+        A jolt within a pose (module docstring, item 5), not a turn to a new pose.
     """
 
     start_time_s: float
@@ -144,6 +183,7 @@ class HandRotation:
     rotvec_b_rad: _F64
     full_turn: bool
     angle_rad: float
+    bump: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,6 +251,13 @@ def _range(value: tuple[float, float], name: str, *, low: float = 0.0) -> tuple[
     return a, b
 
 
+def _probability(value: float, name: str) -> float:
+    p = check_finite_scalar(value, name)
+    if not 0.0 <= p <= 1.0:
+        raise InvalidInputError(f"`{name}` must be in [0, 1]; got {p}")
+    return p
+
+
 def _pose_attitude(face: str, tilt_rad: float, rng: np.random.Generator) -> Rotation:
     """(H.5): face up, tilted by `tilt_rad` about a random horizontal axis, random heading."""
     rot_face, _ = Rotation.align_vectors([_UP_T], [_AXIS[face]])
@@ -246,22 +293,34 @@ def _rotation(t0: float, dur: float, rot0: Rotation, phi: _F64, rng: np.random.G
                        tremor_axis_b=_random_unit(rng) if axis is None else axis)
 
 
-def _plan(n_poses: int, off_axis: tuple[float, float], static_s: tuple[float, float],
-          rotation_s: tuple[float, float], init_static_s: float, full_turns: bool,
-          level_tilt_deg: float, tremor_rad: float, pause_probability: float,
-          rng: np.random.Generator) -> tuple[HandMotion, list[StaticPose], list[HandRotation]]:
+@dataclass(frozen=True)
+class _Shape:
+    """What a session's motion is drawn from (the arguments of :func:`handheld_session`)."""
+
+    n_poses: int
+    off_axis_deg: tuple[float, float]
+    static_s: tuple[float, float]
+    rotation_s: tuple[float, float]
+    init_static_s: float
+    full_turns: bool
+    level_tilt_deg: float
+    tremor_rad: float
+    pause_probability: float
+    rotation_deg: tuple[float, float] | None
+    bump_probability: float
+
+
+def _face_of(rot: Rotation) -> tuple[str, float]:
+    """Return the body axis nearest the vertical at `rot`, and its angle from it [°]."""
+    up_b = rot.inv().apply(_UP_T)
+    i = int(np.argmax(np.abs(up_b)))
+    face = ("+" if up_b[i] > 0 else "-") + "xyz"[i]
+    return face, math.degrees(math.acos(min(1.0, abs(float(up_b[i])))))
+
+
+def _plan(shape: _Shape, rng: np.random.Generator
+          ) -> tuple[HandMotion, list[StaticPose], list[HandRotation]]:
     """Draw the poses and rotations of a session (module docstring)."""
-    # (pose index, face, tilt [°], with turns)
-    poses: list[tuple[int, str, float, bool]] = [(0, "+z", rng.uniform(0.0, level_tilt_deg),
-                                                  False)]
-    turned: set[str] = set()
-    for k in range(n_poses):
-        face = FACES[k % len(FACES)]
-        turns = full_turns and face.startswith("+") and face not in turned
-        if turns:
-            turned.add(face)
-        tilt = rng.uniform(0.0, level_tilt_deg) if turns else rng.uniform(*off_axis)
-        poses.append((k + 1, face, tilt, turns))
     segments: list[HandSegment] = []
     statics: list[StaticPose] = []
     rotations: list[HandRotation] = []
@@ -273,37 +332,86 @@ def _plan(n_poses: int, off_axis: tuple[float, float], static_s: tuple[float, fl
         statics.append(StaticPose(index, face, tilt, t, t + dur, rot, rot.inv().apply(_UP_T)))
         t += dur
 
-    def move(rot0: Rotation, phi: _F64, dur: float, turn: bool, axis: _F64 | None) -> None:
+    def move(rot0: Rotation, phi: _F64, dur: float, turn: bool, axis: _F64 | None, *,
+             bump: bool = False) -> Rotation:
         nonlocal t
-        segments.append(_rotation(t, dur, rot0, phi, rng, tremor_rad, pause_probability, axis))
+        if bump:
+            segments.append(_rotation(t, dur, rot0, phi, rng, 0.0, 0.0, None))
+        else:
+            segments.append(_rotation(t, dur, rot0, phi, rng, shape.tremor_rad,
+                                      shape.pause_probability, axis))
         angle = float(np.dot(phi, rot0.inv().apply(_UP_T))) if turn else float(
             np.linalg.norm(phi))
-        rotations.append(HandRotation(t, t + dur, phi, turn, angle))
+        rotations.append(HandRotation(t, t + dur, phi, turn, angle, bump))
         t += dur
+        return rot0 * Rotation.from_rotvec(phi)
 
+    def rest(index: int, face: str, tilt: float, rot: Rotation, dur: float) -> Rotation:
+        """Hold a pose, knocked partway with chance `bump_probability` (item 5)."""
+        if shape.bump_probability <= 0.0 or rng.random() >= shape.bump_probability:
+            hold(index, face, tilt, rot, dur)
+            return rot
+        jolt = rng.uniform(*_BUMP_S)
+        first = (dur - jolt) * rng.uniform(0.3, 0.7)
+        hold(index, face, tilt, rot, first)
+        rot = move(rot, math.radians(rng.uniform(*_BUMP_DEG)) * _random_unit(rng), jolt,
+                   False, None, bump=True)
+        hold(index, *_face_of(rot), rot, max(dur - jolt - first, 1e-3))
+        return rot
+
+    tilt0 = rng.uniform(0.0, shape.level_tilt_deg)
+    if shape.rotation_deg is not None:  # item 4: turns about any axis, poses anywhere
+        rot = _pose_attitude("+z", math.radians(tilt0), rng)
+        hold(0, "+z", tilt0, rot, shape.init_static_s)
+        for k in range(shape.n_poses):
+            phi = math.radians(rng.uniform(*shape.rotation_deg)) * _random_unit(rng)
+            rot = move(rot, phi, rng.uniform(*shape.rotation_s), False, None)
+            rot = rest(k + 1, *_face_of(rot), rot, rng.uniform(*shape.static_s))
+        return HandMotion(tuple(segments)), statics, rotations
+    # (pose index, face, tilt [°], with turns), every tilt drawn first
+    poses: list[tuple[int, str, float, bool]] = [(0, "+z", tilt0, False)]
+    turned: set[str] = set()
+    for k in range(shape.n_poses):
+        face = FACES[k % len(FACES)]
+        turns = shape.full_turns and face.startswith("+") and face not in turned
+        if turns:
+            turned.add(face)
+        tilt = (rng.uniform(0.0, shape.level_tilt_deg) if turns
+                else rng.uniform(*shape.off_axis_deg))
+        poses.append((k + 1, face, tilt, turns))
     rot = Rotation.identity()
     for index, face, tilt, turns in poses:
         new = _pose_attitude(face, math.radians(tilt), rng)
         if index > 0:
-            move(rot, (rot.inv() * new).as_rotvec(), rng.uniform(*rotation_s), False, None)
+            move(rot, (rot.inv() * new).as_rotvec(), rng.uniform(*shape.rotation_s), False, None)
         rot = new
-        hold(index, face, tilt, rot, init_static_s if index == 0 else rng.uniform(*static_s))
-        if turns:
+        if index == 0:
+            hold(0, face, tilt, rot, shape.init_static_s)
+        elif not turns:
+            rot = rest(index, face, tilt, rot, rng.uniform(*shape.static_s))
+        else:
+            hold(index, face, tilt, rot, rng.uniform(*shape.static_s))
             up_b = rot.inv().apply(_UP_T)
             for sign in (1.0, -1.0):
-                move(rot, sign * 2.0 * math.pi * up_b, 2.0 * rng.uniform(*rotation_s), True,
-                     up_b)
-                hold(index, face, tilt, rot, rng.uniform(*static_s))
+                move(rot, sign * 2.0 * math.pi * up_b, 2.0 * rng.uniform(*shape.rotation_s),
+                     True, up_b)
+                hold(index, face, tilt, rot, rng.uniform(*shape.static_s))
     return HandMotion(tuple(segments)), statics, rotations
 
 
 def _model(grade: str, rng: np.random.Generator, sample_rate_hz: float, noise: str,
-           errors: dict[str, object] | None) -> ImuModel:
+           errors: dict[str, object] | None, *, thermal: bool, reference_degc: float
+           ) -> ImuModel:
     if grade not in GRADES:
         raise ConfigurationError(f"unknown IMU grade {grade!r}; expected one of {sorted(GRADES)}")
     if noise not in ("grade", "white"):
         raise ConfigurationError(f"`noise` must be 'grade' or 'white'; got {noise!r}")
-    model = sample_imu_model(grade, rng, sample_rate_hz=sample_rate_hz)
+    if thermal:
+        model = sample_imu_model(grade, rng, sample_rate_hz=sample_rate_hz,
+                                 temperature_dependence="typical",
+                                 reference_temperature_degc=reference_degc)
+    else:
+        model = sample_imu_model(grade, rng, sample_rate_hz=sample_rate_hz)
     if errors:
         try:
             cfg = ImuConfig(name="handheld", grade=grade, errors=errors)
@@ -314,6 +422,18 @@ def _model(grade: str, rng: np.random.Generator, sample_rate_hz: float, noise: s
         model = dataclasses.replace(
             model, gyro_noise=NoiseModel(white_density=model.gyro_noise.white_density),
             accel_noise=NoiseModel(white_density=model.accel_noise.white_density))
+    return model
+
+
+def _harsher(model: ImuModel, rng: np.random.Generator, gyro_bias_dps: float | None,
+             gyro_range_dps: float | None) -> ImuModel:
+    """Item 6 of the module docstring: the gyro biases and full scale replaced."""
+    if gyro_bias_dps is not None:
+        bias = rng.uniform(-gyro_bias_dps, gyro_bias_dps, 3) * units.DEG
+        model = dataclasses.replace(model, gyro=dataclasses.replace(model.gyro, bias=bias))
+    if gyro_range_dps is not None:
+        model = dataclasses.replace(model, gyro_output=dataclasses.replace(
+            model.gyro_output, range=gyro_range_dps * units.DEG))
     return model
 
 
@@ -335,6 +455,12 @@ def handheld_session(
     pause_probability: float = 0.3,
     level_tilt_deg: float = 2.0,
     temperature_degc: float = 25.0,
+    rotation_deg: tuple[float, float] | None = None,
+    bump_probability: float = 0.0,
+    gyro_bias_dps: float | None = None,
+    gyro_range_dps: float | None = None,
+    warmup_degc: float = 0.0,
+    warmup_tau_s: float = 300.0,
 ) -> HandheldSession:
     """Simulate a hand-held calibration session on the twin (module docstring).
 
@@ -370,7 +496,20 @@ def handheld_session(
     level_tilt_deg : float
         Largest tilt of the initial rest and of the poses with full turns. [°]
     temperature_degc : float
-        The IMU's (constant) temperature. [°C]
+        The IMU's temperature (at the start, with `warmup_degc`). [°C]
+    rotation_deg : (float, float), optional
+        Turn each pose by an angle in this range about a random axis instead of visiting the
+        faces (module docstring, item 4; `off_axis_deg` and `full_turns` then do not apply). [°]
+    bump_probability : float
+        Chance that a pose is knocked partway through its static, in [0, 1] (item 5).
+    gyro_bias_dps : float, optional
+        Replace the gyro biases by U(−b, b) per axis (item 6). [°/s]
+    gyro_range_dps : float, optional
+        Replace the gyro's full scale ± (item 6). [°/s]
+    warmup_degc, warmup_tau_s : float
+        The IMU warms by ΔT with time constant τ during the session, its parameters following
+        the grade's typical temperature dependence (item 7; 0: constant temperature, no
+        temperature dependence). [°C], [s]
 
     Returns
     -------
@@ -379,7 +518,8 @@ def handheld_session(
     Raises
     ------
     InvalidInputError
-        A range that is not one, n_poses < 6, a bad `errors` entry.
+        A range that is not one, n_poses < 6, a bad `errors` entry, a probability outside
+        [0, 1], a non-positive bias bound, full scale or time constant.
     ConfigurationError
         An unknown grade or noise kind.
     """
@@ -394,23 +534,38 @@ def handheld_session(
     init_s = check_positive(init_static_s, "init_static_s")
     fs = check_positive(sample_rate_hz, "sample_rate_hz")
     tremor = check_nonnegative(tremor_deg, "tremor_deg") * units.DEG
-    pause = check_finite_scalar(pause_probability, "pause_probability")
-    if not 0.0 <= pause <= 1.0:
-        raise InvalidInputError(f"`pause_probability` must be in [0, 1]; got {pause}")
+    pause = _probability(pause_probability, "pause_probability")
+    bump = _probability(bump_probability, "bump_probability")
     level = check_nonnegative(level_tilt_deg, "level_tilt_deg")
     temp = check_finite_scalar(temperature_degc, "temperature_degc")
+    turn_deg = None if rotation_deg is None else _range(rotation_deg, "rotation_deg")
+    if turn_deg is not None and turn_deg[1] > 180.0:
+        raise InvalidInputError(f"`rotation_deg` must stay within 180°; got {rotation_deg}")
+    bias_dps = None if gyro_bias_dps is None else check_positive(gyro_bias_dps, "gyro_bias_dps")
+    range_dps = (None if gyro_range_dps is None
+                 else check_positive(gyro_range_dps, "gyro_range_dps"))
+    warm = check_finite_scalar(warmup_degc, "warmup_degc")
+    tau = check_positive(warmup_tau_s, "warmup_tau_s")
     site = Site(latitude_deg=45.0) if site is None else site
-    model_ss, motion_ss, synth_ss = np.random.SeedSequence(abs(int(seed))).spawn(3)
-    model = _model(grade, np.random.default_rng(model_ss), fs, noise, errors)
-    motion, statics, rotations = _plan(n_poses, off_axis, statics_s, rotations_s, init_s,
-                                       full_turns, level, tremor, pause,
-                                       np.random.default_rng(motion_ss))
+    model_ss, motion_ss, synth_ss, bias_ss = np.random.SeedSequence(abs(int(seed))).spawn(4)
+    model = _harsher(_model(grade, np.random.default_rng(model_ss), fs, noise, errors,
+                            thermal=warm != 0.0, reference_degc=temp),
+                     np.random.default_rng(bias_ss), bias_dps, range_dps)
+    shape = _Shape(n_poses, off_axis, statics_s, rotations_s, init_s, full_turns, level,
+                   tremor, pause, turn_deg, bump)
+    motion, statics, rotations = _plan(shape, np.random.default_rng(motion_ss))
     mount = MountedImu("handheld")
     synth = ImuSynthesizer(SimImu("handheld", model, ClockSpec()), np.random.default_rng(synth_ss))
+
+    def temperature(t: _F64) -> tuple[_F64, _F64]:
+        """Item 7: T₀ + ΔT·(1 − e^(−t/τ)) and its rate."""
+        decay = np.exp(-np.asarray(t, dtype=np.float64) / tau)
+        return temp + warm * (1.0 - decay), warm / tau * decay
+
     samples = synth.synthesize(
         motion.duration_s,
         lambda t: compute_imu_kinematics(motion.platform_motion(t), site, mount),
-        lambda t: (np.full(t.shape, temp), np.zeros(t.shape)))
+        temperature)
     return HandheldSession(
         time_s=samples.time_s, gyro_rps=samples.gyro_rps, accel_mps2=samples.accel_mps2,
         temperature_degc=samples.temperature_degc, model=model, site=site,
@@ -418,6 +573,19 @@ def handheld_session(
         true_rate_b_rps=samples.true_rate_b_rps,
         true_specific_force_b_mps2=samples.true_specific_force_b_mps2,
         sample_rate_hz=fs, grade=grade, seed=int(seed))
+
+
+def harsh_handheld_session(grade: str = "consumer", *, seed: int, **overrides: Any
+                           ) -> HandheldSession:
+    """Return :func:`handheld_session` with :data:`HARSH`, any of its entries overridden.
+
+    Examples
+    --------
+    >>> s = harsh_handheld_session("consumer", seed=3, n_poses=8, init_static_s=5.0)
+    >>> sum(not r.bump for r in s.rotations)
+    8
+    """
+    return handheld_session(grade, seed=seed, **{**HARSH, **overrides})
 
 
 @dataclass(frozen=True)
@@ -428,7 +596,7 @@ class WrittenCsv:
     ----------
     path : Path
     layout : str
-        ``"imucal"`` or ``"counts"``.
+        ``"imucal"``, ``"counts"`` or ``"imu_tk"``.
     spec : ImportSpec
         The import specification that reads it (:func:`~imucalib.io.import_spec.read_imu_table`).
     cli_args : tuple of str
@@ -445,11 +613,12 @@ def write_session_csv(
     session: HandheldSession,
     path: str | os.PathLike[str],
     *,
-    layout: Literal["imucal", "counts"] = "imucal",
+    layout: Literal["imucal", "counts", "imu_tk"] = "imucal",
     gyro_counts_per_dps: float = 65.5,
     accel_counts_per_g: float = 16384.0,
-    zero_code: int = 32768,
+    zero_code: int | None = None,
     bits: int = 16,
+    signed: bool = False,
 ) -> WrittenCsv:
     """Write `session` as the CSV a user would have (module docstring, "CSV layouts").
 
@@ -458,15 +627,18 @@ def write_session_csv(
     session : HandheldSession
     path : str or Path
         The file to write.
-    layout : {"imucal", "counts"}
-        imucal's names in SI (gyro °/s), or raw integer counts.
+    layout : {"imucal", "counts", "imu_tk"}
+        imucal's names in SI (gyro °/s), raw integer counts, or imu_tk's two files.
     gyro_counts_per_dps, accel_counts_per_g : float
         With ``"counts"``: the sensitivities (an MPU-6050 at ±500 °/s and ±2 g: 65.5 and
         16384; at ±250 °/s a full turn by hand can clip). [1/(°/s)], [1/g]
-    zero_code : int
-        With ``"counts"``: the code of zero (unsigned output). [counts]
+    zero_code : int, optional
+        With ``"counts"``: the code of zero (default 2^(bits−1) unsigned, 0 signed). [counts]
     bits : int
-        With ``"counts"``: the word length; codes are clipped to [0, 2^bits − 1].
+        With ``"counts"``: the word length; codes are clipped to [0, 2^bits − 1], or with
+        `signed` to [−2^(bits−1), 2^(bits−1) − 1].
+    signed : bool
+        With ``"counts"``: two's-complement words (as most MEMS parts output).
 
     Returns
     -------
@@ -486,14 +658,19 @@ def write_session_csv(
             fh.write("t,acc_x,acc_y,acc_z,gyr_x,gyr_y,gyr_z\n")
             np.savetxt(fh, data, fmt="%.10g", delimiter=",")
         return WrittenCsv(p, layout, ImportSpec(), ())
+    if layout == "imu_tk":
+        return _write_imu_tk(session, p)
     if layout != "counts":
-        raise InvalidInputError(f"`layout` must be 'imucal' or 'counts'; got {layout!r}")
+        raise InvalidInputError(f"`layout` must be 'imucal', 'counts' or 'imu_tk'; got "
+                                f"{layout!r}")
     g_scale = check_positive(gyro_counts_per_dps, "gyro_counts_per_dps")
     a_scale = check_positive(accel_counts_per_g, "accel_counts_per_g")
-    top = (1 << int(bits)) - 1
+    half = 1 << (int(bits) - 1)
+    low, top = (-half, half - 1) if signed else (0, 2 * half - 1)
+    zero_code = (0 if signed else half) if zero_code is None else int(zero_code)
     gyro = np.rint(np.rad2deg(session.gyro_rps) * g_scale + zero_code)
     accel = np.rint(session.accel_mps2 / units.G0_MPS2 * a_scale + zero_code)
-    counts = np.clip(np.column_stack([gyro, accel]), 0, top).astype(np.int64)
+    counts = np.clip(np.column_stack([gyro, accel]), low, top).astype(np.int64)
     rows = np.column_stack([np.arange(len(session), dtype=np.int64), counts])
     with p.open("w", encoding="utf-8", newline="\n") as fh:
         fh.write(f"# imucalib twin, hand-held session, grade {session.grade}, seed {session.seed}"
@@ -510,3 +687,15 @@ def write_session_csv(
             "--gyro-scale", f"{g_scale:g}", "--gyro-offset", str(zero_code), "--accel-unit",
             COUNTS, "--accel-scale", f"{a_scale:g}", "--accel-offset", str(zero_code))
     return WrittenCsv(p, layout, spec, args)
+
+
+def _write_imu_tk(session: HandheldSession, gyro_path: Path) -> WrittenCsv:
+    """imu_tk's two files (module docstring, "CSV layouts")."""
+    accel_path = gyro_path.with_name(f"{gyro_path.stem}_acc{gyro_path.suffix}")
+    for path, values in ((gyro_path, session.gyro_rps), (accel_path, session.accel_mps2)):
+        with path.open("w", encoding="utf-8", newline="\n") as fh:
+            np.savetxt(fh, np.column_stack([session.time_s, values]), fmt="%.10g",
+                       delimiter=" ")
+    spec = ImportSpec(gyro_unit="rad/s", accel_unit="m/s^2", accel_file=accel_path)
+    args = ("--accel-file", str(accel_path), "--gyro-unit", "rad/s", "--accel-unit", "m/s^2")
+    return WrittenCsv(gyro_path, "imu_tk", spec, args)
