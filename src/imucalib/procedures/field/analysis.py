@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
 from datetime import UTC, datetime
 from typing import Any
@@ -52,8 +52,15 @@ import scipy.stats
 from numpy.typing import NDArray
 
 from imucalib import __version__
-from imucalib.errors import CalibrationError, InsufficientExcitationError, InvalidInputError
+from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation.linear import solve_weighted_lsq
+from imucalib.estimation.term_selection import (
+    CRITERIA,
+    TermChoice,
+    choose_terms,
+    model_choice_std,
+    parse_terms,
+)
 from imucalib.models.earth import normal_gravity_mps2
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.reported import ReportedParameter
@@ -80,10 +87,15 @@ _G_RANGE_MPS2 = (9.7803, 9.8322)
 #: Relative standard uncertainty of normal gravity as local g (anomalies, ~50 mGal).
 _ANOMALY_REL = 3e-5
 _FULL_TURN_TOL = 0.10
-#: Fewest poses with which "auto" fits the accelerometer's K2 (12 unknowns).
-_K2_MIN_POSES = 16
-#: Fewest poses with which "auto" fits the accelerometer's bias drift (15 unknowns).
+#: The optional model terms the data choose among (docs/field.md, "Model terms"): the
+#: accelerometer's K2 (F.1′), its bias drift (F.1″), the gyro's g-sensitivity G (FL.2).
+TERMS = ("k2", "drift", "g")
+#: Fewest poses with which the accelerometer's bias drift is fitted unless told (15 unknowns):
+#: a rule, not the data's choice (docs/field.md, "Model terms": the criteria, built on white
+#: noise, under-select a term that stands for the bias's wander).
 _DRIFT_MIN_POSES = 20
+#: Fewest poses with which the gyro's G is a candidate (12 unknowns from 3 per pose).
+_G_MIN_POSES = 6
 #: A note suggests a pose-noise floor (and its size) when the accelerometer fit's χ² exceeds
 #: this quantile of χ²_ν (white noise alone: one session in twenty).
 _SUGGEST_FLOOR_QUANTILE = 0.95
@@ -103,11 +115,22 @@ class FieldOptions:
     accel_form : {"auto", "gravity-norm", "six-position"}
     gyro_form : {"auto", "gravity", "turns", "none"}
     accel_k2 : {"auto", "yes", "no"}
-        Fit the accelerometer's quadratic terms (F.1′) in the gravity-norm form ("auto": with
-        at least 16 poses).
+        Fit the accelerometer's quadratic terms (F.1′) ("auto": when the data support them,
+        by `term_criterion`).
     accel_drift : {"auto", "yes", "no"}
-        Fit a linear drift of the accelerometer's bias over the session (F.1″) ("auto": with
-        at least 20 poses); the bias is then that at the poses' mean time.
+        Fit a linear drift of the accelerometer's bias over the session (F.1″), gravity-norm
+        form only ("auto": by `term_criterion`); the bias is then that at the poses' mean
+        time.
+    terms : str
+        Terms forced in or out, ``"+k2,-drift,+g"`` (of :data:`TERMS`); overrides
+        `accel_k2`, `accel_drift` and `gyro_g_sensitivity`.
+    term_criterion : {"lrt", "aicc", "bic"}
+        How "auto" terms are chosen (:func:`~imucalib.estimation.term_selection.choose_terms`):
+        by default the likelihood-ratio test at `term_level` (docs/field.md, "Model terms",
+        says why not AICc: with 25 poses and 15 unknowns its small-sample term rejects a K2 of
+        Δχ² = 27 on 3 parameters, and the biases then miss by 15σ).
+    term_level : float
+        The likelihood-ratio test's level α (with ``lrt``).
     accel_instability_mps2, gyro_instability_rps : float
         A datasheet's bias instability, added in quadrature to each pose mean's standard error
         (a flicker floor the poses' white noise does not show: without it the accelerometer's
@@ -117,8 +140,8 @@ class FieldOptions:
         :func:`~imucalib.estimation.dark_uncertainty.paule_mandel_floor`: the floor that makes
         the accelerometer fit's χ²/ν one); not with `accel_instability_mps2`.
     gyro_g_sensitivity : {"auto", "yes", "no"}
-        Fit the gyro's g-sensitivity G from the static poses ("auto": when the poses cover
-        every axis direction and there are at least six).
+        Fit the gyro's g-sensitivity G from the static poses ("auto": with at least six poses,
+        when the data support it, by `term_criterion`).
     gravity_mps2, gravity_std_mps2 : float, optional
         Local g and its standard uncertainty (default: from the latitude). [m/s²]
     latitude_deg, height_m : float, optional
@@ -139,6 +162,9 @@ class FieldOptions:
     gyro_g_sensitivity: str = "auto"
     accel_k2: str = "auto"
     accel_drift: str = "auto"
+    terms: str = ""
+    term_criterion: str = "lrt"
+    term_level: float = 0.05
     accel_instability_mps2: float = 0.0
     gyro_instability_rps: float = 0.0
     accel_instability_auto: bool = False
@@ -169,6 +195,12 @@ class FieldOptions:
         if self.gyro_g_sensitivity not in ("auto", "yes", "no"):
             raise InvalidInputError(f"`gyro_g_sensitivity` must be auto, yes or no; got "
                                     f"{self.gyro_g_sensitivity!r}")
+        if self.term_criterion not in CRITERIA:
+            raise InvalidInputError(f"`term_criterion` must be one of {', '.join(CRITERIA)}; "
+                                    f"got {self.term_criterion!r}")
+        if not 0.0 < self.term_level < 1.0:
+            raise InvalidInputError(f"`term_level` must be in (0, 1); got {self.term_level!r}")
+        parse_terms(self.terms, TERMS)
         if self.gyro_form not in ("auto", "gravity", "turns", "none"):
             raise InvalidInputError(f"`gyro_form` must be auto, gravity, turns or none; got "
                                     f"{self.gyro_form!r}")
@@ -186,6 +218,20 @@ class FieldOptions:
         if self.latitude_deg is not None and not -90.0 <= self.latitude_deg <= 90.0:
             raise InvalidInputError(f"`latitude_deg` must be in [−90, 90]; got "
                                     f"{self.latitude_deg!r}")
+
+
+    def forced_terms(self) -> dict[str, bool]:
+        """Terms forced in (True) or out (False): `accel_k2` … not "auto", then `terms`."""
+        forced = {name: choice == "yes" for name, choice in (
+            ("k2", self.accel_k2), ("drift", self.accel_drift), ("g", self.gyro_g_sensitivity))
+            if choice != "auto"}
+        forced.update(parse_terms(self.terms, TERMS))
+        return forced
+
+
+def _model_var(choice: TermChoice, names: Sequence[str]) -> _F64:
+    """u²_model of (TS.4) in the order of `names` (0 where the choice added none)."""
+    return np.array([choice.model_std.get(n, 0.0) ** 2 for n in names])
 
 
 def _gravity(opt: FieldOptions, log: FieldLog) -> tuple[float, float, float | None, str]:
@@ -244,44 +290,59 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
             list(fit.residuals.reshape(n, 3)))
 
 
-def _accel_fit(y: _F64, sy: _F64, g: float, choice: str, times: _F64 | None
-               ) -> tuple[Any, str]:
-    """Step 3's gravity-norm fit, with the quadratic terms (F.1′) unless told not.
+def _accel_names(terms: Sequence[str], six: bool) -> list[str]:
+    """Return the names of a step-3 fit's values for a term set (what (TS.4) pairs up)."""
+    from imucalib.estimation.gravity_norm import DRIFT_PARAMETERS, K2_PARAMETERS, PARAMETERS
 
-    `times` (the poses' mid-times) adds the linear bias drift (F.1″).
+    core = [f"p{i}" for i in range(12)] if six else list(PARAMETERS)
+    return [*core, *(K2_PARAMETERS if "k2" in terms else ()),
+            *(DRIFT_PARAMETERS if "drift" in terms else ())]
+
+
+def _with_model_std(choice: TermChoice, chosen: Any, largest: Any, six: bool) -> TermChoice:
+    """Return `choice` with u_model of (TS.4) for the accelerometer's values."""
+    std = model_choice_std(
+        _accel_names(choice.chosen, six), chosen.values, np.sqrt(np.diag(chosen.covariance_noise)),
+        _accel_names(choice.largest, six), largest.values,
+        np.sqrt(np.diag(largest.covariance_noise)))
+    return dataclasses.replace(choice, model_std={k: v for k, v in std.items() if v > 0})
+
+
+def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, forced: dict[str, bool],
+                  opt: FieldOptions) -> TermChoice:
+    """Step 3's gravity-norm fit: K2 (F.1′) chosen by the data, the bias drift (F.1″) by rule.
+
+    The drift stands for the bias's wander (its random walk and flicker), which the white-noise
+    χ² the criteria are built on does not see as a likelihood would: left to AICc it is dropped
+    and the accelerometer's z spread on the twin's grade noise rises from 1.2–1.3 to 2.1
+    (docs/field.md, "Model terms"). It is fitted with at least 20 poses unless forced.
     """
-    from functools import partial
-
     from imucalib.estimation.gravity_norm import fit_gravity_norm
 
-    fit = partial(fit_gravity_norm, y, sy, g, times_s=times)
-    if choice == "no":
-        return fit(), ("K2 not fitted (accel_k2 = no): a quadratic term would bias the biases "
-                       "unseen")
-    if choice == "auto" and len(y) < _K2_MIN_POSES:
-        return fit(), (f"K2 not fitted ({len(y)} poses; at least {_K2_MIN_POSES} for it): a "
-                       "quadratic term biases the biases and the χ² hardly sees it")
-    try:
-        return fit(k2=True), ""
-    except CalibrationError as exc:
-        if choice == "yes":
-            raise
-        return fit(), f"K2 not fitted: {exc}"
+    choice, chosen, largest = choose_terms(
+        "accel (gravity norm)", ("k2", "drift"),
+        lambda t: fit_gravity_norm(y, sy, g, k2="k2" in t,
+                                   times_s=times if "drift" in t else None),
+        lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
+        forced={k: v for k, v in forced.items() if k in ("k2", "drift")},
+        ruled={"drift": len(y) >= _DRIFT_MIN_POSES},
+        criterion=opt.term_criterion, level=opt.term_level)
+    return _with_model_std(choice, chosen, largest, six=False)
 
 
-def _accel_floor(y: _F64, sy: _F64, g: float, form: str, opt: FieldOptions,
+def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
                  times: _F64 | None, gravity_std_mps2: float) -> float:
     """Return the accelerometer's pose-noise floor by Paule–Mandel (Eq. (PM.1)) for the form."""
     from imucalib.estimation.dark_uncertainty import paule_mandel_floor
+    from imucalib.estimation.gravity_norm import fit_gravity_norm
     from imucalib.estimation.six_position import fit_six_position, nominal_directions
 
     if form == "gravity-norm":
         def chi2_of(s: float) -> tuple[float, int]:
-            q = _accel_fit(y, np.hypot(sy, s), g, opt.accel_k2, times)[0].quality
+            q = fit_gravity_norm(y, np.hypot(sy, s), g, k2=k2, times_s=times).quality
             return float(q.chi2), int(q.dof)
     else:
         directions = nominal_directions(y)
-        k2 = _six_position_k2(opt.accel_k2, directions)
 
         def chi2_of(s: float) -> tuple[float, int]:
             q = fit_six_position(y, np.hypot(sy, s), directions, g,
@@ -290,10 +351,30 @@ def _accel_floor(y: _F64, sy: _F64, g: float, form: str, opt: FieldOptions,
     return paule_mandel_floor(chi2_of, scale=float(np.median(sy)))
 
 
-def _six_position_k2(choice: str, directions: _F64) -> bool:
-    """Return whether the six-position form fits K2 (F.12′): asked, or all six faces + one."""
-    return choice == "yes" or (choice == "auto" and len(
-        {tuple(d) for d in directions.tolist()}) == 6 and len(directions) >= 7)
+def _choose_six(y: _F64, sy: _F64, g: float, sg: float, forced: dict[str, bool],
+                opt: FieldOptions) -> tuple[TermChoice, Any]:
+    """Return step 3's six-position fit, K2 (F.12′) chosen by the data.
+
+    K2 is a candidate when all six faces and a seventh pose make it identifiable.
+    """
+    from imucalib.estimation.six_position import fit_six_position, nominal_directions
+
+    directions = nominal_directions(y)
+    can_k2 = len({tuple(d) for d in directions.tolist()}) == 6 and len(directions) >= 7
+
+    def fit(terms: frozenset[str]) -> Any:
+        if "k2" in terms and not can_k2:
+            raise InsufficientExcitationError(
+                ["accel_K2"], "K2 in the six-position form needs all six faces and a seventh "
+                              "pose")
+        return fit_six_position(y, sy, directions, g, gravity_std_mps2=sg, k2="k2" in terms)
+
+    choice, chosen, largest = choose_terms(
+        "accel (six-position)", ("k2",), fit,
+        lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
+        forced={k: v for k, v in forced.items() if k == "k2"},
+        criterion=opt.term_criterion, level=opt.term_level)
+    return _with_model_std(choice, chosen, largest, six=True), chosen
 
 
 def _on_faces(y: _F64) -> bool:
@@ -356,14 +437,20 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if form == "auto":
         form = "six-position" if _on_faces(y) else "gravity-norm"
     notes = [g_note]
-    six = None
+    six: Any = None
     drift_rows: list[ReportedParameter] = []
-    drift = form == "gravity-norm" and (opt.accel_drift == "yes" or (
-        opt.accel_drift == "auto" and len(poses) >= _DRIFT_MIN_POSES))
     times = np.array([0.5 * (p.start_time_s + p.end_time_s) for p in poses])
+    forced = opt.forced_terms()
+    if form == "gravity-norm":
+        choice_a = _choose_accel(y, sy, g, times, forced, opt)
+    else:
+        choice_a, six = _choose_six(y, sy, g, sg, forced, opt)
+    selection = [choice_a]
+    k2, drift = choice_a.has("k2"), choice_a.has("drift")
+    notes.append(choice_a.summary())
     floor = None
     if opt.accel_instability_auto:
-        floor = _accel_floor(y, sy, g, form, opt, times if drift else None, sg)
+        floor = _accel_floor(y, sy, g, form, k2, times if drift else None, sg)
         poses = [dataclasses.replace(p, accel_se=np.hypot(p.accel_se, floor)) for p in poses]
         sy = np.array([p.accel_se for p in poses])
         notes.append(f"accelerometer pose-noise floor {floor / UG:.3g} µg estimated from the "
@@ -372,15 +459,14 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                      "accelerometer pose-noise floor: none (auto): the poses scatter no more "
                      "than their white noise says")
     if form == "gravity-norm":
-        fit, k2_note = _accel_fit(y, sy, g, opt.accel_k2, times if drift else None)
-        if k2_note:
-            notes.append(k2_note)
+        fit = fit_gravity_norm(y, sy, g, k2=k2, times_s=times if drift else None)
         core = fit.values.size - (3 if drift else 0)
         # g's Type B: refit with g + δ (the norms scale with g)
         dg = 1e-4 * g
         jg = (fit_gravity_norm(y, sy, g + dg, k2=core == 12,
                                times_s=times if drift else None).values - fit.values) / dg
         full_cov = fit.covariance_noise + np.outer(jg, jg) * sg**2
+        full_cov = full_cov + np.diag(_model_var(choice_a, _accel_names(choice_a.chosen, False)))
         accel_values = fit.values[:core]
         accel_cov_noise = np.asarray(full_cov[:core, :core], dtype=np.float64)
         accel_quality = fit.quality
@@ -394,23 +480,20 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                 for i, (a, v) in enumerate(zip("xyz", rate, strict=True))]
         corrected = correct_accel(accel_values, y)
     else:
-        directions = nominal_directions(y)
-        six_k2 = _six_position_k2(opt.accel_k2, directions)
-        six = fit_six_position(y, sy, directions, g, gravity_std_mps2=sg, k2=six_k2)
+        if floor:
+            six = fit_six_position(y, sy, nominal_directions(y), g, gravity_std_mps2=sg, k2=k2)
         accel_values = six.values
-        accel_cov_noise = np.asarray(six.covariance_noise, dtype=np.float64)
+        accel_cov_noise = np.asarray(six.covariance_noise, dtype=np.float64) + np.diag(
+            _model_var(choice_a, _accel_names(choice_a.chosen, True)))
         accel_quality = six.quality
         residuals = np.linalg.norm(six.residuals, axis=1)
         corrected = np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
                                                (y - six.bias).T).T, dtype=np.float64)
-        if not six_k2:
-            notes.append("K2 not fitted in the six-position form (it needs all six faces and "
-                         "a seventh pose): a quadratic term biases the biases")
     accel_cov = accel_cov_noise * accel_quality.sigma_scale**2
     if (floor is None and opt.accel_instability_mps2 == 0.0 and accel_quality.dof > 0
             and accel_quality.chi2 > scipy.stats.chi2.ppf(_SUGGEST_FLOOR_QUANTILE,
                                                            accel_quality.dof)):
-        suggested = _accel_floor(y, sy, g, form, opt, times if drift else None, sg)
+        suggested = _accel_floor(y, sy, g, form, k2, times if drift else None, sg)
         notes.append(
             f"the poses scatter more than their white noise (accelerometer χ²/ν = "
             f"{accel_quality.reduced_chi2:.3g}): a bias instability of about "
@@ -429,10 +512,22 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         notes.append(f"no pose had gravity within 45° of {', '.join(missing)}: add poses "
                      "there (the coverage check in the report counts how many)")
     force = g * up if form == "gravity-norm" else corrected
-    fit_g = opt.gyro_g_sensitivity == "yes" or (
-        opt.gyro_g_sensitivity == "auto" and not missing and len(poses) >= 6)
-    static_values, static_cov, bias_quality, bias_resid = _gyro_static(
-        poses, up, force, lat, fit_g)
+    forced_g = {k: v for k, v in forced.items() if k == "g"}
+    if len(poses) < _G_MIN_POSES:
+        forced_g.setdefault("g", False)
+    choice_g, (static_values, static_cov, bias_quality, bias_resid), largest_g = choose_terms(
+        "gyro (static poses)", ("g",), lambda t: _gyro_static(poses, up, force, lat, "g" in t),
+        lambda f: (float(f[2].chi2), int(f[2].dof), int(f[0].size)),
+        forced=forced_g, criterion=opt.term_criterion, level=opt.term_level)
+    g_names = [f"gyro_bias_{a}" for a in "xyz"] + [f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz"]
+    choice_g = dataclasses.replace(choice_g, model_std={k: v for k, v in model_choice_std(
+        g_names[:static_values.size], static_values, np.sqrt(np.diag(static_cov)),
+        g_names[:largest_g[0].size], largest_g[0], np.sqrt(np.diag(largest_g[1]))).items()
+        if v > 0})
+    static_cov = static_cov + np.diag(_model_var(choice_g, g_names[:static_values.size]))
+    selection.append(choice_g)
+    notes.append(choice_g.summary())
+    fit_g = choice_g.has("g")
     gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov, form,
                      six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
     report(0.9)
@@ -479,6 +574,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         threshold_factor=detection.threshold_factor, poses=pose_rows,
         rotations=[] if gyro is None else gyro["rows"], coverage=coverage,
         quality=tuple(quality), notes=tuple(notes),
+        model_selection=tuple(c.to_dict() for c in selection),
         details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
                  "window_s": opt.window_s, "accel_values": accel_values,
                  "accel_covariance": accel_cov},

@@ -67,14 +67,22 @@ class FieldAnalysisOptions:
     gyro_form: Literal["auto", "gravity", "turns", "none"] = option(
         "auto", help="The gyro's form: from the gravity directions, from the turns, or none.")
     accel_k2: Literal["auto", "yes", "no"] = option(
-        "auto", help="Fit the accelerometer's quadratic terms in the gravity-norm form (auto: "
-                     "with at least 16 poses).")
+        "auto", help="Fit the accelerometer's quadratic terms K2 (auto: when the data support "
+                     "them, by term_criterion).")
     accel_drift: Literal["auto", "yes", "no"] = option(
-        "auto", help="Fit a linear drift of the accelerometer's bias over the session (auto: "
-                     "with at least 20 poses).")
+        "auto", help="Fit a linear drift of the accelerometer's bias over the session, "
+                     "gravity-norm form (auto: by term_criterion).")
     gyro_g_sensitivity: Literal["auto", "yes", "no"] = option(
-        "auto", help="Fit the gyro's g-sensitivity from the static poses (auto: when they cover "
-                     "every axis direction and number six or more).")
+        "auto", help="Fit the gyro's g-sensitivity G from the static poses (auto: with six "
+                     "poses or more, by term_criterion).")
+    terms: str = option(
+        "", help="Model terms forced in or out, e.g. +k2,-drift,+g (k2, drift, g); overrides "
+                 "accel_k2, accel_drift and gyro_g_sensitivity.")
+    term_criterion: Literal["lrt", "aicc", "bic"] = option(
+        "lrt", help="How the data choose the auto terms: a likelihood-ratio test at "
+                    "term_level, AICc or BIC (docs/field.md, \"Model terms\").")
+    term_level: float = option(0.05, help="The likelihood-ratio test's level α.", min=1e-9,
+                               max=0.5)
     gravity_mps2: float | None = gravity_field(
         help="Local gravity (default: normal gravity at the latitude).")
     gravity_std_mps2: float | None = option(

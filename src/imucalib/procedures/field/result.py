@@ -173,6 +173,10 @@ class FieldResult(ResultDefaults):
     extra_rows : list of ReportedParameter
         Estimates outside the triad model (the accelerometer's bias rates, (F.1″)), σ
         Birge-scaled as the accelerometer fit's.
+    model_selection : tuple of dict
+        Per fitted group, the optional terms chosen and every candidate's χ², ν and criterion
+        (:meth:`~imucalib.estimation.term_selection.TermChoice.to_dict`; docs/field.md,
+        "Model terms").
     procedure : str
     decision : Decision
         *No decision* (:func:`field_decision`): a field calibration has no acceptance limits.
@@ -196,6 +200,7 @@ class FieldResult(ResultDefaults):
     notes: tuple[str, ...] = ()
     details: dict[str, Any] = field(default_factory=dict)
     extra_rows: list[ReportedParameter] = field(default_factory=list)
+    model_selection: tuple[dict[str, Any], ...] = ()
     procedure: str = "field"
     decision: Decision = field(default_factory=field_decision)
 
@@ -250,7 +255,7 @@ class FieldResult(ResultDefaults):
             "threshold_factor": self.threshold_factor,
             "poses": self.poses, "rotations": self.rotations, "coverage": self.coverage,
             "result": self.result.to_dict(), "notes": list(self.notes),
-            "details": self.details,
+            "model_selection": list(self.model_selection), "details": self.details,
         }
         return dict(json_safe(out))  # type: ignore[call-overload]
 
