@@ -15,6 +15,10 @@ from imucalib.cli._progress import QUIET_HELP, progress_bar
 from imucalib.errors import CalibrationError, InvalidInputError
 from imucalib.units import DEG_PER_H, G0_MPS2
 
+#: The exit status of a calibration that returned only part of its model (a result's
+#: ``omitted`` parts: docs/procedures.md, "Exit status"); 1 is FAIL, 2 an error.
+PARTIAL_EXIT_CODE = 3
+
 if TYPE_CHECKING:
     from imucalib.io.import_spec import ImportSpec
     from imucalib.procedures.common.procedure import Procedure
@@ -308,6 +312,11 @@ def calibrate(
         console.print(who_note, highlight=False, soft_wrap=True, markup=False)
     if done.result.passed is False:
         raise typer.Exit(code=1)
+    if done.result.omitted:
+        for part in done.result.omitted:
+            err_console.print(f"[yellow]partial result:[/] left out {part}", highlight=False,
+                              soft_wrap=True)
+        raise typer.Exit(code=PARTIAL_EXIT_CODE)
 
 
 @app.command()

@@ -80,7 +80,14 @@ Gauss–Newton from M = 0, with the Jacobian of (F.6) in M from the same perturb
 O(Δt²), which changes the steps, not the solution). The steps are chord steps: J and C of
 M = 0 are kept (each step then cuts the error by about ‖M‖) until a step is under `tol`,
 then J and C are evaluated there and the steps repeated (C depends on M only through R); each
-step is the GLS of :func:`~imucalib.estimation.linear.solve_weighted_lsq` with the full C. The
+step is the GLS of :func:`~imucalib.estimation.linear.solve_weighted_lsq` with the full C.
+A step must lower χ² = rᵀC⁻¹r: one that does not (a large M, a rotation that disagrees with
+the others, a stale J) brings J and C at the current M, and if the step from there does not
+either, it is damped (Levenberg 1944; Marquardt 1963):
+
+    δM = argmin ‖L⁻¹(r + J·δM)‖² + λ‖D·δM‖²,   D² = diag(JᵀC⁻¹J)                    (F.9′)
+
+λ growing tenfold from 10⁻⁴ until χ² falls, shrinking tenfold after each accepted step. The
 covariance is (JᵀC⁻¹J)⁻¹ — the Cramér–Rao bound of the design for this noise — Birge-scaled
 when χ²/ν flags a misfit (:func:`imucalib.models.fit_quality.assess_fit`). With the
 covariance C_a of the accelerometer θ the fit used, the accelerometer's own error is
@@ -105,7 +112,7 @@ columns at unit norm must have no singular value under 10⁻³ of the largest.
 Contents
 --------
 :class:`RotationObservation`, :class:`GyroRotationFit`, :func:`fit_gyro_rotations`,
-:func:`fit_turns_linear`, :data:`PARAMETERS`, :data:`KINDS`.
+:func:`fit_turns_linear`, :func:`rotation_disagreement`, :data:`PARAMETERS`, :data:`KINDS`.
 """
 
 from __future__ import annotations
@@ -126,7 +133,7 @@ from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["KINDS", "PARAMETERS", "GyroRotationFit", "RotationObservation",
-           "fit_gyro_rotations", "fit_turns_linear"]
+           "fit_gyro_rotations", "fit_turns_linear", "rotation_disagreement"]
 
 _F64 = NDArray[np.float64]
 _AXES: Final = ("x", "y", "z")
@@ -540,8 +547,23 @@ def _prepare(rotations: Sequence[RotationObservation], accel_theta: ArrayLike,
 
 
 def _whiten(c: _F64, a: _F64) -> _F64:
-    """L⁻¹·a, C = L·Lᵀ."""
-    return np.asarray(np.linalg.solve(np.linalg.cholesky(c), a), dtype=np.float64)
+    """L⁻¹·a, C = L·Lᵀ.
+
+    Raises
+    ------
+    InvalidInputError
+        C not finite or not positive definite (samples far beyond the others in a rotation).
+    """
+    try:
+        chol = np.linalg.cholesky(c) if np.isfinite(c).all() else None
+    except np.linalg.LinAlgError:
+        chol = None
+    if chol is None:
+        raise InvalidInputError(
+            "the rotations' noise covariance is not finite or not positive definite; expected "
+            "gyro and accelerometer samples within a sensor's range (a spike of absurd size "
+            "in a rotation?)")
+    return np.asarray(np.linalg.solve(chol, a), dtype=np.float64)
 
 
 def _step(jac: _F64, r: _F64, c: _F64, *, gain: bool = False) -> LsqSolution:
@@ -637,23 +659,83 @@ def fit_gyro_rotations(rotations: Sequence[RotationObservation], accel_theta: Ar
     m = np.zeros(9)
     r, jac, c, _ = design.evaluate(m)
     _check(jac, c)
-    it, full = 0, False
-    # chord steps with J and C of M = 0 (each cuts the error by about ‖M‖) until a step is
-    # under tol, then again with J and C evaluated there
+    cost = _chi2(c, r)
+    it, fresh, lam = 0, True, 0.0
+    # chord steps with J and C of M = 0 (each cuts the error by about ‖M‖) while they lower
+    # χ²; a step that raises it brings J and C at the current M, then Levenberg–Marquardt
+    # damping (F.9′); done when a step is under tol with J and C evaluated there
     while True:
-        step = _step(jac, r, c).estimate
-        m, it = m + step, it + 1
-        small = bool(np.max(np.abs(step)) < tol)
-        if full and small:
-            return _finish(design, m, it, accel_covariance, jac, c)
         if it >= max_iter:
-            raise ConvergenceError(f"the gyro rotation fit did not converge in {max_iter} "
-                                   "iterations")
-        if small:
-            full = True
+            raise ConvergenceError(
+                f"the gyro rotation fit did not converge in {max_iter} iterations (χ² "
+                f"{cost:.4g} on {r.size} residuals; the worst rotation: "
+                f"{_worst(design, r, c)})")
+        step = _step(jac, r, c).estimate if lam == 0.0 else _damped_step(jac, r, c, lam)
+        it += 1
+        m_try = m + step
+        r_try = design.residuals(m_try, design.end_attitudes(m_try))
+        cost_try = _chi2(c, r_try) if np.isfinite(r_try).all() else math.inf
+        if cost_try <= cost * (1.0 + 1e-9) + 1e-300:
+            m, r, cost = m_try, r_try, cost_try
+            lam = 0.0 if lam < 1e-6 else lam / 10.0
+            if bool(np.max(np.abs(step)) < tol):
+                if fresh:
+                    return _finish(design, m, it, accel_covariance, jac, c)
+                r, jac, c, _ = design.evaluate(m)
+                cost, fresh = _chi2(c, r), True
+            else:
+                fresh = False
+        elif not fresh:      # a stale J led astray: take J and C at M
             r, jac, c, _ = design.evaluate(m)
-        else:
-            r = design.residuals(m, design.end_attitudes(m))
+            cost, fresh = _chi2(c, r), True
+        else:                # damp (F.9′)
+            lam = max(1e-4, 10.0 * lam)
+
+
+def _chi2(c: _F64, r: _F64) -> float:
+    w = _whiten(c, r)
+    return float(w @ w)
+
+
+def _damped_step(jac: _F64, r: _F64, c: _F64, lam: float) -> _F64:
+    """Return the Levenberg–Marquardt step of (F.9′)."""
+    jw, rw = _whiten(c, jac), _whiten(c, r)
+    d = np.sqrt(np.maximum(np.sum(jw * jw, axis=0), 1e-300))
+    a = np.vstack([jw, math.sqrt(lam) * np.diag(d)])
+    b = np.concatenate([-rw, np.zeros(d.size)])
+    return np.asarray(np.linalg.lstsq(a, b, rcond=None)[0], dtype=np.float64)
+
+
+def _worst(design: _Design, r: _F64, c: _F64) -> str:
+    """Name the rotation whose residual is largest against its own σ (for the message)."""
+    sd = np.sqrt(np.maximum(np.diag(c), 1e-300))
+    per = design.per_rotation(np.abs(r) / sd)
+    k = int(np.argmax([float(np.max(p)) if p.size else 0.0 for p in per]))
+    return f"number {k + 1} of {len(per)}, {float(np.max(per[k])):.3g}σ"
+
+
+def rotation_disagreement(rotations: Sequence[RotationObservation], accel_theta: ArrayLike, *,
+                          gyro_noise_density_rps_rthz: ArrayLike,
+                          m: ArrayLike | None = None) -> _F64:
+    """Return each rotation's largest residual of (F.6)/(F.7) against its own σ of (F.8) at M.
+
+    Parameters
+    ----------
+    rotations, accel_theta, gyro_noise_density_rps_rthz
+        As :func:`fit_gyro_rotations`.
+    m : array_like, shape (9,), optional
+        The gyro's M (row-major) to evaluate at; zero by default (the nominal scale).
+
+    Returns
+    -------
+    ndarray, shape (K,)
+        max_i |r_i|/σ_i per rotation: how far it disagrees with the model at M. [σ]
+    """
+    design = _prepare(rotations, accel_theta, gyro_noise_density_rps_rthz)
+    m_arr = np.zeros(9) if m is None else as_array(m, "m", shape=(9,))
+    r, _, c, _ = design.evaluate(m_arr)
+    per = design.per_rotation(np.abs(r) / np.sqrt(np.maximum(np.diag(c), 1e-300)))
+    return np.array([float(np.max(p)) if p.size else 0.0 for p in per])
 
 
 def fit_turns_linear(rotations: Sequence[RotationObservation], accel_theta: ArrayLike, *,

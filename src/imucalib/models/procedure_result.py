@@ -18,7 +18,8 @@ through it and nothing else (docs/procedures.md, "The result contract"):
 - ``fit_quality``: each fit's :class:`~imucalib.models.fit_quality.FitQuality`;
 - ``notes``; ``provenance`` (where it came from, when it knows); ``members`` (a batch's
   per-unit results, empty for one unit) and ``error`` (why a unit of a batch could not be
-  calibrated, empty otherwise);
+  calibrated, empty otherwise); ``omitted`` (the parts of its model a sound fit could not
+  give, each with why: a *partial result*, ``imucalib calibrate`` exits 3; empty otherwise);
 - :meth:`~ProcedureResult.to_dict`: the whole result, procedure-specific, as JSON-able data.
 
 :class:`ResultDefaults` gives the members most results do not need to write.
@@ -106,6 +107,11 @@ class ProcedureResult(Protocol):
         """Why this unit of a batch could not be calibrated; empty when it was."""
         ...
 
+    @property
+    def omitted(self) -> tuple[str, ...]:
+        """The parts of the model left out, each with why (a partial result); empty if none."""
+        ...
+
     def parameter_rows(self) -> list[ReportedParameter]:
         """Every reported quantity, SI."""
         ...
@@ -155,6 +161,11 @@ class ResultDefaults:
     def error(self) -> str:
         """No error: the unit was calibrated."""
         return ""
+
+    @property
+    def omitted(self) -> tuple[str, ...]:
+        """Nothing left out: the whole model."""
+        return ()
 
     @property
     def calibration(self) -> CalibrationResult | None:

@@ -191,6 +191,12 @@ class StoredResult:
         """None: a stored result was calibrated."""
         return ""
 
+    @property
+    def omitted(self) -> tuple[str, ...]:
+        """The parts its analysis left out, as its details say (a field result's ``omitted``)."""
+        parts = self.details.get("omitted", ())
+        return tuple(str(p) for p in parts) if isinstance(parts, list | tuple) else ()
+
     def parameter_rows(self) -> list[ReportedParameter]:
         """Return the reported parameters as stored."""
         return list(self.rows)

@@ -52,7 +52,7 @@ import scipy.stats
 from numpy.typing import NDArray
 
 from imucalib import __version__
-from imucalib.errors import InsufficientExcitationError, InvalidInputError
+from imucalib.errors import CalibrationError, InsufficientExcitationError, InvalidInputError
 from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.estimation.term_selection import (
     CRITERIA,
@@ -528,8 +528,18 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     selection.append(choice_g)
     notes.append(choice_g.summary())
     fit_g = choice_g.has("g")
-    gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov, form,
-                     six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
+    omitted: list[str] = []
+    try:
+        gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov, form,
+                         six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
+    except CalibrationError as exc:
+        if opt.gyro_form != "auto":
+            raise
+        gyro = None
+        omitted.append(f"the gyro triad (scale and misalignment, from the rotations): {exc}")
+        notes.append(f"PARTIAL RESULT: the gyro triad was left out ({exc}); the accelerometer "
+                     f"triad and the gyro bias{' and G' if fit_g else ''} from the static poses "
+                     "are in the result (docs/field.md, \"A partial result\")")
     report(0.9)
     quality: list[FitQuality] = [accel_quality]
     if gyro is not None:
@@ -543,9 +553,15 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         None if gyro is None else gyro["fit"].values,
         None if gyro is None else _gyro_cov(gyro["fit"]),
         None if gyro is None else gyro["fit"].cross_covariance)
-    if gyro is None:
+    if gyro is None and not omitted:
         notes.append("no rotation fitted: the gyro triad is not in the calibration "
                      "(its bias is in the report)")
+    if gyro is not None:
+        left = [r for r in gyro["rows"] if "left_out" in r]
+        if left:
+            notes.append(f"{len(left)} of {len(gyro['rows'])} rotations left out of the gyro "
+                         "fit: " + "; ".join(f"{r['start_time_s']:.1f}–{r['end_time_s']:.1f} s: "
+                                            f"{r['left_out']}" for r in left))
     if form == "gravity-norm":
         notes.append("the accelerometer frame: x along the sensor x axis, y in the sensors' "
                      "x–y plane (a field calibration cannot see the case)")
@@ -574,11 +590,139 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         threshold_factor=detection.threshold_factor, poses=pose_rows,
         rotations=[] if gyro is None else gyro["rows"], coverage=coverage,
         quality=tuple(quality), notes=tuple(notes),
-        model_selection=tuple(c.to_dict() for c in selection),
+        model_selection=tuple(c.to_dict() for c in selection), omitted=tuple(omitted),
         details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
                  "window_s": opt.window_s, "accel_values": accel_values,
                  "accel_covariance": accel_cov},
         decision=field_decision(tuple(quality)))
+
+
+def _recount_turns(observations: list[Any], rows: list[dict[str, Any]], theta: _F64,
+                   density: _F64) -> None:
+    """Count each full turn's whole turns with the gyro the gravity-referenced rotations fit.
+
+    A turn's known angle n·2π is read off the gyro's own integral, which is off by the scale
+    error: a log whose gyro scale is 1.5× the import options' shows a 360° turn as 540°, and
+    the turns would then teach the fit a wrong scale. With three gravity-referenced rotations
+    or more, they are fitted first (:func:`_robust_rotation_fit`); each turn's angle is then
+    that of the corrected integral ‖(I + M)⁻¹·∫(y − b)dt‖, and a turn whose corrected angle is
+    not within 10 % of a whole number of turns becomes a gravity-referenced rotation. Changes
+    the observations and rows in place; nothing when the gravity rotations cannot be fitted.
+    """
+    grav = [k for k, o in enumerate(observations) if o.kind == "gravity"]
+    turns = [k for k, o in enumerate(observations) if o.kind == "turn"]
+    if len(grav) < 3 or not turns:
+        return
+    try:
+        fit, _ = _robust_rotation_fit([observations[k] for k in grav], list(grav),
+                                      [dict(r) for r in rows], theta, density, None)
+    except CalibrationError:
+        return
+    inv = np.linalg.inv(np.eye(3) + np.asarray(fit.values).reshape(3, 3))
+    for k in turns:
+        o = observations[k]
+        w = o.gyro_rps - o.bias_rps
+        theta_raw = np.sum(0.5 * (w[1:] + w[:-1]) * np.diff(o.time_s)[:, None], axis=0)
+        n = float(np.linalg.norm(inv @ theta_raw)) / (2 * math.pi)
+        whole = round(n)
+        if whole >= 1 and abs(n - whole) <= _FULL_TURN_TOL:
+            observations[k] = dataclasses.replace(o, angle_rad=2 * math.pi * whole)
+        else:
+            observations[k] = dataclasses.replace(o, kind="gravity", angle_rad=None)
+            rows[k]["kind"] = "gravity"
+
+
+def _clipped_rotations(log: FieldLog, rows: list[dict[str, Any]]) -> dict[int, str]:
+    """Rotations during which a gyro axis sat at its largest |value| for 3 samples or more.
+
+    A rate beyond the gyro's range clips: the output holds the full-scale code while the hand
+    turns on, and the integrated angle falls short. The full scale is not known from a log, so
+    an axis's largest |value| in the log held by three consecutive samples of a rotation is
+    taken as clipping (a genuine peak of a smooth hand turn is one sample).
+    """
+    top = np.max(np.abs(log.gyro_rps), axis=0)
+    out: dict[int, str] = {}
+    for k, row in enumerate(rows):
+        sel = (log.time_s >= row["start_time_s"]) & (log.time_s <= row["end_time_s"])
+        at_top = np.abs(log.gyro_rps[sel]) >= top * (1.0 - 1e-9)
+        for axis in range(3):
+            runs = np.diff(np.flatnonzero(np.diff(np.concatenate(
+                [[0], at_top[:, axis].astype(np.int8), [0]]))))[::2]
+            if runs.size and int(runs.max()) >= 3:
+                out[k] = (f"the gyro's {'xyz'[axis]} axis clipped at "
+                          f"{math.degrees(float(top[axis])):.4g} °/s for {int(runs.max())} "
+                          "samples (a turn faster than its range)")
+                break
+    return out
+
+
+#: A rotation is left out when it disagrees with the others beyond this (its largest residual
+#: against its own σ) and leaving it out lowers χ² by more than the 99.9 % quantile of χ²_3.
+_DISAGREE_SIGMA = 5.0
+_DROP_CHI2 = 16.27
+#: … and when it disagrees more than this many times the rotations' median disagreement: a
+#: model that misfits every rotation (a scale asymmetry it lacks) must show in χ²/ν, not be
+#: hidden by leaving rotations out.
+_DISAGREE_MEDIANS = 4.0
+
+
+def _robust_rotation_fit(observations: list[Any], used: list[int], rows: list[dict[str, Any]],
+                         theta: _F64, density: _F64, accel_cov: _F64 | None
+                         ) -> tuple[Any, list[int]]:
+    """Step 5's fit, rotations that disagree with the others left out one at a time.
+
+    A fit that does not converge, or one whose χ² is a misfit, is tried again without the
+    rotation that disagrees most with the model (:func:`~imucalib.estimation.gyro_rotations.
+    rotation_disagreement`, at the fit's M or the nominal scale) when it stands out from the
+    others (beyond :data:`_DISAGREE_SIGMA` and :data:`_DISAGREE_MEDIANS` times their median):
+    kept out when the refit converges where the fit did not, or lowers χ² by more than
+    :data:`_DROP_CHI2`. At most a
+    fifth of the rotations (at least one) go; each is named in its row (``left_out``).
+
+    Raises
+    ------
+    ConvergenceError
+        No fit converges even so; the message names the rotations that disagree.
+    """
+    from imucalib.errors import ConvergenceError
+    from imucalib.estimation.gyro_rotations import fit_gyro_rotations, rotation_disagreement
+
+    def fit(obs: list[Any]) -> Any:
+        return fit_gyro_rotations(obs, theta, gyro_noise_density_rps_rthz=density,
+                                  accel_covariance=accel_cov)
+
+    try:
+        best: Any = fit(observations)
+        error: ConvergenceError | None = None
+    except ConvergenceError as exc:
+        best, error = None, exc
+    budget = max(1, len(observations) // 5)
+    while (best is None or best.quality.misfit) and budget > 0 and len(observations) > 4:
+        far = rotation_disagreement(observations, theta, gyro_noise_density_rps_rthz=density,
+                                    m=None if best is None else best.values)
+        k = int(np.argmax(far))
+        if far[k] < max(_DISAGREE_SIGMA, _DISAGREE_MEDIANS * float(np.median(far))):
+            break  # none stands out: a model misfit of every rotation is left to χ²/ν
+        rest = observations[:k] + observations[k + 1:]
+        try:
+            trial = fit(rest)
+        except ConvergenceError:
+            break
+        if best is not None and best.quality.chi2 - trial.quality.chi2 <= _DROP_CHI2:
+            break
+        row = rows[used[k]]
+        row["left_out"] = (f"it disagrees with the other rotations by {far[k]:.3g}σ (a bump, "
+                           "a pose that was not still, or a detection that split a motion)")
+        observations, used, best, budget = rest, used[:k] + used[k + 1:], trial, budget - 1
+    if best is None:
+        assert error is not None
+        far = rotation_disagreement(observations, theta, gyro_noise_density_rps_rthz=density)
+        worst = [f"{rows[used[k]]['start_time_s']:.1f}–{rows[used[k]]['end_time_s']:.1f} s "
+                 f"({far[k]:.3g}σ)" for k in np.argsort(far)[::-1][:3]]
+        raise ConvergenceError(f"{error}; the rotations that disagree most at the nominal "
+                               f"scale: {', '.join(worst)} (a gyro scale far from the import "
+                               "options' or the datasheet's? check --gyro-scale and the units)")
+    return best, used
 
 
 def _gyro_cov(fit: Any) -> _F64:
@@ -608,7 +752,7 @@ def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], y: _F64, u
     per axis; Ω itself when the latitude is unknown) (FL.3).
     """
     from imucalib.estimation.gravity_norm import correct_accel
-    from imucalib.estimation.gyro_rotations import RotationObservation, fit_gyro_rotations
+    from imucalib.estimation.gyro_rotations import RotationObservation
 
     if opt.gyro_form == "none" or not detection.rotations:
         if opt.gyro_form in ("gravity", "turns"):
@@ -685,10 +829,18 @@ def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], y: _F64, u
         raise InsufficientExcitationError(
             ["gyro_M"], f"{log.source}: no full turn flat on the desk was found (a rotation of "
                         "n·360° within 10 %, the gravity direction back within 5°)")
-    fit = fit_gyro_rotations(observations, theta, gyro_noise_density_rps_rthz=density,
-                             accel_covariance=None if form == "six-position" else accel_cov)
-    for row, r in zip(rows, fit.residuals, strict=True):
-        row["residual"] = r
+    if opt.gyro_form == "auto":
+        _recount_turns(observations, rows, theta, density)
+    clipped = _clipped_rotations(log, rows)
+    for k in sorted(clipped, reverse=True):
+        rows[k]["left_out"] = clipped[k]
+    used = [k for k in range(len(rows)) if k not in clipped]
+    fit, used = _robust_rotation_fit(
+        [observations[k] for k in used], used, rows, theta, density,
+        None if form == "six-position" else accel_cov)
+    for k, r in zip(used, fit.residuals, strict=True):
+        rows[k]["residual"] = r
+    observations = [observations[k] for k in used]
     kinds = {o.kind for o in observations}
     label = ("gravity-referenced and known-angle turns" if kinds == {"gravity", "turn"}
              else "known-angle turns" if kinds == {"turn"} else "gravity-referenced")

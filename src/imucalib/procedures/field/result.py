@@ -173,6 +173,9 @@ class FieldResult(ResultDefaults):
     extra_rows : list of ReportedParameter
         Estimates outside the triad model (the accelerometer's bias rates, (F.1″)), σ
         Birge-scaled as the accelerometer fit's.
+    omitted : tuple of str
+        The parts a sound fit could not give, each with why (a *partial result*: docs/field.md,
+        "A partial result"; ``imucalib calibrate`` exits 3).
     model_selection : tuple of dict
         Per fitted group, the optional terms chosen and every candidate's χ², ν and criterion
         (:meth:`~imucalib.estimation.term_selection.TermChoice.to_dict`; docs/field.md,
@@ -201,6 +204,7 @@ class FieldResult(ResultDefaults):
     details: dict[str, Any] = field(default_factory=dict)
     extra_rows: list[ReportedParameter] = field(default_factory=list)
     model_selection: tuple[dict[str, Any], ...] = ()
+    omitted: tuple[str, ...] = ()
     procedure: str = "field"
     decision: Decision = field(default_factory=field_decision)
 
@@ -255,7 +259,8 @@ class FieldResult(ResultDefaults):
             "threshold_factor": self.threshold_factor,
             "poses": self.poses, "rotations": self.rotations, "coverage": self.coverage,
             "result": self.result.to_dict(), "notes": list(self.notes),
-            "model_selection": list(self.model_selection), "details": self.details,
+            "model_selection": list(self.model_selection), "omitted": list(self.omitted),
+            "details": self.details,
         }
         return dict(json_safe(out))  # type: ignore[call-overload]
 

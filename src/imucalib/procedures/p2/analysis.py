@@ -286,6 +286,11 @@ class P2UnitResult:
         return ()
 
     @property
+    def omitted(self) -> tuple[str, ...]:
+        """Nothing left out: a unit is calibrated whole or fails with its error."""
+        return ()
+
+    @property
     def decision(self) -> Decision:
         """The unit's verdict under :data:`DECISION_RULE` (docs/p2.md, "The decision").
 
