@@ -82,12 +82,13 @@ def test_calibrations_are_recorded_queried_reviewed_amended_verified_and_backed_
     restored = str(tmp_path / "restored.db")
     res = runner.invoke(app, ["records", "restore", str(tmp_path / "b1"), "--db", restored])
     assert res.exit_code == 0 and "verify" in res.output, res.output
-    # a deleted last row is caught against the heads a backup kept
+    # a deleted last row is caught by the anchor log, and against the heads a backup kept
     import sqlite3
 
     with sqlite3.connect(db) as conn:
         conn.execute("DELETE FROM reviews WHERE seq = (SELECT MAX(seq) FROM reviews)")
-    assert runner.invoke(app, ["records", "verify", "--db", db]).exit_code == 0
+    res = runner.invoke(app, ["records", "verify", "--db", db], terminal_width=200)
+    assert res.exit_code == 1 and "anchor log" in res.output, res.output
     res = runner.invoke(app, ["records", "verify", "--db", db, "--anchors",
                               str(tmp_path / "b2" / "heads.json")])
     assert res.exit_code == 1 and "reviews" in res.output

@@ -144,7 +144,9 @@ def test_records_show_gives_the_result_its_run_equipment_reviews_and_release(lab
         assert expected in text, expected
     shown = json.loads(runner.invoke(app, ["records", "show", "1", "--db", lab,
                                            "--json"]).output)
-    assert set(shown) == {"result", "run", "equipment", "reviews", "release", "document"}
+    assert set(shown) == {"result", "run", "equipment", "reviews", "release", "document",
+                          "reviews_unverified"}
+    assert shown["reviews_unverified"] == ""            # the records verify: reviews shown
     assert shown["run"]["operator"] == "Oli Operator"
     assert shown["run"]["started_utc"].startswith("2026-03-01T08:00:00")
     assert [(e["serial"], e["certificate"], e["due_on"]) for e in shown["equipment"]] == [

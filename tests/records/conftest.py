@@ -38,6 +38,13 @@ def _pg_admin_url() -> str:
     return url.render_as_string(hide_password=False)
 
 
+@pytest.fixture(autouse=True)
+def _signing_folders(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """Key folders of PostgreSQL databases under the test's own config dir, not the user's."""
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    monkeypatch.delenv("IMUCALIB_RECORDS_SIGNING", raising=False)
+
+
 @pytest.fixture
 def records_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
     if request.param == "sqlite":

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from sqlalchemy import create_engine, inspect, text
+from sqlalchemy import create_engine, text
 
 from imucalib.errors import RecordsError
 from imucalib.records import engine as records_engine
@@ -92,65 +92,105 @@ def test_reopening_keeps_the_records(records_url, make_result):
         assert rec.verify() == []
 
 
-def test_a_revision_0001_database_is_upgraded_with_its_records_intact(records_url, make_result,
-                                                                      monkeypatch):
-    """A database made by the first schema (no users) opens: the users tables are added and
-    every row recorded before keeps its hash (docs/records.md, "The schema")."""
+def _insert_v1(conn, model, values, **children):
+    """Append a row as revision 0002 wrote it: hash version 1, unsigned (Eq. (R.1))."""
+    from datetime import UTC, datetime
+
+    from sqlalchemy import MetaData, Table, insert
+
+    from imucalib.records.canonical import GENESIS, chain_hash, content_of
+
+    table = model.__table__
+    head = conn.execute(text(f"SELECT seq, row_hash FROM {table.name} ORDER BY seq DESC "
+                             "LIMIT 1")).first()
+    seq = 1 if head is None else head[0] + 1
+    prev = GENESIS if head is None else head[1]
+    values = {**values, "id": seq, "seq": seq,
+              "created_utc": datetime(2026, 1, seq, 8, 0, tzinfo=UTC)}
+    row_hash = chain_hash(prev, content_of(table, {**values, "hash_version": 1}, **children))
+    as_0002 = Table(table.name, MetaData(), autoload_with=conn)   # no signature columns yet
+    conn.execute(insert(as_0002).values(**values, prev_hash=prev, row_hash=row_hash))
+    return seq
+
+
+def test_a_revision_0002_database_is_upgraded_with_its_records_intact(records_url):
+    """A database made before signing opens: its rows keep their hashes (hash version 1,
+    noted as unsigned), new rows are signed, and a row downgraded later is found
+    (docs/records.md, "Signing")."""
     from alembic import command
 
-    from imucalib.records.api import Records
+    from imucalib.records.schema import Result, ResultParameter, Review, Run, Station, Unit
 
     engine = records_engine.make_engine(records_url)
     with engine.connect() as conn, conn.begin():
-        command.upgrade(records_engine._alembic_config(conn), "0001")
-    old = Records(engine)                       # the records as imucalib wrote them at 0001
-    monkeypatch.setattr("imucalib.records.users.check_operator", lambda _s, op: op)  # no users
-    lab = old.add_station("lab 1")
-    table = old.add_equipment(lab, "rate table", serial="T-1", certificate="C-1")
-    run = old.record_run(plan_name="p1", operator="ana", station=lab, equipment=[table])
-    rid = old.record_result(run, make_result("IMU-1"), passed=True)
-    with engine.begin() as conn:                # a review as revision 0001 stored it
-        conn.execute(text("INSERT INTO reviews (id, seq, prev_hash, row_hash, created_utc, "
-                          "result_id, reviewer, reviewed_utc, approved, comment) SELECT 1, 1, "
-                          "'', '', created_utc, id, 'bo', created_utc, (1 = 1), 'ok' "
-                          "FROM results"))
-    with engine.connect() as conn:
-        assert conn.execute(text("SELECT version_num FROM alembic_version")).scalar() == "0001"
-        assert not inspect(conn).has_table("users")
+        command.upgrade(records_engine._alembic_config(conn), "0002")
+    with engine.begin() as conn:
+        lab = _insert_v1(conn, Station, {"name": "lab 1", "location": ""})
+        unit = _insert_v1(conn, Unit, {"serial": "IMU-1", "model": "", "maker": "",
+                                       "specification_json": "{}"})
+        run = _insert_v1(conn, Run, {"plan_name": "p1", "plan_hash": "", "procedure": "p1",
+                                     "recording_path": "", "recording_sha256": "",
+                                     "environment_json": "{}", "operator": "ana",
+                                     "software_version": "0.1", "station_id": lab},
+                         equipment=[])
+        params = [{"name": "accel_b_x", "std": 0.001, "unit": "m/s^2", "value": 0.01}]
+        rid = _insert_v1(conn, Result, {"run_id": run, "unit_id": unit, "procedure": "p1",
+                                        "model": "per-axis", "passed": False,
+                                        "verification_json": "{}", "document_json": "{}",
+                                        "version": 1, "amendment_reason": ""},
+                         parameters=params)
+        conn.execute(ResultParameter.__table__.insert().values(result_id=rid, **params[0]))
+        from datetime import UTC, datetime
+
+        _insert_v1(conn, Review, {"result_id": rid, "reviewer": "bo", "approved": False,
+                                  "reviewed_utc": datetime(2026, 1, 2, tzinfo=UTC),
+                                  "comment": "bias too large"})
     engine.dispose()
-    _rehash_reviews(records_url)
     with open_records(records_url) as rec:
         before = {h.table: h for h in rec.heads()}
-        assert rec.verify(recordings=False) == []
-        assert rec.users() == [] and before["users"].seq == 0
-        assert rec.release_status(rid).decision == "approve"
-        rec.add_user("Ada Admin", "AA", "admin")
-        rec.add_user("Rae Reviewer", "RR", "reviewer", by="Ada Admin")
-        rec.review(rid, "Rae Reviewer", approved=True)
-        assert rec.release_status(rid).released
+        report = rec.verify_report(recordings=False)
+        assert report.problems == ()
+        assert any("reviews: 1 row(s) unsigned, made before signing" in n for n in report.notes)
+        assert rec.history("IMU-1")[0].passed is False
+        rec.add_unit("IMU-2")                                 # the first signed row
         after = {h.table: h for h in rec.heads()}
-        assert all(after[t] == before[t] for t in ("units", "stations", "equipment", "runs",
-                                                   "results"))
-        assert rec.verify(recordings=False) == []
+        assert all(after[t] == before[t] for t in ("stations", "runs", "results", "reviews"))
+        report = rec.verify_report(recordings=False)
+        assert report.problems == ()
+        assert [(k.key_id, k.trusted, k.rows) for k in report.keys] == [
+            (1, True, {"signing_keys": 1, "units": 1})]
+        _downgrade_last_unit(rec)
+        problems = rec.verify(recordings=False)
+        assert ("units", 2, "unsigned") in [(p.table, p.key, p.kind) for p in problems]
     engine = create_engine(records_url)
     with engine.connect() as conn:
         version = conn.execute(text("SELECT version_num FROM alembic_version")).scalar()
     engine.dispose()
-    assert version == records_engine.head_revision()
+    assert version == records_engine.head_revision() == "0003"
 
 
-def _rehash_reviews(url):
-    """Give the hand-inserted review its chain hash (Eq. (R.1)), as 0001's code did."""
+def _downgrade_last_unit(rec):
+    """An intruder re-hashes the newest unit as an unsigned (hash version 1) row."""
     from sqlalchemy.orm import Session
 
-    from imucalib.records.canonical import GENESIS
-    from imucalib.records.chain import expected_hash
-    from imucalib.records.schema import Review
+    from imucalib.records.canonical import chain_hash, content_of
+    from imucalib.records.schema import Unit
 
-    engine = create_engine(url)
-    with Session(engine) as session:
-        row = session.get(Review, 1)
-        row.prev_hash = GENESIS
-        row.row_hash = expected_hash(session, row, GENESIS)
-        session.commit()
+    with Session(rec.engine) as session:
+        row = session.get(Unit, 2)
+        values = {c.name: getattr(row, c.key) for c in Unit.__table__.columns}
+        values.update(hash_version=1, key_id=None, signature="", model="forged")
+        forged = chain_hash(row.prev_hash, content_of(Unit.__table__, values))
+    with rec.engine.begin() as conn:
+        conn.execute(text("UPDATE units SET hash_version = 1, key_id = NULL, signature = '', "
+                          "model = 'forged', row_hash = :h WHERE seq = 2"), {"h": forged})
+
+
+def test_a_dropped_alembic_version_is_one_clear_error(records_url):
+    open_records(records_url).close()
+    engine = create_engine(records_url)
+    with engine.begin() as conn:
+        conn.execute(text("DROP TABLE alembic_version"))
     engine.dispose()
+    with pytest.raises(RecordsError, match="holds records tables but no alembic_version"):
+        open_records(records_url)

@@ -60,9 +60,13 @@ def test_a_deleted_last_row_is_caught_by_an_anchor(records, make_result, recordi
     heads = records.heads()
     assert {h.table: h.seq for h in heads}["reviews"] == reviews[-1]
     _sql(records, "DELETE FROM reviews WHERE id = :i", i=reviews[-1])
-    assert records.verify() == []  # nothing after it to notice
-    problems = records.verify(anchors=heads)
-    assert [(p.table, p.key) for p in problems] == [("reviews", reviews[-1])]
+    problems = records.verify()            # the anchor log names it
+    assert [(p.table, p.key, p.kind) for p in problems] == [("reviews", reviews[-1], "deleted")]
+    assert "anchor log" in problems[0].what
+    gone = records.signing_folder / "none.jsonl"    # without the log: its absence, and an anchor
+    assert [p.kind for p in records.verify_report(anchor_log=gone).problems] == ["anchor log"]
+    problems = list(records.verify_report(anchor_log=gone, anchors=heads).problems)
+    assert [(p.table, p.key) for p in problems] == [("anchor log", 0), ("reviews", reviews[-1])]
 
 
 def test_an_edited_added_or_removed_parameter_is_named(records, make_result, recording_file):
@@ -97,9 +101,13 @@ def test_a_row_can_be_rehashed_by_hand(records, make_result, recording_file):
         rows = conn.execute(text("SELECT id, seq, prev_hash, row_hash, created_utc, result_id, "
                                  "reviewer, reviewed_utc, approved, comment FROM reviews "
                                  "ORDER BY seq")).mappings().all()
+    with records.engine.connect() as conn:
+        signed = conn.execute(text("SELECT hash_version, key_id FROM reviews ORDER BY seq")).all()
     prev = "0" * 64
-    for row in rows:
+    for row, (version, key_id) in zip(rows, signed, strict=True):
         content = {k: row[k] for k in ("id", "seq", "result_id", "reviewer", "comment")}
+        content.update(_table="reviews", hash_version=version, key_id=key_id)  # version 2
+        assert version == 2
         content["approved"] = bool(row["approved"])
         for key in ("created_utc", "reviewed_utc"):
             value = row[key]
@@ -123,8 +131,10 @@ def test_a_rehashed_edit_breaks_the_link_to_the_next_row(records, make_result, r
     _sql(records, "UPDATE results SET amendment_reason = 'forged', row_hash = :h WHERE id = :i",
          h=forged, i=ids[0])
     problems = records.verify()
-    assert [(p.table, p.key) for p in problems] == [("results", ids[1])]
-    assert "chain broken" in problems[0].what
+    assert [(p.table, p.key, p.kind) for p in problems] == [
+        ("results", ids[0], "forged"), ("results", ids[1], "chain broken"),
+        ("results", ids[0], "re-hashed")]   # the signature, the next link, the anchor log
+    assert "chain broken" in problems[1].what
 
 
 def test_a_removed_equipment_link_is_named(records, make_result, recording_file):
@@ -164,12 +174,13 @@ def test_a_deleted_or_edited_user_event_is_named(records):
     records.disable_user("Rae Reviewer", "moved", by="Ada Admin")
     heads = records.heads()
     assert {h.table: h.seq for h in heads}["user_events"] == 3
-    _sql(records, "DELETE FROM user_events WHERE seq = 3")   # a last row: only an anchor sees
-    assert records.verify() == []
+    _sql(records, "DELETE FROM user_events WHERE seq = 3")   # a last row: the anchor log sees
+    assert [(p.table, p.key) for p in records.verify()] == [("user_events", 3)]
     assert [(p.table, p.key) for p in records.verify(anchors=heads)] == [("user_events", 3)]
     _sql(records, "DELETE FROM user_events WHERE seq = 1")   # Oli's disable: the chain breaks
     problems = records.verify()
-    assert [(p.table, p.key) for p in problems] == [("user_events", 1), ("user_events", 2)]
+    assert [(p.table, p.key) for p in problems] == [("user_events", 1), ("user_events", 2),
+                                                    ("user_events", 3)]
     assert "missing (deleted)" in problems[0].what and "chain broken" in problems[1].what
 
 

@@ -1,7 +1,8 @@
 """``imucalib records …``: the calibration records database (docs/records.md).
 
 ``list``, ``runs``, ``show``, ``history``, ``drift``, ``due``, ``review``, ``amend``, ``verify``,
-``backup``, ``restore``, ``add-equipment``, ``recertify`` and ``equipment``; every command
+``rekey``, ``backup``, ``restore``, ``add-equipment``, ``recertify`` and ``equipment``; every
+command
 takes ``--db URL`` (default ``$IMUCALIB_DB``, else ``records.db`` in the user's data directory)
 and the listing ones ``--json``. ``imucalib calibrate`` records by default through
 :func:`imucalib.records.calibrations.record_calibration`.
@@ -122,22 +123,26 @@ def show(result_id: Annotated[int, typer.Argument(help="Result id.")], db: Db = 
             known = {e.equipment_id: e for e in records.equipment(current_only=False)}
             release = records.release_status(result_id)
             doc = records.result_document(result_id) if as_json else {}
+            unverified = records.reviews_unverified()
     except CalibrationError as exc:
         raise fail(exc) from exc
     equipment = [known[i] for i in run.equipment_ids if i in known]
     if as_json:
         console.print_json(json.dumps(_jsonable({
-            "result": entry, "run": run, "equipment": equipment, "reviews": entry.reviews,
-            "release": release, "document": doc}), default=str))
+            "result": entry, "run": run, "equipment": equipment,
+            "reviews": [] if unverified else entry.reviews,
+            "release": None if unverified else release, "reviews_unverified": unverified,
+            "document": doc}), default=str))
         return
-    _show_text(entry, run, equipment, release)
+    _show_text(entry, run, equipment, None if unverified else release, unverified)
 
 
 def _utc_text(value: Any) -> str:
     return "—" if value is None else f"{value:%Y-%m-%d %H:%M:%S} UTC"
 
 
-def _show_text(entry: Any, run: Any, equipment: list[Any], release: Any) -> None:
+def _show_text(entry: Any, run: Any, equipment: list[Any], release: Any,
+               unverified: str = "") -> None:
     from imucalib.report.console import display_parameter
 
     verdict = {True: "PASS", False: "FAIL", None: "no decision"}[entry.passed]
@@ -172,6 +177,10 @@ def _show_text(entry: Any, run: Any, equipment: list[Any], release: Any) -> None
         console.print(table)
     else:
         console.print(f"equipment of run {run.run_id}: none recorded", highlight=False)
+    if unverified:
+        console.print(f"reviews of result {entry.result_id}: not shown, {unverified}",
+                      highlight=False, soft_wrap=True)
+        return
     if entry.reviews:
         table = Table("review", "reviewer", "reviewed_utc", "decision", "comment",
                       title=f"reviews of result {entry.result_id}")
@@ -411,13 +420,21 @@ def amend(result_id: Annotated[int, typer.Argument(help="The result replaced.")]
 
 
 @records_app.command()
-def verify(db: Db = None, as_json: Json = False,
+def verify(db: Db = None, as_json: Annotated[bool, typer.Option(
+               "--json", help="Print the problems as JSON (a list).")] = False,
            recordings: Annotated[bool, typer.Option(
                help="Also re-hash the recording files.")] = True,
            anchors: Annotated[Path | None, typer.Option(
                help="A heads.json kept elsewhere (every backup writes one): its chain heads "
-                    "must still be there, which catches a deleted last row.")] = None) -> None:
-    """Re-hash every record and recording; name every mismatch (exit 1 when any)."""
+                    "must still be there, which catches a deleted last row.")] = None,
+           anchor_log: Annotated[Path | None, typer.Option(
+               help="The anchor log to check (default: anchors.jsonl in the records' key "
+                    "folder; a backup's signing/anchors.jsonl).")] = None) -> None:
+    """Re-hash and check the signature of every record, the anchor log and every recording.
+
+    Names every problem (exit 1 when any), says which key signed what, and notes rows made
+    before signing (docs/records.md, "What verify checks").
+    """
     from imucalib.records.views import ChainHead
 
     try:
@@ -426,23 +443,58 @@ def verify(db: Db = None, as_json: Json = False,
             try:
                 heads = [ChainHead(str(h["table"]), int(h["seq"]), str(h["row_hash"]))
                          for h in json.loads(anchors.read_text(encoding="utf-8"))]
-            except (OSError, ValueError, KeyError, TypeError) as exc:
+            except (OSError, ValueError, KeyError, TypeError, RecursionError) as exc:
                 raise InvalidInputError(f"{anchors}: not a heads.json (a list of table, seq, "
                                         f"row_hash): {exc}") from exc
         with _open(db) as records:
-            problems = records.verify(recordings=recordings, anchors=heads)
+            report = records.verify_report(recordings=recordings, anchors=heads,
+                                           anchor_log=anchor_log)
             where = records.url
     except CalibrationError as exc:
         raise fail(exc) from exc
+    problems = list(report.problems)
     if as_json:
         console.print_json(json.dumps(_jsonable(problems)))
-    elif problems:
-        _print(problems, False, f"{len(problems)} problem(s) in {where}",
-               ["table", "key", "what"])
-    else:
-        console.print(f"every record and recording in {where} is intact", highlight=False)
+        if problems:
+            raise typer.Exit(code=1)
+        return
+    for k in report.keys:
+        signed = ", ".join(f"{t} {n}" for t, n in sorted(k.rows.items())) or "nothing"
+        console.print(f"key {k.key_id} ({k.fingerprint}, "
+                      f"{'trusted' if k.trusted else 'NOT trusted'}"
+                      f"{', ' + k.reason if k.reason else ''}): signed {signed}",
+                      highlight=False, soft_wrap=True)
+    for note in report.notes:
+        console.print(f"note: {note}", highlight=False, soft_wrap=True)
     if problems:
+        console.print(f"{len(problems)} problem(s) in {where}:", highlight=False,
+                      soft_wrap=True)
+        for p in problems:
+            console.print(f"  {p} [{p.kind}]", highlight=False, soft_wrap=True, markup=False)
         raise typer.Exit(code=1)
+    console.print(f"every record and recording in {where} is intact", highlight=False)
+
+
+@records_app.command()
+def rekey(reason: Annotated[str, typer.Option(help="Why the key is replaced (recorded).")],
+          lost_key: Annotated[bool, typer.Option(
+              "--lost-key", help="The key file is lost: register a new key without the old "
+                                 "key's endorsement (docs/records.md, \"A lost key\").")]
+          = False,
+          db: Db = None) -> None:
+    """Replace the station key: a new key file, registered in the records.
+
+    The old key endorses the new one; the old key file is kept as
+    station.key.<fingerprint>.retired.
+    """
+    try:
+        with _open(db) as records:
+            key_id = records.rekey(reason, lost=lost_key)
+            folder = records.signing_folder
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    console.print(f"key {key_id} registered{' (lost key: not endorsed)' if lost_key else ''}; "
+                  f"the key file is {folder / 'station.key'}", highlight=False, soft_wrap=True)
 
 
 @records_app.command()
@@ -452,6 +504,7 @@ def backup(dests: Annotated[list[Path], typer.Argument(help="One or more backup 
                help="Also copy the recordings the runs name.")] = True) -> None:
     """Back up the database (a consistent snapshot) and the recordings, verified."""
     from imucalib.records.backup import backup as do_backup
+    from imucalib.records.signing import LOG_FILE, PUB_FILE
 
     try:
         import sqlalchemy as sa
@@ -460,9 +513,12 @@ def backup(dests: Annotated[list[Path], typer.Argument(help="One or more backup 
             url = records.engine.url
             with records.engine.connect() as conn:
                 paths = conn.execute(sa.text("SELECT recording_path FROM runs")).scalars()
-                files = sorted({Path(p) for p in paths if p}) if recordings else []
+                files = sorted({Path(p) for p in paths if isinstance(p, str) and p}
+                               ) if recordings else []
             heads = [_jsonable(h) for h in records.heads()]
-        manifests = do_backup(url, dests, recordings=files)
+            signing = records.signing_folder
+        manifests = do_backup(url, dests, recordings=files, extra_files={
+            f"signing/{LOG_FILE}": signing / LOG_FILE, f"signing/{PUB_FILE}": signing / PUB_FILE})
         for dest in dests:      # the chain heads, kept apart: `verify --anchors` reads them
             (Path(dest) / "heads.json").write_text(json.dumps(heads, indent=1) + "\n",
                                                    encoding="utf-8")
@@ -473,6 +529,22 @@ def backup(dests: Annotated[list[Path], typer.Argument(help="One or more backup 
     for dest, m in zip(dests, manifests, strict=True):
         console.print(f"backed up into {dest}: {sum(t.rows for t in m.tables)} rows, "
                       f"{len(m.recordings)} recording(s), verified", highlight=False)
+
+
+def _restore_signing(source: Path, folder: Path) -> None:
+    """Copy a backup's anchor log and station.pub into the restored records' key folder."""
+    import shutil
+
+    from imucalib.records.signing import LOG_FILE, PUB_FILE
+
+    for name in (LOG_FILE, PUB_FILE):
+        src, dst = source / "signing" / name, folder / name
+        if src.is_file() and not dst.exists():
+            try:
+                folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+                shutil.copyfile(src, dst)
+            except OSError as exc:
+                raise InvalidInputError(f"cannot copy {src} to {dst}: {exc}") from exc
 
 
 @records_app.command()
@@ -489,6 +561,7 @@ def restore(source: Annotated[Path, typer.Argument(help="A backup folder.")],
         summary = do_restore(source, resolve_url(db), create_schema=upgrade,
                              recordings_dir=recordings_dir)
         with open_records(db) as records:
+            _restore_signing(source, records.signing_folder)
             problems = records.verify(recordings=recordings_dir is not None)
     except CalibrationError as exc:
         raise fail(exc) from exc

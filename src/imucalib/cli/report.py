@@ -70,6 +70,7 @@ def _records_facts(db: str | None, result_id: int, customer: str | None
         run = records.run(entry.run_id)
         kit = {e.equipment_id: e for e in records.equipment(current_only=False)}
         status = records.release_status(result_id)
+        unverified = records.reviews_unverified()   # a review is shown once verified
     started = entry.calibrated_utc or run.started_utc
     items = []
     for eid in run.equipment_ids:
@@ -95,6 +96,9 @@ def _records_facts(db: str | None, result_id: int, customer: str | None
                            decision=status.decision or "",
                            reviewed_utc=_when(status.reviewed_utc), comment=status.comment,
                            reason=status.reason)}
+    if unverified:
+        facts["release"] = Release(released=False, reason=unverified)
+        return facts, (), run
     return facts, entry.reviews, run
 
 

@@ -12,6 +12,9 @@ Contents
     The SQLAlchemy models; :mod:`imucalib.records.migrations` the Alembic revisions.
 :mod:`imucalib.records.canonical`, :mod:`imucalib.records.chain`, :mod:`imucalib.records.verify`
     The hash chain: canonical form, append, verification.
+:mod:`imucalib.records.signing`, :mod:`imucalib.records.keys`, :mod:`imucalib.records.anchor_log`
+    The station key (Ed25519) that signs every row, its registration and rotation, and the
+    anchor log of chain heads kept beside it.
 :mod:`imucalib.records.users`
     Users and roles, who is acting (:func:`resolve_user`), the review control and release.
 :mod:`imucalib.records.views`
@@ -40,6 +43,7 @@ if TYPE_CHECKING:
         DueUnit,
         EquipmentView,
         HistoryEntry,
+        KeyUse,
         ParameterRow,
         Problem,
         ReleaseStatus,
@@ -47,12 +51,13 @@ if TYPE_CHECKING:
         RunView,
         UserEventView,
         UserView,
+        VerifyReport,
     )
 
 __all__ = ["DEFAULT_INTERVAL_DAYS", "ENV_VAR", "ROLES", "USER_ENV", "ChainHead", "DriftPoint",
-           "DueUnit", "EquipmentView", "HistoryEntry", "ParameterRow", "Problem", "Records",
-           "ReleaseStatus", "ReviewView", "RunView", "UserEventView", "UserView", "default_url",
-           "open_records", "resolve_url", "resolve_user"]
+           "DueUnit", "EquipmentView", "HistoryEntry", "KeyUse", "ParameterRow", "Problem",
+           "Records", "ReleaseStatus", "ReviewView", "RunView", "UserEventView", "UserView",
+           "VerifyReport", "default_url", "open_records", "resolve_url", "resolve_user"]
 
 _API, _ENGINE, _VIEWS = "imucalib.records.api", "imucalib.records.engine", "imucalib.records.views"
 _USERS = "imucalib.records.users"
@@ -60,7 +65,7 @@ __getattr__ = lazy_getattr(__name__, {
     "DEFAULT_INTERVAL_DAYS": _API, "Records": _API, "open_records": _API,
     "ENV_VAR": _ENGINE, "default_url": _ENGINE, "resolve_url": _ENGINE,
     **dict.fromkeys(("ChainHead", "DriftPoint", "DueUnit", "EquipmentView", "HistoryEntry",
-                     "ParameterRow", "Problem", "ReleaseStatus", "ReviewView", "RunView",
-                     "UserEventView", "UserView"), _VIEWS),
+                     "KeyUse", "ParameterRow", "Problem", "ReleaseStatus", "ReviewView",
+                     "RunView", "UserEventView", "UserView", "VerifyReport"), _VIEWS),
     "ROLES": _USERS, "USER_ENV": _USERS, "resolve_user": _USERS,
 })

@@ -34,11 +34,11 @@ from datetime import UTC, date, datetime, timedelta
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final, TypeVar
 
-from sqlalchemy import Engine, or_, select
-from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError
+from sqlalchemy import Engine, func, or_, select, true
+from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError, StatementError
 from sqlalchemy.orm import Session
 
-from imucalib.errors import InvalidInputError, RecordsError
+from imucalib.errors import CalibrationError, InvalidInputError, RecordsError
 from imucalib.io.hashing import file_sha256
 from imucalib.records import chain
 from imucalib.records.canonical import canonical_json
@@ -67,6 +67,7 @@ from imucalib.records.views import (
     ReviewView,
     RunView,
     UserView,
+    VerifyReport,
 )
 
 if TYPE_CHECKING:  # the result models (numpy) are imported where a result is recorded
@@ -79,7 +80,30 @@ __all__ = ["DEFAULT_INTERVAL_DAYS", "Records", "open_records"]
 DEFAULT_INTERVAL_DAYS: Final = 365
 #: Attempts of a transaction that met a busy database or a deadlock.
 ATTEMPTS: Final = 8
+#: What reading a row of unexpected type or shape raises (a stored value that is not of its
+#: column's type, a dangling reference): reported as a database problem, not a crash.
+DATA_ERRORS: Final = (ValueError, TypeError, KeyError, IndexError, AttributeError,
+                      AssertionError, ArithmeticError, RecursionError, StatementError)
 _T = TypeVar("_T")
+
+
+def _data_problem(url: str, exc: BaseException) -> RecordsError:
+    what = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return RecordsError(f"the records database {url} has a problem: {what[:300]}; run "
+                        "`imucalib records verify` to find the rows")
+
+
+def _number(value: Any) -> float:
+    """Return a stored number as a float; anything else (text in a float column) is refused."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"a parameter value or σ is not a number ({value!r})")
+    return float(value)
+
+
+def _dangling(table: str, row_id: int, column: str, value: Any) -> RecordsError:
+    return RecordsError(f"the records database has a problem: {table} row {row_id} names "
+                        f"{column} {value!r}, which is not there (a dangling reference); run "
+                        "`imucalib records verify`")
 
 
 def _software_version() -> str:
@@ -160,9 +184,16 @@ class Records:
         From :func:`imucalib.records.engine.make_engine`, schema already at head.
     """
 
-    def __init__(self, engine: Engine) -> None:
+    def __init__(self, engine: Engine, signing: Path | None = None) -> None:
+        from imucalib.records.signing import signing_folder
+
         self.engine = engine
         self.url = safe_url(engine.url.render_as_string(hide_password=False))
+        #: The key folder: station key, station.pub, anchor log (docs/records.md, "Signing").
+        self.signing_folder = (signing if signing is not None else
+                               signing_folder(engine.url.render_as_string(hide_password=False)))
+        self._key: Any = None
+        self._values_checked = False
 
     def close(self) -> None:
         """Release the connections."""
@@ -175,25 +206,40 @@ class Records:
         self.close()
 
     # --- transactions -----------------------------------------------------------------------
-    def _run(self, work: Callable[[Session], _T], *, write: bool) -> _T:
+    def _run(self, work: Callable[[Session], _T], *, write: bool,
+             anchor_key: Any = None, checked: bool = True) -> _T:
         """Run `work` in one transaction, retried when the database is busy.
 
         A write on SQLite begins with ``BEGIN IMMEDIATE``; a read sees one snapshot (SQLite's
         WAL read transaction, PostgreSQL's REPEATABLE READ), so :meth:`verify` never sees a
-        result without the parameters committed with it.
+        result without the parameters committed with it. With `checked`, a database holding a
+        value not of its column's type is refused first (one line that asks for
+        ``records verify``; :func:`~imucalib.records.verify.first_bad_value`).
         """
         sqlite = self.engine.dialect.name == "sqlite"
         for attempt in range(ATTEMPTS):
             try:
+                appended: dict[str, tuple[int, str]] = {}
+                key = anchor_key
                 with self.engine.connect() as conn:
                     if write and sqlite:
                         conn.execution_options(**{BEGIN_OPTION: "BEGIN IMMEDIATE"})
                     elif not write and not sqlite:  # one snapshot for all a query reads
                         conn.execution_options(isolation_level="REPEATABLE READ")
                     with conn.begin(), Session(bind=conn, expire_on_commit=False) as session:
+                        if checked:
+                            self._check_values(session)
+                        if write and anchor_key is None:
+                            self._sign_with(session)
+                            key = self._key
                         out = work(session)
                         session.flush()
+                        appended = dict(session.info.get("appended", {}))
+                if appended and key is not None:
+                    self._anchor(appended, key)
                 return out
+            except CalibrationError:
+                raise
             except OperationalError as exc:
                 text = str(exc.orig).lower()
                 transient = ("locked" in text or "busy" in text or "deadlock" in text
@@ -206,7 +252,96 @@ class Records:
                                    f"{exc.orig}") from exc
             except DBAPIError as exc:
                 raise RecordsError(f"records database {self.url}: {exc.orig}") from exc
+            except DATA_ERRORS as exc:
+                raise _data_problem(self.url, exc) from exc
         raise AssertionError("unreachable")  # pragma: no cover
+
+    def _check_values(self, session: Session) -> None:
+        """Refuse a database holding a value not of its column's type (once per object)."""
+        from imucalib.records.verify import first_bad_value
+
+        if self._values_checked:
+            return
+        bad = first_bad_value(session)
+        if not bad:
+            self._values_checked = True
+        else:
+            raise RecordsError(f"the records database {self.url} has a problem: {bad}; run "
+                               "`imucalib records verify`")
+
+    # --- signing ----------------------------------------------------------------------------
+    def _sign_with(self, session: Session) -> None:
+        """Give `session` the station key to sign with (registering it in a new database)."""
+        from imucalib.records.keys import ensure_signer
+
+        key, key_id = ensure_signer(session, self.signing_folder, self._key)
+        self._key = key
+        session.info["signer"] = (key, key_id)
+
+    def _anchor(self, heads: dict[str, tuple[int, str]], key: Any) -> None:
+        """Append the new chain heads to the anchor log, Eq. (R.10), signed by `key`."""
+        from imucalib.records.anchor_log import append_heads
+        from imucalib.records.signing import LOG_FILE
+
+        append_heads(self.signing_folder / LOG_FILE, key, heads)
+
+    def trusted_keys(self) -> list[str]:
+        """Return the public keys verify trusts: the key file's, else ``station.pub``'s."""
+        from imucalib.records.signing import KEY_FILE, PUB_FILE, load_key, read_public
+
+        key = load_key(self.signing_folder / KEY_FILE)
+        if key is not None:
+            return [key.public_hex]
+        pub = read_public(self.signing_folder / PUB_FILE)
+        return [pub] if pub else []
+
+    def rekey(self, reason: str, *, lost: bool = False) -> int:
+        """Register a new station key and make it the key file; return its id.
+
+        The new key is endorsed by the current key file's key (R.8); with `lost` the current
+        key file is gone and the new key is registered without endorsement (docs/records.md,
+        "A lost key"). The old key file is kept as ``station.key.<fingerprint>.retired``.
+
+        Raises
+        ------
+        RecordsError
+            No key file without `lost`; a key file with `lost`; an empty reason.
+        """
+        from imucalib.records.keys import register_new_key
+        from imucalib.records.signing import KEY_FILE, create_key, load_key, write_public
+
+        if not reason.strip():
+            raise RecordsError("a new key needs a reason (why the key is replaced); got an "
+                               "empty one")
+        path = self.signing_folder / KEY_FILE
+        old = load_key(path)
+        if old is None and not lost:
+            raise RecordsError(f"there is no key file {path} to endorse a new key with: if the "
+                               "key was lost, pass --lost-key (docs/records.md, \"A lost key\")")
+        if old is not None and lost:
+            raise RecordsError(f"--lost-key, but the key file {path} is there: rekey without "
+                               "--lost-key (the old key endorses the new one)")
+        staged = path.with_name(KEY_FILE + ".new")
+        staged.unlink(missing_ok=True)
+        new = create_key(staged, publish=False)
+        try:
+            new_id = self._run(lambda s: register_new_key(s, old, new, reason.strip()),
+                               write=True, anchor_key=new)
+        except BaseException:
+            staged.unlink(missing_ok=True)
+            raise
+        try:
+            if old is not None:
+                path.replace(path.with_name(f"{KEY_FILE}.{old.fingerprint}.retired"))
+            staged.replace(path)
+        except OSError as exc:
+            raise RecordsError(f"key {new_id} is registered but its file {staged} could not "
+                               f"become {path}: move it there by hand ({exc})") from exc
+        from imucalib.records.signing import StationKey
+
+        self._key = StationKey(path, new.private, new.public_hex)
+        write_public(self._key)
+        return new_id
 
     # --- units, stations, equipment ---------------------------------------------------------
     @staticmethod
@@ -444,6 +579,9 @@ class Records:
               verification: Mapping[str, Any] | None = None) -> int:
         """Record a new version of result `result_id` and return its id; the old one stays.
 
+        `passed` None keeps the decision of the result amended (a FAIL stays a FAIL unless
+        the new result decides otherwise).
+
         Raises
         ------
         RecordsError
@@ -464,9 +602,11 @@ class Records:
                 raise RecordsError(f"result {result_id} was already amended by result {newer}; "
                                    f"amend {newer}")
             unit = session.get(Unit, old.unit_id)
-            assert unit is not None
+            if unit is None:
+                raise _dangling("results", old.id, "unit", old.unit_id)
+            decided = old.passed if passed is None else passed   # the decision stays
             return self._append_result(session, run_id=old.run_id, serial=unit.serial,
-                                       result=result, passed=passed, verification=verification,
+                                       result=result, passed=decided, verification=verification,
                                        version=old.version + 1, replaces=result_id,
                                        reason=reason, unit_id=old.unit_id)
         return self._run(work, write=True)
@@ -554,6 +694,20 @@ class Records:
                 result_id=result_id, reviewer=name, approved=bool(approved), comment=comment,
                 reviewed_utc=_utc(when) or datetime.now(UTC))).id
         return self._run(work, write=True)
+
+    def reviews_unverified(self) -> str:
+        """Return why reviews cannot be shown as authorisation ("" when the records verify).
+
+        A review is shown (``records show``, a certificate) only after the records verify:
+        every hash, signature and anchor (recordings aside). Else a review could be a forged
+        row; the reason names the first problem and asks for ``records verify``.
+        """
+        problems = self.verify_report(recordings=False).problems
+        if not problems:
+            return ""
+        return (f"the records do not verify ({len(problems)} problem(s), first: {problems[0]});"
+                " a review is not shown as authorisation until `imucalib records verify` is "
+                "clean")
 
     def release_status(self, result_id: int) -> ReleaseStatus:
         """Return whether a result is released, and by whom, when, with what decision.
@@ -657,8 +811,11 @@ class Records:
         out = []
         for res in results:
             run = session.get(Run, res.run_id)
+            if run is None:
+                raise _dangling("results", res.id, "run", res.run_id)
             unit = session.get(Unit, res.unit_id)
-            assert run is not None and unit is not None
+            if unit is None:
+                raise _dangling("results", res.id, "unit", res.unit_id)
             successor = session.scalars(select(Result.id)
                                         .where(Result.replaces_id == res.id)).first()
             params = session.scalars(select(ResultParameter)
@@ -673,7 +830,8 @@ class Records:
                 created_utc=_as_utc(res.created_utc), passed=res.passed,
                 replaces=res.replaces_id, replaced_by=successor,
                 amendment_reason=res.amendment_reason,
-                parameters=tuple(ParameterRow(p.name, p.value, p.std, p.unit) for p in params),
+                parameters=tuple(ParameterRow(str(p.name), _number(p.value), _number(p.std),
+                                              str(p.unit)) for p in params),
                 reviews=tuple(ReviewView(r.id, r.result_id, r.reviewer,
                                          _as_utc(r.reviewed_utc), r.approved, r.comment)
                               for r in reviews),
@@ -762,7 +920,8 @@ class Records:
                     if res.id in replaced:
                         continue
                     run = session.get(Run, res.run_id)
-                    assert run is not None
+                    if run is None:
+                        raise _dangling("results", res.id, "run", res.run_id)
                     when = calibration_date(session, run, res)
                     if best is None or when > best[0]:
                         best = (when, res.id)
@@ -852,18 +1011,31 @@ class Records:
         """Return the head of every chain (keep them elsewhere; :meth:`verify` checks them)."""
         def work(session: Session) -> list[ChainHead]:
             out = []
-            for model in CHAINED:
+            for model in CHAINED:       # the largest integer seq: a damaged row is skipped
                 head = session.execute(select(model.seq, model.row_hash)
+                                       .where(func.typeof(model.seq) == "integer"
+                                              if sqlite else true())
                                        .order_by(model.seq.desc()).limit(1)).first()
                 out.append(ChainHead(model.__tablename__,  # type: ignore[attr-defined]
                                      int(head[0]) if head else 0,
                                      str(head[1]) if head else ""))
             return out
-        return self._run(work, write=False)
+        sqlite = self.engine.dialect.name == "sqlite"
+        return self._run(work, write=False, checked=False)   # a damaged database: backed up
 
     def verify(self, *, recordings: bool = True,
                anchors: Iterable[ChainHead] = ()) -> list[Problem]:
         """Re-hash every row and recording; return every mismatch (empty: all is intact).
+
+        :meth:`verify_report`'s problems (with the anchor log and the trusted key of the key
+        folder).
+        """
+        return list(self.verify_report(recordings=recordings, anchors=anchors).problems)
+
+    def verify_report(self, *, recordings: bool = True, anchors: Iterable[ChainHead] = (),
+                      anchor_log: Path | None = None,
+                      trusted_keys: Iterable[str] | None = None) -> VerifyReport:
+        """Check every row's hash and signature, the anchor log, every recording.
 
         Parameters
         ----------
@@ -872,12 +1044,25 @@ class Records:
         anchors : iterable of ChainHead
             Heads kept from an earlier :meth:`heads`; each must still be in its chain with the
             same hash (this catches a deleted last row).
+        anchor_log : Path, optional
+            Default: ``anchors.jsonl`` in the key folder.
+        trusted_keys : iterable of str, optional
+            Public keys (hex) to trust; default :meth:`trusted_keys`.
         """
-        from imucalib.records.verify import verify_session
+        from imucalib.records.anchor_log import read_log
+        from imucalib.records.signing import LOG_FILE
+        from imucalib.records.verify import verify_report
 
         anchor_list = list(anchors)
-        return self._run(lambda s: verify_session(s, recordings=recordings,
-                                                  anchors=anchor_list), write=False)
+        log = anchor_log if anchor_log is not None else self.signing_folder / LOG_FILE
+        roots = list(self.trusted_keys() if trusted_keys is None else trusted_keys)
+        present = log.exists()     # read before the snapshot: a later line names later rows
+        lines = read_log(log) if present else ([], [])
+        return self._run(lambda s: verify_report(s, recordings=recordings,
+                                                 anchors=anchor_list, anchor_log=log,
+                                                 trusted_keys=roots, log=lines,
+                                                 log_present=present), write=False,
+                         checked=False)
 
 
 def open_records(url: str | None = None) -> Records:

@@ -9,8 +9,12 @@ A backup is a folder (docs/records.md, "Backups") holding
 - ``database.sqlite3`` (SQLite only): a byte copy made with SQLite's online backup API from the
   same connection, inside the same read transaction (the same snapshot as the dumps);
 - ``recordings/<name>``: byte copies of the recording files given;
+- ``signing/anchors.jsonl`` and ``signing/station.pub``: the anchor log and the public key
+  of the records' key folder (given as `extra_files`; never the private key);
 - ``manifest.json``: each file's SHA-256 digest and size, the kind of database, its Alembic
-  revision, the rows per table, the time and the software version.
+  revision, the rows per table, the time, the software version, and the public keys the
+  records register (``signing_keys``: id, fingerprint, public key; docs/records.md,
+  "Signing").
 
 A file is intact when
 
@@ -50,7 +54,7 @@ import math
 import os
 import sqlite3
 import uuid
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
@@ -141,6 +145,8 @@ class Manifest:
         Relative path → :class:`FileDigest` of every file but the manifest.
     recordings : tuple of str
         The recordings' relative paths (``recordings/<name>``).
+    signing_keys : tuple of dict
+        The public keys registered in the records (``id``, ``fingerprint``, ``public_key``).
     """
 
     dest: Path
@@ -151,6 +157,7 @@ class Manifest:
     tables: tuple[TableDump, ...]
     files: dict[str, FileDigest] = field(default_factory=dict)
     recordings: tuple[str, ...] = ()
+    signing_keys: tuple[dict[str, Any], ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         """Return the manifest as written to ``manifest.json`` (without ``dest``)."""
@@ -165,6 +172,7 @@ class Manifest:
             "files": {k: {"sha256": v.sha256, "size_bytes": v.size_bytes}
                       for k, v in sorted(self.files.items())},
             "recordings": list(self.recordings),
+            "signing_keys": [dict(k) for k in self.signing_keys],
         }
 
     @classmethod
@@ -196,7 +204,8 @@ class Manifest:
                              for t in raw["tables"]),
                 files={str(k): FileDigest(str(v["sha256"]), int(v["size_bytes"]))
                        for k, v in raw["files"].items()},
-                recordings=tuple(str(r) for r in raw["recordings"]))
+                recordings=tuple(str(r) for r in raw["recordings"]),
+                signing_keys=tuple(dict(k) for k in raw.get("signing_keys", [])))
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise BackupCorruptError(dest, [f"{MANIFEST}: malformed ({exc!r})"]) from None
 
@@ -424,9 +433,21 @@ def _recording_names(recordings: Sequence[str | Path]) -> list[tuple[Path, str]]
     return out
 
 
+def _keys_of(dump: Path) -> tuple[dict[str, Any], ...]:
+    """Return the public keys in a dump of ``signing_keys`` (id, fingerprint, public key)."""
+    if not dump.is_file():
+        return ()
+    out = []
+    for row in _rows(dump):
+        out.append({"id": row.get("id"), "fingerprint": row.get("fingerprint"),
+                    "public_key": row.get("public_key")})
+    return tuple(out)
+
+
 def backup(url: str | sa.URL, dests: Sequence[str | Path], *,
            recordings: Sequence[str | Path] = (),
-           metadata: sa.MetaData | None = None) -> list[Manifest]:
+           metadata: sa.MetaData | None = None,
+           extra_files: Mapping[str, str | Path] | None = None) -> list[Manifest]:
     """Back the records database and its recordings up into each folder of `dests`.
 
     Parameters
@@ -441,6 +462,9 @@ def backup(url: str | sa.URL, dests: Sequence[str | Path], *,
     metadata : sqlalchemy.MetaData, optional
         The tables to dump; the database is reflected when omitted (every table but
         ``alembic_version``).
+    extra_files : mapping, optional
+        Relative path in the backup → a file to copy there (the anchor log, ``station.pub``);
+        a file that is not there is left out.
 
     Returns
     -------
@@ -461,6 +485,9 @@ def backup(url: str | sa.URL, dests: Sequence[str | Path], *,
     first = folders[0]
     files: dict[str, FileDigest] = {}
     tables: list[TableDump] = []
+    for rel, src in sorted((extra_files or {}).items()):   # before the snapshot: the anchor
+        if Path(src).is_file():                              # log names no row it lacks
+            files[rel] = _copy_hashed(Path(src), _safe_rel(first, rel))
     engine = _engine(url)
     kind = engine.dialect.name
     try:
@@ -482,6 +509,7 @@ def backup(url: str | sa.URL, dests: Sequence[str | Path], *,
 
     for src, rel in recs:
         files[rel] = _copy_hashed(src, first / rel)
+    keys = _keys_of(first / "tables" / "signing_keys.jsonl")
     for folder in folders[1:]:
         for rel in files:
             # From the first folder; checked below against the digests of what was written.
@@ -491,7 +519,8 @@ def backup(url: str | sa.URL, dests: Sequence[str | Path], *,
     for folder in folders:
         m = Manifest(dest=folder, created_utc=created, software_version=__version__,
                      database_kind=kind, schema_revision=revision, tables=tuple(tables),
-                     files=dict(files), recordings=tuple(rel for _, rel in recs))
+                     files=dict(files), recordings=tuple(rel for _, rel in recs),
+                     signing_keys=keys)
         tmp = folder / (MANIFEST + ".partial")
         tmp.write_text(json.dumps(m.to_json(), indent=2) + "\n", encoding="utf-8")
         tmp.replace(folder / MANIFEST)

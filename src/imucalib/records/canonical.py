@@ -7,9 +7,12 @@ Equations
 (R.2) ``prev_hash(1) = "0" × 64`` and ``prev_hash(n) = row_hash(n − 1)`` in ``seq`` order, per
       table;
 (R.3) ``C(row)`` = :func:`canonical_json` of an object holding every column of the row but
-      ``prev_hash`` and ``row_hash`` (``id`` and ``seq`` included), plus the children hashed
-      with it: a run's ``"equipment"`` (the sorted equipment ids) and a result's
-      ``"parameters"`` (``{"name", "std", "unit", "value"}`` objects sorted by name).
+      ``prev_hash``, ``row_hash`` and ``signature`` (``id`` and ``seq`` included), plus the
+      children hashed with it: a run's ``"equipment"`` (the sorted equipment ids) and a
+      result's ``"parameters"`` (``{"name", "std", "unit", "value"}`` objects sorted by name).
+      Hash version 1 (rows made before revision 0003) leaves ``hash_version`` and ``key_id``
+      out too; hash version 2 (every row since) also holds ``"_table"``, the table's name, so
+      that the hash binds the row's table, id and sequence number.
 
 Canonical JSON: keys sorted, no whitespace (``","`` and ``":"``), non-ASCII characters as
 themselves, floats as Python's ``repr`` (shortest round-trip form, ``1.0`` not ``1``), integers
@@ -21,7 +24,7 @@ depend on the backend a row was read from.
 Contents
 --------
 :data:`GENESIS`, :func:`canonical_json`, :func:`chain_hash`, :func:`row_content`,
-:func:`utc_text`
+:func:`content_of`, :func:`utc_text`, :class:`StoredValueError`
 """
 
 from __future__ import annotations
@@ -34,12 +37,29 @@ from typing import Any, Final
 
 from sqlalchemy import Boolean, Date, DateTime, Float, Integer
 
-__all__ = ["GENESIS", "canonical_json", "chain_hash", "row_content", "utc_text"]
+__all__ = ["GENESIS", "HASH_VERSIONS", "StoredValueError", "canonical_json", "chain_hash",
+           "content_of", "row_content", "utc_text"]
 
 #: ``prev_hash`` of the first row of every table, Eq. (R.2).
 GENESIS: Final = "0" * 64
 #: Columns that are the chain itself, not content (Eq. (R.3)).
-CHAIN_COLUMNS: Final = frozenset({"prev_hash", "row_hash"})
+CHAIN_COLUMNS: Final = frozenset({"prev_hash", "row_hash", "signature"})
+#: Columns hash version 1 leaves out (they did not exist before revision 0003).
+V2_COLUMNS: Final = frozenset({"hash_version", "key_id"})
+#: The hash versions this software knows (Eq. (R.3)).
+HASH_VERSIONS: Final = (1, 2)
+#: The largest integer a stored value may be (a 64-bit signed column).
+MAX_INT: Final = 2**63 - 1
+
+
+class StoredValueError(ValueError):
+    """A stored value that is not of its column's type (``std is not a number``)."""
+
+    def __init__(self, column: str, value: Any, expected: str) -> None:
+        shown = repr(value)
+        shown = shown if len(shown) <= 60 else shown[:57] + "…"
+        super().__init__(f"{column} is {expected} ({shown})")
+        self.column = column
 
 
 def utc_text(value: datetime) -> str:
@@ -85,20 +105,90 @@ def chain_hash(prev_hash: str, content: Mapping[str, Any]) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def _coerce(column_type: Any, value: Any) -> Any:
+def _python(value: Any) -> Any:
+    """Return a numpy scalar as its Python value, anything else as it is."""
+    if not isinstance(value, str | bytes) and hasattr(value, "item") and callable(value.item):
+        return value.item()
+    return value
+
+
+def coerce(name: str, column_type: Any, value: Any, nullable: bool = True) -> Any:
+    """Return `value` read as its column's type (Eq. (R.3)), strictly.
+
+    A value as the database driver hands it back: SQLite gives text for a datetime and 0/1
+    for a boolean. Anything else — text in a number column, a timestamp with junk after it,
+    a float in an integer column, NULL where the schema forbids it — is refused.
+
+    Raises
+    ------
+    StoredValueError
+        Naming the column and what it holds.
+    """
     if value is None:
+        if not nullable:
+            raise StoredValueError(name, value, "NULL, not allowed")
         return None
     if isinstance(column_type, Boolean):
-        return bool(value)
+        if isinstance(value, bool) or (isinstance(value, int) and value in (0, 1)):
+            return bool(value)
+        raise StoredValueError(name, value, "not a boolean")
     if isinstance(column_type, Integer):
-        return int(value)
+        if isinstance(value, int) and not isinstance(value, bool) and abs(value) <= MAX_INT:
+            return int(value)
+        raise StoredValueError(name, value, "not an integer")
     if isinstance(column_type, Float):
-        return float(value)
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return float(value)
+        raise StoredValueError(name, value, "not a number")
     if isinstance(column_type, DateTime):
+        if isinstance(value, str):
+            try:
+                value = datetime.fromisoformat(value)
+            except ValueError:
+                raise StoredValueError(name, value, "not a timestamp") from None
+        if not isinstance(value, datetime):
+            raise StoredValueError(name, value, "not a timestamp")
         return utc_text(value)
     if isinstance(column_type, Date):
+        if isinstance(value, str):
+            try:
+                value = date.fromisoformat(value)
+            except ValueError:
+                raise StoredValueError(name, value, "not a date") from None
+        if not isinstance(value, date) or isinstance(value, datetime):
+            raise StoredValueError(name, value, "not a date")
         return value.isoformat()
+    if not isinstance(value, str):
+        raise StoredValueError(name, value, "not text")
     return value
+
+
+def content_of(table: Any, values: Mapping[str, Any], **children: Any) -> dict[str, Any]:
+    """Return the content C of a row of `table` (Eq. (R.3)) from its stored `values`.
+
+    Parameters
+    ----------
+    table : sqlalchemy.Table
+        The chained table.
+    values : mapping
+        Column name → value as stored (``hash_version`` decides the form).
+    **children
+        Child rows hashed with it (``equipment=[…]``, ``parameters=[…]``).
+
+    Raises
+    ------
+    StoredValueError
+        A value that is not of its column's type.
+    """
+    version = values.get("hash_version") or 1
+    skip = CHAIN_COLUMNS | (V2_COLUMNS if version == 1 else frozenset())
+    content = {c.name: coerce(c.name, c.type, values.get(c.name), bool(c.nullable)
+                              or c.name in V2_COLUMNS)
+               for c in table.columns if c.name not in skip}
+    if version != 1:
+        content["_table"] = table.name
+    content.update(children)
+    return content
 
 
 def row_content(row: Any, **children: Any) -> dict[str, Any]:
@@ -110,7 +200,6 @@ def row_content(row: Any, **children: Any) -> dict[str, Any]:
     **children
         Child rows hashed with it (``equipment=[…]``, ``parameters=[…]``).
     """
-    content = {c.name: _coerce(c.type, getattr(row, c.key))
-               for c in row.__table__.columns if c.name not in CHAIN_COLUMNS}
-    content.update(children)
-    return content
+    table = row.__table__
+    values = {c.name: _python(getattr(row, c.key)) for c in table.columns}
+    return content_of(table, values, **children)

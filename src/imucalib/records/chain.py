@@ -10,6 +10,12 @@ Contents
 :func:`expected_hash`
     Eq. (R.1) recomputed for a stored row (what verify compares).
 
+Signing: every appended row gets ``hash_version`` 2, the id of the key that signs it and its
+signature, Eq. (R.7), by the station key the session carries in ``session.info["signer"]``
+(``(StationKey, key_id)``, set by :class:`~imucalib.records.api.Records`); a
+``signing_keys`` row is signed by the key it registers. ``session.info["appended"]`` collects
+the new head of each table appended to, for the anchor log (Eq. (R.10)).
+
 Serialising: on SQLite the caller's transaction began with ``BEGIN IMMEDIATE`` (one writer for
 the whole database); on PostgreSQL :func:`append` takes ``pg_advisory_xact_lock(key)`` with one
 key per table, held to the end of the transaction. Callers append to tables in the order of
@@ -25,8 +31,10 @@ from typing import Any, Final
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
+from imucalib.errors import RecordsError
 from imucalib.records.canonical import GENESIS, chain_hash, row_content
 from imucalib.records.schema import CHAINED, Result, ResultParameter, Run, RunEquipment
+from imucalib.records.signing import StationKey, row_message
 
 __all__ = ["LOCK_KEYS", "append", "children_of", "expected_hash", "lock"]
 
@@ -72,17 +80,25 @@ def _fill_defaults(row: Any) -> None:
             setattr(row, column.key, column.default.arg)
 
 
-def append(session: Session, row: Any, **children: Any) -> Any:
-    """Append `row` to its table's chain and return it (its ``id`` equals its ``seq``).
+def append(session: Session, row: Any, *, self_signed: StationKey | None = None,
+           **children: Any) -> Any:
+    """Append `row` to its table's chain, signed, and return it (its ``id`` equals its ``seq``).
 
     Parameters
     ----------
     session : Session
-        In a write transaction (module docstring).
+        In a write transaction (module docstring), with ``info["signer"]``.
     row : a new instance of a chained model
+    self_signed : StationKey, optional
+        For a ``signing_keys`` row: the key it registers, which signs it.
     **children
         The child content it is hashed with, as :func:`children_of` will read it back
         (``equipment=[ids]``, ``parameters=[…]``); the caller adds the child rows.
+
+    Raises
+    ------
+    RecordsError
+        No station key to sign with.
     """
     model = type(row)
     lock(session, model)
@@ -94,8 +110,19 @@ def append(session: Session, row: Any, **children: Any) -> Any:
     row.prev_hash = prev
     if row.created_utc is None:
         row.created_utc = datetime.now(UTC)
+    signer = session.info.get("signer")
+    if self_signed is not None:
+        key, key_id = self_signed, seq
+    elif signer is not None:
+        key, key_id = signer
+    else:
+        raise RecordsError("no station key to sign the new row with (docs/records.md, "
+                           "\"Signing\")")
+    row.hash_version, row.key_id = 2, key_id
     _fill_defaults(row)
     row.row_hash = chain_hash(prev, row_content(row, **children))
+    row.signature = key.sign(row_message(row.row_hash))
     session.add(row)
     session.flush()
+    session.info.setdefault("appended", {})[model.__tablename__] = (seq, row.row_hash)
     return row

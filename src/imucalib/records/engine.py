@@ -39,7 +39,7 @@ MIGRATIONS: Final = Path(__file__).resolve().parent / "migrations"
 #: The newest revision in ``migrations/versions`` (what :func:`head_revision` finds): a database
 #: already there is opened without importing Alembic (a third of a second; a test checks that
 #: the two agree).
-HEAD_REVISION: Final = "0002"
+HEAD_REVISION: Final = "0003"
 
 
 def _make_folder(folder: Path, url: str) -> None:
@@ -147,23 +147,61 @@ def _current_revisions(engine: Engine) -> list[str]:
         return [row[0] for row in conn.execute(text("SELECT version_num FROM alembic_version"))]
 
 
+#: Attempts of a schema upgrade that met a database busy with another opener.
+UPGRADE_ATTEMPTS: Final = 12
+#: Tables every records database made by imucalib has (revision 0001 on).
+_RECORDS_TABLES: Final = ("units", "results", "runs")
+
+
+def _transient(exc: BaseException) -> bool:
+    text = str(getattr(exc, "orig", None) or exc).lower()
+    return "locked" in text or "busy" in text or "deadlock" in text
+
+
 def upgrade(engine: Engine) -> None:
     """Bring the schema to the newest revision (Alembic ``upgrade head``, run in code).
+
+    Safe against a concurrent opener: a database that another process is creating or
+    upgrading at the same instant ("database is locked") is waited for and tried again.
 
     Raises
     ------
     RecordsError
-        The database cannot be reached, or it carries a schema revision this software does not
-        know (made by a newer imucalib).
+        The database cannot be reached, it carries a schema revision this software does not
+        know (made by a newer imucalib), or it holds records tables without Alembic's
+        ``alembic_version`` (its revision cannot be told).
     """
+    import time
+
+    for attempt in range(UPGRADE_ATTEMPTS):
+        try:
+            _upgrade_once(engine)
+            return
+        except (OperationalError, _DBAPIError) as exc:
+            if not _transient(exc) or attempt == UPGRADE_ATTEMPTS - 1:
+                url = safe_url(engine.url.render_as_string(hide_password=False))
+                raise RecordsError(f"cannot open the records database {url}: expected a "
+                                   f"reachable database, got "
+                                   f"{str(exc.orig or exc).splitlines()[0]}") from exc
+            time.sleep(min(0.02 * 2 ** attempt, 1.0))
+
+
+def _upgrade_once(engine: Engine) -> None:
     url = safe_url(engine.url.render_as_string(hide_password=False))
-    try:
-        current = _current_revisions(engine)
-    except (OperationalError, _DBAPIError) as exc:
-        raise RecordsError(f"cannot open the records database {url}: expected a reachable "
-                           f"database, got {exc.orig or exc}") from exc
+    current = _current_revisions(engine)
     if current == [HEAD_REVISION]:  # up to date: no Alembic to import
         return
+    if not current:
+        with engine.connect() as conn:    # (another opener may have just made it all)
+            names = set(inspect(conn).get_table_names())
+        current = _current_revisions(engine)
+        if current == [HEAD_REVISION]:
+            return
+        if not current and names & set(_RECORDS_TABLES):
+            raise RecordsError(f"the records database {url} holds records tables but no "
+                               "alembic_version table, so its schema revision cannot be told "
+                               "(the table was dropped?): expected a database made by "
+                               "imucalib; restore it from a backup (imucalib records restore)")
     from alembic import command
     from alembic.script import ScriptDirectory
 
@@ -173,7 +211,7 @@ def upgrade(engine: Engine) -> None:
     if unknown:
         raise RecordsError(f"the records database {url} has schema revision {unknown[0]}, "
                            f"newer than this software knows (newest {head_revision()}); "
-                           "upgrade imucalib")
+                           "upgrade imucalib (or its alembic_version was changed)")
     if current == [script.get_current_head()]:
         return
     with engine.connect() as conn:

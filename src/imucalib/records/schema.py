@@ -5,7 +5,7 @@ Contents
 :class:`Base`
     The declarative base; ``Base.metadata`` is what the migrations create.
 :class:`Unit`, :class:`Station`, :class:`Equipment`, :class:`Run`, :class:`Result`,
-:class:`Review`, :class:`User`, :class:`UserEvent`
+:class:`Review`, :class:`User`, :class:`UserEvent`, :class:`SigningKey`
     The chained tables: each row carries ``seq`` (1, 2, … per table, equal to its ``id``),
     ``prev_hash`` and ``row_hash`` (docs/records.md, Eqs. (R.1)–(R.3)).
 :class:`RunEquipment`, :class:`ResultParameter`
@@ -49,6 +49,7 @@ __all__ = [
     "Review",
     "Run",
     "RunEquipment",
+    "SigningKey",
     "Station",
     "Unit",
     "User",
@@ -80,6 +81,11 @@ class _Chained:
     prev_hash: Mapped[str] = mapped_column(String(HASH_LEN))
     row_hash: Mapped[str] = mapped_column(String(HASH_LEN))
     created_utc: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    #: 1: Eq. (R.1) over the row's columns (rows made before revision 0003, unsigned);
+    #: 2: Eq. (R.1) with the table name, ``hash_version`` and ``key_id`` in C, signed (R.7).
+    hash_version: Mapped[int] = mapped_column(Integer, default=2, server_default="1")
+    key_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    signature: Mapped[str] = mapped_column(Text, default="", server_default="")
 
 
 class Unit(_Chained, Base):
@@ -207,7 +213,26 @@ class UserEvent(_Chained, Base):
     by_user: Mapped[str] = mapped_column(String(200), default="")
 
 
+class SigningKey(_Chained, Base):
+    """A station key whose signatures the records carry (docs/records.md, "Signing").
+
+    ``public_key`` (Ed25519, 64 hex digits) and its ``fingerprint`` (R.9); ``previous_key_id``
+    the key it replaces (None for the first); ``endorsement`` the previous key's signature of
+    this public key (R.8), "" when the previous key was lost; ``heads_json`` the chain heads
+    when the key was registered (``{table: seq}``): every later row must be signed. The row is
+    signed by the key it registers.
+    """
+
+    __tablename__ = "signing_keys"
+    public_key: Mapped[str] = mapped_column(String(HASH_LEN))
+    fingerprint: Mapped[str] = mapped_column(String(16))
+    previous_key_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    endorsement: Mapped[str] = mapped_column(Text, default="")
+    reason: Mapped[str] = mapped_column(Text, default="")
+    heads_json: Mapped[str] = mapped_column(Text, default="{}")
+
+
 #: The chained tables, in the order verify checks them (and PostgreSQL takes their locks;
 #: a new table is appended, so the lock keys of the others stay).
 CHAINED: Final[tuple[type[_Chained], ...]] = (Unit, Station, Equipment, Run, Result, Review,
-                                              User, UserEvent)
+                                              User, UserEvent, SigningKey)

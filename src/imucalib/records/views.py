@@ -13,9 +13,9 @@ from dataclasses import dataclass
 from datetime import date, datetime
 from typing import Any
 
-__all__ = ["ChainHead", "DriftPoint", "DueUnit", "EquipmentView", "HistoryEntry",
+__all__ = ["ChainHead", "DriftPoint", "DueUnit", "EquipmentView", "HistoryEntry", "KeyUse",
            "ParameterRow", "Problem", "ReleaseStatus", "ReviewView", "RunView", "UserEventView",
-           "UserView"]
+           "UserView", "VerifyReport"]
 
 
 @dataclass(frozen=True)
@@ -156,17 +156,51 @@ class Problem:
     table : str
         The table (``"results"``) or ``"recordings"``.
     key : int
-        The row's ``seq`` (or the run's id for a recording).
+        The row's ``seq`` (or the run's id for a recording, the line of the anchor log).
     what : str
         What was expected and what was found.
+    kind : str
+        The kind of change: ``edited``, ``deleted``, ``chain broken``, ``re-hashed``,
+        ``forged``, ``unsigned``, ``bad value``, ``dangling``, ``untrusted key``,
+        ``anchor log``, ``recording`` (docs/records.md, "What verify checks").
     """
 
     table: str
     key: int
     what: str
+    kind: str = ""
 
     def __str__(self) -> str:
-        return f"{self.table}[{self.key}]: {self.what}"
+        return f"{self.table} row {self.key}: {self.what}"
+
+
+@dataclass(frozen=True)
+class KeyUse:
+    """A signing key of the records and what it signed (``records verify``).
+
+    ``trusted``: the key file (or ``station.pub``) is this key, or a trusted key endorses it
+    (docs/records.md, "Signing"); ``rows``: rows per table it signed.
+    """
+
+    key_id: int
+    fingerprint: str
+    trusted: bool
+    rows: dict[str, int]
+    registered_utc: datetime | None = None
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class VerifyReport:
+    """Everything ``records verify`` found: problems, notes, and which key signed what.
+
+    ``problems`` empty means intact; ``notes`` are facts that are no problem (rows made
+    before signing, rows after the last anchor, the trusted key used).
+    """
+
+    problems: tuple[Problem, ...]
+    notes: tuple[str, ...] = ()
+    keys: tuple[KeyUse, ...] = ()
 
 
 @dataclass(frozen=True)
