@@ -161,9 +161,9 @@ def test_forms_and_options():
     assert gravity.gyro_form == "gravity-referenced"
     none = _calibrate(s, gyro_form="none", gyro_g_sensitivity="no", accel_k2="no")
     assert not none.result.has_triad("gyro")
-    assert [n for n, *_ in none.parameter_rows()][-6:] == [
+    assert [n for n, *_ in none.parameter_rows()][-9:] == [
         "gyro_bias_x", "gyro_bias_y", "gyro_bias_z", "accel_bias_rate_x", "accel_bias_rate_y",
-        "accel_bias_rate_z"]
+        "accel_bias_rate_z", "gyro_bias_rate_x", "gyro_bias_rate_y", "gyro_bias_rate_z"]
     assert "accel_K2_x" not in none.result.param_names
     no_turns = handheld_session("consumer", seed=22, noise="white", full_turns=False)
     with pytest.raises(InsufficientExcitationError, match="no full turn"):

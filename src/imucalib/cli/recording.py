@@ -105,6 +105,11 @@ def export(
                               "openvins-imu: the temperature (°C) to evaluate the parameters "
                               "at; those formats hold constant intrinsics "
                               "(docs/exports.md).")] = None,
+    drop_terms: Annotated[bool, typer.Option(
+        "--drop-terms", help="For --format kalibr-imu or openvins-imu: write a result whose "
+                             "accelerometer K2 those tools' models lack without it; the file "
+                             "states the error left (docs/exports.md). Refused otherwise, with "
+                             "that error.")] = False,
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
     step_file: Annotated[Path | None, typer.Option(
         "--step-file", help="Also write the recording's steps as a step file (TOML) here: "
@@ -122,8 +127,11 @@ def export(
     from imucalib.io.step_file import step_file_from_recording, step_file_to_toml
 
     if path.suffix.lower() == ".json" or fmt is not None:
-        _export_result(path, out, fmt, temperature)
+        _export_result(path, out, fmt, temperature, drop_terms)
         return
+    if drop_terms:
+        raise fail(InvalidInputError("--drop-terms is for a result exported with --format "
+                                     "kalibr-imu or openvins-imu, not a recording"))
     if temperature is not None:
         raise fail(InvalidInputError("--temperature is for a result exported with --format "
                                      "kalibr-imu or openvins-imu, not a recording"))
@@ -156,8 +164,8 @@ def export(
         console.print(f"wrote {step_file}", highlight=False)
 
 
-def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: float | None
-                   ) -> None:
+def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: float | None,
+                   drop_terms: bool = False) -> None:
     """Write a result file in `fmt` into the folder `out` (at `temperature_degc`)."""
     from imucalib.exports.outputs import OUTPUT_FORMATS, TEMPERATURE_FORMATS, write_outputs
     from imucalib.models.result_document import load_result
@@ -172,10 +180,14 @@ def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: flo
                 f"--temperature applies to --format {' or '.join(TEMPERATURE_FORMATS)} only; "
                 f"{fmt} holds the result as it is (mat, mat73 and ros-yaml carry its "
                 "temperature models)")
+        if drop_terms and fmt not in TEMPERATURE_FORMATS:
+            raise InvalidInputError(
+                f"--drop-terms applies to --format {' or '.join(TEMPERATURE_FORMATS)} only "
+                f"(their tools' models lack K2); {fmt} holds every term of the result")
         result = load_result(path)
         out.mkdir(parents=True, exist_ok=True)
         written = write_outputs(result, out, formats=(fmt,), name=path.name.split(".")[0],
-                                temperature_degc=temperature_degc)
+                                temperature_degc=temperature_degc, drop_terms=drop_terms)
     except CalibrationError as exc:
         raise fail(exc) from exc
     except OSError as exc:

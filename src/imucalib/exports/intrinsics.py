@@ -32,7 +32,7 @@ and keeps only the lower triangle of D_w, D_a (its ``kalibr`` intrinsic model). 
     (I + M)⁻¹ = Q·L,   R_xxxtoIMU = Q,   R_IMUtoxxx = Qᵀ,   T = L⁻¹,   T_g = G             (X3)
 
 which makes (X2) the exact inverse of (X1) with the IMU frame equal to S. K2 ≠ 0 and the
-biases have no place in (X2): a result with K2 ≠ 0 is refused; the biases are written as
+biases have no place in (X2): a result with K2 ≠ 0 is refused (X6 below); the biases are written as
 ``imucalib_bias_gyro`` / ``imucalib_bias_accel`` (OpenVINS ignores them; its biases are state).
 
 Kalibr's ``scale-misalignment`` IMU model (its source, ``IccSensors.py``,
@@ -48,6 +48,15 @@ With i = C_i_s·S (a rotation of imucalib's sensor frame S), (X1) = (X4) when::
 two LQ splits (L lower triangular with positive diagonal times a rotation). C_i_s is written as
 ``imucalib_C_i_sensor`` (Kalibr's i differs from S by it; Kalibr estimates its camera–IMU
 extrinsics in i).
+
+Neither Kalibr's nor OpenVINS' model holds K2. A result with K2 ≠ 0 is refused with what leaving
+it out errs by: the accelerometer's output error K2_i·f_i² at a specific force f along the axis,
+
+    e_i(f) = |K2_i|·f²   (at 1 g and at 2 g in the message)                              (X6)
+
+and written without it only when asked (``drop_terms``, CLI ``--drop-terms``), the header then
+stating (X6). The better way is a result without K2: a field calibration lets the data choose
+the term and carries the choice in the other σ (docs/field.md, "Model terms").
 
 Temperature models (docs/processing-estimation.md, Eq. (T1))::
 
@@ -74,6 +83,7 @@ from numpy.typing import NDArray
 from imucalib import __version__
 from imucalib.errors import InvalidInputError
 from imucalib.models.result import CalibrationResult
+from imucalib.units import G0_MPS2, MG
 
 __all__ = [
     "at_temperature",
@@ -397,10 +407,28 @@ def _lower_rotation(x: _F64, triad: str) -> tuple[_F64, _F64]:
     return upper.T * signs, signs[:, None] * q.T
 
 
-def _no_k2(s: dict[str, Any], tool: str) -> None:
-    if "K2_a" in s and np.any(s["K2_a"] != 0.0):
-        raise InvalidInputError(f"the result's accelerometer K2 is not 0; {tool}'s IMU model "
-                                "has no quadratic scale factor (docs/exports.md)")
+def _no_k2(s: dict[str, Any], tool: str, drop_terms: bool = False) -> str:
+    """Refuse a K2 ≠ 0 the tool's model lacks, stating what leaving it out errs by (X6).
+
+    With `drop_terms` the K2 in `s` is set to 0 and the statement returned (for the file's
+    header); "" when there was none.
+    """
+    if "K2_a" not in s or not np.any(s["K2_a"] != 0.0):
+        return ""
+    k2 = np.abs(np.asarray(s["K2_a"], dtype=np.float64))
+    worst = int(np.argmax(k2))
+    at_1g = float(k2[worst]) * G0_MPS2**2
+    statement = (f"leaving the accelerometer K2 out errs by up to {at_1g / MG:.3g} mg at 1 g and "
+                 f"{4.0 * at_1g / MG:.3g} mg at 2 g (K2_{'xyz'[worst]} = "
+                 f"{float(s['K2_a'][worst]):.3g} 1/(m/s²), error K2·f²; X6)")
+    if not drop_terms:
+        raise InvalidInputError(
+            f"the result's accelerometer K2 is not 0 and {tool}'s IMU model has no quadratic "
+            f"scale factor: {statement}; pass --drop-terms (drop_terms=True) to write it "
+            "without, or calibrate again without K2 (the field calibration: --set terms=-k2, "
+            "or let the data choose; docs/exports.md)")
+    s["K2_a"] = np.zeros(3)
+    return statement
 
 
 def at_temperature(cal: CalibrationResult, temperature_degc: float | None, tool: str
@@ -445,8 +473,8 @@ def at_temperature(cal: CalibrationResult, temperature_degc: float | None, tool:
     return replace(cal, values=values[0], temperature_models=()), t
 
 
-def kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
-                      ) -> dict[str, _F64]:
+def kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None,
+                      drop_terms: bool = False) -> dict[str, _F64]:
     """Return Kalibr's ``M_accel``, ``M_gyro``, ``A``, ``C_gyro_i`` and ``C_i_sensor`` (Eq. X5).
 
     Needs both triads in the result. A result with temperature models is evaluated at
@@ -455,12 +483,13 @@ def kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None 
     Raises
     ------
     InvalidInputError
-        A triad missing, K2 ≠ 0 (not in Kalibr's model), an I + M with determinant ≤ 0, or a
-        temperature :func:`at_temperature` refuses (none given for a result with models).
+        A triad missing, K2 ≠ 0 (not in Kalibr's model) unless `drop_terms` (then written
+        without it, :func:`_no_k2`), an I + M with determinant ≤ 0, or a temperature
+        :func:`at_temperature` refuses (none given for a result with models).
     """
     cal, _ = at_temperature(cal, temperature_degc, "Kalibr")
     s = intrinsics_struct(cal)
-    _no_k2(s, "Kalibr")
+    _no_k2(s, "Kalibr", drop_terms)
     if "M_a" not in s or "M_g" not in s:
         raise InvalidInputError("Kalibr's IMU model needs both the gyro and the accelerometer "
                                 "calibrated")
@@ -471,22 +500,25 @@ def kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None 
             "C_i_sensor": c_i_s}
 
 
-def format_kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
-                             ) -> str:
+def format_kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None,
+                             drop_terms: bool = False) -> str:
     """Return the intrinsics in the layout of Kalibr's ``scale-misalignment`` IMU result YAML.
 
     A result with temperature models needs `temperature_degc` (:func:`at_temperature`); the
-    file then states it as ``imucalib_temperature_degc``.
+    file then states it as ``imucalib_temperature_degc``. A K2 left out (`drop_terms`) is
+    stated in the header with the error it leaves.
     """
     cal, t = at_temperature(cal, temperature_degc, "Kalibr")
-    k = kalibr_intrinsics(cal)
+    k = kalibr_intrinsics(cal, drop_terms=drop_terms)
     s = intrinsics_struct(cal)
+    dropped = _no_k2(dict(s), "Kalibr", drop_terms)
 
     def block(indent: str, mat: _F64) -> list[str]:
         return [f"{indent}- {_flow(row)}" for row in mat]
 
     lines = [f"# imucalib {__version__}: IMU intrinsics in Kalibr's scale-misalignment model",
              "# (a_m = M a_i + b_a; w_m = M C_gyro_i w_i + A C_gyro_i a_i + b_g; docs/exports.md)",
+             *_dropped_lines("", dropped),
              "model: scale-misalignment",
              "accelerometers:",
              "  M:", *block("    ", k["M_accel"]),
@@ -502,6 +534,21 @@ def format_kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float 
     return "\n".join(lines) + "\n"
 
 
+def _dropped_lines(indent: str, statement: str) -> list[str]:
+    """Return the header lines of a K2 left out (--drop-terms), none when nothing was."""
+    if not statement:
+        return []
+    words, lines, line = statement.split(), [], ""
+    for w in words:
+        if len(line) + len(w) + 1 > 76:
+            lines.append(line)
+            line = w
+        else:
+            line = f"{line} {w}".strip()
+    lines.append(line)
+    return [f"{indent}# K2 LEFT OUT (--drop-terms):", *(f"{indent}#   {x}" for x in lines)]
+
+
 def _temperature_lines(indent: str, temperature_degc: float | None) -> list[str]:
     """Return the lines stating the temperature the values hold at (none without models)."""
     if temperature_degc is None:
@@ -512,16 +559,17 @@ def _temperature_lines(indent: str, temperature_degc: float | None) -> list[str]
 
 
 def write_kalibr_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str], *,
-                            temperature_degc: float | None = None) -> Path:
+                            temperature_degc: float | None = None,
+                            drop_terms: bool = False) -> Path:
     """Write :func:`format_kalibr_intrinsics` to `path`; return the path."""
     out = Path(path)
-    out.write_text(format_kalibr_intrinsics(cal, temperature_degc=temperature_degc),
-                   encoding="utf-8")
+    out.write_text(format_kalibr_intrinsics(cal, temperature_degc=temperature_degc,
+                                            drop_terms=drop_terms), encoding="utf-8")
     return out
 
 
-def openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
-                        ) -> dict[str, _F64]:
+def openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None,
+                        drop_terms: bool = False) -> dict[str, _F64]:
     """Return OpenVINS' ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` (Eq. X3).
 
     A triad the result does not calibrate gets identity (``Tg`` zero). A result with
@@ -530,12 +578,13 @@ def openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | Non
     Raises
     ------
     InvalidInputError
-        K2 ≠ 0 (not in OpenVINS' model), an I + M with determinant ≤ 0, or a temperature
+        K2 ≠ 0 (not in OpenVINS' model) unless `drop_terms` (then written without it,
+        :func:`_no_k2`), an I + M with determinant ≤ 0, or a temperature
         :func:`at_temperature` refuses (none given for a result with models).
     """
     cal, _ = at_temperature(cal, temperature_degc, "OpenVINS")
     s = intrinsics_struct(cal)
-    _no_k2(s, "OpenVINS")
+    _no_k2(s, "OpenVINS", drop_terms)
     out: dict[str, _F64] = {}
     for triad, t_key, r_key in (("gyro", "Tw", "R_IMUtoGYRO"), ("accel", "Ta", "R_IMUtoACC")):
         t = _SUFFIX[triad]
@@ -549,8 +598,8 @@ def openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | Non
     return out
 
 
-def format_openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None
-                               ) -> str:
+def format_openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None = None,
+                               drop_terms: bool = False) -> str:
     """Return the ``imu0`` intrinsics block of OpenVINS' ``kalibr_imu_chain.yaml`` (Eq. X3).
 
     A result with temperature models needs `temperature_degc` (:func:`at_temperature`); the
@@ -558,8 +607,9 @@ def format_openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: floa
     ``estimator_config.yaml`` keys OpenVINS reads with it (docs/exports.md).
     """
     cal, t = at_temperature(cal, temperature_degc, "OpenVINS")
-    mats = openvins_intrinsics(cal)
+    mats = openvins_intrinsics(cal, drop_terms=drop_terms)
     s = intrinsics_struct(cal)
+    dropped = _no_k2(dict(s), "OpenVINS", drop_terms)
     lines = [f"# imucalib {__version__}: IMU intrinsics for OpenVINS (kalibr IMU model: lower-",
              "# triangular D = T^-1; docs/exports.md). Merge the noise keys of the "
              "openvins-yaml export into imu0.",
@@ -568,6 +618,7 @@ def format_openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: floa
              "# calib_imu_intrinsics and calib_imu_g_sensitivity to false to apply these values",
              "# as they are (OpenVINS applies Tw, Ta, R_IMUtoGYRO, R_IMUtoACC and Tg either way),",
              "# or to true to refine them online starting from these values.",
+             *_dropped_lines("", dropped),
              "imu0:",
              '  model: "kalibr"']
     for key in ("Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC", "Tg"):
@@ -582,9 +633,10 @@ def format_openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: floa
 
 
 def write_openvins_intrinsics(cal: CalibrationResult, path: str | os.PathLike[str], *,
-                              temperature_degc: float | None = None) -> Path:
+                              temperature_degc: float | None = None,
+                              drop_terms: bool = False) -> Path:
     """Write :func:`format_openvins_intrinsics` to `path`; return the path."""
     out = Path(path)
-    out.write_text(format_openvins_intrinsics(cal, temperature_degc=temperature_degc),
-                   encoding="utf-8")
+    out.write_text(format_openvins_intrinsics(cal, temperature_degc=temperature_degc,
+                                              drop_terms=drop_terms), encoding="utf-8")
     return out

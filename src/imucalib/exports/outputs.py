@@ -126,21 +126,22 @@ TEMPERATURE_FORMATS = ("kalibr-imu", "openvins-imu")
 
 class _IntrinsicsWriter(Protocol):
     def __call__(self, result: Any, folder: Path, stem: str, *,
-                 temperature_degc: float | None = None) -> list[Path]: ...
+                 temperature_degc: float | None = None,
+                 drop_terms: bool = False) -> list[Path]: ...
 
 
 def _intrinsics(fmt: str, suffix: str) -> _IntrinsicsWriter:
     def writer(result: Any, folder: Path, stem: str, *,
-               temperature_degc: float | None = None) -> list[Path]:
+               temperature_degc: float | None = None, drop_terms: bool = False) -> list[Path]:
         from imucalib.exports import intrinsics
 
         cal, path = _calibration(result, fmt), folder / f"{stem}{suffix}"
         if fmt == "kalibr-imu":
-            return [intrinsics.write_kalibr_intrinsics(cal, path,
-                                                       temperature_degc=temperature_degc)]
+            return [intrinsics.write_kalibr_intrinsics(
+                cal, path, temperature_degc=temperature_degc, drop_terms=drop_terms)]
         if fmt == "openvins-imu":
-            return [intrinsics.write_openvins_intrinsics(cal, path,
-                                                         temperature_degc=temperature_degc)]
+            return [intrinsics.write_openvins_intrinsics(
+                cal, path, temperature_degc=temperature_degc, drop_terms=drop_terms)]
         write = {"mat": intrinsics.write_mat, "mat73": intrinsics.write_mat73,
                  "ros-yaml": intrinsics.write_ros_yaml}[fmt]
         return [write(cal, path)]
@@ -257,6 +258,7 @@ def formats_of(procedure: str) -> dict[str, _Writer]:
 def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
                   formats: Sequence[str] | None = None, *, name: str,
                   temperature_degc: float | None = None,
+                  drop_terms: bool = False,
                   provenance: Provenance | None = None,
                   recording: str | os.PathLike[str] | None = None) -> list[Path]:
     """Name and write the output files of a procedure result (module docstring).
@@ -277,6 +279,10 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
         For :data:`TEMPERATURE_FORMATS` only (``kalibr-imu``, ``openvins-imu``): the temperature
         at which a result's temperature models (Eq. (T1)) are evaluated; such a result is
         refused without it (:func:`imucalib.exports.intrinsics.at_temperature`). [°C]
+    drop_terms : bool
+        For :data:`TEMPERATURE_FORMATS` only: write a result whose K2 their tools' models lack
+        without it, the file stating the error left (Eq. (X6) of
+        :mod:`imucalib.exports.intrinsics`); refused otherwise.
     provenance : Provenance, optional
         Where the result came from (the recording, its SHA-256, the plan hash), for the result
         document and the report; default: its calibration's.
@@ -322,8 +328,9 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
     stem = file_stem(name, result.unit, result.procedure)
     written: list[Path] = []
     for fmt in chosen:
-        if temperature_degc is not None:  # only TEMPERATURE_FORMATS here (checked above)
-            written += _INTRINSICS[fmt](result, out, stem, temperature_degc=temperature_degc)
+        if fmt in TEMPERATURE_FORMATS:
+            written += _INTRINSICS[fmt](result, out, stem, temperature_degc=temperature_degc,
+                                        drop_terms=drop_terms)
         elif fmt in ("report-pdf", "report-html"):
             written += _PROVENANCED[fmt](result, out, stem, provenance=provenance,
                                          recording=None if recording is None else Path(recording))

@@ -229,6 +229,13 @@ class FieldOptions:
         return forced
 
 
+def _gyro_names(terms: Sequence[str]) -> list[str]:
+    """Return the names of the static gyro fit's values (FL.2) for a term set."""
+    return [*(f"gyro_bias_{a}" for a in "xyz"),
+            *((f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz") if "g" in terms else ()),
+            *((f"gyro_bias_rate_{a}" for a in "xyz") if "drift" in terms else ())]
+
+
 def _model_var(choice: TermChoice, names: Sequence[str]) -> _F64:
     """u²_model of (TS.4) in the order of `names` (0 where the choice added none)."""
     return np.array([choice.model_std.get(n, 0.0) ** 2 for n in names])
@@ -255,18 +262,22 @@ def _gravity(opt: FieldOptions, log: FieldLog) -> tuple[float, float, float | No
 
 
 def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | None,
-                 g_sensitivity: bool) -> tuple[_F64, _F64, FitQuality, list[_F64]]:
+                 g_sensitivity: bool, times: _F64 | None = None
+                 ) -> tuple[_F64, _F64, FitQuality, list[_F64]]:
     """Step 4: bias (and G) from the static gyro means less the known Earth rate (FL.2).
 
-    Returns the values (b, and G row-major when fitted), their covariance (Birge-scaled on a
-    misfit), the fit quality and the residual per pose. The poses' 3×3 covariances (noise and
-    the Earth rate's Type B) make one block-diagonal C: GLS by
+    Returns the values (b, G row-major when fitted, the bias rates ḃ when `times` are given:
+    b then holds at the poses' mean time, as the accelerometer's (F.1″)), their covariance
+    (Birge-scaled on a misfit), the fit quality and the residual per pose. The poses' 3×3
+    covariances (noise and the Earth rate's Type B) make one block-diagonal C: GLS by
     :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
     """
     omega = EARTH_RATE_RPS
     names = [f"gyro_bias_{a}" for a in "xyz"]
     if g_sensitivity:
         names += [f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz"]
+    if times is not None:
+        names += [f"gyro_bias_rate_{a}" for a in "xyz"]
     n = len(poses)
     design = np.zeros((3 * n, len(names)))
     z = np.zeros(3 * n)
@@ -280,8 +291,12 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
             vertical = omega * s * u
             type_b = (omega * c) ** 2 / 2.0 * (np.eye(3) - np.outer(u, u))
         rows = slice(3 * row, 3 * row + 3)
-        design[rows] = np.hstack([np.eye(3), np.kron(np.eye(3), f[None, :])]) if g_sensitivity \
-            else np.eye(3)
+        block = [np.eye(3)]
+        if g_sensitivity:
+            block.append(np.kron(np.eye(3), f[None, :]))
+        if times is not None:
+            block.append((times[row] - times.mean()) * np.eye(3))
+        design[rows] = np.hstack(block)
         z[rows] = p.gyro_mean - vertical
         cov[rows, rows] = np.diag(p.gyro_se**2) + type_b
     fit = solve_weighted_lsq(design, z, covariance=cov, param_names=names,
@@ -512,22 +527,32 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         notes.append(f"no pose had gravity within 45° of {', '.join(missing)}: add poses "
                      "there (the coverage check in the report counts how many)")
     force = g * up if form == "gravity-norm" else corrected
-    forced_g = {k: v for k, v in forced.items() if k == "g"}
+    forced_g = {k: v for k, v in forced.items() if k in ("g", "drift")}
     if len(poses) < _G_MIN_POSES:
         forced_g.setdefault("g", False)
     choice_g, (static_values, static_cov, bias_quality, bias_resid), largest_g = choose_terms(
-        "gyro (static poses)", ("g",), lambda t: _gyro_static(poses, up, force, lat, "g" in t),
+        "gyro (static poses)", ("g", "drift"),
+        lambda t: _gyro_static(poses, up, force, lat, "g" in t,
+                               times if "drift" in t else None),
         lambda f: (float(f[2].chi2), int(f[2].dof), int(f[0].size)),
-        forced=forced_g, criterion=opt.term_criterion, level=opt.term_level)
-    g_names = [f"gyro_bias_{a}" for a in "xyz"] + [f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz"]
+        forced=forced_g, ruled={"drift": len(poses) >= _DRIFT_MIN_POSES},
+        criterion=opt.term_criterion, level=opt.term_level)
     choice_g = dataclasses.replace(choice_g, model_std={k: v for k, v in model_choice_std(
-        g_names[:static_values.size], static_values, np.sqrt(np.diag(static_cov)),
-        g_names[:largest_g[0].size], largest_g[0], np.sqrt(np.diag(largest_g[1]))).items()
+        _gyro_names(choice_g.chosen), static_values, np.sqrt(np.diag(static_cov)),
+        _gyro_names(choice_g.largest), largest_g[0], np.sqrt(np.diag(largest_g[1]))).items()
         if v > 0})
-    static_cov = static_cov + np.diag(_model_var(choice_g, g_names[:static_values.size]))
+    static_cov = static_cov + np.diag(_model_var(choice_g, _gyro_names(choice_g.chosen)))
     selection.append(choice_g)
     notes.append(choice_g.summary())
     fit_g = choice_g.has("g")
+    if choice_g.has("drift"):   # the rates go beside the triad, as the accelerometer's
+        core = 3 + 9 * fit_g
+        drift_rows += [ReportedParameter(
+            f"gyro_bias_rate_{a}", float(static_values[core + i]),
+            float(math.sqrt(static_cov[core + i, core + i])), "rad/s^2",
+            float(math.sqrt(static_cov[core + i, core + i])) / bias_quality.sigma_scale)
+            for i, a in enumerate("xyz")]
+        static_values, static_cov = static_values[:core], static_cov[:core, :core]
     omitted: list[str] = []
     try:
         gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov, form,
