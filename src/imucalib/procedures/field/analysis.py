@@ -555,7 +555,12 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         static_values, static_cov = static_values[:core], static_cov[:core, :core]
     omitted: list[str] = []
     try:
-        gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov, form,
+        # the accelerometer's noise-only covariance: its cross-covariance with the gyro and the
+        # gyro block then come from one covariance, so the joint one stays positive
+        # semi-definite; each triad's Birge ratio scales its rows afterwards (a scaled C_a
+        # here with the unscaled block beside it made the joint covariance indefinite on a
+        # misfit accelerometer fit: eigenvalue −0.14 of the correlation on a harsh session)
+        gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov_noise, form,
                          six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
     except CalibrationError as exc:
         if opt.gyro_form != "auto":

@@ -1,0 +1,49 @@
+"""No Python warning reaches a CLI user (docs/field.md): `imucalib calibrate field` and `apply`
+run under `python -W error` (every warning an exception, so one would end in an error line) on
+each kind of twin session and in the layouts users have: a gentle session in imucal's CSV, a
+harsh one in signed 16-bit counts with a preamble, a harsh tactical one in imu_tk's two files,
+and one whose rotations are all unusable (a partial result)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from imucalib.sim import handheld_session, harsh_handheld_session, write_session_csv
+
+CASES = {
+    "gentle-imucal": (lambda: handheld_session("consumer", seed=31, noise="white"),
+                      {"layout": "imucal"}, 0),
+    "harsh-counts": (lambda: harsh_handheld_session("consumer", seed=2),
+                     {"layout": "counts", "signed": True}, 0),
+    "harsh-imu_tk": (lambda: harsh_handheld_session("tactical", seed=3),
+                     {"layout": "imu_tk"}, 0),
+    "partial": (lambda: handheld_session("consumer", seed=5, noise="white",
+                                         gyro_range_dps=20.0), {"layout": "counts"}, 3),
+}
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-W", "error", "-m", "imucalib", *args],
+                          capture_output=True, text=True, timeout=300, check=False)
+
+
+@pytest.mark.parametrize("kind", sorted(CASES))
+def test_calibrate_and_apply_print_no_warning_under_w_error(kind: str, tmp_path: Path):
+    make, layout, code = CASES[kind]
+    written = write_session_csv(make(), tmp_path / "log.txt", **layout)
+    out = tmp_path / "out"
+    res = _cli("calibrate", "field", str(written.path), *written.cli_args, "--latitude", "45",
+               "-o", str(out), "--no-record", "--quiet")
+    text = res.stdout + res.stderr
+    assert res.returncode == code, text
+    for bad in ("Warning", "warning:", "internal error", "Traceback"):
+        assert bad not in text, text
+    (result,) = out.glob("*.result.json")
+    res = _cli("apply", str(result), str(written.path), *written.cli_args, "-o",
+               str(tmp_path / "corrected.csv"))
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "Warning" not in res.stdout + res.stderr
