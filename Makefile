@@ -1,11 +1,18 @@
-# The two commands of README.md: `make demo` (the main job) and `make test` (the suite).
+# The two commands of README.md: `make demo` (the main job) and `make test` (the suite);
+# `make fuzz`: the fuzz suite's long campaign (docs/reliability.md, "Fuzzing").
 # Each creates the virtual environment from this project's own files when it is missing or stale.
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 OUT    ?= out
 
-.PHONY: demo test lint bench clean venv
+# The campaign of `make fuzz`: every fuzz test's examples times FUZZ_EXAMPLES (25: over 5,000
+# cases), each case stopped as a hang after FUZZ_TIMEOUT_S seconds; the outcomes in FUZZ_TALLY.
+FUZZ_EXAMPLES  ?= 25
+FUZZ_TIMEOUT_S ?= 60
+FUZZ_TALLY     ?= $(OUT)/fuzz-tally.jsonl
+
+.PHONY: demo test lint bench clean venv fuzz
 
 venv: $(VENV)/.installed
 
@@ -22,6 +29,13 @@ test: venv
 	$(BIN)/python -m ruff check src tests bench examples
 	$(BIN)/python -m mypy
 	$(BIN)/python -m pytest -n 2 -q
+
+fuzz: venv
+	mkdir -p $(dir $(FUZZ_TALLY))
+	rm -f $(FUZZ_TALLY)
+	IMUCALIB_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) IMUCALIB_FUZZ_TIMEOUT_S=$(FUZZ_TIMEOUT_S) \
+	IMUCALIB_FUZZ_TALLY=$(abspath $(FUZZ_TALLY)) $(BIN)/python -m pytest -n 2 -q tests/fuzz; \
+	status=$$?; $(BIN)/python tests/fuzz/tally.py $(FUZZ_TALLY); exit $$status
 
 lint: venv
 	$(BIN)/python -m ruff check src tests bench examples

@@ -20,6 +20,7 @@ Hierarchy
     - :class:`RecordingOpenForWriteError`: a file a crashed writer left open
       (use ``imucalib recover``)
     - :class:`StorageFullError`: no room left to write (the file is closed cleanly)
+    - :class:`RecordingWriteError`: HDF5 failed to write a file (the file is given up unclosed)
   - :class:`DeviceError`: equipment faults
     - :class:`DeviceTimeoutError` (also a ``TimeoutError``)
   - :class:`GuardTripError`: a guard stopped a step
@@ -48,6 +49,7 @@ __all__ = [
     "RecordingError",
     "RecordingFormatError",
     "RecordingOpenForWriteError",
+    "RecordingWriteError",
     "RecordsError",
     "SaturationError",
     "StorageFullError",
@@ -136,6 +138,16 @@ class StorageFullError(RecordingError):
     Raised before the write that would not fit, so the file stays consistent and closes
     cleanly with everything written so far; ``imucalib run --resume FILE`` continues once
     space is freed.
+    """
+
+
+class RecordingWriteError(RecordingError):
+    """HDF5 failed to write, flush or close a file (ENOSPC or EIO behind the free-space checks).
+
+    The file was given up unclosed, as a killed writer leaves it (``imucalib run --resume
+    FILE`` or ``imucalib recover FILE`` finish a Recording; a temporary copy is removed), and
+    the process must end with :func:`os._exit` after reporting it
+    (:func:`imucalib.io.recording.abandoned_files`; ``docs/reliability.md``).
     """
 
 

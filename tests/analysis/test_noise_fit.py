@@ -218,3 +218,11 @@ def test_fit_bad_inputs() -> None:
         convert_noise_term("gyro", "flicker", 1.0)
     with pytest.raises(InvalidInputError, match=r"`sensor` must be one of \['gyro', 'accel'\]"):
         convert_noise_term("baro", "white", 1.0)
+
+
+def test_a_constant_signal_is_refused_not_fitted() -> None:
+    # issue 27: a column of zeros sent NaN into the Cholesky factor (an internal error)
+    res = compute_oadev(np.zeros(4096), 100.0)
+    with pytest.raises(InvalidInputError, match=r"the Allan variance is 0 at τ = 0.01 s \(\d+ of "
+                                                r"\d+ points\); a noise fit needs a signal"):
+        fit_noise_terms(res)

@@ -47,3 +47,42 @@ def test_calibrate_and_apply_print_no_warning_under_w_error(kind: str, tmp_path:
                str(tmp_path / "corrected.csv"))
     assert res.returncode == 0, res.stdout + res.stderr
     assert "Warning" not in res.stdout + res.stderr
+
+
+def test_a_library_warning_is_one_note_line(monkeypatch, capsys):
+    import warnings
+
+    import imucalib.cli as cli
+
+    def warn_then_finish() -> None:
+        warnings.warn("a library said something", RuntimeWarning, stacklevel=1)
+
+    monkeypatch.setattr(cli, "app", warn_then_finish)
+    monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        with pytest.raises(SystemExit) as done:
+            cli.main()
+    assert done.value.code == 0
+    err = capsys.readouterr().err
+    assert err.strip() == "note: a library said something"
+
+
+def test_debug_shows_the_traceback_of_an_internal_error(monkeypatch):
+    import imucalib.cli as cli
+
+    def broken() -> None:
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(cli, "app", broken)
+    monkeypatch.setenv("IMUCALIB_DEBUG", "1")
+    monkeypatch.setattr(sys, "excepthook", sys.excepthook)
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+    import warnings
+
+    monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)
+    with pytest.raises(RuntimeError, match="a bug"):
+        cli.main()
+    assert sys.excepthook is sys.__excepthook__  # Python prints it, not the quiet hook

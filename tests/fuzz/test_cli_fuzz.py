@@ -2,31 +2,27 @@
 
 Every mutated input must end in exit code 0 (and then no non-finite number in what was written) or
 exit code 2 with a one-line ``error:`` message: never a traceback, never the ``internal error``
-safety net of :func:`imucalib.cli.main`, never a hang. Recordings are fed to one child process
-that opens them one by one under an alarm, so that a hang inside HDF5 is caught as a death by
-SIGALRM. Example counts are bounded so that the suite stays within its time budget; the
-``IMUCALIB_FUZZ_EXAMPLES`` environment variable multiplies them for a longer campaign, and
-``IMUCALIB_FUZZ_TALLY=FILE`` appends each outcome (command, exit code) to FILE as a JSON line.
+safety net of :func:`imucalib.cli.main`, never a hang (:mod:`._harness` has the rules, the
+per-case time limit and the tally). Recordings are fed to one child process that opens them
+one by one under an alarm, so that a hang inside HDF5 is caught as a death by SIGALRM.
+Example counts are bounded so that the suite stays within its time budget; the
+``IMUCALIB_FUZZ_EXAMPLES`` environment variable multiplies them for a longer campaign
+(``make fuzz``), and ``IMUCALIB_FUZZ_TALLY=FILE`` appends each outcome to FILE as a JSON line.
+The doors added for issue 27 (import specs, Allan, field, recover, report, export) are in
+``test_input_fuzz.py``; the reproducers of that campaign in ``test_regression_cases.py``.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
-import os
-import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
-from imucalib.cli import main
 from imucalib.models.result import (
     CalibrationResult,
     Provenance,
@@ -36,13 +32,20 @@ from imucalib.models.result import (
 from imucalib.plan import plan_to_toml
 from imucalib.procedures import generate_p1_plan
 
-SCALE = int(os.environ.get("IMUCALIB_FUZZ_EXAMPLES", "1"))
-FUZZ = settings(max_examples=10 * SCALE, deadline=None, derandomize=True,
-                suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                       HealthCheck.too_slow])
-NUMBER = re.compile(r"-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
-ODD_NUMBERS = st.sampled_from(["nan", "inf", "-inf", "1e308", "-1e308", "0", "-1", "1e-320",
-                               "\"x\"", "", "9" * 40, "-0.0", "1e9", "true"])
+from ._harness import (  # noqa: F401 (run_cli and the rest are used by sibling fuzz files too)
+    ODD_NUMBERS,
+    SCALE,
+    assert_finite_csv,
+    check_outcome,
+    fuzz_settings,
+    mutate_lines,
+    mutate_numbers,
+    run_child,
+    run_cli,
+    tally,
+)
+
+FUZZ = fuzz_settings(10)
 
 
 def _numbers(doc: object) -> list[float]:
@@ -53,75 +56,6 @@ def _numbers(doc: object) -> list[float]:
         return [float(doc)]
     items = doc.values() if isinstance(doc, dict) else doc
     return [v for item in items for v in _numbers(item)]
-
-
-def run_cli(*args: str) -> tuple[int, str, str]:
-    """Run :func:`imucalib.cli.main` in this process; return exit code, stdout, stderr."""
-    out, err = io.StringIO(), io.StringIO()
-    argv = sys.argv
-    sys.argv = ["imucalib", *args]
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            try:
-                main()
-                code = 0
-            except SystemExit as exc:
-                code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        sys.argv = argv
-    return code, out.getvalue(), err.getvalue()
-
-
-TALLY = os.environ.get("IMUCALIB_FUZZ_TALLY")  # a file: one JSON line per CLI outcome
-
-
-def check_outcome(code: int, out: str, err: str, what: str) -> None:
-    if TALLY:
-        with open(TALLY, "a", encoding="utf-8") as f:
-            f.write(json.dumps({"what": what.split()[0] if what.split() else what,
-                                "code": code}) + "\n")
-    text = out + err
-    assert "Traceback" not in text, f"{what}: traceback\n{text}"
-    assert "internal error" not in text, f"{what}: an unexpected exception\n{text}"
-    assert code in (0, 1, 2), f"{what}: exit {code}\n{text}"
-    if code == 2:
-        assert err.startswith("error: "), f"{what}: exit 2 without a message\n{text}"
-
-
-def assert_finite_csv(path: Path) -> None:
-    text = path.read_text(encoding="utf-8").lower()
-    assert "nan" not in text and "inf" not in text, f"non-finite numbers written to {path}"
-
-
-def mutate_numbers(text: str, data: st.DataObject, n: int = 3) -> str:
-    """Replace up to `n` numbers of `text` with odd values."""
-    spans = [m.span() for m in NUMBER.finditer(text)]
-    if not spans:
-        return text
-    picks = sorted(set(data.draw(st.lists(st.integers(0, len(spans) - 1), min_size=1,
-                                          max_size=n))), reverse=True)
-    for i in picks:
-        a, b = spans[i]
-        text = text[:a] + data.draw(ODD_NUMBERS) + text[b:]
-    return text
-
-
-def mutate_lines(text: str, data: st.DataObject) -> str:
-    """Drop, duplicate or garble a line."""
-    lines = text.splitlines()
-    if not lines:
-        return text
-    i = data.draw(st.integers(0, len(lines) - 1))
-    action = data.draw(st.sampled_from(["drop", "dup", "garble", "truncate"]))
-    if action == "drop":
-        del lines[i]
-    elif action == "dup":
-        lines.insert(i, lines[i])
-    elif action == "garble":
-        lines[i] = data.draw(st.text(max_size=40))
-    else:
-        lines = lines[:i]
-    return "\n".join(lines) + "\n"
 
 
 # ------------------------------------------------------------------------------------ plans
@@ -319,9 +253,6 @@ def assert_finite_recording(path: Path, what: str) -> None:
 
 
 # ------------------------------------------------------------------------------ recordings
-FUZZ_CHILD = Path(__file__).with_name("_open_many.py")
-
-
 @pytest.fixture(scope="module")
 def small_recording(tmp_path_factory) -> Path:
     from imucalib.io.recording import RecordingWriter
@@ -365,12 +296,9 @@ def test_damaged_recordings_never_crash_hang_or_export_garbage(small_recording, 
         path = tmp_path / f"m{i:03d}.h5"
         path.write_bytes(bytes(raw))
         files.append(path)
-    proc = subprocess.run([sys.executable, str(FUZZ_CHILD), str(tmp_path), *map(str, files)],
-                          capture_output=True, text=True, timeout=600 * SCALE)
-    assert proc.returncode == 0, f"the child died ({proc.returncode}):\n{proc.stderr[-3000:]}"
-    outcomes = [json.loads(line) for line in proc.stdout.splitlines()]
+    outcomes = run_child(tmp_path, files, ("inspect", "export"))
     assert len(outcomes) == 2 * len(files)
     for o in outcomes:
-        check_outcome(o["code"], o["out"], o["err"], f"{o['args']}")
+        check_outcome(o["code"], o["out"], o["err"], f"{o['args']}", door=o["args"][0])
         if o["code"] == 0 and o["args"][0] == "export":
             assert_finite_csv(Path(o["args"][-1]))

@@ -174,3 +174,47 @@ def test_an_unknown_unit_is_a_unit_error_naming_the_column(tmp_path):
     p = _write(tmp_path, ["t,gx,gy,gz", "0,1,2,3", "1,1,2,3"])
     with pytest.raises(UnitError, match="column 'gx' has an unknown unit 'furlong/s'"):
         read_imu_table(p, ImportSpec(gyro_unit="furlong/s", accel_unit="g"))
+
+
+def test_vendor_columns_mapped_without_a_unit_are_refused_unless_their_names_carry_one(tmp_path):
+    # issue 27: `--column-map gx=GyrX,…` alone read °/s as rad/s and g as m/s² without a word
+    rows = [f"{k * 10},1.0,-2.0,0.5,0.0,0.0,1.0" for k in range(20)]
+    bare = _write(tmp_path, ["Time,GyrX,GyrY,GyrZ,AccX,AccY,AccZ", *rows])
+    cmap = {"t": "Time", "gx": "GyrX", "gy": "GyrY", "gz": "GyrZ", "ax": "AccX", "ay": "AccY",
+            "az": "AccZ"}
+    with pytest.raises(UnitError, match=r"the gyro column\(s\) \['GyrX', 'GyrY', 'GyrZ'\] are "
+                                        r"mapped by the column map without a unit.*--gyro-unit"):
+        read_imu_table(bare, ImportSpec(column_map=cmap, time_unit="ms"))
+    with pytest.raises(UnitError, match=r"the accelerometer column\(s\).*--accel-unit"):
+        read_imu_table(bare, ImportSpec(column_map=cmap, time_unit="ms", gyro_unit="deg/s"))
+    named = tmp_path / "named.csv"
+    named.write_text("Time,gyr_x_dps,gyr_y_dps,gyr_z_dps,acc_x[g],acc_y[g],acc_z[g]\n"
+                     + "\n".join(rows) + "\n", encoding="utf-8")
+    df = read_imu_table(named, ImportSpec(column_map={
+        "t": "Time", "gx": "gyr_x_dps", "gy": "gyr_y_dps", "gz": "gyr_z_dps", "ax": "acc_x[g]",
+        "ay": "acc_y[g]", "az": "acc_z[g]"}, time_unit="ms"))
+    assert df["gyro_x_rps"].iloc[0] == pytest.approx(np.radians(1.0))
+    assert df["accel_z_mps2"].iloc[0] == pytest.approx(9.80665)
+
+
+@pytest.mark.parametrize(("delimiter", "message"), [
+    ("", "--delimiter must be one character, 'tab' or 'whitespace'; got ''"),
+    (";;", "got ';;'"),
+    ("1", "--delimiter '1' cannot separate fields"),
+    ("\"", "cannot separate fields"),
+])
+def test_a_delimiter_that_cannot_separate_fields_is_refused(tmp_path, delimiter, message):
+    p = _write(tmp_path, ["t,gx,gy,gz", "0,1,2,3", "0.01,1,2,3"])
+    with pytest.raises(InvalidInputError, match=message.replace("(", r"\(")):
+        read_imu_table(p, ImportSpec(delimiter=delimiter, gyro_unit="deg/s"))
+
+
+def test_gyro_and_accelerometer_values_beyond_any_sensor_are_refused(tmp_path):
+    rows = [f"{k * 0.01:.2f},1,2,3,0,0,9.8" for k in range(10)]
+    rows[4] = "0.04,1,2,3,0,0,2e7"
+    p = _write(tmp_path, ["time_s,gyro_x_rps,gyro_y_rps,gyro_z_rps,accel_x_mps2,accel_y_mps2,"
+                          "accel_z_mps2", *rows])
+    with pytest.raises(InvalidInputError, match=r"column 'accel_z_mps2' holds 20000000.0 m/s\^2 "
+                                                r"at data row 5 \(line 6\); an accelerometer reads "
+                                                r"at most ±1e\+07 m/s\^2"):
+        read_imu_table(p)

@@ -62,6 +62,9 @@ def test_a_step_file_parses_and_writes_back_equal():
     (HEAD + POSITION + "colour = 1\n", "steps[0].colour: Extra inputs are not permitted"),
     (HEAD.replace('"roll"', '"tilt"') + POSITION, "'tilt' is not a table axis"),
     (HEAD + POSITION.replace("start_s = 1.0", "start_s = nan"), "finite number"),
+    (HEAD + POSITION.replace("[0.0, 0.0]", "[1e308, 0.0]"),  # was accepted (issue 27)
+     "steps[0]: `angles_deg` holds 1e+308°; a table angle is within ±360° (a turn either way)"),
+    (HEAD + POSITION.replace("[0.0, 0.0]", "[0.0, -360.5]"), "holds -360.5°"),
 ])
 def test_defects_are_named_with_their_step_and_field(text, expected):
     with pytest.raises(InvalidInputError) as err:

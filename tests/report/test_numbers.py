@@ -116,3 +116,12 @@ def test_random_pairs_follow_the_rule(rounding: str) -> None:
         else:
             assert Decimal(0) <= shown_u - exact_u < ulp, text
         assert math.isclose(float(shown_u), u, rel_tol=0.11), text
+
+
+def test_a_value_far_larger_than_its_uncertainty_keeps_every_digit() -> None:
+    # an Allan fit of a log whose time column was off by 1000 (issue 27): 1.89 ± 3.4e-30 needs
+    # 32 digits, more than the default decimal context's 28
+    assert format_pm(1.8946383186684301, 3.42986531479226e-30) == \
+        "1.8946383186684301000000000000000 ± 0.0000000000000000000000000000034"
+    assert format_pm(1e30, 1e-3) == ("(1.0000000000000000000000000000000000 ± "
+                                     "0.0000000000000000000000000000000010)e30")

@@ -332,7 +332,8 @@ def fit_noise_terms(result: DeviationResult, *, sensor: str = "gyro",
     Raises
     ------
     InvalidInputError
-        Not an overlapping ADEV, unknown sensor or term, or fewer points than terms.
+        Not an overlapping ADEV, unknown sensor or term, fewer points than terms, or an Allan
+        variance that is zero or not finite at a τ (a constant signal).
     """
     if not isinstance(result, DeviationResult) or result.kind != "oadev":
         got = getattr(result, "kind", type(result).__name__)
@@ -355,6 +356,13 @@ def fit_noise_terms(result: DeviationResult, *, sensor: str = "gyro",
     tau = tau_all[keep]
     a = result.variance[keep]
     edf = result.edf[keep]
+    flat = ~(np.isfinite(a) & (a > 0))
+    if flat.any():
+        k = int(np.argmax(flat))
+        raise InvalidInputError(
+            f"the Allan variance is {a[k]:g} at τ = {tau[k]:.6g} s ({int(flat.sum())} of "
+            f"{a.size} points); a noise fit needs a signal that varies at every τ (a column "
+            "of zeros, a stuck sensor, or values coarser than the noise?)")
     ms = tuple(int(m) for m in result.averaging_factors[keep])
     n_phase = result.n_samples + 1
     tau0 = 1.0 / result.sample_rate_hz

@@ -41,6 +41,8 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import warnings
+from typing import Any
 
 from imucalib.cli import (  # noqa: F401 (register)
     allan,
@@ -56,7 +58,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     twin,
     users,
 )
-from imucalib.cli._app import app, err_console, fail
+from imucalib.cli._app import EXCEPTHOOK, app, err_console, fail
 from imucalib.errors import CalibrationError
 
 __all__ = ["app", "main"]
@@ -69,11 +71,15 @@ def main() -> None:
     net under them: an unexpected exception is printed as one ``internal error`` line (the
     traceback only with ``IMUCALIB_DEBUG=1``), also with exit code 2. When HDF5 failed to write
     a Recording (a disk filled behind the free-space checks), the process ends with
-    :func:`os._exit` so that the HDF5 library cannot crash while it shuts down.
+    :func:`os._exit` so that the HDF5 library cannot crash while it shuts down. No Python
+    warning reaches the terminal as one: a warning a library raises is one ``note:`` line
+    (:func:`_warning_note`), or an error under ``python -W error``.
     """
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    warnings.showwarning = _warning_note
     sys.unraisablehook = _unraisable
     sys.excepthook = _printed_error
+    EXCEPTHOOK[:] = [_printed_error]  # put back by the app's root callback (Typer replaces it)
     code = 0
     try:
         app()
@@ -86,6 +92,7 @@ def main() -> None:
         code = fail(exc).exit_code
     except Exception as exc:
         if os.environ.get("IMUCALIB_DEBUG"):
+            sys.excepthook = sys.__excepthook__  # the quiet hook would swallow the traceback
             raise
         err_console.print(f"[bold red]internal error:[/] {type(exc).__name__}: {exc} (a bug in "
                           "imucalib; IMUCALIB_DEBUG=1 shows the traceback)", highlight=False,
@@ -95,6 +102,12 @@ def main() -> None:
 
 
 _UNRAISABLE: list[str] = []
+
+
+def _warning_note(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  file: Any = None, line: str | None = None) -> None:
+    """Print a warning as one ``note:`` line, without Python's file, line and source."""
+    err_console.print(f"note: {message}", highlight=False, soft_wrap=True, markup=False)
 
 
 def _unraisable(unraisable: sys.UnraisableHookArgs) -> None:
@@ -122,11 +135,11 @@ def _printed_error(exc_type: type[BaseException], exc: BaseException, tb: object
 def _exit(code: int) -> None:
     """Leave with `code`; skip interpreter teardown after HDF5 failed to write a file.
 
-    A command that wrote no Recording never imported :mod:`imucalib.io.recording` (nor h5py),
+    A command that wrote no HDF5 file never imported :mod:`imucalib.io._abandon` (nor h5py),
     so there is nothing of it to ask about (and importing it here would cost every command).
     """
-    writer = sys.modules.get("imucalib.io.recording")
-    abandoned = writer is not None and writer.abandoned_files()
+    gave_up = sys.modules.get("imucalib.io._abandon")
+    abandoned = gave_up is not None and gave_up.abandoned_files()
     if abandoned or _UNRAISABLE:
         sys.stdout.flush()
         sys.stderr.flush()

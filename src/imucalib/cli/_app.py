@@ -7,6 +7,8 @@ line is made by :func:`typer_app`, which turns rich markup off.
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Callable
 from typing import Annotated, Any
 
 import typer
@@ -30,6 +32,10 @@ app = typer_app(
 )
 console = Console()
 err_console = Console(stderr=True)
+#: The ``sys.excepthook`` the entry point chose (:func:`imucalib.cli.main`): Typer installs its
+#: own when the app starts, and the root callback puts this one back (h5py prints, through
+#: the hook, the errors HDF5 raises while Python frees an object of a file it failed to write).
+EXCEPTHOOK: list[Callable[..., Any]] = []
 
 
 def _print_version(value: bool) -> None:
@@ -47,6 +53,8 @@ def _root(
         help="Print the version and exit.")] = False,
 ) -> None:
     """Inertial-sensor calibration station: twin, recordings, analysis."""
+    if EXCEPTHOOK:
+        sys.excepthook = EXCEPTHOOK[0]
 
 
 def fail(exc: Exception) -> typer.Exit:

@@ -67,6 +67,12 @@ class StepLogTables:
         self._fields = dict(step_fields)
         self._steps_group = steps_group
         self._log_group = log_group
+        # opened once: a dataset opened at each write and freed after it is closed by HDF5
+        # then, a write Python cannot see fail (docs/reliability.md, "A failed write")
+        self._step_datasets: dict[str, h5py.Dataset] = {
+            name: steps_group[name] for name in self._fields}
+        self._log_datasets: dict[str, h5py.Dataset] = {
+            name: log_group[name] for name in LOG_FIELDS}
         self._steps: list[dict[str, Any]] = []
         self._steps_dirty_from: int | None = None
         self.n_steps_written = 0
@@ -75,8 +81,8 @@ class StepLogTables:
 
     def load_existing(self) -> None:
         """Take over the rows already in the datasets (reopening a closed Recording)."""
-        n = self._steps_group["index"].shape[0]
-        cols = {name: self._steps_group[name][:n] for name in self._fields}
+        n = self._step_datasets["index"].shape[0]
+        cols = {name: self._step_datasets[name][:n] for name in self._fields}
         for i in range(n):
             row: dict[str, Any] = {}
             for name, spec in self._fields.items():
@@ -89,7 +95,7 @@ class StepLogTables:
                     row[name] = float(value)
             self._steps.append(row)
         self.n_steps_written = n
-        self.n_log_written = self._log_group["time_s"].shape[0]
+        self.n_log_written = self._log_datasets["time_s"].shape[0]
 
     @property
     def n_steps(self) -> int:
@@ -175,7 +181,7 @@ class StepLogTables:
         rows = self._steps[start:]
         n1 = len(self._steps)
         for name, spec in self._fields.items():
-            ds = self._steps_group[name]
+            ds = self._step_datasets[name]
             if ds.shape[0] != n1:
                 ds.resize((n1,))
             values = [r[name] for r in rows]
@@ -192,7 +198,7 @@ class StepLogTables:
         n1 = n0 + len(self._log_pending)
         cols = list(zip(*self._log_pending, strict=True))
         for (name, spec), values in zip(LOG_FIELDS.items(), cols, strict=True):
-            ds = self._log_group[name]
+            ds = self._log_datasets[name]
             if ds.shape[0] != n1:
                 ds.resize((n1,))
             ds[n0:n1] = np.array(values, dtype=spec.dtype)

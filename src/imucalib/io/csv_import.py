@@ -40,7 +40,13 @@ column and the data row (and file line) where relevant, what was expected and wh
   NaN or ±inf in ``time_s`` or a gyro or accelerometer column (other columns may hold ``NaN``,
   the missing value the exports write, but not ±inf);
 - the time: decreasing from one row to the next (equal consecutive times are allowed, as in a
-  Recording), beyond ±:data:`MAX_ABS_TIME_S`, or spanning more than :data:`MAX_TIME_SPAN_S`.
+  Recording), beyond ±:data:`MAX_ABS_TIME_S`, or spanning more than :data:`MAX_TIME_SPAN_S`;
+- the values: a gyro beyond ±:data:`MAX_ABS_RATE_RPS` or an accelerometer beyond
+  ±:data:`MAX_ABS_ACCEL_MPS2` after the conversion to SI (no IMU reads that much: raw counts
+  read without their scale, or the wrong unit);
+- a field longer than :data:`MAX_FIELD_CHARS` characters where a line is split into its fields
+  (the header, the first data row, a row an error names). The ``csv`` module's own limit
+  (131 072 characters) is raised to that bound, for the whole process, when a line is split.
 
 The file is parsed once by pandas' C reader, :data:`DEFAULT_CHUNK_ROWS` rows at a time, and
 checked with array operations: a 10⁶-row export (180 MB) reads in about the time pandas alone
@@ -62,7 +68,7 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
-from imucalib.conventions import IMU_COLUMNS, TIME_COLUMN
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, IMU_COLUMNS, TIME_COLUMN
 from imucalib.errors import InvalidInputError, UnitError
 from imucalib.io._schema import EXTRA_UNITS
 from imucalib.units import parse_unit
@@ -70,8 +76,9 @@ from imucalib.units import parse_unit
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["DEFAULT_CHUNK_ROWS", "MAX_ABS_TIME_S", "MAX_TIME_SPAN_S", "WHITESPACE", "concat_chunks",
-           "iter_imu_csv", "read_imu_csv"]
+__all__ = ["DEFAULT_CHUNK_ROWS", "MAX_ABS_ACCEL_MPS2", "MAX_ABS_RATE_RPS", "MAX_ABS_TIME_S",
+           "MAX_FIELD_CHARS", "MAX_TIME_SPAN_S", "WHITESPACE", "concat_chunks", "iter_imu_csv",
+           "read_imu_csv"]
 
 #: The `delimiter` of files whose fields are separated by runs of blanks (imu_tk's files).
 WHITESPACE: Final = "whitespace"
@@ -84,6 +91,15 @@ DEFAULT_CHUNK_ROWS: Final = 1_000_000
 MAX_ABS_TIME_S: Final = 1e10
 #: Largest accepted last − first time of one file: 366 days. [s]
 MAX_TIME_SPAN_S: Final = 366 * 86400.0
+#: Largest accepted |gyro| once in SI: 10⁴ rad/s (about 573 000 °/s, some 30 times the widest
+#: range of a MEMS or optical gyro). [rad/s]
+MAX_ABS_RATE_RPS: Final = 1e4
+#: Largest accepted |accelerometer| once in SI: 10⁷ m/s² (about 10⁶ g, ten times the range of a
+#: shock accelerometer). [m/s²]
+MAX_ABS_ACCEL_MPS2: Final = 1e7
+#: Most characters of one field where a line is split by the csv module (the header, the first
+#: data row, a row an error names); the module's own default is 131 072. [characters]
+MAX_FIELD_CHARS: Final = 1 << 20
 
 _HEADER = re.compile(r"^\s*(%?[A-Za-z][A-Za-z0-9_.]*)\s*(?:\[(.+)\])?\s*$")
 _SI_SUFFIXES = {"_rps": "rad/s", "_mps2": "m/s^2", "_s": "s"}
@@ -101,6 +117,11 @@ _DIMENSIONS: dict[str, tuple[str, tuple[str, ...]]] = {
 _NO_FACTOR = frozenset(u.lower() for u in EXTRA_UNITS)
 _MAX_HEADER_BYTES = 65536
 _MUST_BE_FINITE = frozenset((TIME_COLUMN, *IMU_COLUMNS))
+#: The SI bound of each IMU column, with what it is and the option that gives its unit.
+_BOUNDS: dict[str, tuple[float, str, str]] = {
+    **dict.fromkeys(GYRO_COLUMNS, (MAX_ABS_RATE_RPS, "a gyro", "gyro")),
+    **dict.fromkeys(ACCEL_COLUMNS, (MAX_ABS_ACCEL_MPS2, "an accelerometer", "accel")),
+}
 
 
 def _unit_of(name: str) -> str:
@@ -123,11 +144,46 @@ def _short(text: str, limit: int = 60) -> str:
     return repr(text) if len(text) <= limit else repr(text[:limit]) + "…"
 
 
-def _split(line: str, delimiter: str) -> list[str]:
-    """Split one line: `delimiter` is one character, or ``"whitespace"``."""
+def named_unit(field: str) -> str | None:
+    """Return the unit a column's own name carries, or None.
+
+    ``name [unit]`` gives the unit in brackets; a name ending in a unit suffix (``_dps``,
+    ``_rps``, ``_g``, ``_mps2``, ``_s``, ``_degc``; any case) the suffix's unit: ``acc_x[g]`` →
+    ``g``, ``gyr_x_dps`` → ``deg/s``, ``GyroX`` → None.
+    """
+    m = _HEADER.match(field)
+    if m is None:
+        return None
+    if m.group(2):
+        return m.group(2).strip()
+    return _suffix_unit(m.group(1).lower())
+
+
+def _suffix_unit(name: str) -> str | None:
+    return next((u for suffix, u in _SUFFIX_UNITS.items() if name.endswith(suffix)), None)
+
+
+def _split(line: str, delimiter: str, where: str = "the line") -> list[str]:
+    """Split one line: `delimiter` is one character, or ``"whitespace"``.
+
+    Raises
+    ------
+    InvalidInputError
+        A field longer than :data:`MAX_FIELD_CHARS`, or a line the csv module cannot split;
+        `where` names the line.
+    """
     if delimiter == WHITESPACE:
         return line.split()
-    return next(csv.reader([line], delimiter=delimiter), [])
+    if csv.field_size_limit() < MAX_FIELD_CHARS:
+        csv.field_size_limit(MAX_FIELD_CHARS)
+    try:
+        return next(csv.reader([line], delimiter=delimiter), [])
+    except csv.Error as exc:
+        if "field limit" in str(exc):
+            raise InvalidInputError(f"{where} has a field longer than {MAX_FIELD_CHARS} "
+                                    "characters, the most a field may hold; expected numbers "
+                                    "(or short text in a column that is skipped)") from None
+        raise InvalidInputError(f"{where} cannot be split into fields: {exc}") from None
 
 
 def _read_header(p: Path, skip_rows: int = 0, delimiter: str = ",") -> list[str]:
@@ -166,7 +222,7 @@ def _read_header(p: Path, skip_rows: int = 0, delimiter: str = ",") -> list[str]
     if not line.strip():
         raise InvalidInputError(f"{p}: line {skip_rows + 1} is blank; expected the header (e.g. "
                                 "`time_s,gyro_x_rps,gyro_y_rps,gyro_z_rps`)")
-    return _split(line.rstrip("\r"), delimiter)
+    return _split(line.rstrip("\r"), delimiter, f"{p}: line {skip_rows + 1} (the header)")
 
 
 def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
@@ -198,7 +254,8 @@ def _columns(p: Path, headers: list[str], column_map: Mapping[str, str] | None,
                                     f"`name [unit]` (a name starts with a letter){hint}")
         given = header if column_map and header in column_map else m.group(1)
         name = (column_map or {}).get(given, given)
-        unit = (m.group(2) or (units or {}).get(name) or _unit_of(name)).strip()
+        renamed = _suffix_unit(m.group(1).lower()) if name != given else None
+        unit = (m.group(2) or (units or {}).get(name) or renamed or _unit_of(name)).strip()
         _check_unit(p, header, name, unit)
         if name in seen:
             j = seen[name]
@@ -227,10 +284,11 @@ def _check_unit(p: Path, header: str, name: str, unit: str) -> None:
     if dim is not None and key not in {_key(u) for u in dim[1]}:
         what, allowed = dim
         problem = "an unknown unit" if not known else "a unit of another quantity,"
-        raise UnitError(f"{p}: column {_short(header)} has {problem} {unit!r}; {name} is {what}, "
-                        f"expected one of {', '.join(allowed)}")
+        raise UnitError(f"{p}: column {_short(header)} has {problem} {_short(unit)}; {name} is "
+                        f"{what}, expected one of {', '.join(allowed)}")
     if not known:
-        raise UnitError(f"{p}: column {_short(header)} has an unknown unit {unit!r}; expected a "
+        raise UnitError(f"{p}: column {_short(header)} has an unknown unit {_short(unit)}; "
+                        "expected a "
                         "unit such as rad/s, deg/s, deg/h, m/s^2, g, s, ms, degC, counts or 1 "
                         "(imucalib.units.parse_unit lists them all)")
 
@@ -267,7 +325,7 @@ def _parse(p: Path, n_fields: int, header_line: int = 1, delimiter: str = ",",
     if first < 0:
         raise InvalidInputError(f"{p}: no data rows after the header; expected at least one row "
                                 "of numbers")
-    n_first = len(_split(text, delimiter))
+    n_first = len(_split(text, delimiter, f"{p}: line {first}"))
     if n_first > n_fields:  # pandas would silently take the extra field for an index
         raise InvalidInputError(f"{p}: line {first} has {n_first} fields; the header has "
                                 f"{n_fields} (a ragged row)")
@@ -317,13 +375,14 @@ def _numeric(p: Path, df: pd.DataFrame, pos: int, name: str, n_fields: int,
     line, text = _locate(p, row, header_line)
     where = f"data row {row + 1}" + (f" (line {line})" if line > 0 else "")
     if isinstance(value, str) and not value.strip():
-        n_here = len(_split(text, delimiter)) if text else n_fields
+        n_here = len(_split(text, delimiter, f"{p}: line {line}")) if text else n_fields
         if n_here < n_fields:
             raise InvalidInputError(f"{p}: line {line} has {n_here} fields; the header has "
                                     f"{n_fields} (a ragged row)")
         raise InvalidInputError(f"{p}: column {name!r} is empty at {where} (a number expected; "
                                 "a missing value is written NaN)")
-    raise InvalidInputError(f"{p}: column {name!r} holds a non-numeric value {value!r} at "
+    shown = _short(value) if isinstance(value, str) else repr(value)
+    raise InvalidInputError(f"{p}: column {name!r} holds a non-numeric value {shown} at "
                             f"{where} (numbers expected; a missing value is written NaN)")
 
 
@@ -346,6 +405,26 @@ def _check_finite(p: Path, name: str, values: np.ndarray[Any, Any], header_line:
                             f"{rule} ({int(bad.sum())} such cell(s){scope})")
 
 
+def _check_range(p: Path, name: str, values: np.ndarray[Any, Any], unit: str,
+                 header_line: int = 1, row0: int = 0, scope: str = "") -> None:
+    """Refuse a gyro or accelerometer value beyond its bound (:data:`_BOUNDS`, in `unit`)."""
+    if name not in _BOUNDS or values.dtype.kind not in "fiu" or not values.size:
+        return
+    bound_si, what, option = _BOUNDS[name]
+    factor = 1.0 if _key(unit) in _NO_FACTOR else parse_unit(unit)
+    bound = bound_si / factor
+    with np.errstate(invalid="ignore"):
+        big = np.abs(values.astype(np.float64)) > bound
+    if not big.any():
+        return
+    row = int(np.argmax(big))
+    raise InvalidInputError(
+        f"{p}: column {name!r} holds {_num(values[row])} {unit} at "
+        f"{_where(p, row0 + row, header_line)}; {what} reads at most ±{bound:.6g} {unit} "
+        f"({int(big.sum())} such cell(s){scope}): raw counts? give `--{option}-unit counts` "
+        f"and `--{option}-scale`; another unit? `--{option}-unit`")
+
+
 def _check_time(p: Path, t: np.ndarray[Any, Any], header_line: int = 1, *, row0: int = 0,
                 before: float | None = None, first: float | None = None, scope: str = ""
                 ) -> None:
@@ -357,7 +436,8 @@ def _check_time(p: Path, t: np.ndarray[Any, Any], header_line: int = 1, *, row0:
     """
     ext = t if before is None else np.concatenate(([before], t))
     shift = row0 if before is None else row0 - 1  # ext[k] is data row shift + k
-    step = np.diff(ext)
+    with np.errstate(invalid="ignore"):  # inf − inf: the bound below names the time
+        step = np.diff(ext)
     if np.any(step < 0):
         k = int(np.argmax(step < 0)) + 1
         raise InvalidInputError(
@@ -547,7 +627,8 @@ class _Chunks:
             scale = self.scales.get(col)
             offset = self.offsets.get(col)
             if scale is not None or offset is not None:
-                values = (values.astype(np.float64) - (offset or 0.0)) / (scale or 1.0)
+                with np.errstate(over="ignore"):  # an overflow is refused below, column named
+                    values = (values.astype(np.float64) - (offset or 0.0)) / (scale or 1.0)
             unit = col_units[col]
             factor = 1.0 if _key(unit) in _NO_FACTOR else parse_unit(unit)
             if self.to_si and factor != 1.0:
@@ -561,11 +642,14 @@ class _Chunks:
                     values = values.astype(np.float64) * factor
                 col_units[col] = si_unit
             _check_finite(p, col, values, hdr, self.row0, scope)
+            _check_range(p, col, values, col_units[col], hdr, self.row0, scope)
             data[col] = values
         if TIME_COLUMN in data:
             t = np.asarray(data.pop(TIME_COLUMN), dtype=np.float64)
         else:
-            t = (self.row0 + np.arange(n, dtype=np.float64)) / float(self.sample_rate_hz or 1.0)
+            with np.errstate(over="ignore"):  # a rate of 1e-320 Hz: refused below as too late
+                t = (self.row0 + np.arange(n, dtype=np.float64)) / float(self.sample_rate_hz
+                                                                         or 1.0)
         _check_time(p, t, hdr, row0=self.row0, before=self.last_t, first=self.first_t,
                     scope=scope)
         if self.first_t is None:

@@ -38,13 +38,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TIME_COLUMN
-from imucalib.errors import InvalidInputError
+from imucalib.errors import InvalidInputError, UnitError
 from imucalib.io.csv_import import (
     DEFAULT_CHUNK_ROWS,
     WHITESPACE,
     _read_header,
     concat_chunks,
     iter_imu_csv,
+    named_unit,
     read_imu_csv,
 )
 from imucalib.io.csv_layouts import SHORT_NAMES, build_csv_mapping, normalize_column_map
@@ -56,6 +57,9 @@ __all__ = ["COUNTS", "ImportSpec", "iter_imu_table", "load_import_spec", "read_i
 
 #: The unit of raw-count columns.
 COUNTS = "counts"
+#: The sample rates a log may be read at (``sample_rate_hz``): a sample every 1000 s to 1 MHz.
+MIN_SAMPLE_RATE_HZ = 1e-3
+MAX_SAMPLE_RATE_HZ = 1e6
 #: The unit a counts-per-unit scale refers to when the column is in counts.
 _COUNTS_BASE = {"gyro": "deg/s", "accel": "g"}
 
@@ -144,6 +148,10 @@ def load_import_spec(path: str | os.PathLike[str]) -> ImportSpec:
         raise InvalidInputError(f"cannot read the import file {p}: {exc.strerror or exc}") from exc
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InvalidInputError(f"{p}: not a TOML import file: {exc}") from exc
+    for key in ("columns", "column_map", "units"):
+        if key in doc and not isinstance(doc[key], dict):
+            raise InvalidInputError(f"{p}: `{key}` must be a table of names to strings (e.g. "
+                                    f"`[{key}]` with `gx = \"GyroX\"`); got {_shown(doc[key])}")
     if "columns" in doc:
         doc["column_map"] = {**doc.pop("columns"), **doc.get("column_map", {})}
     unknown = sorted(set(doc) - _FIELDS)
@@ -155,25 +163,58 @@ def load_import_spec(path: str | os.PathLike[str]) -> ImportSpec:
         if key in ("column_map", "units"):
             if not (isinstance(value, dict) and all(isinstance(v, str) for v in value.values())):
                 raise InvalidInputError(f"{p}: `{key}` must be a table of names to strings; got "
-                                        f"{value!r}")
+                                        f"{_shown(value)}")
             out[key] = dict(value)
         elif key in _FLOATS:
             if isinstance(value, bool) or not isinstance(value, int | float):
-                raise InvalidInputError(f"{p}: `{key}` must be a number; got {value!r}")
+                raise InvalidInputError(f"{p}: `{key}` must be a number; got {_shown(value)}")
             out[key] = float(value)
         elif key in _STRINGS:
             if not isinstance(value, str):
-                raise InvalidInputError(f"{p}: `{key}` must be a string; got {value!r}")
+                raise InvalidInputError(f"{p}: `{key}` must be a string; got {_shown(value)}")
             out[key] = value
         elif key == "skip_rows":
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise InvalidInputError(f"{p}: `skip_rows` must be an integer ≥ 0; got {value!r}")
+                raise InvalidInputError(f"{p}: `skip_rows` must be an integer ≥ 0; got "
+                                        f"{_shown(value)}")
             out[key] = value
         elif key == "accel_file":
             if not isinstance(value, str):
-                raise InvalidInputError(f"{p}: `accel_file` must be a path; got {value!r}")
+                raise InvalidInputError(f"{p}: `accel_file` must be a path; got {_shown(value)}")
             out[key] = p.parent / value
     return ImportSpec(**out)
+
+
+def _shown(value: Any, limit: int = 60) -> str:
+    """`value` as written in a message, cut at `limit` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
+#: Characters that may not separate fields: they occur in numbers, or end a line or quote one.
+_NOT_DELIMITERS = frozenset("0123456789.+-eE\"\r\n")
+
+
+def check_delimiter(delimiter: object, option: str = "`delimiter`") -> str:
+    """Return the field separator a spec's `delimiter` names (``"tab"`` → a tab).
+
+    Raises
+    ------
+    InvalidInputError
+        Not one character, ``"tab"`` or ``"whitespace"``, or a character of numbers.
+    """
+    if delimiter in ("\\t", "tab"):
+        return "\t"
+    if delimiter == WHITESPACE:
+        return WHITESPACE
+    if not isinstance(delimiter, str) or len(delimiter) != 1:
+        raise InvalidInputError(f"{option} must be one character, 'tab' or {WHITESPACE!r}; got "
+                                f"{_shown(delimiter)}")
+    if delimiter in _NOT_DELIMITERS or delimiter.isalnum():
+        raise InvalidInputError(f"{option} {delimiter!r} cannot separate fields (it occurs in "
+                                "numbers or ends a line); expected ',', ';', 'tab', '|', ' ' or "
+                                f"{WHITESPACE!r}")
+    return delimiter
 
 
 def _check_spec(spec: ImportSpec) -> None:
@@ -185,6 +226,10 @@ def _check_spec(spec: ImportSpec) -> None:
         value = getattr(spec, key)
         if value is not None and not value > 0:
             raise InvalidInputError(f"`{key}` must be > 0; got {value}")
+    rate = spec.sample_rate_hz
+    if rate is not None and not MIN_SAMPLE_RATE_HZ <= rate <= MAX_SAMPLE_RATE_HZ:
+        raise InvalidInputError(f"`sample_rate_hz` must be between {MIN_SAMPLE_RATE_HZ:g} and "
+                                f"{MAX_SAMPLE_RATE_HZ:g} Hz (an IMU's output rate); got {rate:g}")
     for kind in ("gyro", "accel"):
         if getattr(spec, f"{kind}_unit") == COUNTS and getattr(spec, f"{kind}_scale") is None:
             raise InvalidInputError(
@@ -281,9 +326,7 @@ def iter_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None,
     spec = spec or ImportSpec()
     _check_spec(spec)
     p = Path(path)
-    delimiter = spec.delimiter
-    if delimiter in ("\\t", "tab"):
-        delimiter = "\t"
+    delimiter = check_delimiter(spec.delimiter, "--delimiter")
     headers = _read_header(p, spec.skip_rows, delimiter)
     if spec.accel_file is not None or (_headerless(headers) and len(headers) == 4
                                        and not spec.column_map):
@@ -291,7 +334,8 @@ def iter_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None,
             raise InvalidInputError(f"`chunk_rows` must be an integer ≥ 1; got {chunk_rows!r}")
         return iter((_read_imu_tk(p, spec),))
     units = {SHORT_NAMES.get(k, k): v for k, v in spec.units.items()}
-    mapping = build_csv_mapping(headers, column_map=normalize_column_map(spec.column_map),
+    user_map = normalize_column_map(spec.column_map)
+    mapping = build_csv_mapping(headers, column_map=user_map,
                                 units=units, gyro_unit=_unit(spec, "gyro"),
                                 accel_unit=_unit(spec, "accel"), time_column=spec.time_column,
                                 time_unit=spec.time_unit)
@@ -307,7 +351,35 @@ def iter_imu_table(path: str | os.PathLike[str], spec: ImportSpec | None = None,
                           delimiter=delimiter, skip_rows=spec.skip_rows,
                           sample_rate_hz=spec.sample_rate_hz, scales=scales, offsets=offsets,
                           chunk_rows=chunk_rows)
+    present = {h.strip() for h in headers}
+    _check_mapped_units(p, {k: v for k, v in user_map.items() if k.strip() in present},
+                        mapping.units)
     return _tagged(chunks, mapping.layout, spec.sample_rate_hz if counter else None)
+
+
+def _check_mapped_units(p: Path, user_map: dict[str, str], known: dict[str, str]) -> None:
+    """Refuse gyro or accelerometer columns a column map renames without saying their unit.
+
+    A column renamed to ``gyro_x_rps`` is not thereby in rad/s: its unit must come from
+    ``gyro_unit``/``accel_unit``, ``units``, the layout, or the column's own name
+    (``AccX [g]``, ``gyr_x_dps``: :func:`~imucalib.io.csv_import.named_unit`).
+
+    Raises
+    ------
+    UnitError
+        Naming the columns and the option that gives their unit.
+    """
+    for kind, cols, option, example in (
+            ("gyro", GYRO_COLUMNS, "--gyro-unit deg/s|rad/s|deg/h|counts", "gx=deg/s"),
+            ("accelerometer", ACCEL_COLUMNS, "--accel-unit g|m/s^2|mg|counts", "ax=g")):
+        bare = [vendor for vendor, canonical in user_map.items()
+                if canonical in cols and canonical not in known and vendor.strip() != canonical
+                and named_unit(vendor) is None]
+        if bare:
+            raise UnitError(
+                f"{p}: the {kind} column(s) {bare} are mapped by the column map without a unit, "
+                f"and their names carry none; give it with `{option}` (or `--units {example}`, "
+                "`units` in the --import file, or a name such as `GyrX [deg/s]`)")
 
 
 def _tagged(chunks: Iterator[pd.DataFrame], layout: str, counter_rate_hz: float | None
@@ -332,7 +404,8 @@ def _read_imu_tk(gyro_path: Path, spec: ImportSpec) -> pd.DataFrame:
     """imu_tk's two files: ``time x y z`` rows, blank-separated, no header."""
     import pandas as pd
 
-    delimiter = WHITESPACE if spec.delimiter == "," else spec.delimiter
+    delimiter = (WHITESPACE if spec.delimiter == "," else
+                 check_delimiter(spec.delimiter, "--delimiter"))
     scales, offsets = _scaling(spec)
     time_unit = spec.time_unit or "s"
 

@@ -76,13 +76,18 @@ last completed flush; the file then refuses a normal HDF5 open (its "open for wr
 set) but :func:`imucalib.io.opening.open_recording` reads it in SWMR mode, and
 :func:`imucalib.io.recover.recover_recording` copies it into a cleanly closed file. The flush
 makes data durable against the process dying (SIGKILL), not against power loss (no fsync).
+
+A write, flush or close that HDF5 fails (ENOSPC or EIO behind the free-space checks) gives the
+file up as a killed writer leaves it: no HDF5 call touches it again, its h5py objects are kept
+alive so that Python never frees them (:mod:`imucalib.io._abandon`), and
+:class:`~imucalib.errors.RecordingWriteError` says what failed, in one line; the process must
+then end with :func:`os._exit` (:func:`abandoned_files`), as the command line does.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import sys
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -94,7 +99,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib.conventions import TIME_COLUMN
-from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
+from imucalib.errors import (
+    InvalidInputError,
+    RecordingError,
+    RecordingWriteError,
+    StorageFullError,
+)
+from imucalib.io._abandon import (
+    WRITE_ERRORS,
+    abandon,
+    abandoned_files,
+    failure_text,
+    freed_object_failure,
+    watch_freed_objects,
+)
 from imucalib.io._layout import (
     StreamState,
     check_stream_specs,
@@ -154,38 +172,6 @@ __all__ = [
     "StreamSpec",
     "abandoned_files",
 ]
-
-_ABANDONED: list[Path] = []
-
-
-def _mute_hdf5_teardown(path: Path) -> None:
-    """Drop the errors HDF5 raises while Python frees objects of an abandoned file.
-
-    They are the same failed write again (reported once already), printed by Python as
-    "Exception ignored in ... __dealloc__" with a traceback; every other unraisable exception
-    still reaches the previous hook.
-    """
-    previous = sys.unraisablehook
-    name = str(path)
-
-    def hook(unraisable: Any) -> None:
-        if name in str(unraisable.exc_value):
-            return
-        previous(unraisable)
-
-    sys.unraisablehook = hook
-
-
-def abandoned_files() -> tuple[Path, ...]:
-    """Files whose writer gave up after HDF5 failed to write (this process).
-
-    After a failed write HDF5 can neither flush nor close the file, and tearing the library
-    down at interpreter exit may crash the process. Such a writer leaves its file as a killed
-    writer would (everything committed before the failure is kept; ``imucalib run --resume`` or
-    ``imucalib recover`` finish it). A program that sees any here should end with
-    :func:`os._exit` after printing its message; the command line does.
-    """
-    return tuple(_ABANDONED)
 
 _METADATA_SLACK_BYTES = 64 << 10  # B-tree and heap growth that may come with a block write
 
@@ -305,14 +291,18 @@ class RecordingWriter:
         self._full: StorageFullError | None = None
         self._buffered_bytes = 0
         self._closed = True
+        watch_freed_objects()
         try:
             self._file = h5py.File(self._path, "w", libver="latest")
         except OSError as exc:
-            raise RecordingError(f"cannot create {self._path}: {exc}") from exc
+            raise RecordingError(f"cannot create {self._path}: {failure_text(exc)}") from exc
         try:
             layout = create_layout(self._file, meta, stream_specs, truth_specs, truth_items,
                                    chunk_rows, compression)
+            self._raise_freed_failure()
             self._file.swmr_mode = True
+        except WRITE_ERRORS as exc:
+            raise self._abandon_new(exc) from exc
         except BaseException:
             self._file.close()
             self._path.unlink(missing_ok=True)
@@ -379,10 +369,12 @@ class RecordingWriter:
         self._streams = {}
         self._truth_streams = {}
         self._closed = True
+        watch_freed_objects()
         try:
             self._file = h5py.File(p, "r+", libver="latest")
         except OSError as exc:
-            raise RecordingError(f"cannot reopen {p} for appending: {exc}") from exc
+            raise RecordingError(f"cannot reopen {p} for appending: {failure_text(exc)}"
+                                 ) from exc
         try:
             f = self._file
             cg = f[COMMIT_GROUP]
@@ -398,7 +390,10 @@ class RecordingWriter:
             version = int(decode_attr(f.attrs["format_version"]))
             self._tables = StepLogTables(f[STEPS_GROUP], f[LOG_GROUP], step_fields(version))
             self._tables.load_existing()
+            self._raise_freed_failure()
             f.swmr_mode = True
+        except WRITE_ERRORS as exc:
+            raise self._abandon("reopening for appending", exc) from exc
         except BaseException:
             self._file.close()
             raise
@@ -545,7 +540,8 @@ class RecordingWriter:
                     ds.resize((n1,))
                 ds.write_direct(block, dest_sel=np.s_[n0:n1])
                 nbytes += block.nbytes
-        except (OSError, RuntimeError, ValueError) as exc:
+            self._raise_freed_failure()
+        except (*WRITE_ERRORS, ValueError) as exc:
             raise self._abandon(f"writing stream {st.entry} rows {n0}:{n1}", exc) from exc
         for parts in st.buffers.values():
             parts.clear()
@@ -580,11 +576,7 @@ class RecordingWriter:
         if not hasattr(self, "_streams"):  # creating or reopening: nothing buffered yet
             raise exc
         if room < _METADATA_SLACK_BYTES:  # not even a clean close fits: touch the file no more
-            self._closed = True
-            _ABANDONED.append(self._path)
-            _mute_hdf5_teardown(self._path)
-            raise StorageFullError(f"{exc}; the file could not be closed cleanly and keeps what "
-                                   "was committed before, as a stopped writer leaves it")
+            raise self._give_up_for_room(exc)
         self._full = exc
         dropped = 0
         for state in (*self._streams.values(), *self._truth_streams.values()):
@@ -595,15 +587,52 @@ class RecordingWriter:
         self._buffered_bytes = 0
         raise StorageFullError(f"{exc} ({dropped} buffered row(s) not written)")
 
-    def _abandon(self, what: str, exc: BaseException) -> RecordingError:
-        """Give the file up after HDF5 failed to write: no further HDF5 call touches it."""
+    def _check_flush_room(self) -> None:
+        """Give the file up, before HDF5 fails on it, when not even a flush's metadata fits."""
+        room = room_bytes(self._path, file_size_bytes=self._file.id.get_filesize())
+        if room >= _METADATA_SLACK_BYTES:
+            return
+        raise self._give_up_for_room(StorageFullError(
+            f"no room to flush {self._path}: {format_bytes(room)} left on its filesystem (or "
+            f"under the file-size limit), less than the {format_bytes(_METADATA_SLACK_BYTES)} "
+            "HDF5's metadata may need; free some space, then continue with `imucalib run "
+            "--resume FILE`"))
+
+    def _give_up_for_room(self, exc: StorageFullError) -> StorageFullError:
+        """Abandon the file when not even a clean close fits; return the error to raise."""
         self._closed = True
-        _ABANDONED.append(self._path)
-        _mute_hdf5_teardown(self._path)
-        return RecordingError(
-            f"{what} to {self._path} failed ({exc}); the file keeps everything committed before "
-            "and is left as a stopped writer leaves it: continue with `imucalib run --resume "
-            "FILE`, or copy it out with `imucalib recover FILE`")
+        abandon(self._path, str(exc), None, self, self._file)
+        return StorageFullError(f"{exc}; the file could not be closed cleanly and keeps what "
+                                "was committed before, as a stopped writer leaves it")
+
+    def _abandon(self, what: str, exc: BaseException) -> RecordingWriteError:
+        """Give the file up after HDF5 failed to write it: no further HDF5 call touches it.
+
+        The writer, its h5py file and `exc` (whose traceback holds the h5py objects of the
+        frames the failure went through) are kept alive for the rest of the process
+        (:mod:`imucalib.io._abandon`), which must end with :func:`os._exit`.
+        """
+        self._closed = True
+        return abandon(
+            self._path,
+            f"{what} to {self._path} failed: {failure_text(exc)}; the file keeps everything "
+            "committed before and is left as a stopped writer leaves it: continue with "
+            "`imucalib run --resume FILE`, or copy it out with `imucalib recover FILE`",
+            exc, self, getattr(self, "_file", None))
+
+    def _abandon_new(self, exc: BaseException) -> RecordingWriteError:
+        """Give up a file HDF5 failed to write while it was being created, and remove it."""
+        self._closed = True
+        error = abandon(
+            self._path,
+            f"creating {self._path} failed: {failure_text(exc)}; nothing was recorded (the "
+            "file is removed): mend the storage or free some space, then start the run again",
+            exc, self, self._file)
+        try:
+            self._path.unlink(missing_ok=True)
+        except OSError:
+            pass  # the storage failed: the file holds no commit, and no reader takes it
+        return error
 
     # ------------------------------------------------------------------------- steps and log
     def begin_step(self, kind: str, label: str, t_start_s: float, *,
@@ -730,20 +759,25 @@ class RecordingWriter:
             try:
                 self._write_stream(st)
             except StorageFullError as exc:  # the buffers are dropped: commit the rest
+                if self._closed:  # given up: not even a clean close fits
+                    raise
                 full = exc
         n_streams = len(self._streams) + len(self._truth_streams)
         counts = self._committed.copy()
         counts[:n_streams] = ([st.n_written for st in self._streams.values()]
                               + [st.n_written for st in self._truth_streams.values()])
+        self._check_flush_room()
         try:
+            self._raise_freed_failure()
             self._file.flush()
             self._commit(counts)
             self._tables.write()
+            self._raise_freed_failure()
             self._file.flush()
             counts = counts.copy()
             counts[n_streams:] = (self._tables.n_steps_written, self._tables.n_log_written)
             self._commit(counts)
-        except (OSError, RuntimeError, ValueError) as exc:
+        except (*WRITE_ERRORS, ValueError) as exc:
             raise self._abandon("flushing", exc) from exc
         self._last_flush = time.monotonic()
         if full is not None:
@@ -759,32 +793,65 @@ class RecordingWriter:
     def close(self) -> None:
         """Flush and close, then compress; the file then opens normally. Again: does nothing.
 
-        The compression (``compression`` of the constructor or :meth:`reopen`) rewrites the
-        closed file (:func:`~imucalib.io.recover.compact_recording`). It is skipped when the
-        room left is less than the file's size plus `reserve_bytes`, after the storage filled
-        up (the caller has had the :class:`~imucalib.errors.StorageFullError`), or when the
-        rewrite fails; the file is then left complete and uncompressed, and
-        :attr:`compression_skipped` says why.
+        The order is controlled: every buffer is written and flushed (:meth:`flush`), then
+        h5py closes the file's datasets and groups, then the file. The compression
+        (``compression`` of the constructor or :meth:`reopen`) rewrites the closed file
+        (:func:`~imucalib.io.recover.compact_recording`). It is skipped when the room left is
+        less than the file's size plus `reserve_bytes`, after the storage filled up (the caller
+        has had the :class:`~imucalib.errors.StorageFullError`), or when the rewrite is refused;
+        the file is then left complete and uncompressed, and :attr:`compression_skipped` says
+        why.
+
+        Raises
+        ------
+        StorageFullError
+            When the last rows could not be written for lack of room (the file is closed).
+        RecordingWriteError
+            When HDF5 failed to write, flush or close the file (it is given up unclosed, as a
+            killed writer leaves it), or to write the compressed copy (the file is then closed,
+            complete and uncompressed; ``imucalib run --resume FILE`` compresses it).
         """
         if self._closed:
             return
         already_full = self._full is not None
-        closed_cleanly = False
+        news: StorageFullError | None = None
         try:
-            self.flush()
-        except StorageFullError:
+            self.flush()  # a failed write abandons the file and propagates
+        except StorageFullError as exc:
             if not already_full:  # news to the caller: rows buffered now were dropped
-                raise
-        finally:
-            if not self._closed:  # not abandoned by a failed write
-                self._closed = True
-                self._file.close()
-                closed_cleanly = True
-        if closed_cleanly:
-            self._compress()
+                news = exc
+        if not self._closed:  # not abandoned for want of room even for a clean close
+            self._close_file()
+            if news is None:
+                self._compress()
+        if news is not None:
+            raise news
+
+    def _close_file(self) -> None:
+        """Close the HDF5 file (its objects first, then the file), or give it up on a failure."""
+        self._closed = True
+        try:
+            self._raise_freed_failure()
+            self._file.close()
+        except WRITE_ERRORS as exc:
+            raise self._abandon("closing", exc) from exc
+
+    def _raise_freed_failure(self) -> None:
+        """Raise a write to this file that HDF5 failed while h5py freed an object.
+
+        Such a failure never reaches the caller; HDF5 may crash at the next flush of the file,
+        so every flush and close asks first.
+        """
+        exc = freed_object_failure(self._path)
+        if exc is not None:
+            raise RuntimeError(str(exc)) from exc
 
     def _compress(self) -> None:
-        """Rewrite the closed file with its compression, or warn and leave it as it is."""
+        """Rewrite the closed file with its compression, or warn and leave it as it is.
+
+        A write that fails in the copy (:class:`~imucalib.errors.RecordingWriteError`) leaves
+        the file complete, closed and uncompressed, and is raised.
+        """
         from imucalib.io.recover import compact_recording
 
         if self._compression is None:
@@ -801,6 +868,11 @@ class RecordingWriter:
             try:
                 compact_recording(self._path, self._compression)
                 return
+            except RecordingWriteError as exc:  # HDF5 failed to write the copy
+                raise RecordingWriteError(
+                    f"{self._path} is complete and closed but was left uncompressed: {exc}; "
+                    "compress it with `imucalib run --resume FILE` (a station run) or "
+                    "`imucalib compact FILE`") from exc
             except (RecordingError, OSError) as exc:
                 why = str(exc)
         self._compression_skipped = (f"{self._path} is complete but was left uncompressed "

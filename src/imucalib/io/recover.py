@@ -49,6 +49,14 @@ from imucalib.errors import (
     RecordingCorruptError,
     RecordingError,
     RecordingOpenForWriteError,
+    RecordingWriteError,
+)
+from imucalib.io._abandon import (
+    WRITE_ERRORS,
+    abandon_copy,
+    failure_text,
+    freed_object_failure,
+    watch_freed_objects,
 )
 from imucalib.io._layout import column_compression
 from imucalib.io._open import marked_open_for_write
@@ -88,7 +96,8 @@ from imucalib.io.compression import (
 from imucalib.io.opening import open_damaged, open_recording
 from imucalib.io.reader import Recording
 
-__all__ = ["RecoveredStream", "RecoveryReport", "compact_recording", "recover_recording"]
+__all__ = ["RecoveredStream", "RecoveryReport", "compact_recording", "recover_recording",
+           "stale_partial"]
 
 _BLOCK_ROWS = 1 << 20
 _T = TypeVar("_T")
@@ -177,9 +186,35 @@ def _raw_attrs(obj: h5py.HLObject) -> dict[str, Any]:
     return dict(obj.attrs.items())
 
 
-def _set_attrs(obj: h5py.HLObject, attrs: Mapping[str, Any]) -> None:
+def _set_attrs(obj: h5py.HLObject, attrs: Mapping[str, Any],
+               notes: list[str] | None = None) -> None:
+    """Write `attrs` on `obj`; text that is not valid UTF-8 is mended (:func:`_valid_text`)."""
     for key, value in attrs.items():
-        obj.attrs[key] = value
+        obj.attrs[key] = _valid_text(value, f"{obj.name} attribute `{key}`", notes)
+
+
+def _valid_text(value: Any, where: str, notes: list[str] | None = None) -> Any:
+    """Return `value` with text that is not valid UTF-8 made valid (a note in `notes`).
+
+    h5py reads the undecodable bytes of a UTF-8 attribute as surrogate escapes, which no
+    UTF-8 attribute can hold: each is replaced by U+FFFD (the rest of the text is kept).
+    """
+    if isinstance(value, np.ndarray) and value.dtype.kind == "O":
+        fixed = [_valid_text(v, where, None) for v in value.tolist()]
+        if any(a is not b for a, b in zip(fixed, value.tolist(), strict=True)):
+            if notes is not None:
+                notes.append(f"{where} is not valid UTF-8: undecodable bytes replaced by U+FFFD")
+            return np.array(fixed, dtype=value.dtype).reshape(value.shape)
+        return value
+    if not isinstance(value, str):
+        return value
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        if notes is not None:
+            notes.append(f"{where} is not valid UTF-8: undecodable bytes replaced by U+FFFD")
+        return value.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
+    return value
 
 
 def _like(dst: h5py.Group, name: str, src: h5py.Dataset, n: int, attrs: Mapping[str, Any],
@@ -244,7 +279,7 @@ class _Copier:
             self.notes.append(f"root attributes unreadable ({err}): only format and "
                               "format_version were written")
             attrs = {}
-        _set_attrs(self.dst, attrs)
+        _set_attrs(self.dst, attrs, self.notes)
         self.dst.attrs["format"] = FORMAT_NAME
         self.dst.attrs["format_version"] = np.int64(min(self.version, FORMAT_VERSION))
         if self.recovered:
@@ -261,6 +296,7 @@ class _Copier:
         tg = self.dst.require_group(TRUTH_GROUP)
         attrs, err = _try(_raw_attrs, group)
         for key, value in (attrs or {}).items():
+            value = _valid_text(value, f"/truth attribute `{key}`", self.notes)
             if key.endswith("_json"):
                 try:
                     json.loads(decode_attr(value))
@@ -377,7 +413,7 @@ class _Copier:
                       ) -> RecoveredStream:
         """Copy rows ``[0, n)`` of the aligned columns `dsets`, block by block, with hashes."""
         dst = self.dst.require_group(path)
-        _set_attrs(dst, attrs)
+        _set_attrs(dst, attrs, notes)
         outs = {}
         for c, d in dsets.items():
             col_attrs, _ = _try(_raw_attrs, d)
@@ -566,6 +602,71 @@ def _verify(path: Path, tables: list[RecoveredStream], hashes: dict[str, str]) -
         rec.log  # noqa: B018
 
 
+def _write_copy(tmp: Path, what: str, fill: Callable[[h5py.File], _T]) -> _T:
+    """Create the HDF5 file `tmp`, fill it with ``fill(file)`` and close it; return its result.
+
+    Raises
+    ------
+    RecordingWriteError
+        When HDF5 fails to create, write or close `tmp` (``what failed: ...``): `tmp` is
+        removed, and an h5py file of it is abandoned (:mod:`imucalib.io._abandon`), never
+        closed, so that the process can end without crashing.
+    """
+    watch_freed_objects()
+    try:
+        dst = h5py.File(tmp, "w", libver="latest")
+    except OSError as exc:
+        _remove(tmp)
+        raise RecordingWriteError(f"{what} failed: HDF5 could not create {tmp.name}: "
+                                  f"{failure_text(exc)}") from exc
+    try:
+        result = fill(dst)
+    except WRITE_ERRORS as exc:
+        raise _abandoned(tmp, what, exc, dst) from exc
+    except BaseException:
+        _close_copy(tmp, what, dst)
+        _remove(tmp)
+        raise
+    _close_copy(tmp, what, dst)
+    return result
+
+
+def _close_copy(tmp: Path, what: str, dst: h5py.File) -> None:
+    """Close a copy: h5py closes its datasets and groups, then the file (abandoned on failure)."""
+    try:
+        freed = freed_object_failure(tmp)  # HDF5 may crash flushing a file it failed to write
+        if freed is not None:
+            raise RuntimeError(str(freed)) from freed
+        dst.close()
+    except WRITE_ERRORS as exc:
+        raise _abandoned(tmp, what, exc, dst) from exc
+
+
+def _abandoned(tmp: Path, what: str, exc: BaseException, dst: h5py.File) -> RecordingWriteError:
+    """Abandon the copy `tmp` after a failed write; return the error to raise."""
+    reason = abandon_copy(tmp, what, exc, dst)
+    return RecordingWriteError(f"{what} failed: HDF5 could not write {tmp.name}: {reason}")
+
+
+def _remove(path: Path) -> None:
+    """Remove a temporary file, quietly when the file system fails too."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
+def stale_partial(path: str | os.PathLike[str]) -> Path:
+    """Return the name of the partial copy a compaction of `path` writes (it may not exist).
+
+    A process killed while it compacted a Recording leaves it beside the file; no reader opens
+    it, and the next compaction of the file (``imucalib run --resume FILE``, ``imucalib compact
+    FILE``) or a recovery of it (``imucalib recover FILE``) removes it.
+    """
+    p = Path(path)
+    return p.with_name(f".{p.name}.compact.partial")
+
+
 def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[str] | None = None,
                       *, overwrite: bool = False,
                       compression: str | None = DEFAULT_COMPRESSION) -> RecoveryReport:
@@ -619,9 +720,9 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
             # a file of version 1 or 2 keeps its own filters rather than gain Blosc, which its
             # readers lack (Blosc came with version 3)
             keep = needs_plugin(compression) and rec.format_version < FORMAT_VERSION
-            with h5py.File(tmp, "w", libver="latest") as dst:
-                copier = _copy(rec, dst,
-                               filters=None if keep else column_filter_kwargs(compression))
+            filters = None if keep else column_filter_kwargs(compression)
+            copier = _write_copy(tmp, f"recovering {src} (the original is unchanged)",
+                                 lambda dst: _copy(rec, dst, filters=filters))
             _verify(tmp, copier.tables, copier.hashes)
             os.replace(tmp, out)
         except OSError as exc:
@@ -630,6 +731,7 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
+    _remove(stale_partial(src))  # a compaction of the original was killed: its copy is junk
     return RecoveryReport(source=src, output=out, was_open_for_write=was_open,
                           tables=tuple(copier.tables), unfinished_steps=copier.unfinished,
                           verified=True, damage=str(damage) if damage is not None else "",
@@ -685,7 +787,7 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
         raise RecordingOpenForWriteError(
             f"{src} is open for write (a writer holds it, or one was stopped): it can be "
             "compacted once closed; `imucalib recover FILE` copies out a stopped writer's file")
-    tmp = src.with_name(f".{src.name}.compact.partial")
+    tmp = stale_partial(src)
     try:
         with open_recording(src, strict=True) as rec:
             visible = rec.committed_rows()  # rows past a commit count are shown to no reader
@@ -696,11 +798,15 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
                     f"{src} is of format version {rec.format_version}, whose step fields "
                     f"predate the Blosc filter (format version {FORMAT_VERSION}): compress it "
                     "with 'gzip', 'lzf' or none")
-            with h5py.File(tmp, "w", libver="latest") as dst:
-                copier = _copy(rec, dst, filters=column_filter_kwargs(compression),
-                               recovered=False)
+            filters = column_filter_kwargs(compression)
+
+            def fill(dst: h5py.File) -> _Copier:
+                copier = _copy(rec, dst, filters=filters, recovered=False)
                 if stamp:  # version 2 readers lack the Blosc filter: they must refuse it
                     dst.attrs["format_version"] = np.int64(FORMAT_VERSION)
+                return copier
+
+            copier = _write_copy(tmp, f"compacting {src} (the file is unchanged)", fill)
         changed = [f"{t.name}: {t.rows_copied} of {visible.get(t.name)} rows ({t.note})"
                    for t in copier.tables if t.rows_copied != visible.get(t.name)]
         if copier.notes or changed:

@@ -90,6 +90,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "FORMAT_NAME",
+    "MAX_ANGLE_DEG",
     "SKIP",
     "StepEntry",
     "StepFile",
@@ -108,6 +109,8 @@ SKIP = "skip"
 _ROLE_FORM = "'<procedure>.<purpose>' (`imucalib procedures NAME` lists a procedure's roles)"
 
 _TIME_BOUND_S = 1e10
+#: Largest table angle in magnitude: a turn either way, as a plan's (docs/import.md). [°]
+MAX_ANGLE_DEG: Final = 360.0
 
 
 class StepEntry(BaseModel):
@@ -167,6 +170,10 @@ class StepEntry(BaseModel):
                                  f"{SKIP!r}") from None
         if self.angles_deg is not None and not all(math.isfinite(a) for a in self.angles_deg):
             raise ValueError("`angles_deg` must be finite")
+        if self.angles_deg is not None and any(abs(a) > MAX_ANGLE_DEG for a in self.angles_deg):
+            bad = next(a for a in self.angles_deg if abs(a) > MAX_ANGLE_DEG)
+            raise ValueError(f"`angles_deg` holds {bad:g}°; a table angle is within "
+                             f"±{MAX_ANGLE_DEG:g}° (a turn either way)")
         if self.rate_dps is not None and not math.isfinite(self.rate_dps):
             raise ValueError("`rate_dps` must be finite")
         if self.role != SKIP and self.axis is not None and self.rate_dps is None:

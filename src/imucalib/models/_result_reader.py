@@ -112,7 +112,11 @@ class ResultReader:
     def number(self, value: object, where: str, *, nonnegative: bool = False) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             self.fail(where, f"expected a number; got {_kind(value)}")
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:  # an integer beyond the largest float (JSON has no bound)
+            self.fail(where, "expected a finite number; got an integer of about "
+                      f"{int(abs(int(value)).bit_length() * math.log10(2)) + 1} digits")
         if not math.isfinite(x):
             self.fail(where, f"expected a finite number; got {_kind(value)}")
         if nonnegative and x < 0:

@@ -137,24 +137,30 @@ def decision_from_dict(data: Mapping[str, Any], source: str = "<dict>") -> Decis
         value = data.get(key, [])
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             raise InvalidInputError(f"{source}: decision.{key} must be a list of strings; got "
-                                    f"{value!r}")
+                                    f"{_shown(value)}")
         return tuple(value)
 
     passed = data.get("passed")
     if passed is not None and not isinstance(passed, bool):
         raise InvalidInputError(f"{source}: decision.passed must be true, false or null; got "
-                                f"{passed!r}")
+                                f"{_shown(passed)}")
     rule = data.get("rule")
     if not isinstance(rule, str):
-        raise InvalidInputError(f"{source}: decision.rule must be a string; got {rule!r}")
+        raise InvalidInputError(f"{source}: decision.rule must be a string; got {_shown(rule)}")
+    raw_checks = data.get("checks", []) or []
+    if not isinstance(raw_checks, list):
+        raise InvalidInputError(f"{source}: decision.checks must be a list of checks; got "
+                                f"{_shown(raw_checks)}")
     checks = []
-    for i, c in enumerate(data.get("checks", []) or []):
+    for i, c in enumerate(raw_checks):
         try:
             rows = tuple(CheckRow(str(r["name"]), _number(r["value"]), _number(r["limit"]),
                                   str(r["unit"]), bool(r["passed"]), str(r.get("detail", "")))
                          for r in c.get("rows", []))
+            if c["passed"] is not None and not isinstance(c["passed"], bool):
+                raise TypeError(f"`passed` is {_shown(c['passed'])}, not true, false or null")
             checks.append(Check(str(c["name"]), c["passed"], str(c["summary"]), rows))
-        except (KeyError, TypeError, AttributeError) as exc:
+        except (KeyError, TypeError, AttributeError, ValueError, OverflowError) as exc:
             raise InvalidInputError(f"{source}: decision.checks[{i}] is malformed ({exc})"
                                     ) from exc
     return Decision(passed=passed, rule=rule, failed=strings("failed"),
@@ -168,4 +174,13 @@ def _finite(value: float) -> float | None:
 
 
 def _number(value: Any) -> float:
+    """Return a check's number (None: NaN); refuse a string or a boolean (TypeError)."""
+    if value is not None and (isinstance(value, bool | str) or not isinstance(value, int | float)):
+        raise TypeError(f"expected a number; got {_shown(value)}")
     return math.nan if value is None else float(value)
+
+
+def _shown(value: object, limit: int = 60) -> str:
+    """`value` as written in a message, cut at `limit` characters."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "…"

@@ -61,6 +61,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -100,6 +101,7 @@ __all__ = [
     "Provenance",
     "ResidualStats",
     "fit_quality_dict",
+    "parse_result_json",
     "read_result_text",
     "triad_parameter_names",
     "triad_parameter_unit",
@@ -540,18 +542,7 @@ class CalibrationResult:
     @classmethod
     def from_json(cls, text: str | bytes, source: str = "<text>") -> CalibrationResult:
         """Rebuild a result from :meth:`to_json`'s text (see :meth:`from_dict`)."""
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InvalidInputError(f"calibration result {source} is not valid JSON: {exc}"
-                                    ) from exc
-        except UnicodeDecodeError as exc:
-            raise InvalidInputError(f"calibration result {source} is not UTF-8 text: {exc}"
-                                    ) from exc
-        except RecursionError as exc:
-            raise InvalidInputError(f"calibration result {source} is not a calibration result: "
-                                    "its JSON nests too deeply") from exc
-        return cls.from_dict(data, source)
+        return cls.from_dict(parse_result_json(text, source), source)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> CalibrationResult:
@@ -572,6 +563,43 @@ class CalibrationResult:
         return (self.param_names == other.param_names and self.model == other.model
                 and np.allclose(self.values, other.values, rtol=rtol, atol=atol)
                 and np.allclose(self.covariance, other.covariance, rtol=rtol, atol=atol))
+
+
+class _HugeIntegerError(ValueError):
+    """A JSON integer beyond the range of a float."""
+
+
+def _json_int(text: str) -> int:
+    """Return a JSON integer; refuse one beyond ±1.8e308 (the range of a float)."""
+    digits = len(text.lstrip("-"))
+    if digits > 309 or (digits == 309 and abs(int(text)) > sys.float_info.max):
+        raise _HugeIntegerError(f"an integer of {digits} digits, beyond the range of a number "
+                           f"(±{sys.float_info.max:.2g})")
+    return int(text)
+
+
+def parse_result_json(text: str | bytes, source: str) -> Any:
+    """Parse a result file's JSON text.
+
+    Raises
+    ------
+    InvalidInputError
+        Not JSON, not UTF-8, nested too deeply, or an integer beyond the range of a number
+        (JSON sets no bound; every number of a result is read as a float).
+    """
+    try:
+        return json.loads(text, parse_int=_json_int)
+    except _HugeIntegerError as exc:
+        raise InvalidInputError(f"calibration result {source} holds {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"calibration result {source} is not valid JSON: {exc}"
+                                ) from exc
+    except UnicodeDecodeError as exc:
+        raise InvalidInputError(f"calibration result {source} is not UTF-8 text: {exc}"
+                                ) from exc
+    except RecursionError as exc:
+        raise InvalidInputError(f"calibration result {source} is not a calibration result: "
+                                "its JSON nests too deeply") from exc
 
 
 def read_result_text(path: str | os.PathLike[str]) -> str:

@@ -40,7 +40,6 @@ Contents
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Mapping
@@ -66,6 +65,7 @@ from imucalib.models.result import (
     CalibrationResult,
     Provenance,
     fit_quality_dict,
+    parse_result_json,
     read_result_text,
 )
 
@@ -323,11 +323,14 @@ def _from_document(doc: Mapping[str, Any], source: str) -> StoredResult:
     if not isinstance(details, Mapping):
         raise _fail(source, "details", "an object", details)
     try:
-        provenance = Provenance(**{k: prov[k] for k in (
-            "plan_hash", "recording_sha256", "recording", "software_version", "created_utc")},
-            details=dict(prov.get("details") or {}))
+        texts = {k: _text(prov[k], source, f"provenance.{k}") for k in (
+            "plan_hash", "recording_sha256", "recording", "software_version", "created_utc")}
     except KeyError as exc:
         raise _fail(source, f"provenance.{exc.args[0]}", "present", "nothing") from None
+    prov_details = prov.get("details") or {}
+    if not isinstance(prov_details, Mapping):
+        raise _fail(source, "provenance.details", "an object", prov_details)
+    provenance = Provenance(**texts, details=dict(prov_details))
     return StoredResult(
         procedure=_text(doc["procedure"], source, "procedure"),
         unit=_text(doc["unit"], source, "unit"), rows=tuple(rows), covariance_names=names,
@@ -348,14 +351,7 @@ def load_result(path: str | os.PathLike[str]) -> StoredResult:
         result, or has a malformed field (named).
     """
     p = Path(path)
-    text = read_result_text(p)
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InvalidInputError(f"calibration result {p} is not valid JSON: {exc}") from exc
-    except RecursionError as exc:
-        raise InvalidInputError(f"calibration result {p} is not a calibration result: its JSON "
-                                "nests too deeply") from exc
+    doc = parse_result_json(read_result_text(p), str(p))
     if isinstance(doc, Mapping) and doc.get("format") == RESULT_FORMAT \
             and doc.get("format_version") == RESULT_DOCUMENT_VERSION:
         return _from_document(doc, str(p))

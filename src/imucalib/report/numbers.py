@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal
+from decimal import ROUND_CEILING, ROUND_HALF_UP, Decimal, localcontext
 from typing import Literal
 
 from imucalib.errors import InvalidInputError
@@ -179,7 +179,10 @@ def round_pair(value: float, uncertainty: float, *, digits: int = 2,
     if not math.isfinite(value) or not math.isfinite(uncertainty) or uncertainty == 0:
         return _fallback(value, uncertainty, sign, fallback_digits, digits, rounding)
     u, place = _round_uncertainty(uncertainty, digits, rounding)
-    v = Decimal(repr(value)).quantize(Decimal(1).scaleb(place), rounding=ROUND_HALF_UP)
+    exact = Decimal(repr(value))
+    with localcontext() as ctx:  # digits enough for a value far larger than its uncertainty
+        ctx.prec = max(ctx.prec, exact.adjusted() - place + 3)
+        v = exact.quantize(Decimal(1).scaleb(place), rounding=ROUND_HALF_UP)
     lead = max(u.adjusted(), v.adjusted() if not v.is_zero() else u.adjusted())
     if place > 0 or lead < _SMALL_EXP or lead >= _LARGE_EXP:
         shift = Decimal(1).scaleb(-lead)

@@ -60,15 +60,27 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from imucalib import units
-from imucalib.errors import InvalidInputError, RecordingError, StorageFullError
+from imucalib.errors import (
+    InvalidInputError,
+    RecordingError,
+    RecordingWriteError,
+    StorageFullError,
+)
 from imucalib.io import StreamSpec
-from imucalib.io.compression import COMPRESSIONS
+from imucalib.io._layout import column_compression
+from imucalib.io.compression import (
+    COMPRESSION_NAMES,
+    COMPRESSIONS,
+    DEFAULT_COMPRESSION,
+    compression_from_name,
+)
 from imucalib.io.context import RecordingContext
 from imucalib.io.coverage import uncovered_done_steps
 from imucalib.io.events import EventKind
 from imucalib.io.opening import open_recording
-from imucalib.io.recording import RecordingWriter
-from imucalib.io.recover import recover_recording
+from imucalib.io.recording import KEEP, RecordingWriter, _Keep
+from imucalib.io.recover import compact_recording, recover_recording, stale_partial
+from imucalib.io.storage import DEFAULT_RESERVE_BYTES, format_bytes, room_bytes
 from imucalib.io.streams import (
     DEVICE_CENTRIFUGE,
     DEVICE_IMU,
@@ -104,6 +116,9 @@ __all__ = [
 
 _log = logging.getLogger(__name__)
 _DRAIN_S = 1.0  # station time acquired after the last step [s]
+#: Root attribute of a run's Recording: the compression its close was asked for (a name of
+#: :data:`~imucalib.io.compression.COMPRESSION_NAMES`), which a resume finishes or keeps.
+RUN_COMPRESSION_KEY = "run_compression"
 
 
 @dataclass(frozen=True)
@@ -205,7 +220,6 @@ def check_room_for_run(plan: Plan, station: Station, identities: list[ImuIdentit
     StorageFullError
         Naming the estimate, the reserve and the room.
     """
-    from imucalib.io.storage import format_bytes, room_bytes
     from imucalib.plan.budget import StationFacts, estimate_plan_recording
 
     rates = tuple(i.sample_rate_hz if math.isfinite(i.sample_rate_hz) and i.sample_rate_hz > 0
@@ -291,7 +305,9 @@ def _drive(run: RunSession, first: int, truth: TruthSource | None = None) -> Run
                                      f"run interrupted: {type(exc).__name__}: {exc}"[:4000])
             run.writer.close()
         except RecordingError as rec_exc:  # the file failed too: the original cause goes up
-            log = _log.debug if isinstance(rec_exc, StorageFullError) else _log.warning
+            # (a full disk or a failed write says so itself; the resume mends either)
+            quiet = isinstance(rec_exc, StorageFullError | RecordingWriteError)
+            log = _log.debug if quiet else _log.warning
             log("closing %s after %s: %s", run.writer.path, type(exc).__name__, rec_exc)
         raise
     return RunSummary(path=run.writer.path, plan=run.plan.name, status=status,
@@ -351,21 +367,42 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
         "latitude_deg": station.latitude_deg, "heading_deg": station.heading_deg,
         "run_started_utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "source": "station-run",
+        RUN_COMPRESSION_KEY: opt.compression or "none",
         **(extra_metadata or {}),
     }
-    writer = RecordingWriter(path, streams=_stream_specs(station, identities), metadata=meta,
-                             truth=opt.truth, overwrite=overwrite,
-                             truth_streams=(truth_source.truth_stream_specs()
-                                            if truth_source is not None else ()),
-                             flush_interval_s=opt.flush_interval_s,
-                             compression=opt.compression)
+    try:
+        writer = RecordingWriter(path, streams=_stream_specs(station, identities),
+                                 metadata=meta, truth=opt.truth, overwrite=overwrite,
+                                 truth_streams=(truth_source.truth_stream_specs()
+                                                if truth_source is not None else ()),
+                                 flush_interval_s=opt.flush_interval_s,
+                                 compression=opt.compression)
+    except BaseException:
+        _disconnect(station)  # nothing has moved
+        raise
     with writer:
         writer.log_event(station.clock.now_s(), "info", "runner",
                          f"plan {plan.name!r} started on {station.describe().get('kind', '?')}")
         run = RunSession(plan, station, writer, opt, identities)
         summary = _drive(run, 0, truth_source)
+        _close_or_stop(run)
     _disconnect(station)
     return _with_storage_note(summary, writer)
+
+
+def _close_or_stop(run: RunSession) -> None:
+    """Close the run's Recording; if that fails, stop the equipment safely before raising.
+
+    The close writes the last rows, closes the file and compresses it: a write that fails there
+    (:class:`~imucalib.errors.RecordingWriteError`, or a :class:`StorageFullError`) ends the run
+    as a full disk does, with the equipment stopped and disconnected.
+    """
+    try:
+        run.writer.close()
+    except BaseException:
+        run.safe_state(chamber_too=True)
+        _disconnect(run.station)
+        raise
 
 
 def _disconnect(station: Station) -> None:
@@ -492,16 +529,25 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         was_open = rec.was_open_for_write
     if was_open:
         crashed = p.with_name(f"{p.stem}.crashed.h5")
-        report = recover_recording(p, p.with_name(f".{p.stem}.recovering.h5"), overwrite=True)
+        # uncompressed: the writer appends to it uncompressed, and compresses it at its close
+        report = recover_recording(p, p.with_name(f".{p.stem}.recovering.h5"), overwrite=True,
+                                   compression=None)
         p.replace(crashed)
         report.output.replace(p)
     point = find_resume_point(p)
+    compression = _run_compression(p)
+    if was_open and isinstance(compression, _Keep):  # a file from before RUN_COMPRESSION_KEY
+        compression = DEFAULT_COMPRESSION
     if point.first_step >= len(point.plan.steps):
         if not was_open:
+            if _finish_compression(p, compression):
+                return _finished_summary(p, point, "every step was already done; the "
+                                                   "interrupted compression was finished")
             raise RecordingError(f"{p}: every step of plan {point.plan.name!r} is already done "
                                  "and the file is closed; there is nothing to resume")
         # the runner died while closing (after its last step): recovery finished the close
-        with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s) as writer:
+        with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s,
+                                    compression=compression) as writer:
             writer.log_event(point.last_time_s, "warning", "runner",
                              "the run had done every step but its file was not closed; closed "
                              f"by resume (the file as found is kept as {p.stem}.crashed.h5)")
@@ -515,7 +561,8 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
     except StorageFullError:
         _disconnect(station)
         raise
-    with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s) as writer:
+    with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s,
+                                compression=compression) as writer:
         for index in point.interrupted:
             writer.update_step(index, status="aborted",
                                note="interrupted (runner stopped); the run was resumed")
@@ -539,6 +586,7 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         _restore_swaps_and_load(station, writer, point)
         run = RunSession(point.plan, station, writer, opt, identities)
         summary = _drive(run, point.first_step)
+        _close_or_stop(run)
     _disconnect(station)
     return _with_storage_note(summary, writer)
 
@@ -566,7 +614,59 @@ def _restore_swaps_and_load(station: Station, writer: RecordingWriter,
                                  "restored on resume)")
 
 
-def _finished_summary(path: Path, point: ResumePoint) -> RunSummary:
+def _run_compression(path: Path) -> str | _Keep | None:
+    """Return the compression the run asked for its closed Recording (:data:`KEEP`: unknown).
+
+    Read from the root attribute :data:`RUN_COMPRESSION_KEY` (``"none"``: None), which files
+    written before it lack.
+    """
+    with open_recording(path) as rec:
+        name = rec.metadata.get(RUN_COMPRESSION_KEY)
+    if not isinstance(name, str) or name not in COMPRESSION_NAMES:
+        return KEEP
+    return compression_from_name(name)
+
+
+def _finish_compression(path: Path, compression: str | _Keep | None) -> bool:
+    """Compress a complete, closed Recording whose compression was interrupted.
+
+    A runner killed (or failing to write) while it compressed the file at its close leaves the
+    file complete, closed and uncompressed, and perhaps the partial copy
+    (:func:`~imucalib.io.recover.stale_partial`). Returns whether there was such a compression
+    to finish; the partial copy is removed in any case.
+
+    Raises
+    ------
+    StorageFullError
+        If the copy would not leave the writer's reserve free.
+    RecordingWriteError
+        If HDF5 fails to write the copy (the file is left as it was).
+    """
+    partial = stale_partial(path)
+    stale = partial.exists()
+    if isinstance(compression, _Keep):  # a file from before RUN_COMPRESSION_KEY
+        compression = DEFAULT_COMPRESSION if stale else None
+    with open_recording(path, strict=True) as rec:
+        had = column_compression(rec._file)[1]
+    if compression is None or had == compression:
+        partial.unlink(missing_ok=True)
+        return False
+    size = path.stat().st_size
+    room = room_bytes(path)
+    if room - size < DEFAULT_RESERVE_BYTES:
+        raise StorageFullError(
+            f"{path} is complete but uncompressed, and compressing it needs up to "
+            f"{format_bytes(size)} with {format_bytes(DEFAULT_RESERVE_BYTES)} left free: "
+            f"{format_bytes(room)} is left; free some space, then run `imucalib run --resume "
+            f"{path}` again (or leave it uncompressed)")
+    compact_recording(path, compression)  # writes, then replaces, the partial copy's name
+    partial.unlink(missing_ok=True)
+    return True
+
+
+def _finished_summary(path: Path, point: ResumePoint,
+                      reason: str = "every step was already done; the interrupted close was "
+                                    "finished") -> RunSummary:
     """Return the summary of a run that a resume found complete (every step done)."""
     with open_recording(path) as rec:
         steps = rec.steps
@@ -574,5 +674,4 @@ def _finished_summary(path: Path, point: ResumePoint) -> RunSummary:
     invalid = sum(1 for s in steps if s.status == "invalid")
     return RunSummary(path=path, plan=point.plan.name, status="done", steps_done=done,
                       steps_invalid=invalid, trips=(), start_s=point.last_time_s,
-                      end_s=point.last_time_s,
-                      reason="every step was already done; the interrupted close was finished")
+                      end_s=point.last_time_s, reason=reason)

@@ -23,7 +23,7 @@ import numpy as np
 
 from imucalib import units
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
-from imucalib.errors import DeviceError, RecordingError, StorageFullError
+from imucalib.errors import DeviceError, RecordingError, RecordingWriteError, StorageFullError
 from imucalib.io.compression import DEFAULT_COMPRESSION
 from imucalib.io.events import EventKind
 from imucalib.io.recording import RecordingWriter
@@ -480,7 +480,9 @@ class RunSession:
                         row, t_end_s=self.now(), status="aborted",
                         note=f"interrupted: {type(exc).__name__}: {exc}"[:2000])
                 except RecordingError as rec_exc:  # the file itself failed: keep the cause
-                    _log.error("cannot mark step %d aborted: %s", index, rec_exc)
+                    quiet = isinstance(rec_exc, StorageFullError | RecordingWriteError)
+                    (_log.debug if quiet else _log.error)("cannot mark step %d aborted: %s",
+                                                          index, rec_exc)
             raise
 
     def safe_state(self, *, chamber_too: bool = False) -> None:

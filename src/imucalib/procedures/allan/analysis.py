@@ -73,6 +73,7 @@ from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults
 from imucalib.models.reported import ReportedParameter
 from imucalib.models.result import Provenance
+from imucalib.plan.bounds import MAX_SAMPLE_RATE_HZ
 from imucalib.units import parse_unit
 
 __all__ = ["FORMAT_VERSION", "NO_DECISION_REASON", "STATIC_STEP_KINDS", "ChannelNoise",
@@ -544,12 +545,20 @@ def _segment(label: str, index: int | None, chunks: Iterable[Any],
         if n < 3:
             raise InvalidInputError(f"{label}: {n} sample(s) in {where}; need at least 3")
         rate = check.sample_rate_hz()
+        if not rate <= MAX_SAMPLE_RATE_HZ:
+            raise InvalidInputError(
+                f"{label}: the samples of {where} are {1.0 / rate:.3g} s apart ({rate:.4g} Hz); "
+                f"an IMU samples at most {MAX_SAMPLE_RATE_HZ:g} Hz: is the time in seconds? "
+                "(give its unit: `--time-unit ms`, or `time_s [ms]` in the header)")
         results = []
         for c, sensor, _ in chans:
             streams[c].sample_rate_hz = rate
             devs = streams[c].compute(opts.kinds, taus=opts.taus, confidence=opts.confidence)
-            fit = fit_noise_terms(devs["oadev"], sensor=sensor, terms=opts.terms,
-                                  tau_range_s=opts.tau_range)
+            try:
+                fit = fit_noise_terms(devs["oadev"], sensor=sensor, terms=opts.terms,
+                                      tau_range_s=opts.tau_range)
+            except InvalidInputError as exc:
+                raise InvalidInputError(f"{label}, column {c}: {exc}") from exc
             results.append(ChannelNoise(c, sensor, devs, fit, sums[c] / n))
     finally:
         for s in streams.values():
