@@ -540,3 +540,25 @@ def test_write_outputs_passes_a_temperature_to_kalibr_and_openvins_only(tmp_path
                       temperature_degc=40.0)
     with pytest.raises(InvalidInputError, match="--temperature"):
         write_outputs(wrapped, tmp_path, ("kalibr-imu",), name="n")  # type: ignore[arg-type]
+
+
+def test_a_mat73_write_that_fails_leaves_no_file_and_one_error(tmp_path: Path, monkeypatch
+                                                               ) -> None:
+    """A write HDF5 fails (a full disk) gives the temporary copy up and removes it; the export
+    raises one RecordingWriteError and leaves neither a half-written file nor the copy."""
+    from imucalib.errors import RecordingWriteError
+    from imucalib.exports import intrinsics
+    from imucalib.io import _abandon
+
+    monkeypatch.setattr(_abandon, "_ABANDONED", [])   # this process must not end by os._exit
+    monkeypatch.setattr(_abandon, "_KEEP_ALIVE", [])
+
+    def full(group, struct):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(intrinsics, "_h5_struct", full)
+    out = tmp_path / "r.mat"
+    with pytest.raises(RecordingWriteError, match="cannot write .*No space left on device"):
+        write_mat73(_result(), out)
+    assert list(tmp_path.iterdir()) == []
+    assert _abandon.abandoned_files() == (tmp_path / ".r.mat.partial",)

@@ -267,12 +267,26 @@ def write_mat73(cal: CalibrationResult, path: str | os.PathLike[str], *,
     """
     import h5py
 
+    from imucalib.errors import RecordingWriteError
+    from imucalib.io._abandon import WRITE_ERRORS, abandon_copy
+
     out = Path(path)
     struct = intrinsics_struct(cal)
-    with h5py.File(out, "w", userblock_size=_USERBLOCK_BYTES) as fh:
+    # written under a temporary name and renamed: a write HDF5 fails (a full disk, EIO) gives
+    # the copy up without touching it again and removes it (docs/reliability.md), and `out`
+    # is never a half-written file
+    tmp = out.with_name(f".{out.name}.partial")
+    fh: h5py.File | None = None
+    try:
+        fh = h5py.File(tmp, "w", userblock_size=_USERBLOCK_BYTES)
         _h5_struct(fh.create_group(name), struct)
-    with open(out, "r+b") as fh:
-        fh.write(_mat73_header())
+        fh.close()
+    except WRITE_ERRORS as exc:
+        reason = abandon_copy(tmp, f"writing {out.name}", exc, fh)
+        raise RecordingWriteError(f"cannot write {out}: HDF5 failed: {reason}") from exc
+    with open(tmp, "r+b") as f:
+        f.write(_mat73_header())
+    os.replace(tmp, out)
     return out
 
 
