@@ -33,9 +33,7 @@ test: venv
 fuzz: venv
 	mkdir -p $(dir $(FUZZ_TALLY))
 	rm -f $(FUZZ_TALLY)
-	IMUCALIB_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) IMUCALIB_FUZZ_TIMEOUT_S=$(FUZZ_TIMEOUT_S) \
-	IMUCALIB_FUZZ_TALLY=$(abspath $(FUZZ_TALLY)) $(BIN)/python -m pytest -n 2 -q tests/fuzz; \
-	status=$$?; $(BIN)/python tests/fuzz/tally.py $(FUZZ_TALLY); exit $$status
+	status=0; IMUCALIB_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) IMUCALIB_FUZZ_TIMEOUT_S=$(FUZZ_TIMEOUT_S) IMUCALIB_FUZZ_TALLY=$(abspath $(FUZZ_TALLY)) $(BIN)/python -m pytest -n 2 -q tests/fuzz || status=$$?; $(BIN)/python tests/fuzz/tally.py $(FUZZ_TALLY); exit $$status
 
 lint: venv
 	$(BIN)/python -m ruff check src tests bench examples
