@@ -2,6 +2,14 @@
 
 from __future__ import annotations
 
+import os
+
+# One BLAS thread per test process, set before numpy loads (the xdist workers inherit it):
+# the suite runs two workers on two cores, and OpenBLAS's own threads then fight for them on
+# the small solves the analyses are made of. Measured (tests/procedures, -n 2, idle 2-core
+# machine): 221 s with one thread, 271 s without (docs/performance.md).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 from pathlib import Path
 from types import SimpleNamespace
 
