@@ -42,6 +42,8 @@ def test_calibrate_and_apply_print_no_warning_under_w_error(kind: str, tmp_path:
     assert res.returncode == code, text
     for bad in ("Warning", "warning:", "internal error", "Traceback"):
         assert bad not in text, text
+    if kind not in ("harsh-counts", "partial"):
+        return  # apply's own path is the same for every layout: two cases suffice
     (result,) = out.glob("*.result.json")
     res = _cli("apply", str(result), str(written.path), *written.cli_args, "-o",
                str(tmp_path / "corrected.csv"))
