@@ -18,12 +18,10 @@ the same database, the commands to run, and what each must print.
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import os
 import shutil
 import sqlite3
-import sys
 import tempfile
 import time
 from datetime import UTC, date, datetime
@@ -34,7 +32,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from imucalib.cli import main
+from ._harness import run_cli  # the CLI in this process, a case running too long a hang
 
 SCALE = int(os.environ.get("IMUCALIB_FUZZ_EXAMPLES", "1"))
 FUZZ = settings(max_examples=12 * SCALE, deadline=None, derandomize=True,
@@ -48,23 +46,6 @@ ODD_VALUES = st.sampled_from([
 ])
 TABLES = ("units", "stations", "equipment", "runs", "run_equipment", "results",
           "result_parameters", "reviews", "users", "user_events", "signing_keys")
-
-
-def run_cli(*args: str) -> tuple[int, str, str]:
-    """Run :func:`imucalib.cli.main` in this process; return exit code, stdout, stderr."""
-    out, err = io.StringIO(), io.StringIO()
-    argv = sys.argv
-    sys.argv = ["imucalib", *args]
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            try:
-                main()
-                code = 0
-            except SystemExit as exc:
-                code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        sys.argv = argv
-    return code, out.getvalue(), err.getvalue()
 
 
 #: ``IMUCALIB_FUZZ_TALLY=FILE``: each outcome appended as a JSON line (the rows of
