@@ -558,7 +558,7 @@ def test_a_mat73_write_that_fails_leaves_no_file_and_one_error(tmp_path: Path, m
 
     monkeypatch.setattr(intrinsics, "_h5_struct", full)
     out = tmp_path / "r.mat"
-    with pytest.raises(RecordingWriteError, match="cannot write .*No space left on device"):
+    with pytest.raises(RecordingWriteError, match=r"cannot write .*No space left on device"):
         write_mat73(_result(), out)
     assert list(tmp_path.iterdir()) == []
     assert _abandon.abandoned_files() == (tmp_path / ".r.mat.partial",)
