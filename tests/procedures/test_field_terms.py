@@ -107,3 +107,30 @@ def test_harsh_sessions_calibrate_with_honest_sigma(grade):
         keep = d > 0
         corr = c[np.ix_(keep, keep)] / np.outer(d[keep], d[keep])
         assert np.linalg.eigvalsh(corr).min() > -1e-9
+
+
+def test_a_warming_session_says_its_parameters_moved():
+    """The IMU's temperature sensor, when the log has it: a session that warmed by more than
+    1 °C says that its one value per parameter hides a drift with temperature."""
+    import pandas as pd
+
+    from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
+    from imucalib.procedures.common.static_intervals import log_from_frame
+
+    s = harsh_handheld_session("consumer", seed=11)
+    frame = pd.DataFrame(np.column_stack([s.gyro_rps, s.accel_mps2, s.temperature_degc]),
+                         index=pd.Index(s.time_s, name="time_s"),
+                         columns=[*GYRO_COLUMNS, *ACCEL_COLUMNS, TEMPERATURE_COLUMN])
+    log = log_from_frame(frame, "IMU", "warm.csv")
+    r = analyze_field(log, FieldOptions(latitude_deg=45.0))
+    low, high = r.details["temperature_span_degc"]
+    assert 25.0 < low < high and high - low > 2.0
+    assert any("the IMU's temperature moved from" in n for n in r.notes)
+    # without a temperature column, or a unit that did not warm, no such note
+    assert _fit(s).details["temperature_span_degc"] is None
+    cold = harsh_handheld_session("consumer", seed=11, warmup_degc=0.0)
+    frame[TEMPERATURE_COLUMN] = cold.temperature_degc
+    r = analyze_field(log_from_frame(frame.assign(**{c: v for c, v in zip(
+        [*GYRO_COLUMNS, *ACCEL_COLUMNS], np.column_stack([cold.gyro_rps, cold.accel_mps2]).T,
+        strict=True)}), "IMU", "cold.csv"), FieldOptions(latitude_deg=45.0))
+    assert not any("temperature moved" in n for n in r.notes)

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
+from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import (
     CalibrationError,
     InsufficientExcitationError,
@@ -63,6 +63,8 @@ class FieldLog:
     gyro_rps, accel_mps2 : ndarray, shape (n, 3)
     latitude_deg, height_m : float or None
         The site, when the source says it (a Recording's metadata).
+    temperature_degc : ndarray, shape (n,), or None
+        The IMU's temperature sensor, when the source has it. [°C]
     """
 
     unit: str
@@ -72,6 +74,7 @@ class FieldLog:
     accel_mps2: _F64
     latitude_deg: float | None = None
     height_m: float | None = None
+    temperature_degc: _F64 | None = None
 
     @property
     def period_s(self) -> float:
@@ -92,7 +95,9 @@ def log_from_recording(rec: Recording, unit: str | None = None) -> FieldLog:
         raise RecordingError(f"{rec.path.name} has the IMU stream(s) {units or 'none'}; "
                              + ("choose one (--imu)" if unit is None else f"not {unit!r}"))
     name = unit or units[0]
-    data = rec.read_stream("imu", name, columns=[*GYRO_COLUMNS, *ACCEL_COLUMNS])
+    stream = next(s for s in rec.streams if s.device == "imu" and s.unit == name)
+    temp = [TEMPERATURE_COLUMN] if TEMPERATURE_COLUMN in stream.columns else []
+    data = rec.read_stream("imu", name, columns=[*GYRO_COLUMNS, *ACCEL_COLUMNS, *temp])
     meta = rec.metadata
     lat = meta.get("latitude_deg")
     height = meta.get("height_m")
@@ -101,7 +106,9 @@ def log_from_recording(rec: Recording, unit: str | None = None) -> FieldLog:
                     gyro_rps=np.column_stack([data.columns[c] for c in GYRO_COLUMNS]),
                     accel_mps2=np.column_stack([data.columns[c] for c in ACCEL_COLUMNS]),
                     latitude_deg=None if lat is None else float(lat),
-                    height_m=None if height is None else float(height))
+                    height_m=None if height is None else float(height),
+                    temperature_degc=np.asarray(data.columns[TEMPERATURE_COLUMN],
+                                                dtype=np.float64) if temp else None)
 
 
 def log_from_frame(frame: Any, unit: str, source: str) -> FieldLog:
@@ -120,7 +127,9 @@ def log_from_frame(frame: Any, unit: str, source: str) -> FieldLog:
     return FieldLog(unit=unit, source=source,
                     time_s=np.asarray(frame.index, dtype=np.float64),
                     gyro_rps=frame[list(GYRO_COLUMNS)].to_numpy(dtype=np.float64),
-                    accel_mps2=frame[list(ACCEL_COLUMNS)].to_numpy(dtype=np.float64))
+                    accel_mps2=frame[list(ACCEL_COLUMNS)].to_numpy(dtype=np.float64),
+                    temperature_degc=frame[TEMPERATURE_COLUMN].to_numpy(dtype=np.float64)
+                    if TEMPERATURE_COLUMN in frame.columns else None)
 
 
 @dataclass(frozen=True)

@@ -229,6 +229,21 @@ class FieldOptions:
         return forced
 
 
+#: A note says the session's temperature moved when the poses span more than this. [°C]
+_TEMPERATURE_SPAN_NOTE_DEGC = 1.0
+
+
+def _temperature_span(log: FieldLog, poses: list[StaticPose]) -> tuple[float, float] | None:
+    """(lowest, highest) mean temperature of the poses, when the log has a temperature."""
+    if log.temperature_degc is None:
+        return None
+    temps = [float(np.mean(log.temperature_degc[(log.time_s >= p.start_time_s)
+                                                 & (log.time_s <= p.end_time_s)]))
+             for p in poses]
+    finite = [t for t in temps if math.isfinite(t)]
+    return (min(finite), max(finite)) if finite else None
+
+
 def _gyro_names(terms: Sequence[str]) -> list[str]:
     """Return the names of the static gyro fit's values (FL.2) for a term set."""
     return [*(f"gyro_bias_{a}" for a in "xyz"),
@@ -595,6 +610,14 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if form == "gravity-norm":
         notes.append("the accelerometer frame: x along the sensor x axis, y in the sensors' "
                      "x–y plane (a field calibration cannot see the case)")
+    span = _temperature_span(log, poses)
+    if span is not None and span[1] - span[0] > _TEMPERATURE_SPAN_NOTE_DEGC:
+        notes.append(
+            f"the IMU's temperature moved from {span[0]:.3g} to {span[1]:.3g} °C over the poses "
+            f"({span[1] - span[0]:.2g} °C): every parameter here is one value for the whole "
+            "session, and what moves with temperature (a consumer unit's scale factors by "
+            "about 1e-4 per °C) moved by more than its σ may show; calibrate after the unit "
+            "has warmed up, or with a chamber (docs/field.md, \"Measured\")")
     prov = Provenance(recording=log.source, software_version=__version__,
                       created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
                       details={"accel_form": form, "n_poses": len(poses),
@@ -622,6 +645,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         quality=tuple(quality), notes=tuple(notes),
         model_selection=tuple(c.to_dict() for c in selection), omitted=tuple(omitted),
         details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
+                 "temperature_span_degc": None if span is None else list(span),
                  "window_s": opt.window_s, "accel_values": accel_values,
                  "accel_covariance": accel_cov},
         decision=field_decision(tuple(quality)))
