@@ -57,7 +57,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Final, Generic, TypeVar
 
 import numpy as np
@@ -252,6 +252,8 @@ def choose_terms(
     criterion: str = "aicc",
     level: float = 0.05,
     term_params: Mapping[str, int] | None = None,
+    estimates: Callable[[frozenset[str], _Fit], tuple[Sequence[str], ArrayLike, ArrayLike]]
+    | None = None,
 ) -> tuple[TermChoice, _Fit, _Fit]:
     """Fit every candidate term set of a group and choose one (module docstring).
 
@@ -276,6 +278,9 @@ def choose_terms(
         α of (TS.3), in (0, 1).
     term_params : mapping of str to int, optional
         The parameters each term adds (Δq of (TS.3)); by default taken from the fits.
+    estimates : callable, optional
+        ``estimates(terms, fit) -> (names, values, σ)`` of a fit: given, the choice carries
+        u_model of (TS.4) (:func:`model_choice_std`, its non-zero entries) in ``model_std``.
 
     Returns
     -------
@@ -345,6 +350,9 @@ def choose_terms(
                         tuple(sorted(largest)))
     fit_chosen, fit_largest = scored[chosen].fit, scored[largest].fit
     assert fit_chosen is not None and fit_largest is not None
+    if estimates is not None:
+        std = model_choice_std(*estimates(chosen, fit_chosen), *estimates(largest, fit_largest))
+        choice = replace(choice, model_std={k: v for k, v in std.items() if v > 0})
     return choice, fit_chosen, fit_largest
 
 

@@ -23,7 +23,8 @@ Steps (docs/field.md derives each):
    direction (latitude known), fitted by GLS to b + G·f_k (FL.2), the horizontal Earth rate a
    Type B (unknown heading; independent between poses); χ² across the poses flags a
    wandering bias (Birge-scaled).
-5. The gyro's M from the rotations between poses (:mod:`imucalib.estimation.gyro_rotations`):
+5. The gyro's M from the rotations between poses (:mod:`imucalib.procedures.field.rotations`,
+   fitted by :mod:`imucalib.estimation.gyro_rotations`):
    a full turn flat on the desk (‖θ‖ within 10 % of n·360° and the gravity direction back
    within 5°) is a known-angle observation (Ferraris et al. 1995), every other rotation a
    gravity-referenced one (Tedaldi et al. 2014); ``gyro_form`` chooses "auto" (both),
@@ -42,7 +43,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, fields
 from datetime import UTC, datetime
 from typing import Any
@@ -58,7 +59,6 @@ from imucalib.estimation.term_selection import (
     CRITERIA,
     TermChoice,
     choose_terms,
-    model_choice_std,
     parse_terms,
 )
 from imucalib.models.earth import normal_gravity_mps2
@@ -77,6 +77,7 @@ from imucalib.procedures.field.result import (
     field_decision,
     triad_from_field,
 )
+from imucalib.procedures.field.rotations import fit_gyro, gyro_covariance
 from imucalib.units import EARTH_RATE_RPS, UG
 
 __all__ = ["FieldOptions", "analyze_field"]
@@ -86,7 +87,6 @@ _F64 = NDArray[np.float64]
 _G_RANGE_MPS2 = (9.7803, 9.8322)
 #: Relative standard uncertainty of normal gravity as local g (anomalies, ~50 mGal).
 _ANOMALY_REL = 3e-5
-_FULL_TURN_TOL = 0.10
 #: The optional model terms the data choose among (docs/field.md, "Model terms"): the
 #: accelerometer's K2 (F.1′), its bias drift (F.1″), the gyro's g-sensitivity G (FL.2).
 TERMS = ("k2", "drift", "g")
@@ -99,7 +99,6 @@ _G_MIN_POSES = 6
 #: A note suggests a pose-noise floor (and its size) when the accelerometer fit's χ² exceeds
 #: this quantile of χ²_ν (white noise alone: one session in twenty).
 _SUGGEST_FLOOR_QUANTILE = 0.95
-_TURN_GRAVITY_DEG = 5.0
 #: Poses closer than this are the same pose (a face visited twice). [°]
 _SAME_POSE_DEG = 1.0
 #: A face's pose lies within this of its axis (a unit's own misalignment is ~1°). [°]
@@ -244,7 +243,7 @@ def _temperature_span(log: FieldLog, poses: list[StaticPose]) -> tuple[float, fl
     return (min(finite), max(finite)) if finite else None
 
 
-def _gyro_names(terms: Sequence[str]) -> list[str]:
+def _gyro_names(terms: Collection[str]) -> list[str]:
     """Return the names of the static gyro fit's values (FL.2) for a term set."""
     return [*(f"gyro_bias_{a}" for a in "xyz"),
             *((f"gyro_G_{i}{j}" for i in "xyz" for j in "xyz") if "g" in terms else ()),
@@ -320,22 +319,20 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
             list(fit.residuals.reshape(n, 3)))
 
 
-def _accel_names(terms: Sequence[str], six: bool) -> list[str]:
+def _accel_estimates(terms: frozenset[str], fit: Any, *, six: bool
+                     ) -> tuple[list[str], _F64, _F64]:
+    """Return a step-3 fit's (names, values, noise σ): what (TS.4) pairs up."""
+    return (_accel_names(terms, six), fit.values,
+            np.sqrt(np.diag(fit.covariance_noise)))
+
+
+def _accel_names(terms: Collection[str], six: bool) -> list[str]:
     """Return the names of a step-3 fit's values for a term set (what (TS.4) pairs up)."""
     from imucalib.estimation.gravity_norm import DRIFT_PARAMETERS, K2_PARAMETERS, PARAMETERS
 
     core = [f"p{i}" for i in range(12)] if six else list(PARAMETERS)
     return [*core, *(K2_PARAMETERS if "k2" in terms else ()),
             *(DRIFT_PARAMETERS if "drift" in terms else ())]
-
-
-def _with_model_std(choice: TermChoice, chosen: Any, largest: Any, six: bool) -> TermChoice:
-    """Return `choice` with u_model of (TS.4) for the accelerometer's values."""
-    std = model_choice_std(
-        _accel_names(choice.chosen, six), chosen.values, np.sqrt(np.diag(chosen.covariance_noise)),
-        _accel_names(choice.largest, six), largest.values,
-        np.sqrt(np.diag(largest.covariance_noise)))
-    return dataclasses.replace(choice, model_std={k: v for k, v in std.items() if v > 0})
 
 
 def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, forced: dict[str, bool],
@@ -349,15 +346,16 @@ def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, forced: dict[str, bo
     """
     from imucalib.estimation.gravity_norm import fit_gravity_norm
 
-    choice, chosen, largest = choose_terms(
+    choice, _, _ = choose_terms(
         "accel (gravity norm)", ("k2", "drift"),
         lambda t: fit_gravity_norm(y, sy, g, k2="k2" in t,
                                    times_s=times if "drift" in t else None),
         lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
         forced={k: v for k, v in forced.items() if k in ("k2", "drift")},
         ruled={"drift": len(y) >= _DRIFT_MIN_POSES},
-        criterion=opt.term_criterion, level=opt.term_level)
-    return _with_model_std(choice, chosen, largest, six=False)
+        criterion=opt.term_criterion, level=opt.term_level,
+        estimates=lambda t, f: _accel_estimates(t, f, six=False))
+    return choice
 
 
 def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
@@ -399,12 +397,13 @@ def _choose_six(y: _F64, sy: _F64, g: float, sg: float, forced: dict[str, bool],
                               "pose")
         return fit_six_position(y, sy, directions, g, gravity_std_mps2=sg, k2="k2" in terms)
 
-    choice, chosen, largest = choose_terms(
+    choice, chosen, _ = choose_terms(
         "accel (six-position)", ("k2",), fit,
         lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
         forced={k: v for k, v in forced.items() if k == "k2"},
-        criterion=opt.term_criterion, level=opt.term_level)
-    return _with_model_std(choice, chosen, largest, six=True), chosen
+        criterion=opt.term_criterion, level=opt.term_level,
+        estimates=lambda t, f: _accel_estimates(t, f, six=True))
+    return choice, chosen
 
 
 def _on_faces(y: _F64) -> bool:
@@ -545,17 +544,14 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     forced_g = {k: v for k, v in forced.items() if k in ("g", "drift")}
     if len(poses) < _G_MIN_POSES:
         forced_g.setdefault("g", False)
-    choice_g, (static_values, static_cov, bias_quality, bias_resid), largest_g = choose_terms(
+    choice_g, (static_values, static_cov, bias_quality, bias_resid), _ = choose_terms(
         "gyro (static poses)", ("g", "drift"),
         lambda t: _gyro_static(poses, up, force, lat, "g" in t,
                                times if "drift" in t else None),
         lambda f: (float(f[2].chi2), int(f[2].dof), int(f[0].size)),
         forced=forced_g, ruled={"drift": len(poses) >= _DRIFT_MIN_POSES},
-        criterion=opt.term_criterion, level=opt.term_level)
-    choice_g = dataclasses.replace(choice_g, model_std={k: v for k, v in model_choice_std(
-        _gyro_names(choice_g.chosen), static_values, np.sqrt(np.diag(static_cov)),
-        _gyro_names(choice_g.largest), largest_g[0], np.sqrt(np.diag(largest_g[1]))).items()
-        if v > 0})
+        criterion=opt.term_criterion, level=opt.term_level,
+        estimates=lambda t, f: (_gyro_names(t), f[0], np.sqrt(np.diag(f[1]))))
     static_cov = static_cov + np.diag(_model_var(choice_g, _gyro_names(choice_g.chosen)))
     selection.append(choice_g)
     notes.append(choice_g.summary())
@@ -575,7 +571,8 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         # semi-definite; each triad's Birge ratio scales its rows afterwards (a scaled C_a
         # here with the unscaled block beside it made the joint covariance indefinite on a
         # misfit accelerometer fit: eigenvalue −0.14 of the correlation on a harsh session)
-        gyro = _fit_gyro(log, detection, poses, y, up, opt, accel_values, accel_cov_noise, form,
+        gyro = fit_gyro(log, detection, poses, y, up, opt.gyro_form, opt.window_s,
+                        accel_values, accel_cov_noise, form,
                          six, static_values[3:].reshape(3, 3) if fit_g else None, lat)
     except CalibrationError as exc:
         if opt.gyro_form != "auto":
@@ -596,7 +593,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     names, values, cov = triad_from_field(
         form, accel_values, accel_cov_noise, static_values, static_cov,
         None if gyro is None else gyro["fit"].values,
-        None if gyro is None else _gyro_cov(gyro["fit"]),
+        None if gyro is None else gyro_covariance(gyro["fit"]),
         None if gyro is None else gyro["fit"].cross_covariance)
     if gyro is None and not omitted:
         notes.append("no rotation fitted: the gyro triad is not in the calibration "
@@ -649,253 +646,3 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                  "window_s": opt.window_s, "accel_values": accel_values,
                  "accel_covariance": accel_cov},
         decision=field_decision(tuple(quality)))
-
-
-def _recount_turns(observations: list[Any], rows: list[dict[str, Any]], theta: _F64,
-                   density: _F64) -> None:
-    """Count each full turn's whole turns with the gyro the gravity-referenced rotations fit.
-
-    A turn's known angle n·2π is read off the gyro's own integral, which is off by the scale
-    error: a log whose gyro scale is 1.5× the import options' shows a 360° turn as 540°, and
-    the turns would then teach the fit a wrong scale. With three gravity-referenced rotations
-    or more, they are fitted first (:func:`_robust_rotation_fit`); each turn's angle is then
-    that of the corrected integral ‖(I + M)⁻¹·∫(y − b)dt‖, and a turn whose corrected angle is
-    not within 10 % of a whole number of turns becomes a gravity-referenced rotation. Changes
-    the observations and rows in place; nothing when the gravity rotations cannot be fitted.
-    """
-    grav = [k for k, o in enumerate(observations) if o.kind == "gravity"]
-    turns = [k for k, o in enumerate(observations) if o.kind == "turn"]
-    if len(grav) < 3 or not turns:
-        return
-    try:
-        fit, _ = _robust_rotation_fit([observations[k] for k in grav], list(grav),
-                                      [dict(r) for r in rows], theta, density, None)
-    except CalibrationError:
-        return
-    inv = np.linalg.inv(np.eye(3) + np.asarray(fit.values).reshape(3, 3))
-    for k in turns:
-        o = observations[k]
-        w = o.gyro_rps - o.bias_rps
-        theta_raw = np.sum(0.5 * (w[1:] + w[:-1]) * np.diff(o.time_s)[:, None], axis=0)
-        n = float(np.linalg.norm(inv @ theta_raw)) / (2 * math.pi)
-        whole = round(n)
-        if whole >= 1 and abs(n - whole) <= _FULL_TURN_TOL:
-            observations[k] = dataclasses.replace(o, angle_rad=2 * math.pi * whole)
-        else:
-            observations[k] = dataclasses.replace(o, kind="gravity", angle_rad=None)
-            rows[k]["kind"] = "gravity"
-
-
-def _clipped_rotations(log: FieldLog, rows: list[dict[str, Any]]) -> dict[int, str]:
-    """Rotations during which a gyro axis sat at its largest |value| for 3 samples or more.
-
-    A rate beyond the gyro's range clips: the output holds the full-scale code while the hand
-    turns on, and the integrated angle falls short. The full scale is not known from a log, so
-    an axis's largest |value| in the log held by three consecutive samples of a rotation is
-    taken as clipping (a genuine peak of a smooth hand turn is one sample).
-    """
-    top = np.max(np.abs(log.gyro_rps), axis=0)
-    out: dict[int, str] = {}
-    for k, row in enumerate(rows):
-        sel = (log.time_s >= row["start_time_s"]) & (log.time_s <= row["end_time_s"])
-        at_top = np.abs(log.gyro_rps[sel]) >= top * (1.0 - 1e-9)
-        for axis in range(3):
-            runs = np.diff(np.flatnonzero(np.diff(np.concatenate(
-                [[0], at_top[:, axis].astype(np.int8), [0]]))))[::2]
-            if runs.size and int(runs.max()) >= 3:
-                out[k] = (f"the gyro's {'xyz'[axis]} axis clipped at "
-                          f"{math.degrees(float(top[axis])):.4g} °/s for {int(runs.max())} "
-                          "samples (a turn faster than its range)")
-                break
-    return out
-
-
-#: A rotation is left out when it disagrees with the others beyond this (its largest residual
-#: against its own σ) and leaving it out lowers χ² by more than the 99.9 % quantile of χ²_3.
-_DISAGREE_SIGMA = 5.0
-_DROP_CHI2 = 16.27
-#: … and when it disagrees more than this many times the rotations' median disagreement: a
-#: model that misfits every rotation (a scale asymmetry it lacks) must show in χ²/ν, not be
-#: hidden by leaving rotations out.
-_DISAGREE_MEDIANS = 4.0
-
-
-def _robust_rotation_fit(observations: list[Any], used: list[int], rows: list[dict[str, Any]],
-                         theta: _F64, density: _F64, accel_cov: _F64 | None
-                         ) -> tuple[Any, list[int]]:
-    """Step 5's fit, rotations that disagree with the others left out one at a time.
-
-    A fit that does not converge, or one whose χ² is a misfit, is tried again without the
-    rotation that disagrees most with the model (:func:`~imucalib.estimation.gyro_rotations.
-    rotation_disagreement`, at the fit's M or the nominal scale) when it stands out from the
-    others (beyond :data:`_DISAGREE_SIGMA` and :data:`_DISAGREE_MEDIANS` times their median):
-    kept out when the refit converges where the fit did not, or lowers χ² by more than
-    :data:`_DROP_CHI2`. At most a
-    fifth of the rotations (at least one) go; each is named in its row (``left_out``).
-
-    Raises
-    ------
-    ConvergenceError
-        No fit converges even so; the message names the rotations that disagree.
-    """
-    from imucalib.errors import ConvergenceError
-    from imucalib.estimation.gyro_rotations import fit_gyro_rotations, rotation_disagreement
-
-    def fit(obs: list[Any]) -> Any:
-        return fit_gyro_rotations(obs, theta, gyro_noise_density_rps_rthz=density,
-                                  accel_covariance=accel_cov)
-
-    try:
-        best: Any = fit(observations)
-        error: ConvergenceError | None = None
-    except ConvergenceError as exc:
-        best, error = None, exc
-    budget = max(1, len(observations) // 5)
-    while (best is None or best.quality.misfit) and budget > 0 and len(observations) > 4:
-        far = rotation_disagreement(observations, theta, gyro_noise_density_rps_rthz=density,
-                                    m=None if best is None else best.values)
-        k = int(np.argmax(far))
-        if far[k] < max(_DISAGREE_SIGMA, _DISAGREE_MEDIANS * float(np.median(far))):
-            break  # none stands out: a model misfit of every rotation is left to χ²/ν
-        rest = observations[:k] + observations[k + 1:]
-        try:
-            trial = fit(rest)
-        except ConvergenceError:
-            break
-        if best is not None and best.quality.chi2 - trial.quality.chi2 <= _DROP_CHI2:
-            break
-        row = rows[used[k]]
-        row["left_out"] = (f"it disagrees with the other rotations by {far[k]:.3g}σ (a bump, "
-                           "a pose that was not still, or a detection that split a motion)")
-        observations, used, best, budget = rest, used[:k] + used[k + 1:], trial, budget - 1
-    if best is None:
-        assert error is not None
-        far = rotation_disagreement(observations, theta, gyro_noise_density_rps_rthz=density)
-        worst = [f"{rows[used[k]]['start_time_s']:.1f}–{rows[used[k]]['end_time_s']:.1f} s "
-                 f"({far[k]:.3g}σ)" for k in np.argsort(far)[::-1][:3]]
-        raise ConvergenceError(f"{error}; the rotations that disagree most at the nominal "
-                               f"scale: {', '.join(worst)} (a gyro scale far from the import "
-                               "options' or the datasheet's? check --gyro-scale and the units)")
-    return best, used
-
-
-def _gyro_cov(fit: Any) -> _F64:
-    """Return the rotation fit's covariance before Birge scaling, the accelerometer's part in."""
-    extra = fit.covariance_accel if fit.covariance_accel is not None else 0.0
-    return np.asarray(fit.covariance_noise + extra, dtype=np.float64)
-
-
-def _fit_gyro(log: FieldLog, detection: Any, poses: list[StaticPose], y: _F64, up: _F64,
-              opt: FieldOptions, accel_values: _F64, accel_cov: _F64, form: str,
-              six: Any, g_sens: _F64 | None, lat: float | None) -> dict[str, Any] | None:
-    """Step 5; None when ``gyro_form`` is "none" or the log holds no rotation.
-
-    The gyro samples of each rotation are first freed of the g-sensitivity G·f̂(t) (f̂ the
-    corrected accelerometer samples) when G was fitted; each rotation's bias is the mean of
-    its two poses' static means (less their G·f), so that a wandering bias is followed. The
-    integration starts and ends `window_s` inside the static intervals (at most their length):
-    a high detector threshold takes the fading ends of a motion (a hand's tremor) for rest, and
-    an angle cut there is a misfit of up to 10⁻³ rad (found on the twin at k = 20); the extra
-    still samples add only their noise and the bias error, which the fit's covariance carries.
-
-    The Earth's rate turns with the body during a motion, so the two poses' means do not
-    remove it (a 4 s turn of 150° leaves ~2·10⁻⁴ rad, several σ of a consumer gyro at 400 Hz
-    on the twin): its vertical part Ω·sin L is removed sample by sample along the corrected
-    accelerometer's direction (and from the static means), the horizontal part Ω·cos L,
-    whose direction needs the heading, is a Type B on the bias of each motion (σ = Ω·cos L/√2
-    per axis; Ω itself when the latitude is unknown) (FL.3).
-    """
-    from imucalib.estimation.gravity_norm import correct_accel
-    from imucalib.estimation.gyro_rotations import RotationObservation
-
-    if opt.gyro_form == "none" or not detection.rotations:
-        if opt.gyro_form in ("gravity", "turns"):
-            raise InsufficientExcitationError(
-                ["gyro_M"], f"{log.source}: no rotation between the static poses was found "
-                            f"(gyro_form {opt.gyro_form!r} needs them)")
-        return None
-    by_stop = {seg.stop_index - 1: k for k, seg in enumerate(detection.static)}
-    by_start = {seg.start_index: k for k, seg in enumerate(detection.static)}
-    if form == "six-position":
-        def correct(y: _F64) -> _F64:
-            return np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
-                                              (np.atleast_2d(y) - six.bias).T).T)
-        # on a fixture the poses' up directions and the turns' axes are the fixture's axes
-        # by construction (a face flat on the desk turns about its own normal): the nominal
-        # directions, exact, as Ferraris et al. take them
-        from imucalib.estimation.six_position import nominal_directions
-
-        theta = np.zeros(9)
-        means = list(float(np.median(np.linalg.norm(y, axis=1))) * nominal_directions(y))
-    else:
-        def correct(y: _F64) -> _F64:
-            return correct_accel(accel_values, y)
-        theta = accel_values
-        means = list(y)           # the poses' means, at t̄ when the bias drift was fitted
-    density = poses[0].gyro_se * math.sqrt(poses[0].duration_s + log.period_s)
-    omega_up = 0.0 if lat is None else EARTH_RATE_RPS * math.sin(math.radians(lat))
-    omega_h = EARTH_RATE_RPS * (1.0 if lat is None else math.cos(math.radians(lat)))
-
-    def vertical(f: _F64) -> _F64:
-        fa = correct(f)
-        return np.asarray(omega_up * fa / np.linalg.norm(fa, axis=1, keepdims=True))
-
-    observations, rows = [], []
-    for rot in detection.rotations:
-        kb, ka = by_stop.get(rot.start_index), by_start.get(rot.stop_index - 1)
-        if kb is None or ka is None:
-            continue
-        # integrate from `window_s` inside the static intervals: a detector threshold that
-        # takes the fading ends of a motion for rest would otherwise cut them off the angle
-        margin = max(1, round(opt.window_s / log.period_s))
-        sl = slice(max(detection.static[kb].start_index, rot.start_index - margin),
-                   min(detection.static[ka].stop_index, rot.stop_index + margin))
-        gyro = log.gyro_rps[sl]
-        before, after = poses[kb], poses[ka]
-        ub, ua = up[kb], up[ka]
-        static_b = before.gyro_mean - vertical(before.accel_mean)[0]
-        static_a = after.gyro_mean - vertical(after.accel_mean)[0]
-        gyro = gyro - vertical(log.accel_mps2[sl])
-        if g_sens is not None:
-            gyro = gyro - correct(log.accel_mps2[sl]) @ g_sens.T
-            static_b = static_b - g_sens @ correct(before.accel_mean)[0]
-            static_a = static_a - g_sens @ correct(after.accel_mean)[0]
-        turns = rot.angle_norm_rad / (2 * math.pi)
-        same_up = math.degrees(math.acos(min(1.0, float(ub @ ua)))) <= _TURN_GRAVITY_DEG
-        is_turn = same_up and round(turns) >= 1 and abs(turns - round(turns)) <= _FULL_TURN_TOL
-        kind = "turn" if is_turn else "gravity"
-        if opt.gyro_form == "turns" and kind != "turn":
-            continue
-        if opt.gyro_form == "gravity":
-            kind = "gravity"
-        observations.append(RotationObservation(
-            kind=kind, time_s=log.time_s[sl], gyro_rps=gyro,
-            bias_rps=0.5 * (static_b + static_a),
-            bias_std_rps=np.sqrt(0.25 * (before.gyro_se**2 + after.gyro_se**2)
-                                 + omega_h**2 / 2.0),
-            accel_before_mps2=means[kb], accel_before_std=before.accel_se,
-            accel_after_mps2=means[ka], accel_after_std=after.accel_se,
-            angle_rad=2 * math.pi * round(turns) if kind == "turn" else None))
-        rows.append({"start_time_s": rot.start_time_s, "end_time_s": rot.end_time_s,
-                     "kind": kind, "angle_deg": math.degrees(rot.angle_norm_rad),
-                     "pose_before": kb, "pose_after": ka})
-    if opt.gyro_form == "turns" and not observations:
-        raise InsufficientExcitationError(
-            ["gyro_M"], f"{log.source}: no full turn flat on the desk was found (a rotation of "
-                        "n·360° within 10 %, the gravity direction back within 5°)")
-    if opt.gyro_form == "auto":
-        _recount_turns(observations, rows, theta, density)
-    clipped = _clipped_rotations(log, rows)
-    for k in sorted(clipped, reverse=True):
-        rows[k]["left_out"] = clipped[k]
-    used = [k for k in range(len(rows)) if k not in clipped]
-    fit, used = _robust_rotation_fit(
-        [observations[k] for k in used], used, rows, theta, density,
-        None if form == "six-position" else accel_cov)
-    for k, r in zip(used, fit.residuals, strict=True):
-        rows[k]["residual"] = r
-    observations = [observations[k] for k in used]
-    kinds = {o.kind for o in observations}
-    label = ("gravity-referenced and known-angle turns" if kinds == {"gravity", "turn"}
-             else "known-angle turns" if kinds == {"turn"} else "gravity-referenced")
-    return {"fit": fit, "form": label, "rows": rows}
