@@ -88,3 +88,19 @@ def test_debug_shows_the_traceback_of_an_internal_error(monkeypatch):
     with pytest.raises(RuntimeError, match="a bug"):
         cli.main()
     assert sys.excepthook is sys.__excepthook__  # Python prints it, not the quiet hook
+
+
+def test_a_rotation_of_180_degrees_raises_no_warning():
+    """A gravity-referenced rotation of 180° has opposite up directions: no turn axis, and no
+    division by zero for it (it gave `RuntimeWarning: invalid value encountered in divide`)."""
+    import warnings
+
+    from imucalib.procedures.common.static_intervals import FieldLog
+    from imucalib.procedures.field.analysis import FieldOptions, analyze_field
+
+    s = harsh_handheld_session("consumer", seed=11)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = analyze_field(FieldLog("IMU", "twin", s.time_s, s.gyro_rps, s.accel_mps2),
+                          FieldOptions(latitude_deg=45.0))
+    assert r.result.has_triad("gyro")

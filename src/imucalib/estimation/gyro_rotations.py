@@ -431,8 +431,13 @@ class _Design:
 
     @staticmethod
     def _axis(ub: _F64, ua: _F64) -> _F64:
+        """Return a turn's axis, the mean of its two up directions.
+
+        0 where they are opposite (a gravity-referenced rotation of 180°, which is no turn
+        and never uses it): no division by zero.
+        """
         s = ub + ua
-        return np.asarray(s / np.linalg.norm(s, axis=1, keepdims=True), dtype=np.float64)
+        return np.asarray(s / _safe_norm(s)[:, None], dtype=np.float64)
 
     def end_attitudes(self, m: _F64) -> _F64:
         """R_T (K, 3, 3) of (F.4) alone, by a pairwise product tree (in order)."""
@@ -513,8 +518,8 @@ class _Design:
         pb = (np.eye(3) - np.einsum("ka,kb->kab", self.ub, self.ub)) @ d / self.nb[:, None, None]
         pa = (np.eye(3) - np.einsum("ka,kb->kab", self.ua, self.ua)) @ d / self.na[:, None, None]
         n = self._axis(self.ub, self.ua)
-        pn = (np.eye(3) - np.einsum("ka,kb->kab", n, n)) / np.linalg.norm(
-            self.ub + self.ua, axis=1)[:, None, None]
+        pn = (np.eye(3) - np.einsum("ka,kb->kab", n, n)) / _safe_norm(
+            self.ub + self.ua)[:, None, None]  # used for turns only (np.where below)
         grav_b = -np.einsum("kab,kca,kcd->kbd", self.basis, rt, pb)
         grav_a = np.einsum("kab,kad->kbd", self.basis, pa)
         pad = ((0, 0), (0, 1), (0, 0))
@@ -531,6 +536,12 @@ class _Design:
     def per_rotation(self, r: _F64) -> tuple[_F64, ...]:
         return tuple(r[a:b].copy() for a, b in zip(self.slices[:-1], self.slices[1:],
                                                    strict=True))
+
+
+def _safe_norm(v: _F64) -> _F64:
+    """‖v‖ per row, 1 where it is 0 (rows only the turns use, which never have 0)."""
+    norm = np.linalg.norm(v, axis=1)
+    return np.asarray(np.where(norm > 0.0, norm, 1.0), dtype=np.float64)
 
 
 def _prepare(rotations: Sequence[RotationObservation], accel_theta: ArrayLike,
