@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 
@@ -42,8 +43,8 @@ import imucalib.cli
 from imucalib.cli import main
 
 __all__ = ["ODD_NUMBERS", "SCALE", "TALLY", "TIMEOUT_S", "CaseTimeout", "assert_finite_csv",
-           "check_outcome", "fuzz_settings", "mutate_lines", "mutate_numbers", "run_child",
-           "run_cli", "tally"]
+           "check_outcome", "damage_bytes", "fuzz_settings", "mutate_lines", "mutate_numbers",
+           "run_child", "run_cli", "tally"]
 
 #: The multiplier of every example count (``IMUCALIB_FUZZ_EXAMPLES``; 1 in ``make test``).
 SCALE = int(os.environ.get("IMUCALIB_FUZZ_EXAMPLES", "1"))
@@ -195,6 +196,28 @@ def assert_finite_csv(path: Path) -> None:
     """No NaN or inf written to the CSV `path`."""
     text = path.read_text(encoding="utf-8").lower()
     assert "nan" not in text and "inf" not in text, f"non-finite numbers written to {path}"
+
+
+def damage_bytes(original: bytes, i: int, rng: np.random.Generator) -> bytes:
+    """Return a damaged copy of a file's bytes, the damage's kind chosen by ``i % 4``.
+
+    Bytes flipped anywhere, a block of the metadata region (the first 16 KiB) zeroed, the file
+    truncated, or random bytes in its data region.
+    """
+    raw = bytearray(original)
+    kind = i % 4
+    if kind == 0:
+        for _ in range(int(rng.integers(1, 8))):
+            raw[int(rng.integers(0, len(raw)))] ^= int(rng.integers(1, 256))
+    elif kind == 1:
+        a = int(rng.integers(0, min(len(raw), 16384) - 64))
+        raw[a:a + 64] = bytes(64)
+    elif kind == 2:
+        raw = raw[:int(rng.integers(0, len(raw)))]
+    else:
+        a = int(rng.integers(len(raw) // 2, len(raw) - 64))
+        raw[a:a + 64] = rng.integers(0, 256, 64, dtype=np.uint8).tobytes()
+    return bytes(raw)
 
 
 def mutate_numbers(text: str, data: st.DataObject, n: int = 3) -> str:

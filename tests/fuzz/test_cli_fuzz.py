@@ -37,6 +37,7 @@ from ._harness import (  # noqa: F401 (run_cli and the rest are used by sibling 
     SCALE,
     assert_finite_csv,
     check_outcome,
+    damage_bytes,
     fuzz_settings,
     mutate_lines,
     mutate_numbers,
@@ -280,21 +281,8 @@ def test_damaged_recordings_never_crash_hang_or_export_garbage(small_recording, 
     original = small_recording.read_bytes()
     files = []
     for i in range(16 * SCALE):
-        raw = bytearray(original)
-        kind = i % 4
-        if kind == 0:  # flip bytes anywhere
-            for _ in range(int(rng.integers(1, 8))):
-                raw[int(rng.integers(0, len(raw)))] ^= int(rng.integers(1, 256))
-        elif kind == 1:  # zero a block in the metadata region (the first 16 KiB)
-            a = int(rng.integers(0, min(len(raw), 16384) - 64))
-            raw[a:a + 64] = bytes(64)
-        elif kind == 2:  # truncate
-            raw = raw[:int(rng.integers(0, len(raw)))]
-        else:  # random bytes in the data region
-            a = int(rng.integers(len(raw) // 2, len(raw) - 64))
-            raw[a:a + 64] = rng.integers(0, 256, 64, dtype=np.uint8).tobytes()
         path = tmp_path / f"m{i:03d}.h5"
-        path.write_bytes(bytes(raw))
+        path.write_bytes(damage_bytes(original, i, rng))
         files.append(path)
     outcomes = run_child(tmp_path, files, ("inspect", "export"))
     assert len(outcomes) == 2 * len(files)

@@ -29,6 +29,7 @@ from ._harness import (
     SCALE,
     assert_finite_csv,
     check_outcome,
+    damage_bytes,
     fuzz_settings,
     mutate_lines,
     mutate_numbers,
@@ -471,21 +472,8 @@ def test_damaged_open_recordings_are_recovered_or_refused(open_recordings, tmp_p
     files = [p for name, p in open_recordings.items()]
     original = open_recordings["plain"].read_bytes()
     for i in range(8 * SCALE):
-        raw = bytearray(original)
-        kind = i % 4
-        if kind == 0:  # flip bytes anywhere
-            for _ in range(int(rng.integers(1, 8))):
-                raw[int(rng.integers(0, len(raw)))] ^= int(rng.integers(1, 256))
-        elif kind == 1:  # zero a block of the metadata region (the first 16 KiB)
-            a = int(rng.integers(0, min(len(raw), 16384) - 64))
-            raw[a:a + 64] = bytes(64)
-        elif kind == 2:  # truncate
-            raw = raw[:int(rng.integers(0, len(raw)))]
-        else:  # random bytes in the data region
-            a = int(rng.integers(len(raw) // 2, len(raw) - 64))
-            raw[a:a + 64] = rng.integers(0, 256, 64, dtype=np.uint8).tobytes()
         path = tmp_path / f"open{i:03d}.h5"
-        path.write_bytes(bytes(raw))
+        path.write_bytes(damage_bytes(original, i, rng))
         files.append(path)
     outcomes = run_child(tmp_path, files, ("recover",))
     assert len(outcomes) == len(files)
