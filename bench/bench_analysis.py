@@ -293,7 +293,9 @@ def kernels(n: int = 3_300_000, repeat: int = 3) -> None:
     The outlier rule's median of each sample's 8 neighbours (h = 4) on one Gaussian column,
     side by side in this process: the sorting network (numba), the sorted window (numba, any
     h; timed with h = 4 through its loop), and the former ``np.partition`` of blocks of
-    windows (the numpy path). Best of `repeat`.
+    windows (the numpy path). Best of `repeat`. Then the exact median of
+    ``processing/_select_kernel.py`` against ``np.median`` (:func:`_medians`) on `n` and on
+    10,000 values.
     """
     import numpy as np
 
@@ -315,6 +317,42 @@ def kernels(n: int = 3_300_000, repeat: int = 3) -> None:
         best = min(_timed(run) for _ in range(repeat))
         floor = floor or best
         print(f"  {name:26s} {best * 1e9 / n:6.1f} ns/sample   {best / floor:5.1f}×")
+    for size in (n, 10_000):
+        _medians(np.random.default_rng(1).normal(size=size), n // size, repeat)
+
+
+def _medians(x: Any, calls: int, repeat: int) -> None:
+    """Print the exact Floyd–Rivest median (and MAD) against ``np.median`` on `x`, ns/sample.
+
+    The outlier rule's two medians per column: of the residuals, and of their absolute
+    deviations (materialised as the rule does, and fused). Each timing makes `calls` calls.
+    """
+    import numpy as np
+
+    from imucalib.processing import _select_kernel as sk
+
+    sk.median(x[:1000])  # compile or load the kernel
+    c = float(np.median(x))
+    dev = np.abs(x - c)
+    ways: list[tuple[str, Any]] = [
+        ("median: np.median", lambda: np.median(x)),
+        ("median: Floyd-Rivest", lambda: sk.median(x)),
+        ("MAD: np.median(|x - c|)", lambda: np.median(np.abs(x - c))),
+        ("MAD: Floyd-Rivest of dev", lambda: sk.median(dev)),
+        ("MAD: Floyd-Rivest, fused", lambda: sk.median_abs_deviation(x, c)),
+    ]
+    kernel = "numba" if sk._kernel() is not None else "numpy (no numba)"
+    print(f"\nexact median, {x.size:,} samples × {calls} calls ({kernel}, best of {repeat}):")
+    floor = None
+    for name, run in ways:
+        def many(run: Any = run) -> None:
+            for _ in range(calls):
+                run()
+
+        best = min(_timed(many) for _ in range(repeat))
+        per = best * 1e9 / (x.size * calls)
+        floor = floor or per
+        print(f"  {name:26s} {per:6.2f} ns/sample   {per / floor:5.2f}×")
 
 
 def _timed(run: Any) -> float:

@@ -92,7 +92,8 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -103,6 +104,7 @@ from imucalib._checks import check_positive
 from imucalib.errors import InvalidInputError
 from imucalib.processing._common import as_columns, as_time, restore_shape
 from imucalib.processing._median_kernel import neighbour_median
+from imucalib.processing._select_kernel import median
 
 __all__ = [
     "MAD_TO_SIGMA",
@@ -119,11 +121,15 @@ OutlierMethod = Literal["interpolate", "drop"]
 #: 1/Φ⁻¹(3/4): the MAD of Gaussian data times this is σ.
 MAD_TO_SIGMA = 1.482602218505602
 _MIN_SAMPLES = 3
+_Center = NDArray[np.float64] | Callable[[], NDArray[np.float64]]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class OutlierResult:
     """Result of an outlier rejection. Arrays are read-only.
+
+    `center` may be given as a function of no arguments that returns it: it is then computed
+    on first access and kept (the robust rule's P1 caller never reads it).
 
     Attributes
     ----------
@@ -154,12 +160,32 @@ class OutlierResult:
     outlier_mask: NDArray[np.bool_]
     kept: NDArray[np.bool_]
     n_outliers: NDArray[np.int64]
-    center: NDArray[np.float64]
     scale: NDArray[np.float64]
     n_iterations: NDArray[np.int64]
     test: str
     method: str
-    threshold: float = math.nan
+    threshold: float
+    _center: _Center = field(repr=False)
+
+    def __init__(self, values: NDArray[np.float64], outlier_mask: NDArray[np.bool_],
+                 kept: NDArray[np.bool_], n_outliers: NDArray[np.int64], center: _Center,
+                 scale: NDArray[np.float64], n_iterations: NDArray[np.int64], test: str,
+                 method: str, threshold: float = math.nan) -> None:
+        fields = {"values": values, "outlier_mask": outlier_mask, "kept": kept,
+                  "n_outliers": n_outliers, "scale": scale, "n_iterations": n_iterations,
+                  "test": test, "method": method, "threshold": threshold, "_center": center}
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
+
+    @property
+    def center(self) -> NDArray[np.float64]:
+        """Final location estimate per column (see the class docstring), read-only."""
+        found = self._center
+        if callable(found):
+            found = found()
+            found.setflags(write=False)
+            object.__setattr__(self, "_center", found)
+        return found
 
     @property
     def outlier_indices(self) -> tuple[NDArray[np.int64], ...]:
@@ -375,7 +401,8 @@ def reject_outliers_robust(
     -------
     OutlierResult
         Cleaned values, mask (and :attr:`OutlierResult.outlier_indices`), counts per column,
-        the median of the kept samples as `center`, s as `scale` and k(n) as `threshold`.
+        the median of the kept samples as `center` (computed when first read), s as `scale`
+        and k(n) as `threshold`.
 
     Raises
     ------
@@ -399,22 +426,34 @@ def reject_outliers_robust(
     n, k = cols.shape
     k_n = robust_threshold(n, alpha, min_threshold)
     mask = np.zeros((n, k), dtype=bool)
-    center = np.empty(k)
     scale = np.empty(k)
     for j in range(k):
         x = cols[:, j]
         c, margin = _running_median(x, h)
         r = x - c
-        med_r = float(np.median(r))
+        med_r = median(r)  # np.median's value bit for bit, by Floyd–Rivest selection
         dev = np.abs(r - med_r)
-        s = MAD_TO_SIGMA * float(np.median(dev))
+        s = MAD_TO_SIGMA * median(dev)
         if s <= 0.0:
             s = float(np.std(r, ddof=1))
         mask[:, j] = dev > k_n * s + margin  # Eq. (2)
-        center[j] = float(np.median(x[~mask[:, j]]))
         scale[j] = s
     iters = np.ones(k, dtype=np.int64)
+    center = _kept_median(cols, mask)
     return _finish(cols, one_d, mask, center, scale, iters, "robust", method, t, k_n)
+
+
+def _kept_median(cols: NDArray[np.float64], mask: NDArray[np.bool_]
+                 ) -> Callable[[], NDArray[np.float64]]:
+    """Return a function computing the median of each column's unflagged samples.
+
+    :func:`_finish` overwrites only flagged samples of `cols` (``method="interpolate"``) or
+    none (``"drop"``), so the unflagged ones keep their input values.
+    """
+    def center() -> NDArray[np.float64]:
+        return np.array([median(cols[~mask[:, j], j]) for j in range(cols.shape[1])])
+
+    return center
 
 
 def _running_median(x: NDArray[np.float64], h: int
@@ -432,7 +471,7 @@ def _running_median(x: NDArray[np.float64], h: int
     """
     n, w = x.size, 2 * h + 1
     if n < 2 * w:
-        return np.full(n, float(np.median(x))), np.zeros(n)
+        return np.full(n, median(x)), np.zeros(n)
     c = neighbour_median(x, h)  # a sorted window slid along x: O(n·h), no n × 2h copy
     d2 = np.zeros(n)
     d2[2 * h:n - 2 * h] = c[h:n - 3 * h] - 2.0 * c[2 * h:n - 2 * h] + c[3 * h:n - h]
@@ -527,7 +566,7 @@ def _location_scale(x: NDArray[np.float64], robust: bool) -> tuple[float, float]
 
 
 def _finish(cols: NDArray[np.float64], one_d: bool, mask: NDArray[np.bool_],
-            center: NDArray[np.float64], scale: NDArray[np.float64], iters: NDArray[np.int64],
+            center: _Center, scale: NDArray[np.float64], iters: NDArray[np.int64],
             test: str, method: str, t: NDArray[np.float64] | None,
             threshold: float = math.nan) -> OutlierResult:
     n = cols.shape[0]
@@ -544,8 +583,10 @@ def _finish(cols: NDArray[np.float64], one_d: bool, mask: NDArray[np.bool_],
     n_out = mask.sum(axis=0).astype(np.int64)
     values = restore_shape(out, one_d)
     mask_out = mask[:, 0].copy() if one_d else mask
-    for arr in (values, mask_out, kept, n_out, center, scale, iters):
+    for arr in (values, mask_out, kept, n_out, scale, iters):
         arr.setflags(write=False)
+    if not callable(center):
+        center.setflags(write=False)
     return OutlierResult(values=values, outlier_mask=mask_out, kept=kept, n_outliers=n_out,
                          center=center, scale=scale, n_iterations=iters, test=test,
                          method=method, threshold=threshold)
