@@ -51,6 +51,90 @@ def naive_grubbs(x: np.ndarray, alpha: float) -> int:
     return n_out
 
 
+def best_of(fn: Callable[[], object], repeat: int = 3) -> float:
+    out = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t0)
+    return min(out)
+
+
+def _ref_time_base(counter: np.ndarray, host: np.ndarray) -> np.ndarray:
+    """reconstruct_time_base as it was: np.polyfit fits, medians recomputed, checked copies."""
+    c = np.array(counter, dtype=np.float64)
+    assert np.all(np.isfinite(c)) and not np.any(c != np.round(c))
+    t = np.array(host, dtype=np.float64)
+    x = c - c[0]
+    y = t - t[0]
+    keep = np.ones(c.size, dtype=bool)
+    coef = np.polyfit(x, y, 1)
+    for _ in range(2):
+        resid = y - np.polyval(coef, x)
+        mad = 1.4826 * float(np.median(np.abs(resid[keep] - np.median(resid[keep]))))
+        new_keep = np.abs(resid - np.median(resid[keep])) <= 5.0 * mad if mad > 0 else keep
+        if new_keep.sum() < 3 or np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+        coef = np.polyfit(x[keep], y[keep], 1)
+    return t[0] + coef[1] + coef[0] * x
+
+
+def _ref_jitter(t: np.ndarray) -> float:
+    t = np.array(t, dtype=np.float64)
+    d = np.diff(t)
+    k = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / np.median(d)), 1.0))])
+    assert np.unique(k).size >= 3
+    coef = np.polyfit(k, t - t[0], 1)
+    return float(np.sqrt(np.sum(((t - t[0]) - np.polyval(coef, k)) ** 2) / (t.size - 2)))
+
+
+def _fixed_costs_at(n: int, rng: np.random.Generator) -> None:
+    from scipy import signal
+
+    from imucalib.processing import estimate_timestamp_jitter_s, reconstruct_time_base
+
+    k = np.arange(n)
+    host = 10.0 + k / 1000.0 + rng.exponential(3e-4, n)
+    host[n // 3] += 0.05
+    stamps = np.sort(host) + k * 1e-9
+    x = rng.normal(size=(n, 6))
+    rows = [
+        ("reconstruct_time_base", lambda: reconstruct_time_base(k, host),
+         lambda: _ref_time_base(k, host)),
+        ("estimate_timestamp_jitter_s", lambda: estimate_timestamp_jitter_s(stamps),
+         lambda: _ref_jitter(stamps)),
+        ("lowpass_zero_phase (6 columns)",
+         lambda: lowpass_zero_phase(x, 1000.0, bandwidth_hz=200.0),
+         lambda: signal.sosfiltfilt(signal.butter(4, 50.0, output="sos", fs=1000.0),
+                                    np.array(x), axis=0)),
+    ]
+    for name, new, ref in rows:
+        t_new, t_ref = best_of(new), best_of(ref)
+        print(f"{name:<40}  {n:>7}  {1e3 * t_new:8.3f}  {1e3 * t_ref:8.3f}  {t_new / t_ref:6.2f}")
+    t_ws = best_of(lambda: compute_window_statistics(x, 1000.0))
+    print(f"{'compute_window_statistics (allan-fit)':<40}  {n:>7}  {1e3 * t_ws:8.3f}  "
+          f"{'—':>8}  {'—':>6}")
+
+
+def fixed_costs() -> None:
+    """Per-window fixed costs: each function against the way it was computed before."""
+    from imucalib.models.noise import compute_theoretical_adev
+
+    rng = np.random.default_rng(1)
+    model = NoiseModel(white_density=1e-3, bias_instability=1e-4, random_walk=1e-5)
+    print(f"{'per-window function (best of 3)':<40}  {'n':>7}  {'new ms':>8}  {'ref ms':>8}  "
+          f"{'ratio':>6}")
+    for n in (600_000, 6_000):
+        _fixed_costs_at(n, rng)
+    tau = np.array([6.0])
+    t_adev = best_of(lambda: [compute_theoretical_adev(model, tau) for _ in range(1000)])
+    print(f"{'compute_theoretical_adev, 1 τ (µs/call)':<40}  {1:>7}  {t_adev * 1e3:8.2f}")
+    print("references: np.polyfit line fits with the medians recomputed, a fresh butter design "
+          "+ sosfiltfilt; compute_window_statistics and compute_theoretical_adev: see "
+          "docs/performance.md (timed against the previous code)")
+
+
 def main() -> None:
     rng = np.random.default_rng(0)
     fs = 100.0
@@ -102,4 +186,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    if "--fixed-costs" in sys.argv:
+        fixed_costs()
+    else:
+        main()

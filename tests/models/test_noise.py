@@ -509,3 +509,42 @@ def test_generator_bad_inputs(call: Callable[[], object], error: type[Exception]
                               match: str) -> None:
     with pytest.raises(error, match=match):
         call()
+
+
+def _reference_adev(m: NoiseModel, tau_s) -> np.ndarray:
+    """docs/equations.md §8 term by term, every term evaluated (zero coefficients included)."""
+    from scipy import special
+
+    tau = np.asarray(tau_s, dtype=float).reshape(-1, 1)
+    x = np.pi * m.bias_instability_corner_hz * tau
+    flicker = (2 / np.pi) * (np.log(2.0) - np.sin(x) ** 3 / (2 * x**2)
+                             * (np.sin(x) + 4 * x * np.cos(x))
+                             + special.sici(2 * x)[1] - special.sici(4 * x)[1])
+    used = m.markov_sigma > 0
+    tc = np.where(used, m.markov_time_constant_s, 1.0)
+    r = tau / tc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bracket = 1 - (-4 * np.expm1(-r) + np.expm1(-2 * r)) / (2 * r)
+    bracket = np.where(r < 1e-3, r**2 / 3 - r**3 / 4 + 7 * r**4 / 60, bracket)
+    avar = (3 * m.quantization**2 / tau**2 + m.white_density**2 / tau
+            + m.random_walk**2 * tau / 3 + m.rate_ramp**2 * tau**2 / 2
+            + m.bias_instability**2 * flicker
+            + np.where(used, 2 * m.markov_sigma**2 * tc / tau * bracket, 0.0))
+    return np.sqrt(avar)
+
+
+@pytest.mark.parametrize("model", [
+    NoiseModel(),
+    NoiseModel(white_density=[0.1, 0.2, 0.3]),
+    NoiseModel(white_density=0.1, bias_instability=[0.01, 0.0, 0.02], random_walk=1e-3,
+               quantization=1e-4, rate_ramp=[1e-6, -1e-6, 0.0], bias_instability_corner_hz=3.0),
+    NoiseModel(markov_sigma=[0.1, 0.0, 0.2], markov_time_constant_s=[10.0, 0.0, 1.0]),
+    NoiseModel(bias_instability=1e-3),
+])
+def test_theoretical_adev_skips_only_zero_terms(model: NoiseModel) -> None:
+    tau = [1e-5, 1e-3, 0.5, 6.0, 1e3, 1e5]
+    for _ in range(2):  # the second call uses the per-model cache
+        got = compute_theoretical_adev(model, tau)
+        np.testing.assert_allclose(got, _reference_adev(model, tau), rtol=1e-12, atol=0.0)
+        one = compute_theoretical_adev(model, np.array([6.0]))
+        np.testing.assert_array_equal(one[0], got[3])

@@ -94,3 +94,37 @@ def test_bad_inputs_raise_with_messages(kwargs: dict, match: str) -> None:
     values, fs = args.pop("values"), args.pop("sample_rate_hz")
     with pytest.raises(InvalidInputError, match=match):
         lowpass_zero_phase(values, fs, **args)
+
+
+@pytest.mark.parametrize(("n", "k", "order", "frac", "fs", "bw"),
+                         [(16, 1, 4, 0.25, 500.0, 200.0), (40, 3, 1, 0.2, 100.0, 40.0),
+                          (6000, 6, 4, 0.25, 1000.0, 200.0), (3001, 2, 7, 1 / 3, 4000.0, 1000.0)])
+def test_cached_design_equals_a_fresh_butter_and_sosfiltfilt(n: int, k: int, order: int,
+                                                             frac: float, fs: float,
+                                                             bw: float) -> None:
+    # the cached design must give what a design made for this call gives, bit for bit
+    from scipy import signal
+
+    x = np.random.default_rng(n).normal(size=(n, k)) + 5.0
+    for _ in range(2):  # the second call is served from the cache
+        got = lowpass_zero_phase(x, fs, bandwidth_hz=bw, cutoff_fraction=frac, order=order)
+        sos = signal.butter(order, frac * bw, btype="low", output="sos", fs=fs)
+        np.testing.assert_array_equal(got.values, signal.sosfiltfilt(sos, x, axis=0))
+    # a constant is kept exactly up to rounding (unit DC gain)
+    const = lowpass_zero_phase(np.full(n, 2.5), fs, bandwidth_hz=bw, cutoff_fraction=frac,
+                               order=order).values
+    np.testing.assert_allclose(const, 2.5, rtol=1e-12)
+
+
+def test_design_cache_keys_on_order_and_normalised_cutoff() -> None:
+    from imucalib.processing.filtering import _butter_lowpass
+
+    x = np.random.default_rng(4).normal(size=400)
+    a = lowpass_zero_phase(x, 1000.0, bandwidth_hz=200.0).values  # 50 Hz of 1 kHz
+    b = lowpass_zero_phase(x, 2000.0, bandwidth_hz=400.0).values  # 100 Hz of 2 kHz: same design
+    c = lowpass_zero_phase(x, 1000.0, bandwidth_hz=160.0).values  # 40 Hz: another one
+    np.testing.assert_array_equal(a, b)
+    assert not np.allclose(a, c)
+    sos4, pad4 = _butter_lowpass(4, 0.1)
+    sos3, pad3 = _butter_lowpass(3, 0.1)
+    assert sos4.shape == (2, 6) and pad4 == 15 and sos3.shape == (2, 6) and pad3 == 12

@@ -210,3 +210,56 @@ def test_revolution_bad_inputs(kwargs: dict, match: str) -> None:
 def test_statistics_bad_inputs(call, match: str) -> None:
     with pytest.raises(InvalidInputError, match=match):
         call()
+
+
+# -- the batched Allan path against a straightforward reference ---------------------------------
+
+def _reference_oavar(x: np.ndarray, fs: float, ms: np.ndarray) -> np.ndarray:
+    """Overlapping Allan variance per column from the cumulative sum (NIST SP 1065 Eq. (8))."""
+    out = np.empty((ms.size, x.shape[1]))
+    for j in range(x.shape[1]):
+        y = x[:, j] - x[:, j].mean()
+        phase = np.concatenate([[0.0], np.cumsum(y)]) / fs
+        for t, m in enumerate(ms):
+            d = phase[2 * m:] - 2 * phase[m:-m] + phase[: -2 * m]
+            out[t, j] = np.sum(d**2) / (2 * d.size * (m / fs) ** 2)
+    return out
+
+
+@pytest.mark.parametrize(("n", "k"), [(7, 1), (6000, 6), (70_001, 3)])
+def test_batched_overlapping_avar_matches_a_column_by_column_reference(n: int, k: int) -> None:
+    from imucalib.analysis._allan_engine import ArrayPhase, n_terms, sum_overlapping
+    from imucalib.analysis.allan import phase_from_rate
+    from imucalib.processing.statistics import _overlapping_avar
+
+    fs = 200.0
+    rng = np.random.default_rng(n)
+    x = rng.normal(size=(n, k)) + np.cumsum(rng.normal(size=(n, k)), axis=0) * 1e-2
+    x[:, -1] = 3.0  # a constant column: no variance at all
+    ms = 2 ** np.arange(0, int(np.log2(n // 2)) + 1)
+    got = _overlapping_avar(x - x.mean(axis=0), 1.0 / fs, ms)
+    want = _reference_oavar(x, fs, ms)
+    scale = np.max(want, axis=0)
+    assert np.all(np.abs(got - want) <= 1e-9 * np.maximum(want, 1e-12 * scale) + 1e-300)
+    assert np.all(got[:, -1] == 0.0)
+    # and bit for bit the one-column-at-a-time path of the analysis package
+    count = n_terms("oadev", ms, n + 1)
+    for j in range(k):
+        col = np.ascontiguousarray((x - x.mean(axis=0))[:, j])
+        one = sum_overlapping(ArrayPhase(phase_from_rate(col, fs)), ms, count, 2) / (
+            2.0 * count * (ms / fs) ** 2)
+        np.testing.assert_array_equal(got[:, j], one)
+
+
+def test_window_statistics_mean_std_are_numpys_and_fit_is_stable() -> None:
+    rng = np.random.default_rng(9)
+    x = rng.normal(size=(6000, 4)) * [1.0, 1e-3, 5.0, 0.0] + [0.0, 9.81, -3.0, 7.0]
+    st = compute_window_statistics(x, 100.0)
+    np.testing.assert_array_equal(st.mean, x.mean(axis=0))
+    np.testing.assert_array_equal(st.std, x.std(axis=0, ddof=1))
+    assert st.std[3] == 0.0 and st.standard_error[3] == 0.0
+    assert st.n_effective[3] == 6000.0
+    one = compute_window_statistics(x[:, 0], 100.0)  # a column alone: the same numbers
+    # (numpy sums a lone column pairwise, columns of a 2-D array row by row: rounding apart)
+    assert one.standard_error[0] == pytest.approx(st.standard_error[0], rel=1e-12)
+    assert one.white_density[0] == pytest.approx(st.white_density[0], rel=1e-12)

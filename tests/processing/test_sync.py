@@ -164,3 +164,113 @@ def test_reconstruct_without_nominal_rate_gives_nan_error() -> None:
 def test_bad_inputs_raise_with_messages(call, match: str) -> None:
     with pytest.raises(InvalidInputError, match=match):
         call()
+
+
+# -- closed-form line fits against np.polyfit (the implementation they replaced) ---------------
+
+def _polyfit_time_base(counter: np.ndarray, host: np.ndarray) -> tuple[float, float, np.ndarray,
+                                                                       np.ndarray]:
+    """The trimmed regression written with np.polyfit / np.polyval, as before the closed form."""
+    x = (counter - counter[0]).astype(np.float64)
+    y = host - host[0]
+    keep = np.ones(x.size, dtype=bool)
+    coef = np.polyfit(x, y, 1)
+    for _ in range(2):
+        resid = y - np.polyval(coef, x)
+        med = np.median(resid[keep])
+        mad = 1.4826 * float(np.median(np.abs(resid[keep] - med)))
+        new_keep = np.abs(resid - med) <= 5.0 * mad if mad > 0 else keep
+        if new_keep.sum() < 3 or np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+        coef = np.polyfit(x[keep], y[keep], 1)
+    return float(coef[0]), float(coef[1]), y - np.polyval(coef, x), keep
+
+
+def _close(a: float, b: float, scale: float = 0.0) -> bool:
+    return abs(a - b) <= 1e-12 * max(abs(a), abs(b), scale)
+
+
+@pytest.mark.parametrize("case", ["three", "gaps", "outlier", "long", "epoch", "exact"])
+def test_time_base_line_fit_matches_polyfit(case: str) -> None:
+    rng = np.random.default_rng(7)
+    if case == "three":
+        c = np.array([5, 6, 7])
+        host = np.array([1.0, 1.011, 1.019])
+    elif case == "exact":  # on the line: no jitter, MAD = 0
+        c = np.arange(100)
+        host = 3.0 + 0.01 * c
+    else:
+        n = {"gaps": 5000, "outlier": 2000, "long": 200_000, "epoch": 20_000}[case]
+        c = np.cumsum(rng.integers(1, 4 if case == "gaps" else 2, n)) + 1000
+        host = 7.0 + c * 1e-3 * (1 + 20e-6) + rng.exponential(2e-4, n)
+        if case == "outlier":
+            host[n // 2] += 1e3  # a huge hiccup
+        if case == "epoch":
+            host += 1.7e9
+    tb = reconstruct_time_base(c, host, nominal_rate_hz=1000.0)
+    slope, icpt, resid, keep = _polyfit_time_base(c, host)
+    scale = float(np.abs(host - host[0]).max())  # the size of the fitted values
+    assert _close(tb.sample_period_s, slope)
+    # the intercept and the residuals are small differences of values of size `scale`: both
+    # fits carry rounding errors of order 1e-16·scale there
+    assert _close(tb.offset_s, float(host[0] + icpt - slope * c[0]), scale)
+    assert tb.n_rejected == int(np.sum(~keep))
+    assert _close(tb.max_abs_residual_s, float(np.abs(resid).max()), scale)
+    jitter = float(np.sqrt(np.sum(resid[keep] ** 2) / max(int(keep.sum()) - 2, 1)))
+    assert _close(tb.jitter_s, jitter, scale * 1e-2)
+    np.testing.assert_allclose(tb.time_s, host[0] + icpt + slope * (c - c[0]), rtol=1e-12,
+                               atol=1e-12 * scale)
+    if case == "outlier":
+        assert tb.n_rejected >= 1 and tb.max_abs_residual_s > 900.0
+    if case == "exact":
+        assert tb.n_rejected == 0 and tb.jitter_s < 1e-12
+
+
+def test_time_base_accepts_float_and_list_counters_alike() -> None:
+    host = 2.0 + np.arange(50) * 0.01 + np.random.default_rng(3).normal(0.0, 1e-4, 50)
+    ints = reconstruct_time_base(np.arange(50), host)
+    for counter in (np.arange(50.0), list(range(50)), np.arange(50, dtype=np.uint16)):
+        other = reconstruct_time_base(counter, host.tolist())
+        assert other.sample_period_s == ints.sample_period_s
+        np.testing.assert_array_equal(other.time_s, ints.time_s)
+        assert other.counter.dtype == np.int64
+
+
+def test_time_base_rejects_constant_host_time() -> None:
+    with pytest.raises(InvalidInputError, match=r"host time must increase with the counter; got "
+                                                r"a fitted period of 0 s"):
+        reconstruct_time_base([0, 1, 2, 3], [5.0, 5.0, 5.0, 5.0])
+
+
+def _polyfit_jitter(t: np.ndarray) -> float:
+    d = np.diff(t)
+    k = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / np.median(d)), 1.0))])
+    coef = np.polyfit(k, t - t[0], 1)
+    resid = (t - t[0]) - np.polyval(coef, k)
+    return float(np.sqrt(np.sum(resid**2) / (t.size - 2)))
+
+
+@pytest.mark.parametrize("case", ["three", "gaps", "outlier", "epoch", "uniform"])
+def test_jitter_line_fit_matches_polyfit(case: str) -> None:
+    rng = np.random.default_rng(11)
+    if case == "three":
+        t = np.array([0.0, 0.0101, 0.0199])
+    elif case == "uniform":
+        t = 4.0 + np.arange(1000) * 0.004
+    else:
+        k = np.cumsum(rng.integers(1, 3 if case == "gaps" else 2, 30_000))
+        t = 1.0 + k * 1e-3 + rng.normal(0.0, 3e-5, k.size)
+        if case == "outlier":
+            t[k.size // 2:] += 0.5  # one step of 500 samples
+        if case == "epoch":
+            t = t + 1.7e9
+    want = _polyfit_jitter(t)
+    got = estimate_timestamp_jitter_s(t)
+    scale = float(t[-1] - t[0])
+    assert abs(got - want) <= 1e-12 * max(want, 1e-3 * scale)
+    if case != "uniform":
+        assert got > 0
+    # synchronize reuses the validated stamps, their steps and median step: the same value
+    res = synchronize(t, np.zeros(t.size), [t[1]], max_alignment_error_s=None)
+    assert res.timestamp_jitter_s == got

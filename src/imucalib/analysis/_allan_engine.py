@@ -49,6 +49,7 @@ __all__ = [
     "read_reflected",
     "sum_nonoverlapping",
     "sum_overlapping",
+    "sum_overlapping_rows",
     "sums_mdev",
     "sums_totdev",
 ]
@@ -238,6 +239,28 @@ def sum_overlapping(source: PhaseSource, ms: I64, totals_n: I64, order: int) -> 
     for buf, starts, n_t in _superblocks(source, offsets, win, totals_n, order):
         _run_groups(kern, buf, starts, win, n_t, order, totals, groups)
     return totals
+
+
+def sum_overlapping_rows(phases: F64, ms: I64, totals_n: I64, order: int) -> F64:
+    """:func:`sum_overlapping` of every row of `phases` (k, n) in one kernel pass; (k, len(ms)).
+
+    The rows form one buffer; job (j, t) is τ_t of row j with its windows moved on by j·n. The
+    jobs of different rows never chain (their first windows differ), so each sum is formed by
+    the same operations as :func:`sum_overlapping` of its row alone: equal bit for bit, for
+    the set-up cost (windows, thread groups, kernel call) of one row.
+    """
+    kern = get_kernels()["sumsq_overlap"]
+    k, n = phases.shape
+    offsets, win = _windows(ms, order)
+    rows = np.arange(k, dtype=np.int64)
+    starts = (offsets[None, :] + n * rows[:, None]).reshape(-1)
+    wins = np.ascontiguousarray(
+        (win[None, :, :] + offsets.size * rows[:, None, None]).reshape(-1, win.shape[1]))
+    counts = np.tile(totals_n.astype(np.int64), k)
+    totals = np.zeros(counts.size)
+    _run_groups(kern, np.ascontiguousarray(phases).reshape(-1), starts, wins, counts, order,
+                totals, _job_groups(counts))
+    return totals.reshape(k, ms.size)
 
 
 def _superblocks(source: PhaseSource, offsets: I64, win: I64, counts: I64,

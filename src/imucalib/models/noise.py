@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import cmath
 import math
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from functools import partial
@@ -332,37 +333,97 @@ class NoiseModel:
         return cls(**{k: v for k, v in data.items() if k in known})
 
 
+@dataclass(frozen=True)
+class _AdevTerms:
+    """The squared coefficients of one model's Allan-variance terms (docs/equations.md §8).
+
+    None for a term that is zero on every axis: it adds exactly 0, so leaving it out of the sum
+    changes no bit of the result.
+    """
+
+    quantization: NDArray[np.float64] | None  # 3Q²
+    white: NDArray[np.float64] | None  # N²
+    random_walk: NDArray[np.float64] | None  # K²
+    rate_ramp: NDArray[np.float64] | None  # R²
+    flicker: NDArray[np.float64] | None  # B²
+    markov: tuple[NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]] | None
+    corner_hz: float
+
+
+#: Per-model terms of :func:`compute_theoretical_adev`; models are immutable (read-only arrays),
+#: so an entry never goes stale, and it goes with its model.
+_ADEV_TERMS: weakref.WeakKeyDictionary[NoiseModel, _AdevTerms] = weakref.WeakKeyDictionary()
+
+
+def _adev_terms(model: NoiseModel) -> _AdevTerms:
+    """Return (and cache) the squared coefficients of `model`'s Allan-variance terms."""
+    terms = _ADEV_TERMS.get(model)
+    if terms is None:
+        m = model
+        used = m.markov_sigma > 0
+        terms = _AdevTerms(
+            quantization=3 * m.quantization**2 if np.any(m.quantization != 0) else None,
+            white=m.white_density**2 if np.any(m.white_density != 0) else None,
+            random_walk=m.random_walk**2 if np.any(m.random_walk != 0) else None,
+            rate_ramp=m.rate_ramp**2 if np.any(m.rate_ramp != 0) else None,
+            flicker=m.bias_instability**2 if np.any(m.bias_instability != 0) else None,
+            markov=((used, np.where(used, m.markov_time_constant_s, 1.0), m.markov_sigma**2)
+                    if used.any() else None),
+            corner_hz=m.bias_instability_corner_hz)
+        _ADEV_TERMS[model] = terms
+    return terms
+
+
 def compute_theoretical_adev(model: NoiseModel, tau_s: ArrayLike) -> NDArray[np.float64]:
     """Return the Allan deviation that `model` predicts, per axis.
 
     The Allan variances of the terms of docs/equations.md §8 are summed: 3Q²/τ² + N²/τ + flicker
     (IEEE closed form with cut-off f0, no low cut-off: valid for τ ≲ 0.1/f_low) + K²τ/3 +
     R²τ²/2 + Markov (q_c·T_c)²/τ·[1 − (T_c/2τ)(3 − 4e^(−τ/T_c) + e^(−2τ/T_c))], q_c² = 2σ²/T_c.
+    A term whose coefficient is zero on every axis is left out of the sum (it adds exactly 0);
+    the squared coefficients are computed once per model.
 
     `tau_s` (shape (m,), > 0) [s]; returns σ_Allan(τ), shape (m, 3) [rad/s | m/s²].
     """
     tau = as_array(tau_s, "tau_s").reshape(-1, 1)
     if np.any(tau <= 0):
         raise InvalidInputError(f"`tau_s` must be > 0; got minimum {tau.min()}")
+    c = _adev_terms(model)
+    avar = np.zeros((tau.shape[0], 3))
+    if c.quantization is not None:
+        avar = avar + c.quantization / tau**2
+    if c.white is not None:
+        avar = avar + c.white / tau
+    if c.random_walk is not None:
+        avar = avar + c.random_walk * tau / 3
+    if c.rate_ramp is not None:
+        avar = avar + c.rate_ramp * tau**2 / 2
+    if c.flicker is not None:
+        avar = avar + c.flicker * _flicker_avar_factor(np.pi * c.corner_hz * tau)
+    if c.markov is not None:
+        used, tc, sigma2 = c.markov
+        r = tau / tc
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bracket = 1 - (-4 * np.expm1(-r) + np.expm1(-2 * r)) / (2 * r)
+        bracket = np.where(r < 1e-3, r**2 / 3 - r**3 / 4 + 7 * r**4 / 60, bracket)
+        avar = avar + np.where(used, 2 * sigma2 * tc / tau * bracket, 0.0)
+    out: NDArray[np.float64] = np.sqrt(avar)
+    return out
+
+
+def _flicker_avar_factor(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Return σ²_A/B² of flicker noise cut off at f0, x = π·f0·τ (docs/equations.md §8).
+
+    The IEEE 952 Annex C closed form, (2/π)·[ln 2 − sin³x/(2x²)·(sin x + 4x·cos x) + Ci(2x) −
+    Ci(4x)], with both cosine integrals from one ``scipy.special.sici`` call.
+    """
     from scipy import special  # imported when used: importing this module stays cheap
 
-    m = model
-    avar = (3 * m.quantization**2 / tau**2 + m.white_density**2 / tau
-            + m.random_walk**2 * tau / 3 + m.rate_ramp**2 * tau**2 / 2)
-    x = np.pi * m.bias_instability_corner_hz * tau
-    ci2 = special.sici(2 * x)[1]
-    ci4 = special.sici(4 * x)[1]
-    flicker = (2 / np.pi) * (math.log(2.0) - np.sin(x) ** 3 / (2 * x**2)
-                             * (np.sin(x) + 4 * x * np.cos(x)) + ci2 - ci4)
-    avar = avar + m.bias_instability**2 * flicker
-    used = m.markov_sigma > 0
-    tc = np.where(used, m.markov_time_constant_s, 1.0)
-    r = tau / tc
-    with np.errstate(divide="ignore", invalid="ignore"):
-        bracket = 1 - (-4 * np.expm1(-r) + np.expm1(-2 * r)) / (2 * r)
-    bracket = np.where(r < 1e-3, r**2 / 3 - r**3 / 4 + 7 * r**4 / 60, bracket)
-    avar = avar + np.where(used, 2 * m.markov_sigma**2 * tc / tau * bracket, 0.0)
-    out: NDArray[np.float64] = np.sqrt(avar)
+    ci = special.sici(np.concatenate([2 * x, 4 * x]))[1]  # one call for Ci(2x) and Ci(4x)
+    ci2, ci4 = ci[: x.shape[0]], ci[x.shape[0]:]
+    sin_x = np.sin(x)
+    out: NDArray[np.float64] = (2 / np.pi) * (math.log(2.0) - sin_x**3 / (2 * x**2)
+                                              * (sin_x + 4 * x * np.cos(x)) + ci2 - ci4)
     return out
 
 

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -184,9 +185,7 @@ def lowpass_zero_phase(
             f"frequency {nyquist:.6g} Hz (sample rate {fs:.6g} Hz)"
         )
     cols, one_d = as_columns(values, "values")
-    sos = signal.butter(n_ord, fc, btype="low", output="sos", fs=fs)
-    n_zero = min(int(np.sum(sos[:, 2] == 0)), int(np.sum(sos[:, 5] == 0)))
-    padlen = 3 * (2 * sos.shape[0] + 1 - n_zero)  # sosfiltfilt's default
+    sos, padlen = _butter_lowpass(n_ord, 2.0 * fc / fs)  # butter(fs=fs) normalises the same way
     if cols.shape[0] <= padlen:
         raise InvalidInputError(
             f"`values` must have more than {padlen} samples for an order-{n_ord} zero-phase "
@@ -198,6 +197,38 @@ def lowpass_zero_phase(
     return LowpassResult(values=res, cutoff_hz=fc,
                          effective_cutoff_hz=compute_effective_cutoff_hz(fc, fs, n_ord),
                          order=n_ord, sample_rate_hz=fs)
+
+
+@lru_cache(maxsize=64)
+def _butter_lowpass(order: int, wn: float) -> tuple[NDArray[np.float64], int]:
+    """Return the Butterworth low-pass of Eq. (1) as second-order sections and its padding.
+
+    Parameters
+    ----------
+    order : int
+        N.
+    wn : float
+        Cut-off as a fraction of the Nyquist frequency, 2·f_c/f_s (what ``butter`` computes from
+        ``fs``), 0 < wn < 1.
+
+    Returns
+    -------
+    sos : ndarray, shape (⌈N/2⌉, 6)
+        ``scipy.signal.butter(order, wn, output="sos")``; shared by every call: never modify.
+    padlen : int
+        ``sosfiltfilt``'s default odd-extension length 3·(2·sections + 1 − z), z the sections
+        whose b₂ and a₂ are both zero.
+
+    Notes
+    -----
+    The design (bilinear transform, pole pairing) costs as much as filtering a few thousand
+    samples, and every window of an analysis asks for the same one: it is cached per
+    (N, wn).
+    """
+    # left writable: scipy's compiled sosfilt takes a writable buffer (it never writes sos)
+    sos = np.asarray(signal.butter(order, wn, btype="low", output="sos"), dtype=np.float64)
+    n_zero = min(int(np.sum(sos[:, 2] == 0)), int(np.sum(sos[:, 5] == 0)))
+    return sos, 3 * (2 * sos.shape[0] + 1 - n_zero)  # sosfiltfilt's default
 
 
 def _check_order(order: object) -> int:

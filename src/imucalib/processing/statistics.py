@@ -85,8 +85,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 from imucalib._checks import as_array, check_positive
-from imucalib.analysis._allan_engine import ArrayPhase, n_terms, sum_overlapping
-from imucalib.analysis.allan import phase_from_rate
+from imucalib.analysis._allan_engine import (
+    PARALLEL_PHASE_MIN,
+    integrate_phase,
+    n_terms,
+    sum_overlapping_rows,
+)
+from imucalib.analysis._allan_kernels import get_kernels
+from imucalib.analysis.allan import canonical_mean
 from imucalib.errors import InvalidInputError
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 from imucalib.processing._common import as_columns, as_time
@@ -100,6 +106,7 @@ __all__ = [
 ]
 
 _MIN_TAU_POINTS = 3
+_OCTAVES = 2 ** np.arange(0, 40, dtype=np.int64)  # candidate cluster sizes m of "allan-fit"
 SeMethod = Literal["noise-model", "allan-fit", "white"]
 
 
@@ -206,7 +213,9 @@ def compute_window_statistics(
     n, k = cols.shape
     duration = n / fs
     mean = cols.mean(axis=0)
-    std = cols.std(axis=0, ddof=1)
+    dev = cols - mean  # also the centred input of the Allan fit
+    # ndarray.std(ddof=1)'s own operations on the deviations it would form again
+    std = np.sqrt(np.sum(np.multiply(dev, dev), axis=0) / (n - 1))
     se_white = std / np.sqrt(n)
     nan = np.full(k, np.nan)
     wd, fl, rw = nan, nan.copy(), nan.copy()
@@ -218,11 +227,11 @@ def compute_window_statistics(
                                     f"got {k}")
         se = compute_theoretical_adev(noise_model, [duration])[0]  # Eq. (1)
     elif method == "allan-fit":
-        ms = np.array([m for m in (2 ** np.arange(0, 40)) if min_cluster_samples <= m <= n // 2])
+        ms = _OCTAVES[(_OCTAVES >= min_cluster_samples) & (_OCTAVES <= n // 2)]
         if ms.size < _MIN_TAU_POINTS:
             method, se = "white", se_white.copy()
         else:
-            coefs = _fit_allan(cols - mean, 1.0 / fs, ms)
+            coefs = _fit_allan(dev, 1.0 / fs, ms)
             wd, fl, rw = np.sqrt(coefs[:, 0]), coefs[:, 1], np.sqrt(3.0 * coefs[:, 2])
             se2 = coefs[:, 0] / duration + coefs[:, 1] + coefs[:, 2] * duration  # Eqs. (1)-(2)
             se = np.sqrt(np.maximum(se2, se_white**2))
@@ -245,15 +254,30 @@ def _overlapping_avar(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]
 
     The one Allan path of the project: the phase sum and the blocked sums of squared second
     differences of :mod:`imucalib.analysis` (``compute_oadev``'s kernels, NIST SP 1065 Eq. (8)),
-    without its noise identification and confidence intervals, which this fit does not use.
+    without its noise identification and confidence intervals, which this fit does not use::
+
+        σ²_A(m·dt) = Σ_{i<n+1−2m} (x_{i+2m} − 2x_{i+m} + xᵢ)² / (2·(n + 1 − 2m)·(m·dt)²)
+
+    The k phase series are integrated into the rows of one array and their sums taken in one
+    kernel pass (:func:`~imucalib.analysis._allan_engine.sum_overlapping_rows`), the same
+    operations as column by column.
     """
     n, k = x.shape
     count = n_terms("oadev", ms, n + 1)
     tau = ms * dt
-    out = np.empty((ms.size, k))
+    tau0 = 1.0 / (1.0 / dt)  # phase_from_rate(·, 1/dt)'s step
+    phase = np.empty((k, n + 1))
+    phase[:, 0] = 0.0
+    # below PARALLEL_PHASE_MIN integrate_phase runs this one kernel: call it without its dispatch
+    phase_kernel = get_kernels()["phase"] if n < PARALLEL_PHASE_MIN else None
     for j in range(k):
-        phase = phase_from_rate(np.ascontiguousarray(x[:, j]), 1.0 / dt)
-        out[:, j] = sum_overlapping(ArrayPhase(phase), ms, count, 2) / (2.0 * count * tau**2)
+        col = np.ascontiguousarray(x[:, j])
+        if phase_kernel is None:
+            integrate_phase(col, canonical_mean(col), tau0, phase[j, 1:])
+        else:
+            phase_kernel(col, canonical_mean(col), tau0, phase[j, 1:], 0.0)
+    sums = sum_overlapping_rows(phase, ms, count, 2)
+    out: NDArray[np.float64] = (sums / (2.0 * count * tau**2)).T
     return out
 
 
@@ -271,7 +295,7 @@ def _fit_allan(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]) -> NDAr
     avar = _overlapping_avar(x, dt, ms)
     tau = ms * dt
     basis = np.column_stack([1.0 / tau, np.ones_like(tau), tau])
-    edf = _edf_white(x.shape[0], ms)
+    rel_sd = np.sqrt(2.0 / _edf_white(x.shape[0], ms))  # σ(σ̂²)/σ² of each point
     out = np.zeros((x.shape[1], 3))
     for j in range(x.shape[1]):
         a = avar[:, j]
@@ -279,7 +303,7 @@ def _fit_allan(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]) -> NDAr
             continue
         model = np.maximum(a, 1e-300)
         for _ in range(2):  # weights from the data, then from the fitted model
-            sd = model * np.sqrt(2.0 / edf)
+            sd = model * rel_sd
             coef, _ = optimize.nnls(basis / sd[:, None], a / sd)
             fitted = basis @ coef
             model = np.where(fitted > 0, fitted, model)

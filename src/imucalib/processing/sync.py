@@ -60,6 +60,8 @@ References
    Variable*, 1963, §4.8 (Bernstein's inequality for entire functions of exponential type).
 .. [3] docs/drivers.md, "Time synchronisation practice" (regression of host time on the sample
    counter); IEEE Std 1554-2005 (inertial sensor test data acquisition).
+.. [4] N. R. Draper and H. Smith, *Applied Regression Analysis*, 3rd ed., Wiley, 1998, §1.2
+   (the straight line by least squares, in centred form).
 """
 
 from __future__ import annotations
@@ -156,12 +158,43 @@ def estimate_timestamp_jitter_s(time_s: ArrayLike) -> float:
     if t.size < 3:
         raise InvalidInputError(f"`time_s` must have at least 3 stamps; got {t.size}")
     d = np.diff(t)
-    dt = float(np.median(d))
-    k = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(d / dt), 1.0))])  # local counts
-    if np.unique(k).size < 3:
+    return _jitter_of_steps(t, d, float(np.median(d)))
+
+
+def _fit_line(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[float, float]:
+    """Return the least-squares line (slope b̂, intercept â) of y ≈ â + b̂·x in closed form.
+
+    With the means x̄, ȳ (pairwise sums) [4]_::
+
+        b̂ = Σ(xᵢ − x̄)(yᵢ − ȳ) / Σ(xᵢ − x̄)²,    â = ȳ − b̂·x̄                          (3)
+
+    the normal equations of the straight line solved on centred data, which keeps them
+    well-conditioned; it equals ``np.polyfit(x, y, 1)`` to rounding without its Vandermonde
+    matrix and SVD. `x` must hold at least two distinct values.
+    """
+    x_bar = float(x.mean())
+    y_bar = float(y.mean())
+    dx = x - x_bar
+    slope = float(dx @ (y - y_bar)) / float(dx @ dx)  # Eq. (3)
+    return slope, y_bar - slope * x_bar
+
+
+def _jitter_of_steps(t: NDArray[np.float64], d: NDArray[np.float64], dt: float) -> float:
+    """σ_jitter of validated stamps `t` with steps ``d = diff(t)`` and median step `dt` [s].
+
+    The line of the stamps on their local counts is Eq. (3); the residuals are taken about it
+    as ``np.polyval`` forms them, (t − t₀) − (b̂·k + â).
+    """
+    k = np.empty(t.size)
+    k[0] = 0.0
+    np.cumsum(np.maximum(np.round(d / dt), 1.0), out=k[1:])  # local counts
+    # integer counts stay distinct below 2^53; beyond, repeated values may make the line
+    # undefined (np.unique would be a sort of the whole record)
+    if k[-1] >= 2.0**53 and 1 + np.count_nonzero(np.diff(k)) < 3:
         return 0.0
-    coef = np.polyfit(k, t - t[0], 1)
-    resid = (t - t[0]) - np.polyval(coef, k)
+    y = t - t[0]
+    slope, intercept = _fit_line(k, y)
+    resid = y - (slope * k + intercept)
     return float(np.sqrt(np.sum(resid**2) / (t.size - 2)))
 
 
@@ -259,7 +292,9 @@ def synchronize(
     lam = (t_tgt - t_src[j]) / spacing[j]
     out = cols[j] * (1.0 - lam)[:, None] + cols[j + 1] * lam[:, None]
     e_interp = math.pi * f_max * h_max**2 / 4.0  # Eq. (2)
-    jitter = estimate_timestamp_jitter_s(t_src) if (estimate_jitter and t_src.size >= 3) else 0.0
+    # σ_jitter from the validated stamps, their steps and median step (computed above)
+    jitter = (_jitter_of_steps(t_src, spacing, dt_med) if (estimate_jitter and t_src.size >= 3)
+              else 0.0)
     e_align = u_off + e_interp + 3.0 * jitter  # Eq. (1)
     if max_alignment_error_s is not None:
         limit = check_positive(max_alignment_error_s, "max_alignment_error_s")
@@ -355,18 +390,13 @@ def reconstruct_time_base(
         If shapes disagree, values are not finite or not integral, fewer than 3 samples, or the
         counter repeats or goes backwards (after unwrapping).
     """
-    c_raw = as_array(counter, "counter")
-    if c_raw.ndim != 1 or c_raw.size < 3:
-        raise InvalidInputError(f"`counter` must have shape (n,) with n ≥ 3; got {c_raw.shape}")
-    if np.any(c_raw != np.round(c_raw)):
-        raise InvalidInputError("`counter` must hold integers; got non-integral values")
-    t_host = as_array(host_time_s, "host_time_s")
-    if t_host.shape != c_raw.shape:
+    c_int = _as_counter(counter)
+    t_host = _as_float_vector(host_time_s, "host_time_s")
+    if t_host.shape != c_int.shape:
         raise InvalidInputError(
-            f"`host_time_s` must have shape {c_raw.shape} (one per counter value); got "
+            f"`host_time_s` must have shape {c_int.shape} (one per counter value); got "
             f"{t_host.shape}"
         )
-    c_int = c_raw.astype(np.int64)
     step = np.diff(c_int)
     if counter_modulus is not None:
         mod = int(check_positive(counter_modulus, "counter_modulus"))
@@ -383,33 +413,90 @@ def reconstruct_time_base(
 
     x = (c - c[0]).astype(np.float64)
     y = t_host - t_host[0]
-    keep = np.ones(c.size, dtype=bool)
-    coef = np.polyfit(x, y, 1)
-    for _ in range(2):  # trimmed refits: Eq. in the module docstring
-        resid = y - np.polyval(coef, x)
-        mad = 1.4826 * float(np.median(np.abs(resid[keep] - np.median(resid[keep]))))
-        new_keep = np.abs(resid - np.median(resid[keep])) <= _ROBUST_K * mad if mad > 0 else keep
-        if new_keep.sum() < 3 or np.array_equal(new_keep, keep):
-            break
-        keep = new_keep
-        coef = np.polyfit(x[keep], y[keep], 1)
-    period, intercept = float(coef[0]), float(coef[1])
+    keep, resid, period, intercept = _trimmed_line(x, y)
     if not period > 0:
         raise InvalidInputError(f"host time must increase with the counter; got a fitted period "
                                 f"of {period:.6g} s")
-    resid = y - (intercept + period * x)
-    n_kept = int(keep.sum())
-    jitter = float(np.sqrt(np.sum(resid[keep] ** 2) / max(n_kept - 2, 1)))
+    n_kept = c.size if keep is None else int(np.count_nonzero(keep))
+    kept = resid if keep is None else resid[keep]
+    jitter = float(np.sqrt(np.sum(kept**2) / max(n_kept - 2, 1)))
     offset = float(t_host[0] + intercept - period * c[0])
     t_rec = offset + period * c.astype(np.float64)
     rate = 1.0 / period
     err = float("nan") if nominal_rate_hz is None else rate / check_positive(
         nominal_rate_hz, "nominal_rate_hz") - 1.0
-    c_out = c.astype(np.int64)
+    c_out = c  # int64 already (cumsum of int64 steps)
     for arr in (t_rec, c_out, gaps):
         arr.setflags(write=False)
     return TimeBase(time_s=t_rec, counter=c_out, sample_period_s=period, sample_rate_hz=rate,
                     clock_rate_error=err, offset_s=offset, jitter_s=jitter,
                     max_abs_residual_s=float(np.abs(resid).max()),
-                    n_rejected=int(c.size - n_kept), gap_indices=gaps.astype(np.int64),
+                    n_rejected=int(c.size - n_kept), gap_indices=gaps,
                     n_missing=n_missing)
+
+
+def _as_counter(counter: ArrayLike) -> NDArray[np.int64]:
+    """Return the counter as int64 (n,), n ≥ 3, checking that it is finite and integral.
+
+    An integer array is integral and finite already: it is converted without the float64 copy
+    and the rounding test.
+    """
+    if isinstance(counter, np.ndarray) and (counter.dtype.kind == "i" or (
+            counter.dtype.kind == "u" and counter.dtype.itemsize < 8)):
+        c_int = counter.astype(np.int64, copy=False)
+    else:
+        c_raw = as_array(counter, "counter")
+        if c_raw.ndim == 1 and c_raw.size >= 3 and np.any(c_raw != np.round(c_raw)):
+            raise InvalidInputError("`counter` must hold integers; got non-integral values")
+        c_int = c_raw.astype(np.int64)
+    if c_int.ndim != 1 or c_int.size < 3:
+        raise InvalidInputError(f"`counter` must have shape (n,) with n ≥ 3; got {c_int.shape}")
+    return c_int
+
+
+def _as_float_vector(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """Return `value` as a finite float64 array: a finite float64 array as it is (no copy).
+
+    Anything else goes through :func:`~imucalib._checks.as_array` (conversion, messages).
+    The result is only read.
+    """
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and bool(
+            np.isfinite(value).all()):
+        return value
+    return as_array(value, name)
+
+
+def _trimmed_line(x: NDArray[np.float64], y: NDArray[np.float64]
+                  ) -> tuple[NDArray[np.bool_] | None, NDArray[np.float64], float, float]:
+    """Line of y on x (Eq. (3)), refitted twice without samples beyond 5 robust σ.
+
+    Each pass takes the median r̃ and MAD of the kept residuals, keeps
+    |rᵢ − r̃| ≤ 5·1.4826·MAD (all samples count, rejected ones may return) and refits; it stops
+    when fewer than 3 samples would remain or the kept set does not change.
+
+    Returns
+    -------
+    keep : ndarray of bool or None
+        The samples of the final fit; None when all are kept.
+    resid : ndarray
+        y − (b̂·x + â) of every sample about the final line. [units of y]
+    slope, intercept : float
+        b̂ and â.
+    """
+    keep: NDArray[np.bool_] | None = None  # None: every sample
+    slope, intercept = _fit_line(x, y)
+    resid = y - (slope * x + intercept)
+    for _ in range(2):  # trimmed refits: Eq. in the module docstring
+        kept = resid if keep is None else resid[keep]
+        med = float(np.median(kept))
+        mad = 1.4826 * float(np.median(np.abs(kept - med)))
+        if not mad > 0:
+            break  # the kept set cannot change
+        new_keep = np.abs(resid - med) <= _ROBUST_K * mad
+        n_new = int(np.count_nonzero(new_keep))
+        if n_new < 3 or (n_new == x.size if keep is None else np.array_equal(new_keep, keep)):
+            break
+        keep = None if n_new == x.size else new_keep
+        slope, intercept = _fit_line(x[new_keep], y[new_keep])
+        resid = y - (slope * x + intercept)
+    return keep, resid, slope, intercept
