@@ -12,7 +12,7 @@ from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError, MissingSegmentError
 from imucalib.estimation import build_triad_design
 from imucalib.estimation.designs import TRIAD_TERMS, build_design
-from imucalib.procedures.common.noise import estimate_noise, window_mean_se
+from imucalib.procedures.common.noise import FLICKER_FACTOR, estimate_noise, window_mean_se
 from imucalib.procedures.common.reference import (
     rate_inputs_b,
     spin_axis_b,
@@ -171,3 +171,31 @@ def test_counter_times_and_whole_revolutions():
     with pytest.raises(MissingSegmentError,
                        match=r"holds 2 whole revolution\(s\) of the 4 commanded"):
         whole_revolutions("w", t, values, t, angle, commanded_revolutions=4)
+
+
+def test_noise_model_pools_the_records_about_as_long_as_the_longest():
+    """Several equally long records (P1's repetitions) are averaged, not picked by rounding."""
+    a, b = np.zeros((3, 6)), np.zeros((3, 6))
+    a[0], b[0] = 1e-4, 3e-4  # white densities N
+    a[1], b[1] = 4e-10, 2e-10  # flicker plateaus C_B
+    a[2], b[2] = 0.0, 2e-6  # random-walk densities K
+
+    def model(d_a, d_b, short=np.zeros((3, 6))):
+        return estimate_noise([SimpleNamespace(kind="static", duration_s=d_a, allan_fit=a),
+                               SimpleNamespace(kind="static", duration_s=d_b, allan_fit=b),
+                               SimpleNamespace(kind="static", duration_s=250.0,
+                                               allan_fit=short)])
+
+    one, other = model(600.0, np.nextafter(600.0, 0.0)), model(np.nextafter(600.0, 0.0), 600.0)
+    for triad in ("gyro", "accel"):
+        np.testing.assert_allclose(one[triad].white_density, np.sqrt((1e-8 + 9e-8) / 2),
+                                   rtol=1e-12)
+        np.testing.assert_allclose(one[triad].bias_instability,
+                                   np.sqrt(3e-10 / FLICKER_FACTOR), rtol=1e-12)
+        np.testing.assert_allclose(one[triad].random_walk, np.sqrt(2e-12), rtol=1e-12)
+        np.testing.assert_allclose(one[triad].white_density, other[triad].white_density,
+                                   rtol=1e-12)
+    # a record shorter than half the longest stays out; weights follow the durations
+    uneven = model(900.0, 600.0, short=np.full((3, 6), 1.0))
+    np.testing.assert_allclose(uneven["gyro"].white_density, np.sqrt(0.6e-8 + 0.4 * 9e-8),
+                               rtol=1e-12)

@@ -1,8 +1,10 @@
-"""The noise model of window means: fitted once on the longest static record, used for all.
+"""The noise model of window means: fitted once on the long static records, used for all.
 
-The overlapping Allan variance of the longest static window is fitted with
+The overlapping Allan variance of each long static window is fitted with
 σ²(τ) ≈ N²/τ + C_B + K²τ/3 (white, flicker and random-walk terms; docs/noise.md §4) and
-B = √(C_B/(2 ln 2/π)) (IEEE Std 952-1997 Annex C). The standard error of a window mean of
+B = √(C_B/(2 ln 2/π)) (IEEE Std 952-1997 Annex C). When a run holds several records about as
+long as the longest (a P1 plan's repetitions), their fitted N², C_B and K² are averaged,
+weighted by duration (:func:`estimate_noise`). The standard error of a window mean of
 duration T is then the model's Allan deviation at τ = T (:func:`window_mean_se`), and the
 covariance of several windows' means
 :func:`~imucalib.estimation.compute_window_mean_covariance` (docs/processing-estimation.md).
@@ -60,21 +62,38 @@ class StaticWindow(Protocol):
         ...
 
 
-def estimate_noise(windows: Sequence[StaticWindow], *, min_duration_s: float = 120.0
-                   ) -> dict[str, NoiseModel]:
-    """Fit gyro and accelerometer noise models to the longest static record.
+#: The shortest static record :func:`estimate_noise` fits a noise model to. [s]
+NOISE_RECORD_MIN_S = 120.0
 
-    The record's overlapping Allan variance is fitted with σ²(τ) ≈ N²/τ + C_B + K²τ/3 (the
+
+def estimate_noise(windows: Sequence[StaticWindow], *,
+                   min_duration_s: float = NOISE_RECORD_MIN_S) -> dict[str, NoiseModel]:
+    """Fit gyro and accelerometer noise models to the long static records.
+
+    Each record's overlapping Allan variance is fitted with σ²(τ) ≈ N²/τ + C_B + K²τ/3 (the
     ``allan_fit`` of :func:`~imucalib.processing.statistics.compute_window_statistics`);
-    B = √(C_B/(2 ln 2/π)). Empty when no static window lasts `min_duration_s`. [s]
+    B = √(C_B/(2 ln 2/π)). The records at least half as long as the longest are pooled: their
+    N², C_B and K² averaged with weights proportional to duration (each term is linear in
+    the Allan variance it describes). One record's flicker and random-walk terms are uncertain
+    by a factor of about two (a 600 s record at 1 kHz: B differed by 2× between four
+    repetitions of the same twin run); taking just "the longest" of several equally long
+    records let the last bits of their durations choose among those estimates. Empty when no
+    static window lasts `min_duration_s`. [s]
     """
     static = [w for w in windows if w.kind == "static" and w.allan_fit is not None
               and w.duration_s >= min_duration_s]
     if not static:
         return {}
-    best = max(static, key=lambda w: w.duration_s)
-    assert best.allan_fit is not None
-    fit = np.nan_to_num(best.allan_fit, nan=0.0)
+    longest = max(w.duration_s for w in static)
+    pooled = [w for w in static if w.duration_s >= 0.5 * longest]
+    weights = np.array([w.duration_s for w in pooled]) / sum(w.duration_s for w in pooled)
+    squares = np.array([1.0, 0.0, 1.0])[:, None]  # N and K are densities, C_B a variance
+    fit = np.zeros((3, 6))
+    for wt, w in zip(weights, pooled, strict=True):
+        assert w.allan_fit is not None
+        f = np.nan_to_num(w.allan_fit, nan=0.0)
+        fit += wt * np.where(squares > 0, f * f, f)
+    fit = np.where(squares > 0, np.sqrt(fit), fit)
     out = {}
     for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6))):
         n, c_b, k = fit[0, cols], fit[1, cols], fit[2, cols]
