@@ -78,7 +78,7 @@ from imucalib.io.step_roles import role_from_tags
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
-from imucalib.procedures.common.noise import estimate_noise, window_mean_se
+from imucalib.procedures.common.noise import NOISE_RECORD_MIN_S, estimate_noise, window_mean_se
 from imucalib.procedures.common.reference import axis_vector as _axis_vector
 from imucalib.procedures.common.reference import (
     rate_inputs_b,
@@ -413,8 +413,14 @@ class _Extractor:
             allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
                                  stats.random_walk]))
 
-    def observe(self, step: StepRecord, step_role: str) -> WindowObservation:
-        """Reduce one step's valid window to a :class:`WindowObservation` (module docstring)."""
+    def observe(self, step: StepRecord, step_role: str, own_noise: bool = True
+                ) -> WindowObservation:
+        """Reduce one step's valid window to a :class:`WindowObservation` (module docstring).
+
+        Without `own_noise` the window's own Allan fit is not made (its standard errors are NaN
+        and ``allan_fit`` None): for windows whose standard errors the noise model of the long
+        static record replaces (:func:`_needs_own_noise`).
+        """
         role = "verification" if step_role in _HELD_OUT_ROLES else "calibration"
         tags = _window_tags(step, step_role)
         spins = step_role in _RATE_ROLES
@@ -424,7 +430,7 @@ class _Extractor:
             if i1 - i0 > CHUNK_ROWS:
                 return self.observe_long_static(step, role, tags, step_role)
         t, raw, flagged = self.imu_window(step.index)
-        stats = compute_window_statistics(raw, self.sample_rate_hz)
+        stats = compute_window_statistics(raw, self.sample_rate_hz) if own_noise else None
         filt = self.filtered(raw)
         fb = self.rec.read_step(step.index, DEVICE_TABLE, self.table.unit)
         inside = (fb.time_s >= t[0]) & (fb.time_s <= t[-1])
@@ -471,20 +477,21 @@ class _Extractor:
             table_rate, kind = 0.0, "static"
             t0, span = float(fb_t[0]), float(fb_t[-1] - fb_t[0])
             resid_std = filt.std(axis=0, ddof=1)
+        se = np.full(6, np.nan) if stats is None else stats.standard_error
         return WindowObservation(
             step_index=step.index, plan_step=_plan_step(step), kind=kind,
             role=role, repetition=_repetition(tags), tags=tags, label=step.label,
             step_role=step_role, gyro_mean_rps=np.asarray(mean[:3], dtype=np.float64),
             accel_mean_mps2=np.asarray(mean[3:], dtype=np.float64),
-            gyro_se_rps=stats.standard_error[:3], accel_se_mps2=stats.standard_error[3:],
+            gyro_se_rps=se[:3], accel_se_mps2=se[3:],
             gyro_std_rps=resid_std[:3], accel_std_mps2=resid_std[3:],
             rate_b_rps=np.asarray(rate_b, dtype=np.float64),
             force_b_mps2=np.asarray(force_b, dtype=np.float64),
             angles_rad=np.asarray(mean_angles, dtype=np.float64), table_rate_rps=table_rate,
             axis=axis, n_samples=int(t.size), **flagged.fields(), n_revolutions=n_rev,
             alignment_error_s=float(sync.alignment_error_s), duration_s=span, t_start_s=t0,
-            allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
-                                 stats.random_walk]))
+            allan_fit=None if stats is None else np.vstack([
+                stats.white_density, stats.flicker_variance, stats.random_walk]))
 
     def spin(self, step: StepRecord, rates_rps: _F64) -> tuple[int | None, float]:
         """Return the spinning table axis and commanded rate [°/s] of a rate step.
@@ -570,12 +577,13 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
         elif role:
             todo.append((step, role))
     tick = _Progress(progress, len(steps), len(steps) - len(todo))
-    if workers > 1 and len(todo) > 2:
-        windows = _observe_parallel(ex, todo, workers, tick)
+    jobs = _with_noise_flags(todo)
+    if workers > 1 and len(jobs) > 2:
+        windows = _observe_parallel(ex, jobs, workers, tick)
     else:
         windows = []
-        for step, role in todo:
-            windows.append(ex.observe(step, role))
+        for job in jobs:
+            windows.append(ex.observe(*job))
             tick()
     tick.finish()
     if not windows:
@@ -583,6 +591,9 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
         raise RecordingError(f"{rec.path}: no completed calibration or verification window for "
                              f"{sensor_id} ({why})")
     noise = estimate_noise(windows)
+    if not noise:  # no noise model after all: every window's own Allan fit gives its SE
+        windows = [w if w.allan_fit is not None else ex.observe(step, role)
+                   for w, (step, role, _) in zip(windows, jobs, strict=True)]
     notes = list(ex.notes)
     if noise:
         windows = [_with_model_se(w, noise) for w in windows]
@@ -620,18 +631,37 @@ class _Progress:
             self.progress(fraction)
 
 
+def _with_noise_flags(todo: Sequence[tuple[StepRecord, str]]
+                      ) -> list[tuple[StepRecord, str, bool]]:
+    """Say for each window whether it needs its own Allan fit (``observe``'s `own_noise`).
+
+    When some static window's valid span lasts :data:`~imucalib.procedures.common.noise.
+    NOISE_RECORD_MIN_S`, the noise model fitted to the longest such record gives every window
+    its standard error (:func:`~imucalib.procedures.common.noise.estimate_noise`): only those
+    long records need their own fit. Otherwise every window does. (A long record whose
+    averaged span turns out shorter than its valid span leaves no model: the windows without
+    a fit are reduced again with one, so the result never depends on this guess.)
+    """
+    def long_static(step: StepRecord, role: str) -> bool:
+        return (role not in _RATE_ROLES
+                and step.valid_end_s - step.valid_start_s >= NOISE_RECORD_MIN_S)
+
+    model = any(long_static(step, role) for step, role in todo)
+    return [(step, role, not model or long_static(step, role)) for step, role in todo]
+
+
 def _observe_steps(path: str, sensor_id: str, opt: P1Processing, sample_rate_hz: float,
-                   todo: Sequence[tuple[StepRecord, str]]) -> list[WindowObservation]:
+                   todo: Sequence[tuple[StepRecord, str, bool]]) -> list[WindowObservation]:
     """Reduce some steps of a recording in a worker process (:func:`_observe_parallel`)."""
     from imucalib.io.opening import open_recording
 
     with open_recording(path) as rec:
         ex = _Extractor(rec, sensor_id, opt)
         ex.sample_rate_hz = sample_rate_hz  # the parent's: the same time base as in one process
-        return [ex.observe(step, role) for step, role in todo]
+        return [ex.observe(*job) for job in todo]
 
 
-def _observe_parallel(ex: _Extractor, todo: list[tuple[StepRecord, str]], workers: int,
+def _observe_parallel(ex: _Extractor, todo: list[tuple[StepRecord, str, bool]], workers: int,
                       tick: _Progress) -> list[WindowObservation]:
     """Reduce the steps in this process and `workers` − 1 spawned ones; the serial result.
 
@@ -648,7 +678,7 @@ def _observe_parallel(ex: _Extractor, todo: list[tuple[StepRecord, str]], worker
     rest = todo[1:]
     there = functools.partial(_observe_steps, str(ex.rec.path), ex.sensor, ex.opt,
                               ex.sample_rate_hz)
-    return [first, *share_with_workers(rest, [max(1, _rows(ex, step)) for step, _ in rest],
+    return [first, *share_with_workers(rest, [max(1, _rows(ex, job[0])) for job in rest],
                                        workers, here=lambda item: ex.observe(*item),
                                        there=there, done=tick)]
 
