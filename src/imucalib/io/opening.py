@@ -21,8 +21,10 @@ the file, what was found and what was expected. What the opened file reads, and 
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextvars import ContextVar
 from pathlib import Path
 
 import h5py
@@ -44,7 +46,50 @@ from imucalib.io._validate import (
 from imucalib.io.compression import register_plugin_filters
 from imucalib.io.reader import Recording
 
-__all__ = ["open_damaged", "open_recording"]
+__all__ = ["open_damaged", "open_recording", "reopening"]
+
+#: Inside :func:`reopening`: the files validated (probe, layout, time bases) and found sound in
+#: this scope, by their identity (:func:`_identity`), with the layout found.
+_SCOPE: ContextVar[dict[tuple[object, ...], Layout] | None] = ContextVar("_SCOPE", default=None)
+
+
+@contextlib.contextmanager
+def reopening() -> Iterator[None]:
+    """Within this block, opening again a file already opened and validated skips the checks.
+
+    For code that opens the same recording several times in one task (a P2 batch opens each
+    file to list its units, then to analyse them): the second open of a file whose identity
+    (path, inode, size, modification and change times) is unchanged reuses the layout the first
+    found valid instead of probing and checking it again. Scoped, not process-wide: a file
+    rewritten in place within the timestamps' granularity would otherwise look unchanged.
+    """
+    token = _SCOPE.set({} if _SCOPE.get() is None else _SCOPE.get())
+    try:
+        yield
+    finally:
+        _SCOPE.reset(token)
+
+
+def _identity(p: Path) -> tuple[object, ...] | None:
+    """Return what changes when a file is written or replaced: path, inode, size, times."""
+    try:
+        st = p.stat()
+        return (str(p.resolve()), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns,
+                st.st_ctime_ns)
+    except OSError:
+        return None
+
+
+def _remembered(key: tuple[object, ...] | None) -> Layout | None:
+    scope = _SCOPE.get()
+    return None if scope is None or key is None else scope.get(key)
+
+
+def _remember(key: tuple[object, ...] | None, p: Path, layout: Layout) -> None:
+    """Keep `layout` in the scope if the file still has identity `key` after the checks."""
+    scope = _SCOPE.get()
+    if scope is not None and key is not None and _identity(p) == key:
+        scope[key] = layout
 
 
 def open_recording(path: str | os.PathLike[str], *, strict: bool = False, probe: bool = True,
@@ -158,6 +203,19 @@ def _open_h5(p: Path) -> tuple[h5py.File, bool]:
 
 def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, lenient: bool
           ) -> tuple[Recording, RecordingCorruptError | None]:
+    key = None if lenient or _SCOPE.get() is None else _identity(p)
+    known = _remembered(key)
+    if known is not None:  # validated before by this process, and unchanged since
+        f, was_open = _open_h5(p)
+        if not was_open:
+            try:
+                register_plugin_filters(f)
+                return Recording(f, p, known.format_version, was_open_for_write=False,
+                                 layout=known), None
+            except BaseException:
+                f.close()
+                raise
+        f.close()
     found = run_probe(p, _probe_work(p, lenient), timeout_s=probe_timeout_s) if probe else None
     f, was_open = _open_h5(p)
     try:
@@ -183,6 +241,8 @@ def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, 
         version = (layout.format_version if layout is not None
                    else _root_version(p, f, lenient))
         rec = Recording(f, p, version, was_open_for_write=was_open, layout=layout)
+        if layout is not None and not was_open and damage is None:
+            _remember(key, p, layout)
     except BaseException:
         f.close()
         raise

@@ -46,7 +46,7 @@ from imucalib.errors import (
     MissingSegmentError,
 )
 from imucalib.io.hashing import file_sha256
-from imucalib.io.opening import open_recording
+from imucalib.io.opening import open_recording, reopening
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality
@@ -326,52 +326,54 @@ def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
     if workers < 1:
         raise InvalidInputError(f"--workers must be ≥ 1; got {workers}")
     opt = options or P2Options()
-    tasks = _tasks(files, units)
-    results: dict[int, P2UnitResult] = {}
-    # a job: a run of consecutive units of one recording (one open of the file per run)
-    by_file: dict[tuple[str, str], list[int]] = {}
-    for i, (p, _, sha) in enumerate(tasks):
-        by_file.setdefault((p, sha), []).append(i)
-    parallel = scheduler is not None or workers > 1
-    n_runs = (2 * workers if scheduler is None else 8) if parallel else 1
-    jobs = [(p, sha, run) for (p, sha), idx in by_file.items() for run in _chunks(idx, n_runs)]
+    # _tasks opens each file to list its units; opening it again here skips the checks
+    with reopening():
+        tasks = _tasks(files, units)
+        results: dict[int, P2UnitResult] = {}
+        # a job: a run of consecutive units of one recording (one open of the file per run)
+        by_file: dict[tuple[str, str], list[int]] = {}
+        for i, (p, _, sha) in enumerate(tasks):
+            by_file.setdefault((p, sha), []).append(i)
+        parallel = scheduler is not None or workers > 1
+        n_runs = (2 * workers if scheduler is None else 8) if parallel else 1
+        jobs = [(p, sha, run) for (p, sha), idx in by_file.items() for run in _chunks(idx, n_runs)]
 
-    def done(run: list[int], res: list[P2UnitResult]) -> None:
-        for i, r in zip(run, res, strict=True):
-            results[i] = r
-        if progress is not None:
-            progress(len(results) / len(tasks))
+        def done(run: list[int], res: list[P2UnitResult]) -> None:
+            for i, r in zip(run, res, strict=True):
+                results[i] = r
+            if progress is not None:
+                progress(len(results) / len(tasks))
 
-    def names(run: list[int]) -> list[str]:
-        return [tasks[i][1] for i in run]
+        def names(run: list[int]) -> list[str]:
+            return [tasks[i][1] for i in run]
 
-    if scheduler is not None:
-        try:
-            from dask.distributed import Client
-            from dask.distributed import as_completed as dask_completed
-        except ImportError as exc:
-            raise ConfigurationError("--scheduler needs the dask extra: pip install "
-                                     "'imucalib[dask]'") from exc
-        client = scheduler if isinstance(scheduler, Client) else Client(str(scheduler))
-        try:
-            futures = {client.submit(analyze_units_file, p, names(run), opt, sha,
-                                     pure=False): run for p, sha, run in jobs}
-            for fut in dask_completed(list(futures)):
-                done(futures[fut], fut.result())
-        finally:
-            if client is not scheduler:
-                client.close()
-    elif not parallel or len(tasks) == 1:
-        for p, sha, run in jobs:
-            done(run, analyze_units_file(p, names(run), opt, sha))
-    else:
-        with local_pool(min(workers, len(jobs))) as pool:
-            pending = {pool.submit(analyze_units_file, p, names(run), opt, sha): run
-                       for p, sha, run in jobs}
-            for fut in as_completed(pending):
-                done(pending[fut], fut.result())
-    return P2BatchResult(recordings=tuple(str(f) for f in files),
-                         results=tuple(results[i] for i in range(len(tasks))))
+        if scheduler is not None:
+            try:
+                from dask.distributed import Client
+                from dask.distributed import as_completed as dask_completed
+            except ImportError as exc:
+                raise ConfigurationError("--scheduler needs the dask extra: pip install "
+                                         "'imucalib[dask]'") from exc
+            client = scheduler if isinstance(scheduler, Client) else Client(str(scheduler))
+            try:
+                futures = {client.submit(analyze_units_file, p, names(run), opt, sha,
+                                         pure=False): run for p, sha, run in jobs}
+                for fut in dask_completed(list(futures)):
+                    done(futures[fut], fut.result())
+            finally:
+                if client is not scheduler:
+                    client.close()
+        elif not parallel or len(tasks) == 1:
+            for p, sha, run in jobs:
+                done(run, analyze_units_file(p, names(run), opt, sha))
+        else:
+            with local_pool(min(workers, len(jobs))) as pool:
+                pending = {pool.submit(analyze_units_file, p, names(run), opt, sha): run
+                           for p, sha, run in jobs}
+                for fut in as_completed(pending):
+                    done(pending[fut], fut.result())
+        return P2BatchResult(recordings=tuple(str(f) for f in files),
+                             results=tuple(results[i] for i in range(len(tasks))))
 
 
 def batch_json(batch: P2BatchResult) -> str:
