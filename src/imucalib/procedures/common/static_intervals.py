@@ -163,9 +163,17 @@ class StaticPose:
         return self.end_time_s - self.start_time_s
 
 
-def static_poses(log: FieldLog, detection: StaticDetection, *, block_s: float = 0.25
-                 ) -> list[StaticPose]:
+#: One interval's reductions, by (start, stop) index: block variance, accel and gyro means.
+_IntervalMemo = dict[tuple[int, int], tuple[tuple[int, _F64], _F64, _F64]]
+
+
+def static_poses(log: FieldLog, detection: StaticDetection, *, block_s: float = 0.25,
+                 memo: _IntervalMemo | None = None) -> list[StaticPose]:
     """Return the static intervals' means with pooled-noise standard errors (module docstring).
+
+    `memo` keeps each interval's block variance and means for further calls on the same log
+    and `block_s` (the automatic threshold choice asks for the poses of several detections,
+    which share most of their intervals).
 
     Raises
     ------
@@ -174,22 +182,28 @@ def static_poses(log: FieldLog, detection: StaticDetection, *, block_s: float = 
     """
     period = log.period_s
     slices = [slice(s.start_index, s.stop_index) for s in detection.static]
-    blocks = [block_variance(np.column_stack([log.accel_mps2[sl], log.gyro_rps[sl]]),
-                             period, block_s) for sl in slices]
+    memo = {} if memo is None else memo
+    for sl in slices:
+        if (sl.start, sl.stop) not in memo:
+            memo[sl.start, sl.stop] = (
+                block_variance(np.column_stack([log.accel_mps2[sl], log.gyro_rps[sl]]),
+                               period, block_s),
+                log.accel_mps2[sl].mean(axis=0), log.gyro_rps[sl].mean(axis=0))
+    reduced = [memo[sl.start, sl.stop] for sl in slices]
+    blocks = [r[0] for r in reduced]
     density = pooled_white_density(blocks)
     if density is None:
         raise InsufficientExcitationError(
             ["noise"], f"no static interval of {log.source} holds three {block_s:g} s blocks: "
                        "the poses' noise cannot be estimated (hold each pose longer)")
     poses = []
-    for k, sl in enumerate(slices):
+    for k, (sl, (_, accel, gyro)) in enumerate(zip(slices, reduced, strict=True)):
         t = log.time_s[sl]
         span = max(float(t[-1] - t[0]) + period, period)
         se = density / math.sqrt(span)
         poses.append(StaticPose(index=k, start_time_s=float(t[0]), end_time_s=float(t[-1]),
-                                n_samples=int(t.size),
-                                accel_mean=log.accel_mps2[sl].mean(axis=0), accel_se=se[:3],
-                                gyro_mean=log.gyro_rps[sl].mean(axis=0), gyro_se=se[3:]))
+                                n_samples=int(t.size), accel_mean=accel.copy(), accel_se=se[:3],
+                                gyro_mean=gyro.copy(), gyro_se=se[3:]))
     return poses
 
 
@@ -229,6 +243,7 @@ def find_intervals(log: FieldLog, *, threshold_factor: float | None,
         return found
     best: tuple[tuple[float, int, float], StaticDetection] | None = None
     tried = []
+    memo: _IntervalMemo = {}  # the candidates' detections share most intervals
     for k, found in zip(candidates, detect(candidates), strict=True):
         tried.append(f"k={k:g}: {len(found.static)}")
         if len(found.static) < 2:
@@ -236,7 +251,7 @@ def find_intervals(log: FieldLog, *, threshold_factor: float | None,
         score = math.inf
         if len(found.static) >= 10:
             try:
-                poses = static_poses(log, found)
+                poses = static_poses(log, found, memo=memo)
                 score = fit_gravity_norm([p.accel_mean for p in poses],
                                          [p.accel_se for p in poses],
                                          gravity_mps2).quality.reduced_chi2
