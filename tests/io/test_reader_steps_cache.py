@@ -25,3 +25,26 @@ def test_steps_parsed_once(consumer_run, monkeypatch):
     with open_recording(consumer_run) as rec:
         assert repr(rec.steps) == repr(again)
     assert len(calls) == 2
+
+
+def test_stream_extents_read_once(consumer_run, monkeypatch):
+    """The streams' extents (first and last stamps of every stream) likewise, as copies."""
+    calls = []
+    real = Recording._info
+
+    def counted(self, path, committed=None):
+        calls.append(path)
+        return real(self, path, committed)
+
+    monkeypatch.setattr(Recording, "_info", counted)
+    with open_recording(consumer_run) as rec:
+        first = rec.streams
+        n = len(calls)
+        first[0].columns.clear()  # a caller's info is its own
+        again = rec.streams
+        assert len(calls) == n and again[0].columns
+        assert [(s.device, s.unit, s.n_samples, s.t_first_s, s.t_last_s) for s in again] == \
+            [(s.device, s.unit, s.n_samples, s.t_first_s, s.t_last_s) for s in first]
+    with open_recording(consumer_run) as rec:
+        rec.streams
+    assert len(calls) == 2 * n

@@ -184,3 +184,29 @@ def test_one_dimensional_input_keeps_its_shape() -> None:
 def test_bad_inputs_raise_with_messages(call, match: str) -> None:
     with pytest.raises(InvalidInputError, match=match):
         call()
+
+
+def test_interpolation_from_the_kept_neighbours_equals_that_from_all_kept_samples():
+    """The replacement of flagged samples reads only the kept rows around each run of them."""
+    from imucalib.processing.outliers import _kept_neighbours
+
+    rng = np.random.default_rng(5)
+    checked = 0
+    for trial in range(2000):
+        n = int(rng.integers(3, 60))
+        m = rng.random(n) < rng.uniform(0.02, 0.7)
+        if trial % 3 == 0:  # a run at the start
+            m[: rng.integers(1, n)] = True
+        if trial % 5 == 0:  # a run at the end
+            m[-int(rng.integers(1, n)):] = True
+        if m.all() or not m.any():
+            continue
+        axis = np.sort(rng.uniform(0.0, 100.0, n))
+        col = rng.normal(size=n)
+        bad = np.flatnonzero(m)
+        near = _kept_neighbours(bad, n)
+        assert np.all(np.diff(near) > 0) and not m[near].any()
+        np.testing.assert_array_equal(np.interp(axis[bad], axis[near], col[near]),
+                                      np.interp(axis[m], axis[~m], col[~m]))
+        checked += 1
+    assert checked > 1500

@@ -11,10 +11,23 @@ from imucalib.errors import InvalidInputError
 __all__ = ["as_columns", "as_time", "restore_shape"]
 
 
-def as_columns(values: ArrayLike, name: str, *, min_samples: int = 1
+def as_columns(values: ArrayLike, name: str, *, min_samples: int = 1, copy: bool = True
                ) -> tuple[NDArray[np.float64], bool]:
-    """Return `values` as a finite (n, k) float64 array and whether the input was 1-D."""
-    arr = as_array(values, name)
+    """Return `values` as a finite (n, k) float64 array and whether the input was 1-D.
+
+    With ``copy=False`` a C-ordered float64 ndarray comes back as it is, for callers that only
+    read it; the others get their own C-ordered copy to change (a copy's layout fixes the
+    order of numpy's reductions, so results do not depend on the caller's layout).
+    """
+    if (not copy and isinstance(values, np.ndarray) and values.dtype == np.float64
+            and values.flags.c_contiguous):
+        arr = values
+        if not np.all(np.isfinite(arr)):
+            bad = int(arr.size - np.count_nonzero(np.isfinite(arr)))
+            raise InvalidInputError(f"`{name}` must be finite; got {bad} NaN or infinite "
+                                    "value(s)")
+    else:
+        arr = as_array(values, name)
     if arr.ndim not in (1, 2):
         raise InvalidInputError(f"`{name}` must have shape (n,) or (n, k); got {arr.shape}")
     one_d = arr.ndim == 1

@@ -51,6 +51,7 @@ from scipy import signal
 from imucalib._checks import check_positive
 from imucalib.errors import InvalidInputError
 from imucalib.processing._common import as_columns, restore_shape
+from imucalib.processing._sos_kernel import sosfiltfilt_columns
 
 __all__ = [
     "SPEC_CUTOFF_FRACTION_RANGE",
@@ -184,14 +185,15 @@ def lowpass_zero_phase(
             f"the cut-off {frac:.6g} × {bw:.6g} Hz = {fc:.6g} Hz must be below the Nyquist "
             f"frequency {nyquist:.6g} Hz (sample rate {fs:.6g} Hz)"
         )
-    cols, one_d = as_columns(values, "values")
+    cols, one_d = as_columns(values, "values", copy=False)  # sosfiltfilt only reads it
     sos, padlen = _butter_lowpass(n_ord, 2.0 * fc / fs)  # butter(fs=fs) normalises the same way
     if cols.shape[0] <= padlen:
         raise InvalidInputError(
             f"`values` must have more than {padlen} samples for an order-{n_ord} zero-phase "
             f"filter; got {cols.shape[0]}"
         )
-    out = np.asarray(signal.sosfiltfilt(sos, cols, axis=0), dtype=np.float64)
+    # scipy.signal.sosfiltfilt(sos, cols, axis=0), bit for bit, all columns at once
+    out = sosfiltfilt_columns(sos, _steady_state(n_ord, 2.0 * fc / fs), cols, padlen)
     res = restore_shape(out, one_d)
     res.setflags(write=False)
     return LowpassResult(values=res, cutoff_hz=fc,
@@ -229,6 +231,12 @@ def _butter_lowpass(order: int, wn: float) -> tuple[NDArray[np.float64], int]:
     sos = np.asarray(signal.butter(order, wn, btype="low", output="sos"), dtype=np.float64)
     n_zero = min(int(np.sum(sos[:, 2] == 0)), int(np.sum(sos[:, 5] == 0)))
     return sos, 3 * (2 * sos.shape[0] + 1 - n_zero)  # sosfiltfilt's default
+
+
+@lru_cache(maxsize=64)
+def _steady_state(order: int, wn: float) -> NDArray[np.float64]:
+    """Return ``scipy.signal.sosfilt_zi`` of :func:`_butter_lowpass` (the same cache key)."""
+    return np.asarray(signal.sosfilt_zi(_butter_lowpass(order, wn)[0]), dtype=np.float64)
 
 
 def _check_order(order: object) -> int:

@@ -425,10 +425,11 @@ def reject_outliers_robust(
     t = None if time_s is None else as_time(time_s, "time_s", cols.shape[0])
     n, k = cols.shape
     k_n = robust_threshold(n, alpha, min_threshold)
-    mask = np.zeros((n, k), dtype=bool)
+    by_column = np.ascontiguousarray(cols.T)  # each column contiguous: every pass below streams
+    flagged = np.empty((k, n), dtype=bool)
     scale = np.empty(k)
     for j in range(k):
-        x = cols[:, j]
+        x = by_column[j]
         c, margin = _running_median(x, h)
         r = x - c
         med_r = median(r)  # np.median's value bit for bit, by Floyd–Rivest selection
@@ -436,8 +437,9 @@ def reject_outliers_robust(
         s = MAD_TO_SIGMA * median(dev)
         if s <= 0.0:
             s = float(np.std(r, ddof=1))
-        mask[:, j] = dev > k_n * s + margin  # Eq. (2)
+        np.greater(dev, k_n * s + margin, out=flagged[j])  # Eq. (2)
         scale[j] = s
+    mask = np.ascontiguousarray(flagged.T)
     iters = np.ones(k, dtype=np.int64)
     center = _kept_median(cols, mask)
     return _finish(cols, one_d, mask, center, scale, iters, "robust", method, t, k_n)
@@ -578,8 +580,9 @@ def _finish(cols: NDArray[np.float64], one_d: bool, mask: NDArray[np.bool_],
         out = cols  # as_columns' own copy; a flagged sample is filled from kept ones only
         axis = np.arange(n, dtype=np.float64) if t is None else t
         for j in np.flatnonzero(mask.any(axis=0)):
-            good = ~mask[:, j]
-            out[mask[:, j], j] = np.interp(axis[mask[:, j]], axis[good], cols[good, j])
+            bad = np.flatnonzero(mask[:, j])
+            near = _kept_neighbours(bad, n)
+            out[bad, j] = np.interp(axis[bad], axis[near], cols[near, j])
     n_out = mask.sum(axis=0).astype(np.int64)
     values = restore_shape(out, one_d)
     mask_out = mask[:, 0].copy() if one_d else mask
@@ -590,6 +593,22 @@ def _finish(cols: NDArray[np.float64], one_d: bool, mask: NDArray[np.bool_],
     return OutlierResult(values=values, outlier_mask=mask_out, kept=kept, n_outliers=n_out,
                          center=center, scale=scale, n_iterations=iters, test=test,
                          method=method, threshold=threshold)
+
+
+def _kept_neighbours(bad: NDArray[np.intp], n: int) -> NDArray[np.intp]:
+    """Return the kept rows next to the flagged rows `bad` (sorted) of a column of `n` rows.
+
+    Each run of consecutive flagged rows is bracketed by the kept row just before it and the
+    one just after it (where they exist). ``np.interp`` of a flagged row between these rows
+    gives what it gives between all kept rows (the same bracketing pair and formula, or the
+    first or last kept value beyond them), without copying every kept row of the column.
+    """
+    starts = np.flatnonzero(np.diff(bad, prepend=-2) != 1)
+    ends = np.append(starts[1:], bad.size) - 1
+    rows = np.empty(2 * starts.size, dtype=np.intp)
+    rows[0::2], rows[1::2] = bad[starts] - 1, bad[ends] + 1  # non-decreasing
+    rows = rows[(rows >= 0) & (rows < n)]
+    return rows[np.diff(rows, prepend=-1) != 0]  # one kept row between two runs: once
 
 
 def _check_method(method: str) -> None:

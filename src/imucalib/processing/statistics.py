@@ -96,6 +96,7 @@ from imucalib.analysis.allan import canonical_mean
 from imucalib.errors import InvalidInputError
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
 from imucalib.processing._common import as_columns, as_time
+from imucalib.processing._select_kernel import median
 
 __all__ = [
     "RevolutionWindow",
@@ -199,7 +200,7 @@ def compute_window_statistics(
     >>> np.round(st.standard_error, 6).tolist()            # N/√T = 0.1/√100
     [0.01, 0.01, 0.01]
     """
-    cols, _ = as_columns(values, "values", min_samples=2)
+    cols, _ = as_columns(values, "values", min_samples=2, copy=False)  # only read
     fs = check_positive(sample_rate_hz, "sample_rate_hz")
     if isinstance(min_cluster_samples, bool) or not isinstance(min_cluster_samples,
                                                                int | np.integer) \
@@ -395,7 +396,7 @@ def compute_integer_revolution_window(
     (2, 1.0)
     """
     t = as_time(time_s, "time_s")
-    cols, _ = as_columns(values, "values", min_samples=2)
+    cols, _ = as_columns(values, "values", min_samples=2, copy=False)  # only read
     if cols.shape[0] != t.size:
         raise InvalidInputError(f"`values` must have {t.size} rows (one per time); got "
                                 f"{cols.shape[0]}")
@@ -423,7 +424,8 @@ def compute_integer_revolution_window(
     # a span short of N revolutions by less than half a sample step counts as N (the servo's
     # rate noise moves the last boundary by a fraction of a step); the window's angle_error_rad
     # says by how much
-    half_step = 0.5 * float(np.median(step * sign))
+    median_step = median(step * sign)
+    half_step = 0.5 * median_step
     n_rev = int(np.floor((bound[-1] - bound[0] + half_step) / (2.0 * np.pi) + 1e-12))
     if n_rev < 1:
         raise InvalidInputError(
@@ -442,7 +444,7 @@ def compute_integer_revolution_window(
         better = err < best_err
         best_err[better], best_stop[better] = err[better], s[better]
     finite = np.isfinite(best_err)
-    scale = max(float(np.median(step * sign)), 1e-300)
+    scale = max(median_step, 1e-300)
     # smallest angle error (to a 1e-9 fraction of a sample), then the most central window
     score = np.round(best_err / scale, 9)
     center_off = np.abs((cand_a + best_stop) / 2.0 - t.size / 2.0)

@@ -75,6 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib._checks import as_array, check_nonnegative, check_positive
 from imucalib.errors import InvalidInputError, LimitExceededError
 from imucalib.processing._common import as_columns, as_time, restore_shape
+from imucalib.processing._select_kernel import median
 
 __all__ = [
     "DEFAULT_MAX_ALIGNMENT_ERROR_S",
@@ -158,7 +159,7 @@ def estimate_timestamp_jitter_s(time_s: ArrayLike) -> float:
     if t.size < 3:
         raise InvalidInputError(f"`time_s` must have at least 3 stamps; got {t.size}")
     d = np.diff(t)
-    return _jitter_of_steps(t, d, float(np.median(d)))
+    return _jitter_of_steps(t, d, median(d))
 
 
 def _fit_line(x: NDArray[np.float64], y: NDArray[np.float64]) -> tuple[float, float]:
@@ -257,7 +258,7 @@ def synchronize(
     t_src = as_time(source_time_s, "source_time_s")
     if t_src.size < 2:
         raise InvalidInputError(f"`source_time_s` must have at least 2 samples; got {t_src.size}")
-    cols, one_d = as_columns(source_values, "source_values")
+    cols, one_d = as_columns(source_values, "source_values", copy=False)  # only read
     if cols.shape[0] != t_src.size:
         raise InvalidInputError(
             f"`source_values` must have {t_src.size} rows (one per source time); got "
@@ -277,7 +278,7 @@ def synchronize(
             f"{t_tgt[0]:.9g} to {t_tgt[-1]:.9g} s"
         )
     spacing = np.diff(t_src)
-    dt_med = float(np.median(spacing))
+    dt_med = median(spacing)
     f_max = (0.5 / dt_med if signal_bandwidth_hz is None
              else check_positive(signal_bandwidth_hz, "signal_bandwidth_hz"))
 
@@ -488,8 +489,8 @@ def _trimmed_line(x: NDArray[np.float64], y: NDArray[np.float64]
     resid = y - (slope * x + intercept)
     for _ in range(2):  # trimmed refits: Eq. in the module docstring
         kept = resid if keep is None else resid[keep]
-        med = float(np.median(kept))
-        mad = 1.4826 * float(np.median(np.abs(kept - med)))
+        med = median(kept)
+        mad = 1.4826 * median(np.abs(kept - med))
         if not mad > 0:
             break  # the kept set cannot change
         new_keep = np.abs(resid - med) <= _ROBUST_K * mad

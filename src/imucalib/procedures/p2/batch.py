@@ -47,7 +47,7 @@ from imucalib.errors import (
 )
 from imucalib.io.hashing import file_sha256
 from imucalib.io.opening import open_recording, reopening
-from imucalib.io.reader import Recording, StepRecord
+from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults
@@ -229,13 +229,14 @@ def analyze_units_file(path: str | os.PathLike[str], units: Sequence[str],
                 gyro_accuracy_dps=opt.gyro_accuracy_dps if opt.gyro_accuracy_dps
                 is not None else gyr)
         steps = rec.steps
+        table_windows: dict[int, StreamData] = {}  # the turns' table rows, read once for all
         for unit in units:
             try:
                 soaks = _soak_failures(steps, unit)
                 if soaks:
                     raise MissingSegmentError(soaks[min(soaks)])
                 obs = extract_unit_observations(rec, unit, processing=opt.processing,
-                                                steps=steps)
+                                                steps=steps, table_windows=table_windows)
                 out.append(analyze_unit(obs, opt, source=str(path),
                                         recording_sha256=recording_sha256))
             except CalibrationError as exc:

@@ -296,13 +296,17 @@ class _Reducer:
 def extract_unit_observations(rec: Recording, unit: str, *,
                               processing: P2Processing | None = None,
                               progress: Callable[[float], None] | None = None,
-                              steps: list[StepRecord] | None = None) -> UnitObservations:
+                              steps: list[StepRecord] | None = None,
+                              table_windows: dict[int, StreamData] | None = None
+                              ) -> UnitObservations:
     """Reduce every P2 window of one unit (module docstring).
 
     A window that cannot be used (dropouts, a short turn, NaN) is recorded in ``failures`` for
     its temperature point, and the point is left out for this unit; the others go on.
 
-    `steps` (the recording's, read once) saves reading the steps table again for each unit.
+    `steps` (the recording's, read once) saves reading the steps table again for each unit;
+    `table_windows` (step index → the table's rows in its valid window, filled by the first
+    unit that reads them) saves reading the same turns of the table again for each unit.
 
     Raises
     ------
@@ -340,11 +344,14 @@ def extract_unit_observations(rec: Recording, unit: str, *,
     imu_rows = rec.iter_windows(DEVICE_IMU, unit,
                                 [(s.valid_start_s, s.valid_end_s) for s in usable],
                                 [*_COLUMNS, "counter", "saturated", TEMPERATURE_COLUMN])
-    table_rows = rec.iter_windows(DEVICE_TABLE, red.table.unit,
-                                  [(s.valid_start_s, s.valid_end_s) for s in usable
-                                   if s.role == P2_RATE], [red.angle_col, red.rate_col])
+    turns = [s for s in usable if s.role == P2_RATE]
+    shared = {} if table_windows is None else table_windows
+    missing = [s for s in turns if s.index not in shared]
+    shared.update(zip((s.index for s in missing), rec.iter_windows(
+        DEVICE_TABLE, red.table.unit, [(s.valid_start_s, s.valid_end_s) for s in missing],
+        [red.angle_col, red.rate_col]), strict=True))
     for i, (step, data) in enumerate(zip(usable, imu_rows, strict=True), start=1):
-        fb = next(table_rows) if step.role == P2_RATE else None
+        fb = shared[step.index] if step.role == P2_RATE else None
         point = points[step.index]
         if point not in failures:
             try:
