@@ -106,13 +106,16 @@ def test_bisection_on_long_stream_with_repeated_times(tmp_path, monkeypatch):
                 assert i0 == int(np.argmax(keep))
 
 
+@pytest.mark.parametrize("group_rows", [40, 1 << 18])  # nearby windows read alone, together
 @pytest.mark.parametrize("scan_from", [1, 10**9])  # one pass over the column, or searches
-def test_iter_windows_reads_what_read_stream_reads(tmp_path, monkeypatch, scan_from):
+def test_iter_windows_reads_what_read_stream_reads(tmp_path, monkeypatch, scan_from,
+                                                   group_rows):
     import imucalib.io._search as search_module
     import imucalib.io.reader as reader_module
 
     monkeypatch.setattr(search_module, "_SCAN_BLOCK", 97)  # many blocks, windows across them
     monkeypatch.setattr(reader_module, "_SCAN_WINDOWS", scan_from)
+    monkeypatch.setattr(reader_module, "_GROUP_ROWS", group_rows)
     rng = np.random.default_rng(5)
     t = np.cumsum(rng.integers(0, 2, 5_000)) * 0.5  # repeated values
     spec = StreamSpec("chamber", "main", {"temperature_degc": ColumnSpec("degC")})
@@ -120,12 +123,20 @@ def test_iter_windows_reads_what_read_stream_reads(tmp_path, monkeypatch, scan_f
     with RecordingWriter(path, streams=[spec], chunk_rows=300) as w:
         w.append("chamber", "main", {"time_s": t, "temperature_degc": t * 2})
     windows = [(t[10], t[900]), (-5.0, 0.5), (t[2000], t[2000]), (t[4000], 1e9),
-               (t[1500], t[1600]), (100.25, 100.25), (t[-1], t[-1] + 1.0)]
+               (t[1500], t[1600]), (100.25, 100.25), (t[-1], t[-1] + 1.0),
+               *((t[a], t[a + 25]) for a in range(2100, 2900, 60)),  # near one another
+               (t[2200], t[2400]), (t[2300], t[2350])]  # overlapping, inside
     with open_recording(path) as rec:
         got = list(rec.iter_windows("chamber", "main", windows, ["temperature_degc"]))
+        for d in got:  # each window's arrays are its own
+            d.columns["temperature_degc"][:] = -1.0
         for (t0, t1), d in zip(windows, got, strict=True):
             want = rec.read_stream("chamber", "main", ["temperature_degc"], t0, t1)
             assert np.array_equal(d.time_s, want.time_s), (t0, t1)
+            assert np.all(d.columns["temperature_degc"] == -1.0)
+        got = list(rec.iter_windows("chamber", "main", windows, ["temperature_degc"]))
+        for (t0, t1), d in zip(windows, got, strict=True):
+            want = rec.read_stream("chamber", "main", ["temperature_degc"], t0, t1)
             assert np.array_equal(d.columns["temperature_degc"],
                                   want.columns["temperature_degc"])
         with pytest.raises(InvalidInputError, match="before"):
@@ -262,3 +273,15 @@ def test_damaged_superblock(recording):
     path.write_bytes(bytes(raw))
     with pytest.raises(RecordingCorruptError, match="cannot be opened by HDF5"):
         open_recording(path)
+
+
+def test_read_groups_join_nearby_spans_in_order_within_the_limit():
+    from imucalib.io.reader import _read_groups
+
+    spans = [(0, 10), (15, 30), (200, 210), (205, 220), (100, 120), (120, 120), (500, 9000)]
+    groups = list(_read_groups(spans, chunk_rows=50, max_rows=1000))
+    assert groups == [(0, 30, [(0, 10), (15, 30)]), (200, 220, [(200, 210), (205, 220)]),
+                      (100, 120, [(100, 120), (120, 120)]), (500, 9000, [(500, 9000)])]
+    assert [s for _, _, m in groups for s in m] == spans  # every span once, in order
+    assert list(_read_groups([(0, 10), (15, 30)], chunk_rows=50, max_rows=20)) == [
+        (0, 10, [(0, 10)]), (15, 30, [(15, 30)])]
