@@ -58,6 +58,14 @@ def marked_open_for_write(path: str | os.PathLike[str]) -> bool:
     return sb is not None and sb.open_for_write
 
 
+#: HDF5's chunk cache per open dataset of a file opened for reading (HDF5 2.0 defaults to
+#: 8 MiB). A Recording keeps a column's dataset open from one window to the next so the chunk
+#: two windows share is decompressed once; 4 MiB holds eight 512 KiB chunks of a float64
+#: column, as fast as 8 MiB on the bench's analyses, and with a dozen columns open the caches'
+#: share of an analysis's memory stays about 50 MiB instead of about 100 (docs/performance.md).
+CHUNK_CACHE_BYTES = 1 << 22
+
+
 def open_h5(path: str | os.PathLike[str]) -> tuple[h5py.File, bool]:
     """Open an HDF5 file read-only, in SWMR mode if a writer left it open (package-private).
 
@@ -78,12 +86,13 @@ def open_h5(path: str | os.PathLike[str]) -> tuple[h5py.File, bool]:
             "cut are lost and HDF5 cannot open the rest; restore the file from a copy (imucalib "
             "recover cannot rebuild a truncated, cleanly closed file)")
     try:
-        return h5py.File(p, "r"), False
+        return h5py.File(p, "r", rdcc_nbytes=CHUNK_CACHE_BYTES), False
     except OSError as exc:
         msg = str(exc)
     if sb.open_for_write or "open for write" in msg:
         try:
-            return h5py.File(p, "r", swmr=True, libver="latest"), True
+            return h5py.File(p, "r", swmr=True, libver="latest",
+                             rdcc_nbytes=CHUNK_CACHE_BYTES), True
         except OSError as exc:
             raise RecordingCorruptError(
                 f"{p} was left open by a writer and cannot be read even in SWMR mode ({exc})"

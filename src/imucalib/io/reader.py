@@ -65,8 +65,9 @@ __all__ = ["LogEvent", "Recording", "StepRecord", "StreamData", "StreamInfo"]
 #: time column rather than a search per end (a search costs a few small reads).
 _SCAN_WINDOWS = 32
 #: Rows :meth:`Recording.iter_windows` reads at most in one call per column when it reads
-#: several nearby windows together (a window longer than this is read alone).
-_GROUP_ROWS = 1 << 18
+#: several nearby windows together (a window longer than this is read alone; a chunk of the
+#: default layout, 65,536 rows: memory stays bounded by what one window needs).
+_GROUP_ROWS = 1 << 16
 
 
 def _read_groups(spans: Sequence[tuple[int, int]], chunk_rows: int, max_rows: int
@@ -469,9 +470,10 @@ class Recording:
         layout = self._guard(f"stream {device}/{unit}", self._layout, path)
         names = self._select(layout, columns)
         n = self._guard(f"stream {device}/{unit}", self._n_rows, path)
-        # HDF5 keeps one chunk cache (8 MiB a column here) per open dataset for as long as any
-        # handle to it is open: the reader's cached handles of these columns are dropped, and the
-        # iterator's own closed with it, so reading stream after stream does not pile caches up
+        # HDF5 keeps one chunk cache (4 MiB a column: _open.CHUNK_CACHE_BYTES) per open dataset
+        # while any handle to it is open: the reader's cached handles of these columns are
+        # dropped, and the iterator's own closed with it, so reading stream after stream does
+        # not pile caches up
         for c in (TIME_COLUMN, *names):
             self._datasets.pop(f"{path}/{c}", None)
         dsets = self._guard(f"stream {device}/{unit}",
