@@ -46,5 +46,5 @@ def test_stream_extents_read_once(consumer_run, monkeypatch):
         assert [(s.device, s.unit, s.n_samples, s.t_first_s, s.t_last_s) for s in again] == \
             [(s.device, s.unit, s.n_samples, s.t_first_s, s.t_last_s) for s in first]
     with open_recording(consumer_run) as rec:
-        rec.streams
+        assert rec.streams
     assert len(calls) == 2 * n

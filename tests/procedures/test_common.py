@@ -180,7 +180,8 @@ def test_noise_model_pools_the_records_about_as_long_as_the_longest():
     a[1], b[1] = 4e-10, 2e-10  # flicker plateaus C_B
     a[2], b[2] = 0.0, 2e-6  # random-walk densities K
 
-    def model(d_a, d_b, short=np.zeros((3, 6))):
+    def model(d_a, d_b, short=None):
+        short = np.zeros((3, 6)) if short is None else short
         return estimate_noise([SimpleNamespace(kind="static", duration_s=d_a, allan_fit=a),
                                SimpleNamespace(kind="static", duration_s=d_b, allan_fit=b),
                                SimpleNamespace(kind="static", duration_s=250.0,

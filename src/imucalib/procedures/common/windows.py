@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from imucalib.errors import InvalidInputError, MissingSegmentError
 from imucalib.processing import compute_integer_revolution_window, reconstruct_time_base
+from imucalib.processing.moments import shifted_sums
 
 __all__ = ["RunningMoments", "TurnSpan", "counter_times", "harmonic_residual_std",
            "table_angle_at", "whole_revolutions"]
@@ -61,10 +62,10 @@ class RunningMoments:
             k = raw.shape[1]
             self._sum, self._sum_f, self._sum_f2 = np.zeros(k), np.zeros(k), np.zeros(k)
         assert self._sum is not None and self._sum_f is not None and self._sum_f2 is not None
-        self._sum += (raw - self._shift).sum(axis=0)
-        d = filtered - self._shift
-        self._sum_f += d.sum(axis=0)
-        self._sum_f2 += (d * d).sum(axis=0)
+        s_raw, s_f, s_f2 = shifted_sums(raw, filtered, self._shift)  # one pass, numpy's sums
+        self._sum += s_raw
+        self._sum_f += s_f
+        self._sum_f2 += s_f2
         self.n += raw.shape[0]
 
     @property

@@ -109,6 +109,7 @@ from imucalib.processing import (
     reject_outliers_robust,
     synchronize,
 )
+from imucalib.processing.moments import block_means
 
 __all__ = [
     "P1Observations",
@@ -385,8 +386,7 @@ class _Extractor:
             flagged.add(out)
             filt = self.filtered(raw)
             acc.add(raw, filt)
-            usable = (raw.shape[0] // decim) * decim
-            means.append(raw[:usable].reshape(-1, decim, 6).mean(axis=1))
+            means.append(block_means(raw, decim))
             if math.isnan(align):
                 inside = (fb.time_s >= t[0]) & (fb.time_s <= t[-1])
                 align = float(synchronize(
