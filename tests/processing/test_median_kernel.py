@@ -45,3 +45,22 @@ def test_backends_equal_the_definition(h: int, kind: str):
 def test_shortest_column():
     x = np.arange(9.0)[::-1]
     assert neighbour_median(x, 4)[4] == 4.0
+
+
+@pytest.mark.parametrize("h", [1, 2, 3, 4, 5, 8])
+def test_curvature_margin_kernel_equals_the_numpy_path(h):
+    """The edges' extrapolation and the curvature margin: one compiled pass, numpy's values."""
+    from imucalib.processing import _median_kernel as mk
+    from imucalib.processing._median_kernel import curvature_margin
+
+    rng = np.random.default_rng(h)
+    for n in (4 * h + 2, 4 * h + 3, 50, 1001, 20_000):
+        x = np.cumsum(rng.normal(size=n)) + 5.0 * np.sin(np.arange(n) / 7.0)
+        fast = mk.neighbour_median(x, h)
+        slow = fast.copy()
+        m_fast = curvature_margin(fast, h)
+        m_slow = curvature_margin(slow, h, backend="numpy")
+        assert mk._STATE["kernel"] is not None
+        np.testing.assert_array_equal(fast, slow)
+        np.testing.assert_array_equal(m_fast, m_slow)
+        assert np.all(m_fast >= 0.0) and np.all(np.isfinite(fast))

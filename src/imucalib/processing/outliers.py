@@ -103,7 +103,7 @@ from scipy import stats
 from imucalib._checks import check_positive
 from imucalib.errors import InvalidInputError
 from imucalib.processing._common import as_columns, as_time, restore_shape
-from imucalib.processing._median_kernel import neighbour_median
+from imucalib.processing._median_kernel import curvature_margin, neighbour_median
 from imucalib.processing._select_kernel import median
 
 __all__ = [
@@ -475,19 +475,7 @@ def _running_median(x: NDArray[np.float64], h: int
     if n < 2 * w:
         return np.full(n, median(x)), np.zeros(n)
     c = neighbour_median(x, h)  # a sorted window slid along x: O(n·h), no n × 2h copy
-    d2 = np.zeros(n)
-    d2[2 * h:n - 2 * h] = c[h:n - 3 * h] - 2.0 * c[2 * h:n - 2 * h] + c[3 * h:n - h]
-    d2[:2 * h], d2[n - 2 * h:] = d2[2 * h], d2[n - 2 * h - 1]
-    margin = np.abs(d2) / 4.0
-    i = np.arange(h, dtype=np.float64)
-    slope = (c[2 * h] - c[h]) / h
-    c[:h] = c[h] + slope * (i - h)
-    slope = (c[n - 1 - h] - c[n - 1 - 2 * h]) / h
-    c[n - h:] = c[n - 1 - h] + slope * (i + 1)
-    edge = (h - i) * (2 * h - i) / (2.0 * h * h)  # at distance h − i before ĉ_h
-    margin[:h] = np.maximum(margin[:h], np.abs(d2[:h]) * edge)
-    margin[n - h:] = np.maximum(margin[n - h:], np.abs(d2[n - h:]) * edge[::-1])
-    return c, margin
+    return c, curvature_margin(c, h)  # the edges extrapolated, the margin (one compiled pass)
 
 
 def grubbs_critical_value(n_samples: int | NDArray[np.int64], alpha: float
