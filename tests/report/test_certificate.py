@@ -280,6 +280,6 @@ def test_the_noise_model_behind_the_weights_is_stated_and_drawn(certificate):
             f"{gyro.bias_instability[i] * 180 / math.pi * 3600:.3g} °/h")
         assert rows[f"accel {axis}"][0] == f"{accel.white_density[i] / 9.80665e-6:.3g} µg/√Hz"
         assert rows[f"accel {axis}"][1] == f"{accel.bias_instability[i] / 9.80665e-6:.3g} µg"
-    assert any("noise model fitted to the longest static record" in f.caption
+    assert any("noise model fitted to the long static records" in f.caption
                for f in results.figures)
-    assert "noise model of the longest static record" in certificate.text
+    assert "noise model of the long static records" in certificate.text

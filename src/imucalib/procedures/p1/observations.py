@@ -598,7 +598,7 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
     if noise:
         windows = [_with_model_se(w, noise) for w in windows]
         notes.append("standard errors of the window means from the noise model fitted to the "
-                     "longest static record (white, flicker and random-walk terms)")
+                     "long static records (white, flicker and random-walk terms)")
     else:
         notes.append("no long static record: standard errors from each window's own Allan "
                      "variance (uncertain by about a factor of two)")
@@ -636,7 +636,7 @@ def _with_noise_flags(todo: Sequence[tuple[StepRecord, str]]
     """Say for each window whether it needs its own Allan fit (``observe``'s `own_noise`).
 
     When some static window's valid span lasts :data:`~imucalib.procedures.common.noise.
-    NOISE_RECORD_MIN_S`, the noise model fitted to the longest such record gives every window
+    NOISE_RECORD_MIN_S`, the noise model fitted to the long such records gives every window
     its standard error (:func:`~imucalib.procedures.common.noise.estimate_noise`): only those
     long records need their own fit. Otherwise every window does. (A long record whose
     averaged span turns out shorter than its valid span leaves no model: the windows without

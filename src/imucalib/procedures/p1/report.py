@@ -6,7 +6,7 @@ The ``report_content`` hook of :class:`~imucalib.procedures.p1.procedure.P1Proce
 The results section holds every parameter with U = k·u (R.1 of :mod:`imucalib.report.document`),
 the verification checks, the conformity table against the plan's acceptance limits, the
 residual figure (per position and rate), the held-out/repeatability figure, and the noise model
-of the longest static record that gave the window means' standard errors, as a table and as
+of the long static records that gave the window means' standard errors, as a table and as
 Allan deviation curves (docs/p1.md, docs/reporting.md).
 """
 
@@ -121,7 +121,7 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
         from imucalib.report.noise_model_figure import noise_model_rows, save_noise_model_figure
 
         tables.append(ReportTable(
-            "noise model of the longest static record (the window means' standard errors)",
+            "noise model of the long static records (the window means' standard errors)",
             ("axis", "white noise N", "bias instability B", "random walk K"),
             noise_model_rows(obs.noise)))
         noise_fig = figure_of(
@@ -129,7 +129,7 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
                 obs.noise, [w.duration_s for w in obs.windows], p,
                 tau_min_s=1.0 / obs.sample_rate_hz,
                 tau_max_s=max(10.0 * max(w.duration_s for w in obs.windows), 100.0)),
-            "Allan deviation of the noise model fitted to the longest static record; each "
+            "Allan deviation of the noise model fitted to the long static records; each "
             "window mean's standard error is its value at τ = the window's length (dotted).")
     results = Section(SECTION_TITLES[4], (u_paragraph(), *fit_text, *rule_par),
                       tuple(tables), tuple(f for f in (fig, checks_fig, noise_fig)
