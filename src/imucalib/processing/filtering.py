@@ -16,7 +16,8 @@ transform with pre-warping, second-order sections for numerical robustness) has 
 
     |H(f)|² = 1 / (1 + (tan(πf/f_s) / tan(πf_c/f_s))^{2N})                      (1)
 
-Running it forward then backward (``scipy.signal.sosfiltfilt``, odd extension at both ends)
+Running it forward then backward (what ``scipy.signal.sosfiltfilt`` does, odd extension at both
+ends; here its values bit for bit from the compiled :mod:`~imucalib.processing._sos_kernel`)
 cancels the phase exactly — no delay, no phase distortion, as P1 requires — but *squares*
 the magnitude: the overall response is |H(f)|², −6 dB (gain ½) at f_c, with roll-off 2N·20 dB
 per decade. Its −3 dB point is lower than f_c::
