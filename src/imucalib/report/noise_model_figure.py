@@ -2,8 +2,9 @@
 
 P1 fits a noise model to its long static records (``procedures/common/noise.py``: white
 density N, bias instability B and random walk K per axis, from each record's Allan variance
-σ²(τ) ≈ N²/τ + C_B + K²τ/3, pooled over the records about as long as the longest) and takes each window mean's standard error from it, the model's
-Allan deviation at τ = the window's length (docs/p1.md). The report shows that model: the
+σ²(τ) ≈ N²/τ + C_B + K²τ/3, pooled over the records about as long as the longest) and takes
+each window mean's standard error from it, the model's Allan deviation at τ = the window's
+length (docs/p1.md). The report shows that model: the
 terms per axis in the usual datasheet units, and σ(τ) of each axis
 (:func:`~imucalib.models.noise.compute_theoretical_adev`, docs/equations.md §8) with the
 windows' lengths marked, where the standard errors were read.
