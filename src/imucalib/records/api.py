@@ -11,38 +11,30 @@ Every write appends rows to the hash chains (:mod:`imucalib.records.chain`); not
 updated or deleted. An amendment is a new result, version n + 1, whose ``replaces`` names the
 result it supersedes; "current" means not replaced.
 
-Due rules (docs/records.md, "Due rules")
-----------------------------------------
-(R.4) a unit's due date = the date of its last calibration + its interval (its own
-      ``recal_interval_days``, else the `interval_days` asked for); the last calibration is the
-      latest calibration date (:func:`calibration_date`: its run's ``started_utc``, else its
-      ``ended_utc``, else the ``created_utc`` of the result's first version, so that an
-      amendment or a re-analysis keeps it) among its current results whose decision is not a
-      fail; a unit with none is due now;
-(R.5) a piece of equipment is due when its current certificate's ``due_on`` ≤ the date asked
-      (a missing ``due_on`` is due).
+What a user reads back (history, drift, due units and equipment, runs) is built by
+:mod:`imucalib.records.queries`, which also states the due rules (R.4) and (R.5).
 """
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from datetime import UTC, date, datetime, timedelta
+from datetime import UTC, date, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final, TypeVar
 
-from sqlalchemy import Engine, func, or_, select, true
+from sqlalchemy import Engine, func, select, true
 from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError, StatementError
 from sqlalchemy.orm import Session
 
 from imucalib.errors import CalibrationError, InvalidInputError, RecordsError
 from imucalib.io.hashing import file_sha256
-from imucalib.records import chain
+from imucalib.records import chain, queries
 from imucalib.records.canonical import canonical_json
 from imucalib.records.engine import BEGIN_OPTION, make_engine, resolve_url, safe_url, upgrade
+from imucalib.records.queries import dangling, to_utc
 from imucalib.records.schema import (
     CHAINED,
     Equipment,
@@ -64,7 +56,6 @@ from imucalib.records.views import (
     ParameterRow,
     Problem,
     ReleaseStatus,
-    ReviewView,
     RunView,
     UserView,
     VerifyReport,
@@ -93,35 +84,10 @@ def _data_problem(url: str, exc: BaseException) -> RecordsError:
                         "`imucalib records verify` to find the rows")
 
 
-def _number(value: Any) -> float:
-    """Return a stored number as a float; anything else (text in a float column) is refused."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"a parameter value or σ is not a number ({value!r})")
-    return float(value)
-
-
-def _dangling(table: str, row_id: int, column: str, value: Any) -> RecordsError:
-    return RecordsError(f"the records database has a problem: {table} row {row_id} names "
-                        f"{column} {value!r}, which is not there (a dangling reference); run "
-                        "`imucalib records verify`")
-
-
 def _software_version() -> str:
     from imucalib import __version__
 
     return __version__
-
-
-def _utc(value: datetime | None) -> datetime | None:
-    if value is None:
-        return None
-    return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
-
-
-def _as_utc(value: datetime) -> datetime:
-    out = _utc(value)
-    assert out is not None
-    return out
 
 
 def _json_text(value: Mapping[str, Any] | None, name: str) -> str:
@@ -149,30 +115,6 @@ def parameter_rows(result: ProcedureResult | CalibrationResult) -> list[Paramete
             else result.parameter_rows())
     return [ParameterRow(r.name, float(r.value), float(r.std), r.unit) for r in rows
             if math.isfinite(r.value) and math.isfinite(r.std)]
-
-
-def _first_version(session: Session, res: Result) -> Result:
-    """Return the first version (version 1) of `res`, following ``replaces_id`` back."""
-    first, seen = res, {res.id}
-    while first.replaces_id is not None and first.replaces_id not in seen:
-        earlier = session.get(Result, first.replaces_id)
-        if earlier is None:
-            break
-        seen.add(earlier.id)
-        first = earlier
-    return first
-
-
-def calibration_date(session: Session, run: Run, res: Result) -> datetime:
-    """Return a result's calibration date (UTC): its run's, which no new version changes.
-
-    The run's ``started_utc``, else its ``ended_utc``, else (a run with no times: one opened by
-    ``calibrate`` for a recording no run recorded) the ``created_utc`` of the result's first
-    version. An amendment or a re-analysis (version n + 1, in the same run) therefore keeps the
-    date of the calibration it corrects, and the due date (R.4) with it.
-    """
-    return (_utc(run.started_utc) or _utc(run.ended_utc)
-            or _as_utc(_first_version(session, res).created_utc))
 
 
 class Records:
@@ -345,15 +287,6 @@ class Records:
 
     # --- units, stations, equipment ---------------------------------------------------------
     @staticmethod
-    def _unit(session: Session, serial: str) -> Unit:
-        unit = session.scalars(select(Unit).where(Unit.serial == serial)).first()
-        if unit is None:
-            known = session.scalars(select(Unit.serial).order_by(Unit.seq).limit(10)).all()
-            raise RecordsError(f"no unit with serial {serial!r} in the records; known serials: "
-                               f"{', '.join(known) or 'none'}")
-        return unit
-
-    @staticmethod
     def _new_unit(session: Session, serial: str, model: str, maker: str,
                   specification: Mapping[str, Any] | None,
                   recal_interval_days: int | None) -> Unit:
@@ -504,8 +437,8 @@ class Records:
                 recording_path=path, recording_sha256=sha, environment_json=env_text,
                 operator=check_operator(session, operator),
                 software_version=software_version or _software_version(),
-                station_id=station_id, started_utc=_utc(started_utc),
-                ended_utc=_utc(ended_utc)), equipment=ids)
+                station_id=station_id, started_utc=to_utc(started_utc),
+                ended_utc=to_utc(ended_utc)), equipment=ids)
             session.add_all(RunEquipment(run_id=run.id, equipment_id=eq) for eq in ids)
             return run.id
         return self._run(work, write=True)
@@ -603,7 +536,7 @@ class Records:
                                    f"amend {newer}")
             unit = session.get(Unit, old.unit_id)
             if unit is None:
-                raise _dangling("results", old.id, "unit", old.unit_id)
+                raise dangling("results", old.id, "unit", old.unit_id)
             decided = old.passed if passed is None else passed   # the decision stays
             return self._append_result(session, run_id=old.run_id, serial=unit.serial,
                                        result=result, passed=decided, verification=verification,
@@ -692,7 +625,7 @@ class Records:
             name = users.check_review(session, result_id, who, bool(approved), comment)
             return chain.append(session, Review(
                 result_id=result_id, reviewer=name, approved=bool(approved), comment=comment,
-                reviewed_utc=_utc(when) or datetime.now(UTC))).id
+                reviewed_utc=to_utc(when) or datetime.now(UTC))).id
         return self._run(work, write=True)
 
     def reviews_unverified(self) -> str:
@@ -785,7 +718,7 @@ class Records:
             return users.user_view(session, row)
         return self._run(work, write=False)
 
-    # --- queries ----------------------------------------------------------------------------
+    # --- queries (the read side: imucalib.records.queries) ----------------------------------
     def units(self) -> list[str]:
         """Return every recorded serial number, in the order they were added."""
         return self._run(lambda s: list(s.scalars(select(Unit.serial).order_by(Unit.seq))),
@@ -799,44 +732,7 @@ class Records:
         ``to_dict()``; ``CalibrationResult.from_dict`` rebuilds the calibration from either
         (when the result has one).
         """
-        def work(session: Session) -> dict[str, Any]:
-            row = session.get(Result, result_id)
-            if row is None:
-                raise RecordsError(f"no result with id {result_id} in the records")
-            return dict(json.loads(row.document_json))
-        return self._run(work, write=False)
-
-    @staticmethod
-    def _entries(session: Session, results: Iterable[Result]) -> list[HistoryEntry]:
-        out = []
-        for res in results:
-            run = session.get(Run, res.run_id)
-            if run is None:
-                raise _dangling("results", res.id, "run", res.run_id)
-            unit = session.get(Unit, res.unit_id)
-            if unit is None:
-                raise _dangling("results", res.id, "unit", res.unit_id)
-            successor = session.scalars(select(Result.id)
-                                        .where(Result.replaces_id == res.id)).first()
-            params = session.scalars(select(ResultParameter)
-                                     .where(ResultParameter.result_id == res.id)
-                                     .order_by(ResultParameter.id)).all()
-            reviews = session.scalars(select(Review).where(Review.result_id == res.id)
-                                      .order_by(Review.seq)).all()
-            out.append(HistoryEntry(
-                result_id=res.id, run_id=res.run_id, serial=unit.serial,
-                procedure=res.procedure, model=res.model, version=res.version,
-                calibrated_utc=calibration_date(session, run, res),
-                created_utc=_as_utc(res.created_utc), passed=res.passed,
-                replaces=res.replaces_id, replaced_by=successor,
-                amendment_reason=res.amendment_reason,
-                parameters=tuple(ParameterRow(str(p.name), _number(p.value), _number(p.std),
-                                              str(p.unit)) for p in params),
-                reviews=tuple(ReviewView(r.id, r.result_id, r.reviewer,
-                                         _as_utc(r.reviewed_utc), r.approved, r.comment)
-                              for r in reviews),
-                plan_name=run.plan_name, plan_hash=run.plan_hash))
-        return out
+        return self._run(lambda s: queries.result_document(s, result_id), write=False)
 
     def history(self, serial: str) -> list[HistoryEntry]:
         """Return every result of unit `serial` in recording order, amended ones included.
@@ -849,12 +745,7 @@ class Records:
         RecordsError
             An unknown serial (the message lists known ones).
         """
-        def work(session: Session) -> list[HistoryEntry]:
-            unit = self._unit(session, serial)
-            rows = session.scalars(select(Result).where(Result.unit_id == unit.id)
-                                   .order_by(Result.seq)).all()
-            return self._entries(session, rows)
-        return self._run(work, write=False)
+        return self._run(lambda s: queries.unit_history(s, serial), write=False)
 
     def result(self, result_id: int) -> HistoryEntry:
         """Return one result as a history entry (RecordsError if unknown)."""
@@ -862,7 +753,7 @@ class Records:
             row = session.get(Result, result_id)
             if row is None:
                 raise RecordsError(f"no result with id {result_id} in the records")
-            return self._entries(session, [row])[0]
+            return queries.history_entries(session, [row])[0]
         return self._run(work, write=False)
 
     def drift(self, serial: str, parameter: str) -> list[DriftPoint]:
@@ -873,21 +764,7 @@ class Records:
         RecordsError
             An unknown serial, or a parameter none of its results carries.
         """
-        entries = [e for e in self.history(serial) if e.current]
-        points = []
-        for e in entries:
-            try:
-                p = e.parameter(parameter)
-            except KeyError:
-                continue
-            assert e.calibrated_utc is not None
-            points.append(DriftPoint(e.calibrated_utc, p.value, p.std, p.unit, e.result_id))
-        if entries and not points:
-            names = sorted({p.name for e in entries for p in e.parameters})
-            raise RecordsError(f"no result of unit {serial!r} carries parameter {parameter!r}; "
-                               f"they carry {', '.join(names[:12])}"
-                               f"{' …' if len(names) > 12 else ''}")
-        return sorted(points, key=lambda d: (d.calibrated_utc, d.result_id))
+        return queries.drift_points(serial, parameter, self.history(serial))
 
     def due_units(self, as_of: date | None = None,
                   interval_days: int = DEFAULT_INTERVAL_DAYS) -> list[DueUnit]:
@@ -904,51 +781,12 @@ class Records:
         """
         if interval_days <= 0:
             raise InvalidInputError(f"`interval_days` must be > 0; got {interval_days}")
-
-        def work(session: Session) -> list[DueUnit]:
-            due = []
-            replaced = set(session.scalars(select(Result.replaces_id).where(
-                Result.replaces_id.is_not(None))))
-            for unit in session.scalars(select(Unit).order_by(Unit.seq)).all():
-                interval = unit.recal_interval_days or interval_days
-                rows = session.scalars(
-                    select(Result).where(Result.unit_id == unit.id,
-                                         or_(Result.passed.is_(None), Result.passed.is_(True)))
-                ).all()
-                best: tuple[datetime, int] | None = None
-                for res in rows:
-                    if res.id in replaced:
-                        continue
-                    run = session.get(Run, res.run_id)
-                    if run is None:
-                        raise _dangling("results", res.id, "run", res.run_id)
-                    when = calibration_date(session, run, res)
-                    if best is None or when > best[0]:
-                        best = (when, res.id)
-                if best is None:
-                    due.append(DueUnit(unit.serial, unit.model, None, None, interval, None))
-                    continue
-                last = best[0].date()
-                due.append(DueUnit(unit.serial, unit.model, last,
-                                   last + timedelta(days=interval), interval, best[1]))
-            return due
-        return self._run(work, write=False)
+        return self._run(lambda s: queries.unit_status(s, interval_days), write=False)
 
     def equipment(self, *, current_only: bool = True) -> list[EquipmentView]:
         """Return the equipment (by default only current certificates), in recording order."""
-        def work(session: Session) -> list[EquipmentView]:
-            replaced = set(session.scalars(select(Equipment.replaces_id).where(
-                Equipment.replaces_id.is_not(None))))
-            out = []
-            for eq in session.scalars(select(Equipment).order_by(Equipment.seq)):
-                if current_only and eq.id in replaced:
-                    continue
-                station = session.get(Station, eq.station_id) if eq.station_id else None
-                out.append(EquipmentView(eq.id, station.name if station else "", eq.kind,
-                                         eq.model, eq.serial, eq.certificate, eq.calibrated_on,
-                                         eq.due_on, eq.replaces_id))
-            return out
-        return self._run(work, write=False)
+        return self._run(lambda s: queries.equipment_views(s, current_only=current_only),
+                         write=False)
 
     def due_equipment(self, as_of: date | None = None) -> list[EquipmentView]:
         """Return the current equipment whose certificate is due on `as_of`, Eq. (R.5)."""
@@ -957,12 +795,7 @@ class Records:
 
     def runs_of_plan(self, plan: str) -> list[RunView]:
         """Return every run whose plan hash or plan name is `plan`, oldest first."""
-        def work(session: Session) -> list[RunView]:
-            runs = session.scalars(select(Run).where(or_(Run.plan_hash == plan,
-                                                         Run.plan_name == plan))
-                                   .order_by(Run.seq)).all()
-            return [self._run_view(session, r) for r in runs]
-        return self._run(work, write=False)
+        return self._run(lambda s: queries.runs_of_plan(s, plan), write=False)
 
     def run(self, run_id: int) -> RunView:
         """Return one run (RecordsError if unknown)."""
@@ -970,7 +803,7 @@ class Records:
             row = session.get(Run, run_id)
             if row is None:
                 raise RecordsError(f"no run with id {run_id} in the records")
-            return self._run_view(session, row)
+            return queries.run_view(session, row)
         return self._run(work, write=False)
 
     def run_of_recording(self, sha256: str,
@@ -985,26 +818,7 @@ class Records:
         if not sha256:
             return None
         want = "" if path is None else str(Path(path).expanduser().resolve())
-
-        def work(session: Session) -> RunView | None:
-            rows = session.scalars(select(Run).where(Run.recording_sha256 == sha256)
-                                   .order_by(Run.seq)).all()
-            if not rows:
-                return None
-            same = [r for r in rows if want and r.recording_path == want]
-            return self._run_view(session, (same or list(rows))[0])
-        return self._run(work, write=False)
-
-    @staticmethod
-    def _run_view(session: Session, run: Run) -> RunView:
-        station = session.get(Station, run.station_id) if run.station_id else None
-        eq = chain.children_of(session, run)["equipment"]
-        results = session.scalars(select(Result.id).where(Result.run_id == run.id)
-                                  .order_by(Result.seq)).all()
-        return RunView(run.id, run.plan_name, run.plan_hash, run.procedure, run.recording_path,
-                       run.recording_sha256, dict(json.loads(run.environment_json)),
-                       run.operator, run.software_version, station.name if station else "",
-                       tuple(eq), _utc(run.started_utc), _utc(run.ended_utc), tuple(results))
+        return self._run(lambda s: queries.run_of_recording(s, sha256, want), write=False)
 
     # --- tamper evidence --------------------------------------------------------------------
     def heads(self) -> list[ChainHead]:
