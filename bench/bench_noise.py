@@ -30,7 +30,8 @@ from collections.abc import Callable  # noqa: E402
 import numpy as np  # noqa: E402
 
 from imucalib import units  # noqa: E402
-from imucalib.models.noise import NoiseGenerator, NoiseModel  # noqa: E402
+from imucalib.models.noise import NoiseModel  # noqa: E402
+from imucalib.models.noise_generator import NoiseGenerator  # noqa: E402
 from imucalib.models.sensor import OutputChain, SensorSpec  # noqa: E402
 
 FS_HZ = 1000.0

@@ -15,7 +15,8 @@ from scipy import stats
 
 from imucalib import units
 from imucalib.estimation import build_triad_design, refine_with_kalman, solve_weighted_lsq
-from imucalib.models.noise import NoiseModel, simulate_noise
+from imucalib.models.noise import NoiseModel
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.processing import (
     compute_window_statistics,
     detect_segments,

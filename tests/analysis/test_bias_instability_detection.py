@@ -1,7 +1,8 @@
 """Bias instability from the Allan minimum: usable τ, the flattening test, upper bounds.
 
 The rule is docs/noise.md "Bias instability: when the Allan minimum is a detection". Records are
-the project's own noise generator (models.noise.simulate_noise) with a fixed seed sequence.
+the project's own noise generator (models.noise_generator.simulate_noise) with a fixed seed
+sequence.
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ import pytest
 from imucalib import units
 from imucalib.analysis import compute_oadev, fit_noise_terms
 from imucalib.analysis.bias_instability import EDF_MIN, read_allan_minimum
-from imucalib.models.noise import FLICKER_ALLAN_FACTOR, NoiseModel, simulate_noise
+from imucalib.models.noise import FLICKER_ALLAN_FACTOR, NoiseModel
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.report.noise_table import format_noise_table
 
 RATE_HZ = 100.0

@@ -1,8 +1,8 @@
 """Noise-term fits on twin data with known coefficients, against their Monte-Carlo spread.
 
-Twin data come from imucalib.models.noise (two-sided coefficients). Criteria per coefficient
-over R runs: the reported standard uncertainty u must match the Monte-Carlo standard deviation
-s (ratio s/mean(u) within the band below, which allows for the sampling error of s, about
+Twin data come from imucalib.models.noise_generator (two-sided coefficients). Criteria per
+coefficient over R runs: the reported standard uncertainty u must match the Monte-Carlo standard
+deviation s (ratio s/mean(u) within the band below, which allows for the sampling error of s, about
 1/√(2(R−1))), the normalised errors z = (estimate − truth)/u must be centred and covered
 (|z| < 2 in most runs), the bias |mean(z)| small.
 """
@@ -26,7 +26,8 @@ from imucalib.analysis import (
 )
 from imucalib.analysis._avar_covariance import covariance_basis
 from imucalib.errors import InvalidInputError
-from imucalib.models.noise import NoiseGenerator, NoiseModel
+from imucalib.models.noise import NoiseModel
+from imucalib.models.noise_generator import NoiseGenerator
 
 # name: (sample rate [Hz], samples, truth, flicker corner [Hz], sensor)
 CONFIGS = {

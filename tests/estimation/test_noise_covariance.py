@@ -7,7 +7,8 @@ import pytest
 
 from imucalib.errors import InvalidInputError
 from imucalib.estimation import compute_window_mean_covariance
-from imucalib.models.noise import NoiseModel, compute_theoretical_adev, simulate_noise
+from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.models.noise_generator import simulate_noise
 
 MODELS = {
     "white": (NoiseModel(white_density=1.0), 1e-12),

@@ -14,7 +14,8 @@ from imucalib import units
 from imucalib.analysis import NoiseFit, NoiseTerm, compute_oadev, fit_noise_terms, make_noise_term
 from imucalib.analysis.noise_parameters import ImuNoiseParameters, noise_parameters_from_fits
 from imucalib.errors import InvalidInputError
-from imucalib.models.noise import NoiseModel, simulate_noise
+from imucalib.models.noise import NoiseModel
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.procedures.allan.noise_exports import (
     format_kalibr_yaml,
     format_noise_table,

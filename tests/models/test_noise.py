@@ -1,4 +1,4 @@
-"""Tests of imucalib.models.noise: coefficients, conversions, and the statistics of the generator.
+"""Tests of imucalib.models.noise (coefficients, conversions) and noise_generator (its statistics).
 
 Allan-deviation checks use an overlapping ADEV (checked against allantools) and NIST SP 1065
 equivalent degrees of freedom (EDF) for their statistical tolerance: the relative standard
@@ -23,14 +23,8 @@ from scipy import stats
 
 from imucalib import units
 from imucalib.errors import ConfigurationError, InvalidInputError
-from imucalib.models.noise import (
-    FLICKER_ALLAN_FACTOR,
-    NoiseGenerator,
-    NoiseModel,
-    _ma_factor,
-    compute_theoretical_adev,
-    simulate_noise,
-)
+from imucalib.models.noise import FLICKER_ALLAN_FACTOR, NoiseModel, compute_theoretical_adev
+from imucalib.models.noise_generator import NoiseGenerator, _ma_factor, simulate_noise
 
 
 # -- helpers ------------------------------------------------------------------------------------

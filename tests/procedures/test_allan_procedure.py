@@ -12,7 +12,8 @@ from imucalib import units
 from imucalib.analysis import compute_oadev
 from imucalib.errors import InvalidInputError
 from imucalib.io import ColumnSpec, RecordingWriter, StreamSpec, open_recording
-from imucalib.models.noise import NoiseModel, simulate_noise
+from imucalib.models.noise import NoiseModel
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.procedures import NoiseCharacterization, analyze_allan_recording
 
 RATE_HZ = 200.0

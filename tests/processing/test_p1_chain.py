@@ -14,7 +14,8 @@ from imucalib.estimation import (
     compute_window_mean_covariance,
     solve_weighted_lsq,
 )
-from imucalib.models.noise import NoiseModel, simulate_noise
+from imucalib.models.noise import NoiseModel
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.models.triad import TriadModel, apply_triad
 from imucalib.processing import (
     compute_window_statistics,

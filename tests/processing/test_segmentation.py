@@ -10,7 +10,7 @@ import pytest
 from imucalib import units
 from imucalib.errors import InvalidInputError
 from imucalib.models.imu import sample_imu_model
-from imucalib.models.noise import simulate_noise
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.processing import SEGMENT_LABELS, detect_segments
 from imucalib.sim import RateTableSpec, SimRateTable
 

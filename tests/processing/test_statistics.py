@@ -9,7 +9,8 @@ from scipy import stats
 
 from imucalib import units
 from imucalib.errors import InvalidInputError
-from imucalib.models.noise import NoiseModel, compute_theoretical_adev, simulate_noise
+from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.processing import compute_integer_revolution_window, compute_window_statistics
 
 

@@ -12,7 +12,8 @@ import pytest
 
 from imucalib.analysis import compute_oadev, fit_noise_terms
 from imucalib.errors import InvalidInputError
-from imucalib.models.noise import NoiseModel, simulate_noise
+from imucalib.models.noise import NoiseModel
+from imucalib.models.noise_generator import simulate_noise
 from imucalib.procedures import ChannelNoise, NoiseCharacterization, SegmentNoise
 from imucalib.procedures.allan.figures import plot_allan_triad, save_allan_figures
 

@@ -23,7 +23,7 @@ For a stationary term with autocovariance R(u), with Φ'' = R and Φ(0) = Φ'(0)
   Φ(u) = σ²τ(|u| − τ(1 − e^{−|u|/τ}));
 - flicker (bias instability B): the IEEE PSD B²/(2πf) on [f_low, f0] as the sum of Gauss–Markov
   terms with corners f0·10^{−i} (i = 0 … ⌈log₁₀(f0/f_low)⌉ + 1) of variance B²·ln 10/π each
-  [2]_ — the construction of :class:`~imucalib.models.noise.NoiseGenerator`, whose Allan
+  [2]_ — the construction of :class:`~imucalib.models.noise_generator.NoiseGenerator`, whose Allan
   deviation is within ±1.5 % of the IEEE form; the terms start stationary, so the covariance
   includes the slowly varying flicker *state* (of standard deviation ≈ 2.3·B), which a fit
   with a bias parameter absorbs into the bias and its uncertainty;

@@ -8,8 +8,9 @@ Contents
 :mod:`imucalib.models.temperature`
     :class:`TemperatureDependence`, :func:`evaluate_parameter`, :func:`hysteresis_state`.
 :mod:`imucalib.models.noise`
-    :class:`NoiseModel`, :class:`NoiseGenerator`, :func:`simulate_noise`,
-    :func:`compute_theoretical_adev`.
+    :class:`NoiseModel`, :func:`compute_theoretical_adev`.
+:mod:`imucalib.models.noise_generator`
+    :class:`NoiseGenerator`, :func:`simulate_noise` (samples of a model's noise).
 :mod:`imucalib.models.sensor`
     :class:`SensorSpec` (range, resolution, bandwidth), :class:`OutputChain`.
 :mod:`imucalib.models.imu`
@@ -33,12 +34,8 @@ from imucalib._lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from imucalib.models.imu import GRADES, THERMAL_GRADES, GradeSpec, ImuModel, sample_imu_model
-    from imucalib.models.noise import (
-        NoiseGenerator,
-        NoiseModel,
-        compute_theoretical_adev,
-        simulate_noise,
-    )
+    from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+    from imucalib.models.noise_generator import NoiseGenerator, simulate_noise
     from imucalib.models.sensor import OutputChain, SensorSpec, apply_output_chain
     from imucalib.models.temperature import (
         TemperatureDependence,
@@ -77,6 +74,7 @@ __all__ = [
 ]
 
 _IMU, _NOISE, _SENSOR = "imucalib.models.imu", "imucalib.models.noise", "imucalib.models.sensor"
+_GENERATOR = "imucalib.models.noise_generator"
 _TEMPERATURE, _TRIAD = "imucalib.models.temperature", "imucalib.models.triad"
 
 #: Module of each public name, imported on first access (PEP 562): importing one module of this
@@ -84,8 +82,8 @@ _TEMPERATURE, _TRIAD = "imucalib.models.temperature", "imucalib.models.triad"
 __getattr__ = lazy_getattr(__name__, {
     **dict.fromkeys(("GRADES", "THERMAL_GRADES", "GradeSpec", "ImuModel", "sample_imu_model"),
                     _IMU),
-    **dict.fromkeys(("NoiseGenerator", "NoiseModel", "compute_theoretical_adev",
-                     "simulate_noise"), _NOISE),
+    **dict.fromkeys(("NoiseModel", "compute_theoretical_adev"), _NOISE),
+    **dict.fromkeys(("NoiseGenerator", "simulate_noise"), _GENERATOR),
     **dict.fromkeys(("OutputChain", "SensorSpec", "apply_output_chain"), _SENSOR),
     **dict.fromkeys(("TemperatureDependence", "evaluate_parameter", "hysteresis_state"),
                     _TEMPERATURE),

@@ -3,7 +3,7 @@
 An IMU on the twin samples at its own (drifting) oscillator, timestamps with its own counter, and
 its packets reach the station with latency and jitter; some may be lost. Its outputs are the truth
 passed through the error model (:func:`~imucalib.models.triad.apply_triad`), plus noise
-(:class:`~imucalib.models.noise.NoiseGenerator`), through the output stage
+(:class:`~imucalib.models.noise_generator.NoiseGenerator`), through the output stage
 (:class:`~imucalib.models.sensor.OutputChain`: bandwidth, saturation, resolution).
 
 Contents
@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 from imucalib._checks import check_finite_scalar, check_nonnegative
 from imucalib.errors import ConfigurationError, InvalidInputError
 from imucalib.models.imu import ImuModel
-from imucalib.models.noise import NoiseGenerator
+from imucalib.models.noise_generator import NoiseGenerator
 from imucalib.models.sensor import OutputChain
 from imucalib.models.temperature import hysteresis_state
 from imucalib.models.triad import TriadModel, apply_triad
