@@ -19,18 +19,18 @@ import pytest
 from rich.console import Console
 
 from imucalib.models.result_document import result_document
-from imucalib.procedures.p2.analysis import (
+from imucalib.procedures.p2.analysis import analyze_unit
+from imucalib.procedures.p2.batch import P2BatchResult, summary_rows
+from imucalib.procedures.p2.console import render_p2
+from imucalib.procedures.p2.observations import UnitObservations
+from imucalib.procedures.p2.report import content
+from imucalib.procedures.p2.result import (
     DECISION_RULE,
     HELD_OUT_ALPHA,
     HELD_OUT_CHECK,
     HELD_OUT_Z_LIMIT,
     P2UnitResult,
-    analyze_unit,
 )
-from imucalib.procedures.p2.batch import P2BatchResult, summary_rows
-from imucalib.procedures.p2.console import render_p2
-from imucalib.procedures.p2.observations import UnitObservations
-from imucalib.procedures.p2.report import content
 from imucalib.procedures.p2.summary_report import summary_report
 
 from ._p2_synthetic import draw_truth, unit_observations

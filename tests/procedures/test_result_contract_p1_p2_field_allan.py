@@ -24,13 +24,9 @@ from imucalib.procedures.allan.analysis import NO_DECISION_REASON, analyze_allan
 from imucalib.procedures.common.static_intervals import FieldLog
 from imucalib.procedures.field.analysis import FieldOptions, analyze_field
 from imucalib.procedures.p1.analysis import P1Options, analyze_p1
-from imucalib.procedures.p2.analysis import (
-    DECISION_RULE,
-    HELD_OUT_CHECK,
-    analyze_unit,
-    failed_unit,
-)
+from imucalib.procedures.p2.analysis import analyze_unit, failed_unit
 from imucalib.procedures.p2.batch import P2BatchResult
+from imucalib.procedures.p2.result import DECISION_RULE, HELD_OUT_CHECK
 from imucalib.sim import handheld_session
 
 from ._p2_synthetic import draw_truth, unit_observations

@@ -52,9 +52,10 @@ from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults
 from imucalib.procedures.common.workers import local_pool
-from imucalib.procedures.p2.analysis import P2Options, P2UnitResult, analyze_unit, failed_unit
+from imucalib.procedures.p2.analysis import P2Options, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
+from imucalib.procedures.p2.result import P2UnitResult
 from imucalib.procedures.p2.roles import P2_SOAK
 
 __all__ = ["BATCH_DECISION_RULE", "P2BatchResult", "analyze_p2", "analyze_unit_file",

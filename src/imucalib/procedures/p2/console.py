@@ -15,7 +15,7 @@ from rich.markup import escape
 from rich.table import Column, Table
 
 from imucalib import units
-from imucalib.procedures.p2.analysis import HELD_OUT_CHECK
+from imucalib.procedures.p2.result import HELD_OUT_CHECK
 from imucalib.report.console import print_written
 
 __all__ = ["render_p2"]

@@ -30,8 +30,8 @@ __all__ = ["P2_WRITERS", "write_batch_summary"]
 
 
 def _temperature_png(result: Any, folder: Path, stem: str) -> list[Path]:
-    from imucalib.procedures.p2.analysis import P2UnitResult
     from imucalib.procedures.p2.figures import save_temperature_figure
+    from imucalib.procedures.p2.result import P2UnitResult
 
     if not isinstance(result, P2UnitResult) or not result.models:
         raise InvalidInputError("output 'temperature-png' needs a P2 unit's temperature "

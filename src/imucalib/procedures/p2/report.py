@@ -63,14 +63,14 @@ def _error_rows(unit_result: Any) -> tuple[tuple[str, ...], ...]:
 
 def _held_out_note(unit_result: Any) -> str:
     """Return the decision's note on the held-out consistency (empty when every model holds)."""
-    from imucalib.procedures.p2.analysis import HELD_OUT_CHECK
+    from imucalib.procedures.p2.result import HELD_OUT_CHECK
 
     return next((n for n in unit_result.decision.notes if n.startswith(HELD_OUT_CHECK)), "")
 
 
 def content(unit_result: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return a P2 unit's sections 1–5 (None for anything but a calibrated P2 unit)."""
-    from imucalib.procedures.p2.analysis import P2UnitResult
+    from imucalib.procedures.p2.result import P2UnitResult
 
     if not isinstance(unit_result, P2UnitResult) or unit_result.result is None:
         return None
