@@ -11,7 +11,8 @@ The station together: :mod:`~imucalib.sim.synth` (an IMU at its own clock),
 :mod:`~imucalib.sim.rig` (:class:`TwinRig`, every stream of the station in virtual time),
 :mod:`~imucalib.sim.scenario` (what to simulate: twin equipment plus a plan's steps),
 :mod:`~imucalib.sim.build` (equipment → rig and truth). Field calibration without a table:
-:mod:`~imucalib.sim.handheld` (a hand-held session on a desk, its truth and its CSV) on
+:mod:`~imucalib.sim.handheld` (a hand-held session on a desk and its truth;
+:mod:`~imucalib.sim.handheld_csv` writes it as a user's files) on
 :mod:`~imucalib.sim.hand_motion` (the hand's attitude, rate and angular acceleration). A
 scenario is run into a Recording by the station runner on the simulated station
 (:mod:`imucalib.station.simulate`).
@@ -46,11 +47,10 @@ from imucalib.sim.handheld import (
     HandheldSession,
     HandRotation,
     StaticPose,
-    WrittenCsv,
     handheld_session,
     harsh_handheld_session,
-    write_session_csv,
 )
+from imucalib.sim.handheld_csv import WrittenCsv, write_session_csv
 from imucalib.sim.kinematics import (
     ImuKinematics,
     PlatformMotion,
