@@ -45,6 +45,7 @@ from ._harness import (  # noqa: F401 (run_cli and the rest are used by sibling 
     run_cli,
     tally,
 )
+from ._still_imu import still_imu_columns
 
 FUZZ = fuzz_settings(10)
 
@@ -260,13 +261,7 @@ def small_recording(tmp_path_factory) -> Path:
     from imucalib.io.streams import imu_stream_spec
 
     path = tmp_path_factory.mktemp("rec") / "small.h5"
-    n = 2000
-    t = np.arange(n) / 200.0
-    cols = {"time_s": t, "device_time_s": t, "counter": np.arange(n),
-            "temperature_degc": np.full(n, 25.0), "saturated": np.zeros(n, dtype=bool)}
-    for c in ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps", "accel_x_mps2", "accel_y_mps2"):
-        cols[c] = np.full(n, 1e-3)
-    cols["accel_z_mps2"] = np.full(n, 9.8)
+    cols = still_imu_columns(2000)
     with RecordingWriter(path, streams=[imu_stream_spec("IMU-0001")],
                          metadata={"operator": "fz"}, chunk_rows=512) as w:
         w.append("imu", "IMU-0001", cols)

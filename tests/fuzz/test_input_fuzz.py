@@ -36,6 +36,7 @@ from ._harness import (
     run_child,
     run_cli,
 )
+from ._still_imu import CHILD_PATH
 
 #: The multiplier of the costly doors in a campaign (a fifth of the others').
 SLOW_SCALE = max(1, SCALE // 5)
@@ -400,21 +401,16 @@ def test_mutated_result_json_through_report_and_export(field_result, tmp_path, d
 
 
 # -------------------------------------------------------------------------------- recover
-WRITE_OPEN = r"""
+WRITE_OPEN = CHILD_PATH + r"""
 import os, sys
 import h5py
 import numpy as np
+from _still_imu import still_imu_columns
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.streams import imu_stream_spec
 
 folder = sys.argv[1]
-n = 1200
-t = np.arange(n) / 200.0
-cols = {"time_s": t, "device_time_s": t, "counter": np.arange(n),
-        "temperature_degc": np.full(n, 25.0), "saturated": np.zeros(n, dtype=bool)}
-for c in ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps", "accel_x_mps2", "accel_y_mps2"):
-    cols[c] = np.full(n, 1e-3)
-cols["accel_z_mps2"] = np.full(n, 9.8)
+cols = still_imu_columns(1200)
 UTF8 = h5py.string_dtype("utf-8")
 BAD = np.array(b"\xff\xfe{bad", dtype=object)
 EDITS = {

@@ -30,6 +30,7 @@ import numpy as np
 import pytest
 
 from ._harness import check_outcome, run_cli
+from ._still_imu import CHILD_PATH
 
 CASES = Path(__file__).with_name("cases")
 CASE_DIRS = sorted(p.parent for p in CASES.glob("*/case.toml") if not p.parent.name.startswith(
@@ -47,20 +48,15 @@ def _long_field(tmp: Path) -> None:
         (tmp / name).write_text(text, encoding="utf-8")
 
 
-_OPEN_BAD_UTF8 = r"""
+_OPEN_BAD_UTF8 = CHILD_PATH + r"""
 import os, sys
 import h5py
 import numpy as np
+from _still_imu import still_imu_columns
 from imucalib.io.recording import RecordingWriter
 from imucalib.io.streams import imu_stream_spec
 
-n = 400
-t = np.arange(n) / 200.0
-cols = {"time_s": t, "device_time_s": t, "counter": np.arange(n),
-        "temperature_degc": np.full(n, 25.0), "saturated": np.zeros(n, dtype=bool)}
-for c in ("gyro_x_rps", "gyro_y_rps", "gyro_z_rps", "accel_x_mps2", "accel_y_mps2"):
-    cols[c] = np.full(n, 1e-3)
-cols["accel_z_mps2"] = np.full(n, 9.8)
+cols = still_imu_columns(400)
 w = RecordingWriter(sys.argv[1], streams=[imu_stream_spec("IMU-0001")],
                     metadata={"operator": "fz"}, chunk_rows=256)
 w.__enter__()
