@@ -13,6 +13,7 @@ from scipy.spatial.transform import Rotation
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation.gravity_norm import (
     PARAMETERS,
+    TEMPERATURE_PARAMETERS,
     correct_accel,
     fit_gravity_norm,
     pose_coverage,
@@ -124,3 +125,55 @@ def test_coverage_names_missing_directions_and_the_poses_needed():
     assert all(0 < k <= 50 for k in need.values()), need
     _, none = pose_coverage(y, sy, G, target_std=fit.std() * 10.0)
     assert set(none.values()) == {0}
+
+
+SCALE_TC = np.array([1.2e-4, -0.8e-4, 1.5e-4])   # ṡ_T of (F.1‴) [1/°C]
+
+
+def _warming_poses(rng, n=30, sigma=SIGMA):
+    """n random poses whose scale factors follow (F.1‴) over a 3 °C warm-up."""
+    temps = 25.0 + 3.0 * (1.0 - np.exp(-np.linspace(0.0, 1.5, n)))
+    f = Rotation.random(n, random_state=rng).apply([0.0, 0.0, G])
+    tinv, _ = _truth_matrix(TRUTH)
+    s_k = TRUTH[3:6] + np.outer(temps - temps.mean(), SCALE_TC)
+    y = (f @ tinv.T) / (1.0 + s_k) + TRUTH[:3]
+    sy = np.full_like(y, sigma)
+    return y + rng.normal(0.0, sy), sy, temps
+
+
+def test_the_temperature_term_recovers_scale_factors_that_move_with_temperature():
+    """(F.1‴): noise-free poses give the truth (s at the poses' mean temperature, ṡ_T), and
+    every pose's force by the fitted model has the norm g."""
+    y, _, temps = _warming_poses(np.random.default_rng(3), sigma=1e-12)
+    fit = fit_gravity_norm(y, np.full_like(y, SIGMA), G, temperatures_degc=temps)
+    assert fit.values.size == len(PARAMETERS) + len(TEMPERATURE_PARAMETERS)
+    np.testing.assert_allclose(fit.values[:9], TRUTH, atol=1e-9)
+    np.testing.assert_allclose(fit.values[9:], SCALE_TC, atol=1e-10)
+    np.testing.assert_allclose(np.linalg.norm(fit.forces, axis=1), G, atol=1e-9)
+    # without the term one value per scale factor misfits, the forces' norms miss g
+    blind = fit_gravity_norm(y, np.full_like(y, SIGMA), G)
+    assert blind.quality.misfit
+    # with the drift too, (F.1″) first and (F.1‴) last
+    both = fit_gravity_norm(y, np.full_like(y, SIGMA), G, times_s=np.arange(30.0),
+                            temperatures_degc=temps)
+    np.testing.assert_allclose(both.values[12:], SCALE_TC, atol=1e-8)
+    np.testing.assert_allclose(both.values[9:12], 0.0, atol=1e-9)
+
+
+def test_the_temperature_coefficients_sigma_match_their_spread():
+    rng = np.random.default_rng(4)
+    y0, sy, temps = _warming_poses(rng, sigma=0.0)
+    errs, stds = [], []
+    for _ in range(200):
+        fit = fit_gravity_norm(y0 + rng.normal(0.0, SIGMA, y0.shape), sy + SIGMA, G,
+                               temperatures_degc=temps)
+        errs.append(fit.values[9:] - SCALE_TC)
+        stds.append(np.sqrt(np.diag(fit.covariance_noise))[9:])
+    ratio = np.std(errs, axis=0) / np.mean(stds, axis=0)
+    assert np.all(np.abs(ratio - 1.0) < 0.2), ratio
+
+
+def test_a_constant_temperature_cannot_give_its_coefficients():
+    y, sy, _ = _warming_poses(np.random.default_rng(5))
+    with pytest.raises(InsufficientExcitationError, match="scale_tc"):
+        fit_gravity_norm(y, sy, G, temperatures_degc=np.full(len(y), 25.0))

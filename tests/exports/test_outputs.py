@@ -125,3 +125,21 @@ def test_parameters_csv_gives_the_birge_scaled_sigma_of_a_misfit(tmp_path):
     for name, sigma in rows.items():
         factor = 2.0 if name.startswith("gyro") else 1.0  # √(40/10)
         assert sigma == pytest.approx(factor * noise[name], rel=1e-12), name
+
+
+def test_parameters_csv_writes_numpy_scalars_as_plain_numbers(tmp_path):
+    """A procedure that hands a numpy scalar to a row gets the number, not ``np.float64(…)``."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from imucalib.exports.outputs import _parameters_csv
+    from imucalib.models.reported import ReportedParameter
+
+    row = ReportedParameter("accel_M_zz_tc", np.float64(2.2e-4),
+                            np.float64(7.6e-5), "1/K", np.float64(7.6e-5))
+    fake = SimpleNamespace(parameter_rows=lambda: [row], procedure="field")
+    (path,) = _parameters_csv(fake, tmp_path, "run")
+    (_, (name, value, sigma, unit, noise)) = list(csv.reader(path.open()))
+    assert (name, value, sigma, unit, noise) == ("accel_M_zz_tc", "0.00022", "7.6e-05", "1/K",
+                                                 "7.6e-05")

@@ -50,7 +50,8 @@ def static_temperature_degc(session: Any) -> float:
     return float(np.mean(session.temperature_degc[still]))
 
 
-def session_bias_drift(session: Any) -> tuple[np.ndarray, np.ndarray]:
+def session_bias_drift(session: Any, temperature_degc: float | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
     """The mean over the session's static samples of output − deterministic model (gyro, accel).
 
     With the grade's noise the biases wander (bias instability, random walk): the session's
@@ -58,7 +59,8 @@ def session_bias_drift(session: Any) -> tuple[np.ndarray, np.ndarray]:
     can see. A session whose IMU warms (a temperature-dependent truth) is taken at its statics'
     mean temperature (:func:`model_at`): the biases' drift with it is then in this mean too.
     """
-    model = model_at(session.model, static_temperature_degc(session))
+    model = model_at(session.model, static_temperature_degc(session)
+                     if temperature_degc is None else temperature_degc)
     still = np.zeros(session.time_s.size, dtype=bool)
     for p in session.statics:
         still |= (session.time_s >= p.start_time_s) & (session.time_s <= p.stop_time_s)
@@ -69,17 +71,20 @@ def session_bias_drift(session: Any) -> tuple[np.ndarray, np.ndarray]:
             np.mean(session.accel_mps2[still] - accel, axis=0))
 
 
-def field_truth(model: ImuModel, *, six_position: bool = False,
-                session: Any = None) -> dict[str, float]:
+def field_truth(model: ImuModel, *, six_position: bool = False, session: Any = None,
+                temperature_degc: float | None = None) -> dict[str, float]:
     """The truth by the names of the field result's triad model (SI).
 
     With `session`, the biases are the session's mean biases (:func:`session_bias_drift`), and a
-    temperature-dependent truth is taken at the statics' mean temperature.
+    temperature-dependent truth is taken at `temperature_degc` (the result's
+    ``reference_temperature_degc`` when its scale factors were fitted as linear in temperature)
+    or else at the statics' mean temperature.
     """
     if session is not None:
-        model = model_at(model, static_temperature_degc(session))
+        model = model_at(model, static_temperature_degc(session)
+                         if temperature_degc is None else temperature_degc)
     a, g = model.accel, model.gyro
-    drift_g, drift_a = session_bias_drift(session) if session is not None else (
+    drift_g, drift_a = session_bias_drift(session, temperature_degc) if session is not None else (
         np.zeros(3), np.zeros(3))
     if six_position:
         ua, q = np.eye(3) + np.asarray(a.scale_misalignment), np.eye(3)

@@ -17,8 +17,9 @@ from ._field_twin import field_truth
 SEEDS = range(1000, 1008)
 
 
-def _fit(session, **options):
-    log = FieldLog("IMU", "twin", session.time_s, session.gyro_rps, session.accel_mps2)
+def _fit(session, temperature=False, **options):
+    log = FieldLog("IMU", "twin", session.time_s, session.gyro_rps, session.accel_mps2,
+                   temperature_degc=session.temperature_degc if temperature else None)
     return analyze_field(log, FieldOptions(latitude_deg=session.site.latitude_deg,
                                            gravity_std_mps2=0.0, **options))
 
@@ -95,9 +96,10 @@ def test_harsh_sessions_calibrate_with_honest_sigma(grade):
     5σ off, the covariance is one (the 40-seed figures are in docs/field.md)."""
     for seed in range(3):
         s = harsh_handheld_session(grade, seed=seed)
-        r = _fit(s)
+        r = _fit(s, temperature=True)
         assert r.result.has_triad("gyro")
-        truth = field_truth(s.model, session=s)
+        truth = field_truth(s.model, session=s,
+                            temperature_degc=r.details["reference_temperature_degc"])
         z = [(p.value - truth[p.name]) / p.std for p in r.parameter_rows()
              if p.name in truth and p.std > 0]
         assert max(abs(v) for v in z) < 5.0
@@ -134,3 +136,50 @@ def test_a_warming_session_says_its_parameters_moved():
         [*GYRO_COLUMNS, *ACCEL_COLUMNS], np.column_stack([cold.gyro_rps, cold.accel_mps2]).T,
         strict=True)}), "IMU", "cold.csv"), FieldOptions(latitude_deg=45.0))
     assert not any("temperature moved" in n for n in r.notes)
+
+
+def test_a_warming_unit_gets_its_scale_factors_temperature_terms():
+    """Seed 11 warms by 2.4 °C over its poses: a consumer's scale factors move by ~1.2·10⁻⁴ per
+    °C, so one value for the session left accel_M_zz 10σ off (max |z| 6.9 over 40 seeds).
+    With the log's temperature the data choose (F.1‴): every parameter within 5σ of the truth
+    at the result's reference temperature (the poses' mean), the coefficients near the truth's
+    slope; without a temperature the one-value fit misses, as before."""
+    s = harsh_handheld_session("consumer", seed=11)
+    r = _fit(s, temperature=True)
+    accel = r.model_selection[0]
+    assert "temp" in accel["chosen"] and "temp" in accel["optional"]
+    t_ref = r.details["reference_temperature_degc"]
+    low, high = r.details["temperature_span_degc"]
+    assert low < t_ref < high
+    truth = field_truth(s.model, session=s, temperature_degc=t_ref)
+    rows = {p.name: p for p in r.parameter_rows()}
+    z = {n: (p.value - truth[n]) / p.std for n, p in rows.items() if n in truth and p.std > 0}
+    assert max(abs(v) for v in z.values()) < 5.0, max(z.items(), key=lambda kv: abs(kv[1]))
+    # the slope of the truth's M_zz over the session's temperatures, against the coefficient
+    # (the M of the frame a differs from the sensor's in second order only)
+    d_t = 1.0
+    slope = (s.model.parameters_at(t_ref + d_t)["accel_M_zz"]
+             - s.model.parameters_at(t_ref)["accel_M_zz"]) / d_t
+    tc = rows["accel_M_zz_tc"]
+    assert tc.unit == "1/K" and abs(tc.value - slope) < 4.0 * tc.std, (tc.value, slope, tc.std)
+    assert any("fitted as linear in it" in n for n in r.notes)
+    blind = _fit(s)                                 # no temperature: one value, 10σ off
+    truth0 = field_truth(s.model, session=s)
+    zz = {p.name: (p.value - truth0[p.name]) / p.std for p in blind.parameter_rows()
+          if p.name in truth0 and p.std > 0}
+    assert abs(zz["accel_M_zz"]) > 5.0
+    assert "temp" not in blind.model_selection[0]["optional"]
+
+
+def test_the_temperature_term_can_be_forced_and_needs_a_temperature():
+    s = harsh_handheld_session("consumer", seed=11)
+    out = _fit(s, temperature=True, terms="-temp")
+    assert out.model_selection[0]["forced"] == {"temp": False}
+    assert "accel_M_xx_tc" not in {p.name for p in out.parameter_rows()}
+    assert any("every parameter here is one value" in n for n in out.notes)
+    with pytest.raises(InvalidInputError, match=r"\+temp\) needs .* temperature"):
+        _fit(s, terms="+temp")
+    with pytest.raises(InvalidInputError, match="accel_temperature"):
+        FieldOptions(accel_temperature="maybe")
+    same = _fit(s, temperature=True, accel_temperature="yes")
+    assert same.model_selection[0]["forced"] == {"temp": True}

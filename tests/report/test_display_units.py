@@ -34,6 +34,10 @@ G0 = 9.80665
     ("delta_x_head_z", 1.0e-4, 1.0e-5, "rad", ("+100", "10", "µrad")),
     # a gyro's quadratic term: ppm per °/s
     ("gyro_E2_x", 1.0e-6, 1.0e-7, "s/rad", ("+0.0175", "0.0017", "ppm/(°/s)")),
+    # a bias's drift over a session, a scale factor's temperature coefficient (docs/field.md)
+    ("accel_bias_rate_x", 2.0 * G0 * 1e-6, 0.5 * G0 * 1e-6, "m/s^3", ("+2.00", "0.50", "µg/s")),
+    ("gyro_bias_rate_x", 1.0e-6, 1.0e-7, "rad/s^2", ("+0.206", "0.021", "(°/h)/s")),
+    ("accel_M_zz_tc", 2.2e-4, 7.6e-5, "1/K", ("+220", "76", "ppm/K")),
     # a quantity without a display unit stays in SI
     ("latitude_from_gyro_x", 45.123, 0.05, "deg", ("+45.123", "0.050", "deg")),
     ("c", 1.0e-6, 1.0e-7, "m/(rad/s)^2", ("+1.00e-6", "0.10e-6", "m/(rad/s)^2")),

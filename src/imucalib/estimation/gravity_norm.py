@@ -27,7 +27,16 @@ linear drift
 
     y_k → y_k − ḃ·(t_k − t̄)                                                            (F.1″)
 
-(t̄ the poses' mean time, b then the bias at t̄) adds three rates. :func:`fit_gravity_norm`
+(t̄ the poses' mean time, b then the bias at t̄) adds three rates. A unit that warms during
+the session (self-heating after power-up: a consumer accelerometer's scale factors move by about
+10⁻⁴ per °C) changes its scale factors with its temperature sensor's reading T_k; the optional
+temperature term
+
+    s → s + ṡ_T·(T_k − T̄)                                                              (F.1‴)
+
+(T̄ the poses' mean temperature, s then the scale-factor errors at T̄, ṡ_T [1/°C] per axis) adds
+three coefficients; the bias's own temperature dependence is in (F.1″) when the temperature
+follows the time (a warm-up), and the two are not told apart. :func:`fit_gravity_norm`
 solves (F.2) by Gauss–Newton with the analytic Jacobian (each step by
 :func:`~imucalib.estimation.linear.solve_weighted_lsq`), returns the covariance
 (JᵀW J)⁻¹ (the Cramér–Rao bound of the design for white noise), χ²/ν and its Birge-scaled
@@ -48,6 +57,7 @@ Contents
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
@@ -60,7 +70,8 @@ from imucalib.estimation._common import check_rank
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
-__all__ = ["PARAMETERS", "GravityNormFit", "correct_accel", "fit_gravity_norm", "pose_coverage"]
+__all__ = ["DRIFT_PARAMETERS", "K2_PARAMETERS", "PARAMETERS", "TEMPERATURE_PARAMETERS",
+           "GravityNormFit", "correct_accel", "fit_gravity_norm", "pose_coverage"]
 
 _F64 = NDArray[np.float64]
 #: The unknowns of (F.1), in order.
@@ -70,6 +81,8 @@ PARAMETERS: Final = ("bias_x", "bias_y", "bias_z", "scale_x", "scale_y", "scale_
 K2_PARAMETERS: Final = ("k2_x", "k2_y", "k2_z")
 #: The optional bias rates of (F.1″), last. [m/s³]
 DRIFT_PARAMETERS: Final = ("bias_rate_x", "bias_rate_y", "bias_rate_z")
+#: The optional scale factors' temperature coefficients of (F.1‴), after the rates. [1/°C]
+TEMPERATURE_PARAMETERS: Final = ("scale_tc_x", "scale_tc_y", "scale_tc_z")
 _DIRECTIONS: Final = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0),
                       "+z": (0, 0, 1), "-z": (0, 0, -1)}
 #: Where added poses go once no axis direction is missing: the 12 directions halfway between
@@ -91,10 +104,13 @@ def correct_accel(theta: ArrayLike, y: ArrayLike) -> _F64:
     return _jacobian(p, np.atleast_2d(as_array(y, "y")))[0]
 
 
-def _jacobian(p: _F64, y: _F64) -> tuple[_F64, _F64]:
-    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9 or 12) of (F.1) or (F.1′)."""
+def _jacobian(p: _F64, y: _F64, scale_offset: _F64 | None = None) -> tuple[_F64, _F64]:
+    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9 or 12) of (F.1) or (F.1′).
+
+    `scale_offset` (n, 3) adds to s pose by pose: ṡ_T·(T_k − T̄) of (F.1‴).
+    """
     d = y - p[:3]                                   # y − b
-    k = 1.0 + p[3:6]
+    k = 1.0 + p[3:6] if scale_offset is None else 1.0 + p[3:6] + scale_offset
     k2 = p[9:12] if p.size == 12 else np.zeros(3)
     w = d - k2 * d**2                               # the quadratic term removed (F.1′)
     v = w * k                                       # (I + diag s)(y − b − k2∘(y − b)²)
@@ -131,6 +147,9 @@ class GravityNormFit:
     residuals : ndarray, shape (n,)
         ‖a_k‖ − g. [m/s²]
     iterations : int
+    forces : ndarray, shape (n, 3)
+        Each pose's corrected specific force a_k by the fitted model (with its drift and
+        temperature terms at the pose). [m/s²]
     """
 
     values: _F64
@@ -139,21 +158,21 @@ class GravityNormFit:
     quality: FitQuality
     residuals: _F64
     iterations: int
+    forces: _F64
 
     def std(self) -> _F64:
         """Return the standard uncertainties of :data:`PARAMETERS` (Birge-scaled on a misfit)."""
         return np.sqrt(np.diag(self.covariance))
 
 
-def _check_rank(j: _F64, sw: _F64, drift: bool) -> None:
-    core = (*PARAMETERS, *K2_PARAMETERS)[:j.shape[1] - (3 if drift else 0)]
-    names = (*core, *DRIFT_PARAMETERS) if drift else core
-    check_rank(j * sw[:, None], names, subject="the poses",
+def _check_rank(j: _F64, sw: _F64, names: Sequence[str]) -> None:
+    check_rank(j * sw[:, None], tuple(names), subject="the poses",
                advice="add poses with gravity along other axes; pose_coverage says which")
 
 
 def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
-                     k2: bool = False, times_s: ArrayLike | None = None, max_iter: int = 50,
+                     k2: bool = False, times_s: ArrayLike | None = None,
+                     temperatures_degc: ArrayLike | None = None, max_iter: int = 50,
                      tol: float = 1e-12) -> GravityNormFit:
     """Solve (F.2) by Gauss–Newton from b = 0, s = 0, α = 0 (module docstring).
 
@@ -161,7 +180,10 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     [1/(m/s²)]): their poses need every axis at several |x_i| (tilted poses), else the design
     is refused as rank-deficient. With `times_s` (each pose's mid-time) the bias drifts
     linearly over the session (F.1″): y_k is replaced by y_k − ḃ·(t_k − t̄), t̄ the mean time,
-    three rates more (:data:`DRIFT_PARAMETERS`, last); b is then the bias at t̄.
+    three rates more (:data:`DRIFT_PARAMETERS`); b is then the bias at t̄. With
+    `temperatures_degc` (each pose's mean temperature) the scale factors move with it (F.1‴),
+    three coefficients more (:data:`TEMPERATURE_PARAMETERS`, last); s is then that at the poses'
+    mean temperature T̄.
 
     Parameters
     ----------
@@ -190,7 +212,11 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     if times_s is not None:
         tk = as_array(times_s, "times_s", shape=(n,))
         dt = tk - float(np.mean(tk))
-    m = core + (3 if drift else 0)
+    dtemp: _F64 | None = None
+    if temperatures_degc is not None:
+        tc = as_array(temperatures_degc, "temperatures_degc", shape=(n,))
+        dtemp = tc - float(np.mean(tc))
+    m = core + (3 if drift else 0) + (3 if dtemp is not None else 0)
     if n < m + 1:
         raise InvalidInputError(f"the gravity-norm fit needs at least {m + 1} static poses "
                                 f"({m} unknowns and a degree of freedom); got {n}")
@@ -198,22 +224,34 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
         raise InvalidInputError("`y_std` must be positive")
     if not (np.isfinite(gravity_mps2) and gravity_mps2 > 0):
         raise InvalidInputError(f"`gravity_mps2` must be positive; got {gravity_mps2!r}")
-    def evaluate(p: _F64) -> tuple[_F64, _F64]:
-        if not drift:
-            return _jacobian(p, yy)
-        a, j = _jacobian(p[:core], yy - np.outer(dt, p[core:]))
-        return a, np.column_stack([j, j[:, :3] * dt[:, None]])
+    t0 = core + (3 if drift else 0)                # where (F.1‴)'s coefficients start
 
-    names = [*(*PARAMETERS, *K2_PARAMETERS)[:core], *(DRIFT_PARAMETERS if drift else ())]
+    def evaluate(p: _F64) -> tuple[_F64, _F64]:
+        if not drift and dtemp is None:
+            return _jacobian(p, yy)
+        ya = yy - np.outer(dt, p[core:core + 3]) if drift else yy
+        a, j = _jacobian(p[:core], ya, None if dtemp is None else np.outer(dtemp, p[t0:]))
+        cols = [j]
+        if drift:
+            cols.append(j[:, :3] * dt[:, None])
+        if dtemp is not None:
+            cols.append(j[:, 3:6] * dtemp[:, None])
+        return a, np.column_stack(cols)
+
+    names = [*(*PARAMETERS, *K2_PARAMETERS)[:core], *(DRIFT_PARAMETERS if drift else ()),
+             *(TEMPERATURE_PARAMETERS if dtemp is not None else ())]
+
+    forces: list[_F64] = []
 
     def linearised(p: _F64, check: bool) -> tuple[LsqSolution, _F64, _F64]:
         """Solve the Gauss–Newton step at p by the one solver: (step solution, r, σ_r)."""
         a, j = evaluate(p)
+        forces[:] = [a]
         u = a / np.linalg.norm(a, axis=1, keepdims=True)
         sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
         r = np.linalg.norm(a, axis=1) - gravity_mps2
         if check:
-            _check_rank(j, 1.0 / sr, drift)
+            _check_rank(j, 1.0 / sr, names)
         return solve_weighted_lsq(
             j, -r, sigma=sr, param_names=names, context="gravity-norm Jacobian",
             advice="poses along the axes alone cannot see the non-orthogonality; add tilted "
@@ -232,7 +270,8 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     cov = at_solution.covariance_noise
     quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - m)
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
-                          covariance_noise=cov, quality=quality, residuals=r, iterations=it)
+                          covariance_noise=cov, quality=quality, residuals=r, iterations=it,
+                          forces=forces[0])
 
 
 def pose_coverage(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,

@@ -109,8 +109,10 @@ def _parameters_csv(result: ProcedureResult, folder: Path, stem: str) -> list[Pa
     with open(path, "w", encoding="utf-8", newline="") as fh:
         out = csv.writer(fh, lineterminator="\n")
         out.writerow(["parameter", "value", "std_uncertainty", "unit", "std_noise"])
-        out.writerows((r.name, repr(r.value), repr(r.std), r.unit, repr(r.std_noise))
-                      for r in rows)
+        # repr of a Python float: the shortest text that reads back to the same bits (a numpy
+        # scalar's repr would write "np.float64(…)")
+        out.writerows((r.name, repr(float(r.value)), repr(float(r.std)), r.unit,
+                       repr(float(r.std_noise))) for r in rows)
     return [path]
 
 

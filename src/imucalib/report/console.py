@@ -46,6 +46,9 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "1/(m/s^2)^2": ("µg/g³", units.UG / units.G0_MPS2**3),          # K3
     "s/rad": ("ppm/(°/s)", units.PPM / units.DEG_PER_S),            # a gyro's quadratic term
     "1": ("ppm", units.PPM),                                        # scale factor, misalignment
+    "1/K": ("ppm/K", units.PPM),                                    # a scale factor's temp. coeff.
+    "m/s^3": ("µg/s", units.UG),                                    # an accelerometer bias's drift
+    "rad/s^2": ("(°/h)/s", units.DEG_PER_H),                        # a gyro bias's drift
     "rad": ("µrad", units.URAD),                                    # small angles
 }
 #: A dimensionless parameter that is a small angle: an off-diagonal M element (misalignment).
@@ -90,7 +93,9 @@ def display_unit(name: str, si_unit: str) -> tuple[str, float]:
     parts = name.split("_")
     if _is_misalignment(parts):
         return _OFF_DIAGONAL
-    if len(parts) >= 2:  # a triad parameter's kind is its name's (whatever unit it was given)
+    if len(parts) == 3 or (len(parts) >= 2 and si_unit in ("", "1")):
+        # a triad parameter's kind is its name's (whatever unit it was given); a longer name
+        # with a unit of its own (accel_bias_rate_x in m/s^3) is another quantity
         si_unit = _P1_SI_UNITS.get((parts[0], parts[1]), si_unit)
     return DISPLAY_UNITS.get(si_unit, (si_unit, 1.0))
 

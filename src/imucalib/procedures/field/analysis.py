@@ -88,8 +88,9 @@ _G_RANGE_MPS2 = (9.7803, 9.8322)
 #: Relative standard uncertainty of normal gravity as local g (anomalies, ~50 mGal).
 _ANOMALY_REL = 3e-5
 #: The optional model terms the data choose among (docs/field.md, "Model terms"): the
-#: accelerometer's K2 (F.1′), its bias drift (F.1″), the gyro's g-sensitivity G (FL.2).
-TERMS = ("k2", "drift", "g")
+#: accelerometer's K2 (F.1′), its bias drift (F.1″), its scale factors' temperature
+#: coefficients (F.1‴, "temp"), the gyro's g-sensitivity G (FL.2).
+TERMS = ("k2", "drift", "g", "temp")
 #: Fewest poses with which the accelerometer's bias drift is fitted unless told (15 unknowns):
 #: a rule, not the data's choice (docs/field.md, "Model terms": the criteria, built on white
 #: noise, under-select a term that stands for the bias's wander).
@@ -120,6 +121,10 @@ class FieldOptions:
         Fit a linear drift of the accelerometer's bias over the session (F.1″), gravity-norm
         form only ("auto": by `term_criterion`); the bias is then that at the poses' mean
         time.
+    accel_temperature : {"auto", "yes", "no"}
+        Fit the accelerometer's scale factors as linear in the IMU's temperature (F.1‴),
+        gravity-norm form, when the log has a temperature ("auto": by `term_criterion`); the
+        scale factors are then those at the poses' mean temperature.
     terms : str
         Terms forced in or out, ``"+k2,-drift,+g"`` (of :data:`TERMS`); overrides
         `accel_k2`, `accel_drift` and `gyro_g_sensitivity`.
@@ -161,6 +166,7 @@ class FieldOptions:
     gyro_g_sensitivity: str = "auto"
     accel_k2: str = "auto"
     accel_drift: str = "auto"
+    accel_temperature: str = "auto"
     terms: str = ""
     term_criterion: str = "lrt"
     term_level: float = 0.05
@@ -188,6 +194,9 @@ class FieldOptions:
         if self.accel_drift not in ("auto", "yes", "no"):
             raise InvalidInputError(f"`accel_drift` must be auto, yes or no; got "
                                     f"{self.accel_drift!r}")
+        if self.accel_temperature not in ("auto", "yes", "no"):
+            raise InvalidInputError(f"`accel_temperature` must be auto, yes or no; got "
+                                    f"{self.accel_temperature!r}")
         if self.accel_k2 not in ("auto", "yes", "no"):
             raise InvalidInputError(f"`accel_k2` must be auto, yes or no; got "
                                     f"{self.accel_k2!r}")
@@ -222,7 +231,8 @@ class FieldOptions:
     def forced_terms(self) -> dict[str, bool]:
         """Terms forced in (True) or out (False): `accel_k2` … not "auto", then `terms`."""
         forced = {name: choice == "yes" for name, choice in (
-            ("k2", self.accel_k2), ("drift", self.accel_drift), ("g", self.gyro_g_sensitivity))
+            ("k2", self.accel_k2), ("drift", self.accel_drift), ("g", self.gyro_g_sensitivity),
+            ("temp", self.accel_temperature))
             if choice != "auto"}
         forced.update(parse_terms(self.terms, TERMS))
         return forced
@@ -232,15 +242,18 @@ class FieldOptions:
 _TEMPERATURE_SPAN_NOTE_DEGC = 1.0
 
 
-def _temperature_span(log: FieldLog, poses: list[StaticPose]) -> tuple[float, float] | None:
-    """(lowest, highest) mean temperature of the poses, when the log has a temperature."""
+def _pose_temperatures(log: FieldLog, poses: list[StaticPose]) -> _F64 | None:
+    """Each pose's mean temperature, when the log has a finite one for every pose. [°C]"""
     if log.temperature_degc is None:
         return None
-    temps = [float(np.mean(log.temperature_degc[(log.time_s >= p.start_time_s)
-                                                 & (log.time_s <= p.end_time_s)]))
-             for p in poses]
-    finite = [t for t in temps if math.isfinite(t)]
-    return (min(finite), max(finite)) if finite else None
+    temps = []
+    for p in poses:
+        t = log.temperature_degc[(log.time_s >= p.start_time_s) & (log.time_s <= p.end_time_s)]
+        t = t[np.isfinite(t)]
+        if not t.size:          # a pose without a reading: no temperature for the fit
+            return None
+        temps.append(float(np.mean(t)))
+    return np.array(temps) if temps else None
 
 
 def _gyro_names(terms: Collection[str]) -> list[str]:
@@ -328,17 +341,25 @@ def _accel_estimates(terms: frozenset[str], fit: Any, *, six: bool
 
 def _accel_names(terms: Collection[str], six: bool) -> list[str]:
     """Return the names of a step-3 fit's values for a term set (what (TS.4) pairs up)."""
-    from imucalib.estimation.gravity_norm import DRIFT_PARAMETERS, K2_PARAMETERS, PARAMETERS
+    from imucalib.estimation.gravity_norm import (
+        DRIFT_PARAMETERS,
+        K2_PARAMETERS,
+        PARAMETERS,
+        TEMPERATURE_PARAMETERS,
+    )
 
     core = [f"p{i}" for i in range(12)] if six else list(PARAMETERS)
     return [*core, *(K2_PARAMETERS if "k2" in terms else ()),
-            *(DRIFT_PARAMETERS if "drift" in terms else ())]
+            *(DRIFT_PARAMETERS if "drift" in terms else ()),
+            *(TEMPERATURE_PARAMETERS if "temp" in terms else ())]
 
 
-def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, forced: dict[str, bool],
-                  opt: FieldOptions) -> TermChoice:
-    """Step 3's gravity-norm fit: K2 (F.1′) chosen by the data, the bias drift (F.1″) by rule.
+def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, temps: _F64 | None,
+                  forced: dict[str, bool], opt: FieldOptions) -> TermChoice:
+    """Step 3's gravity-norm fit: K2 (F.1′) and (F.1‴) by the data, the drift (F.1″) by rule.
 
+    The scale factors' temperature coefficients (F.1‴) are a candidate when the poses have
+    temperatures (`temps`).
     The drift stands for the bias's wander (its random walk and flicker), which the white-noise
     χ² the criteria are built on does not see as a likelihood would: left to AICc it is dropped
     and the accelerometer's z spread on the twin's grade noise rises from 1.2–1.3 to 2.1
@@ -346,12 +367,14 @@ def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, forced: dict[str, bo
     """
     from imucalib.estimation.gravity_norm import fit_gravity_norm
 
+    optional = ("k2", "drift") if temps is None else ("k2", "drift", "temp")
     choice, _, _ = choose_terms(
-        "accel (gravity norm)", ("k2", "drift"),
+        "accel (gravity norm)", optional,
         lambda t: fit_gravity_norm(y, sy, g, k2="k2" in t,
-                                   times_s=times if "drift" in t else None),
+                                   times_s=times if "drift" in t else None,
+                                   temperatures_degc=temps if "temp" in t else None),
         lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
-        forced={k: v for k, v in forced.items() if k in ("k2", "drift")},
+        forced={k: v for k, v in forced.items() if k in optional},
         ruled={"drift": len(y) >= _DRIFT_MIN_POSES},
         criterion=opt.term_criterion, level=opt.term_level,
         estimates=lambda t, f: _accel_estimates(t, f, six=False))
@@ -359,7 +382,8 @@ def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, forced: dict[str, bo
 
 
 def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
-                 times: _F64 | None, gravity_std_mps2: float) -> float:
+                 times: _F64 | None, gravity_std_mps2: float,
+                 temps: _F64 | None = None) -> float:
     """Return the accelerometer's pose-noise floor by Paule–Mandel (Eq. (PM.1)) for the form."""
     from imucalib.estimation.dark_uncertainty import paule_mandel_floor
     from imucalib.estimation.gravity_norm import fit_gravity_norm
@@ -367,7 +391,8 @@ def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
 
     if form == "gravity-norm":
         def chi2_of(s: float) -> tuple[float, int]:
-            q = fit_gravity_norm(y, np.hypot(sy, s), g, k2=k2, times_s=times).quality
+            q = fit_gravity_norm(y, np.hypot(sy, s), g, k2=k2, times_s=times,
+                                 temperatures_degc=temps).quality
             return float(q.chi2), int(q.dof)
     else:
         directions = nominal_directions(y)
@@ -470,16 +495,23 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     drift_rows: list[ReportedParameter] = []
     times = np.array([0.5 * (p.start_time_s + p.end_time_s) for p in poses])
     forced = opt.forced_terms()
+    temps = _pose_temperatures(log, poses)
+    if forced.get("temp") and (form != "gravity-norm" or temps is None):
+        raise InvalidInputError(
+            "the temperature term (+temp) needs the gravity-norm form and a log with the IMU's "
+            f"temperature; got the {form} form and "
+            f"{'no temperature column' if temps is None else 'a temperature'}")
     if form == "gravity-norm":
-        choice_a = _choose_accel(y, sy, g, times, forced, opt)
+        choice_a = _choose_accel(y, sy, g, times, temps, forced, opt)
     else:
         choice_a, six = _choose_six(y, sy, g, sg, forced, opt)
     selection = [choice_a]
     k2, drift = choice_a.has("k2"), choice_a.has("drift")
+    tt = temps if choice_a.has("temp") else None
     notes.append(choice_a.summary())
     floor = None
     if opt.accel_instability_auto:
-        floor = _accel_floor(y, sy, g, form, k2, times if drift else None, sg)
+        floor = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt)
         poses = [dataclasses.replace(p, accel_se=np.hypot(p.accel_se, floor)) for p in poses]
         sy = np.array([p.accel_se for p in poses])
         notes.append(f"accelerometer pose-noise floor {floor / UG:.3g} µg estimated from the "
@@ -488,12 +520,13 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                      "accelerometer pose-noise floor: none (auto): the poses scatter no more "
                      "than their white noise says")
     if form == "gravity-norm":
-        fit = fit_gravity_norm(y, sy, g, k2=k2, times_s=times if drift else None)
-        core = fit.values.size - (3 if drift else 0)
+        fit = fit_gravity_norm(y, sy, g, k2=k2, times_s=times if drift else None,
+                               temperatures_degc=tt)
+        core = fit.values.size - (3 if drift else 0) - (0 if tt is None else 3)
         # g's Type B: refit with g + δ (the norms scale with g)
         dg = 1e-4 * g
-        jg = (fit_gravity_norm(y, sy, g + dg, k2=core == 12,
-                               times_s=times if drift else None).values - fit.values) / dg
+        jg = (fit_gravity_norm(y, sy, g + dg, k2=core == 12, times_s=times if drift else None,
+                               temperatures_degc=tt).values - fit.values) / dg
         full_cov = fit.covariance_noise + np.outer(jg, jg) * sg**2
         full_cov = full_cov + np.diag(_model_var(choice_a, _accel_names(choice_a.chosen, False)))
         accel_values = fit.values[:core]
@@ -501,13 +534,24 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         accel_quality = fit.quality
         residuals = fit.residuals
         if drift:   # the poses' means at t̄, for the gravity directions of the gyro
-            rate = fit.values[core:]
+            rate = fit.values[core:core + 3]
             y = y - np.outer(times - times.mean(), rate)
             drift_rows = [ReportedParameter(f"accel_bias_rate_{a}", float(v), float(math.sqrt(
                 full_cov[core + i, core + i] * fit.quality.sigma_scale**2)), "m/s^3",
                 float(math.sqrt(full_cov[core + i, core + i])))
                 for i, (a, v) in enumerate(zip("xyz", rate, strict=True))]
-        corrected = correct_accel(accel_values, y)
+        if tt is not None:  # (F.1‴)'s coefficients, after the rates, reported as the forward
+            # model's dM_ii/dT = −ṡ_T,i/(1 + s_i)² (M_ii = 1/(1 + s_i) − 1 to first order)
+            at = core + (3 if drift else 0)
+            for i, a in enumerate("xyz"):
+                k = 1.0 / (1.0 + float(accel_values[3 + i])) ** 2
+                sd = math.sqrt(full_cov[at + i, at + i])
+                drift_rows.append(ReportedParameter(
+                    f"accel_M_{a}{a}_tc", float(-fit.values[at + i] * k),
+                    sd * k * fit.quality.sigma_scale, "1/K", sd * k))
+        # each pose's force by the fitted model (with (F.1‴) its scale at the pose's
+        # temperature): the gravity directions of the gyro's fit
+        corrected = correct_accel(accel_values, y) if tt is None else fit.forces
     else:
         if floor:
             six = fit_six_position(y, sy, nominal_directions(y), g, gravity_std_mps2=sg, k2=k2)
@@ -522,7 +566,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if (floor is None and opt.accel_instability_mps2 == 0.0 and accel_quality.dof > 0
             and accel_quality.chi2 > scipy.stats.chi2.ppf(_SUGGEST_FLOOR_QUANTILE,
                                                            accel_quality.dof)):
-        suggested = _accel_floor(y, sy, g, form, k2, times if drift else None, sg)
+        suggested = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt)
         notes.append(
             f"the poses scatter more than their white noise (accelerometer χ²/ν = "
             f"{accel_quality.reduced_chi2:.3g}): a bias instability of about "
@@ -607,8 +651,15 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if form == "gravity-norm":
         notes.append("the accelerometer frame: x along the sensor x axis, y in the sensors' "
                      "x–y plane (a field calibration cannot see the case)")
-    span = _temperature_span(log, poses)
-    if span is not None and span[1] - span[0] > _TEMPERATURE_SPAN_NOTE_DEGC:
+    span = None if temps is None else (float(temps.min()), float(temps.max()))
+    reference_degc = None if temps is None else float(np.mean(temps))
+    if tt is not None and span is not None:
+        notes.append(
+            f"the IMU's temperature moved from {span[0]:.3g} to {span[1]:.3g} °C over the "
+            "poses: the accelerometer's scale factors were fitted as linear in it (F.1‴, "
+            f"accel_M_xx_tc …); the calibration holds them at {reference_degc:.3g} °C, the "
+            "poses' mean (docs/field.md, \"Model terms\")")
+    elif span is not None and span[1] - span[0] > _TEMPERATURE_SPAN_NOTE_DEGC:
         notes.append(
             f"the IMU's temperature moved from {span[0]:.3g} to {span[1]:.3g} °C over the poses "
             f"({span[1] - span[0]:.2g} °C): every parameter here is one value for the whole "
@@ -643,6 +694,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         model_selection=tuple(c.to_dict() for c in selection), omitted=tuple(omitted),
         details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
                  "temperature_span_degc": None if span is None else list(span),
+                 "reference_temperature_degc": reference_degc,
                  "window_s": opt.window_s, "accel_values": accel_values,
                  "accel_covariance": accel_cov},
         decision=field_decision(tuple(quality)))

@@ -72,12 +72,16 @@ class FieldAnalysisOptions:
     accel_drift: Literal["auto", "yes", "no"] = option(
         "auto", help="Fit a linear drift of the accelerometer's bias over the session, "
                      "gravity-norm form (auto: by term_criterion).")
+    accel_temperature: Literal["auto", "yes", "no"] = option(
+        "auto", help="Fit the accelerometer's scale factors as linear in the IMU's temperature, "
+                     "gravity-norm form, when the log has a temperature (auto: by "
+                     "term_criterion).")
     gyro_g_sensitivity: Literal["auto", "yes", "no"] = option(
         "auto", help="Fit the gyro's g-sensitivity G from the static poses (auto: with six "
                      "poses or more, by term_criterion).")
     terms: str = option(
-        "", help="Model terms forced in or out, e.g. +k2,-drift,+g (k2, drift, g); overrides "
-                 "accel_k2, accel_drift and gyro_g_sensitivity.")
+        "", help="Model terms forced in or out, e.g. +k2,-drift,+g (k2, drift, g, temp); "
+                 "overrides accel_k2, accel_drift, accel_temperature and gyro_g_sensitivity.")
     term_criterion: Literal["lrt", "aicc", "bic"] = option(
         "lrt", help="How the data choose the auto terms: a likelihood-ratio test at "
                     "term_level, AICc or BIC (docs/field.md, \"Model terms\").")
