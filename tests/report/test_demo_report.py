@@ -47,3 +47,17 @@ def test_the_demo_ends_with_a_report_that_prints_its_json_numbers(tmp_path: Path
         assert f"{row['name']}\n{v_text}\n{u_text}\n{unit}" in text, row["name"]
     verdict = "PASS" if report["decision"]["passed"] else "FAIL"
     assert f"Decision: {verdict}" in " ".join(text.split())
+    # the truth table of step 4 holds every term the data may choose (K2 forced in here)
+    from imucalib.calibration import calibrate
+    from imucalib.io.opening import open_recording
+    from imucalib.models.result import CalibrationResult
+
+    rec_path = tmp_path / "p1-run.h5"
+    done = calibrate(rec_path, procedure="p1", options={"terms": "+k2"},
+                     out=tmp_path / "k2", record=False)
+    saved = CalibrationResult.load(next(p for p in done.written
+                                        if p.name.endswith(".result.json")))
+    assert "accel_K2_z" in saved.param_names
+    with open_recording(rec_path) as rec:
+        table = demo._truth_table(saved, rec.truth)
+    assert table.columns[0]._cells == [str(len(saved.param_names))]

@@ -15,6 +15,10 @@ fit of the chosen model (:mod:`.fit`), then the verification of
   difference from least squares in standard deviations;
 - the Cramér–Rao bound of the design with the same observation covariance
   (docs/processing-estimation.md);
+- the optional model terms (the accelerometer's K2, the gyro's G) chosen per triad by the data
+  (:func:`~imucalib.procedures.p1.fit.choose_triad_terms`, docs/p1.md "Model terms"), each
+  choice a note and, with every candidate's χ², ν and criterion, the report's
+  ``model_selection``;
 
 and one decision under :data:`~imucalib.analysis.verification.DECISION_RULE`. The calibration
 itself (:class:`~imucalib.models.result.CalibrationResult`) is the fit of every repetition's
@@ -45,7 +49,9 @@ from imucalib.analysis.verification import (
     decide,
     decision_rule_text,
 )
+from imucalib.errors import InvalidInputError
 from imucalib.estimation import compute_crlb, refine_with_kalman
+from imucalib.estimation.term_selection import CRITERIA, parse_terms
 from imucalib.io.hashing import file_sha256
 from imucalib.io.opening import open_recording
 from imucalib.models.decision import Check, Decision
@@ -61,6 +67,7 @@ from imucalib.models.triad import correct_triad
 from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
 from imucalib.procedures.common.spec_decision import spec_field
 from imucalib.procedures.p1.fit import (
+    TERMS,
     P1Fit,
     TriadFit,
     _stack_covariance,
@@ -87,8 +94,19 @@ class P1Options:
     ----------
     model : {"triad", "per-axis"}
         The full triad model or the procedure's per-axis model (docs/p1.md).
-    g_sensitivity : bool
-        Triad model: estimate the gyro g-sensitivity.
+    g_sensitivity : bool or None
+        Triad model: estimate the gyro g-sensitivity G (True: always, the behaviour before the
+        data chose; False: never) or let the data choose (None, the default; docs/p1.md,
+        "Model terms"). ``terms`` overrides it.
+    terms : str
+        Terms forced in or out, ``"+k2,-g"`` (of :data:`~imucalib.procedures.p1.fit.TERMS`:
+        the accelerometer's K2, the gyro's G); the others are chosen by the data.
+    term_criterion : {"lrt", "aicc", "bic"}
+        How the data choose (:func:`~imucalib.estimation.term_selection.choose_terms`): the
+        likelihood-ratio test at `term_level` by default, as the field calibration's
+        (docs/p1.md, "Model terms", says why).
+    term_level : float
+        The likelihood-ratio test's level α, in (0, 1).
     processing : P1Processing
         Outliers, low-pass, synchronisation, gravity.
     correlated : bool
@@ -126,7 +144,10 @@ class P1Options:
     """
 
     model: Literal["triad", "per-axis"] = "triad"
-    g_sensitivity: bool = True
+    g_sensitivity: bool | None = None
+    terms: str = ""
+    term_criterion: Literal["lrt", "aicc", "bic"] = "lrt"
+    term_level: float = 0.05
     processing: P1Processing = field(default_factory=P1Processing)
     correlated: bool = True
     residual_accel_g: float = 0.002
@@ -144,6 +165,21 @@ class P1Options:
     guard_band_k: float | None = None
     workers: int = 1
 
+    def __post_init__(self) -> None:
+        if self.term_criterion not in CRITERIA:
+            raise InvalidInputError(f"`term_criterion` must be one of {', '.join(CRITERIA)}; "
+                                    f"got {self.term_criterion!r}")
+        if not (isinstance(self.term_level, int | float)
+                and 0.0 < float(self.term_level) < 1.0):
+            raise InvalidInputError(f"`term_level` must be in (0, 1); got {self.term_level!r}")
+        parse_terms(self.terms, TERMS)
+
+    def forced_terms(self) -> dict[str, bool]:
+        """Terms forced in (True) or out (False): `g_sensitivity` when given, then `terms`."""
+        forced = {} if self.g_sensitivity is None else {"g": bool(self.g_sensitivity)}
+        forced.update(parse_terms(self.terms, TERMS))
+        return forced
+
 
 @dataclass(frozen=True, eq=False)
 class P1Analysis(ResultDefaults):
@@ -153,7 +189,10 @@ class P1Analysis(ResultDefaults):
     result contract"): ``calibration`` is the fit of every repetition (:attr:`result`), whose
     parameters are the :meth:`~imucalib.models.procedure_result.ResultDefaults.parameter_rows`
     (σ Birge-scaled per triad whose fit is a misfit, docs/processing-estimation.md Eq. (3)) and
-    whose covariance as reported the :meth:`triad_parameters`; ``decision`` is the one of
+    whose covariance as reported the :meth:`triad_parameters`; ``model_selection`` each
+    triad's choice of optional terms with every candidate's χ², ν, χ²/ν and criterion
+    (:meth:`~imucalib.estimation.term_selection.TermChoice.to_dict`; docs/p1.md, "Model
+    terms"; empty for the per-axis model); ``decision`` is the one of
     :data:`~imucalib.analysis.verification.DECISION_RULE` over :attr:`checks` (docs/p1.md,
     rules 5–7); ``passed`` is its verdict.
     """
@@ -165,6 +204,7 @@ class P1Analysis(ResultDefaults):
     kalman_max_difference_sigma: float
     crlb_ratio: dict[str, float]
     observations: P1Observations
+    model_selection: tuple[dict[str, Any], ...] = ()
 
     @property
     def procedure(self) -> str:
@@ -216,6 +256,7 @@ class P1Analysis(ResultDefaults):
                              "birge_ratio": q.birge_ratio, "summary": q.summary()}
                             for q in self.result.fit_quality],
             "std_scaled": self.result.std(scaled=True),
+            "model_selection": list(self.model_selection),
         }
 
 
@@ -291,6 +332,21 @@ def _acceptance(obs: P1Observations, opt: P1Options) -> tuple[str, float]:
     stated = obs.acceptance or AcceptanceConfig()
     return (opt.acceptance or stated.rule,
             opt.guard_band_k if opt.guard_band_k is not None else stated.guard_band_k)
+
+
+#: Why the gyro's G is in the model by rule (:func:`_ruled_terms`), said after the choice's note.
+_G_RULE_NOTE = (" — G by rule: the unit's specification limits the g-sensitivity, and its "
+                "conformity check needs G's estimate (terms=-g forces it out)")
+
+
+def _ruled_terms(spec: ImuSpecConfig) -> dict[str, bool]:
+    """Terms held in by rule, not chosen by the data (docs/p1.md, "Model terms").
+
+    The gyro's G when the specification limits the g-sensitivity: a term the data left out
+    has no estimate to check against its limit (a tactical unit's 1 °/h/g is below what the
+    rate points resolve, yet its datasheet bounds it).
+    """
+    return {"g": True} if spec.limits.gyro_g_sensitivity_dph_per_g is not None else {}
 
 
 def _specification_rows(result: CalibrationResult, obs: P1Observations, spec: ImuSpecConfig
@@ -384,8 +440,11 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                             provenance: Provenance | None = None) -> P1Analysis:
     """Fit, verify and decide from extracted observations (see :func:`analyze_p1`)."""
     opt = options or P1Options()
-    fit = fit_p1(obs, model=opt.model, g_sensitivity=opt.g_sensitivity,
-                 correlated=opt.correlated)
+    forced = opt.forced_terms()
+    spec = _imu_spec(obs)
+    fit = fit_p1(obs, model=opt.model, g_sensitivity=forced.get("g"), k2=forced.get("k2"),
+                 correlated=opt.correlated, criterion=opt.term_criterion,
+                 level=opt.term_level, ruled=_ruled_terms(spec))
     accel_w = fit.accel.windows
     gyro_w = list(fit.gyro.windows)
     accel_groups = _residual_groups(fit, list(accel_w), "accel")
@@ -417,8 +476,9 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                                     created_utc=datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"))
     quality = (assess_fit("accel", chi2_a, dof_a), assess_fit("gyro", chi2_g, dof_g))
     result = _result(fit, obs, opt, prov, residuals,
-                     [q.summary() for q in quality if q.misfit], quality)
-    spec = _imu_spec(obs)
+                     [c.summary() + (_G_RULE_NOTE if c.ruled.get("g") else "")
+                      for c in fit.selection]
+                     + [q.summary() for q in quality if q.misfit], quality)
     accel_err, gyro_err = _held_out(result, obs)
     checks.append(check_accuracy("held-out accelerometer accuracy", accel_err,
                                  limit=opt.accel_accuracy_g or spec.accel_accuracy_g, unit="g",
@@ -432,9 +492,11 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
     per_rep: dict[int, CalibrationResult] = {}
     reps = obs.repetitions
     if len(reps) > 1:
+        # each repetition with the terms the whole fit chose: the same parameters to compare
+        chosen = {t: any(c.has(t) for c in fit.selection) for t in TERMS}
         for rep in reps:
-            rep_fit = fit_p1(obs, model=opt.model, g_sensitivity=opt.g_sensitivity,
-                             repetitions=[rep], correlated=opt.correlated)
+            rep_fit = fit_p1(obs, model=opt.model, g_sensitivity=chosen["g"],
+                             k2=chosen["k2"], repetitions=[rep], correlated=opt.correlated)
             per_rep[rep] = _result(rep_fit, obs, opt, prov, {}, [f"repetition {rep} alone"])
     names = result.param_names
     estimates = {n: [r.value(n) for r in per_rep.values()] for n in names}
@@ -456,7 +518,8 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                                                      if q.misfit],
                                       rule=decision_rule_text(rule, guard_k)),
                       kalman_max_difference_sigma=kalman,
-                      crlb_ratio=crlb, observations=obs)
+                      crlb_ratio=crlb, observations=obs,
+                      model_selection=tuple(c.to_dict() for c in fit.selection))
 
 
 def analyze_p1(path: str | Path, sensor_id: str | None = None,

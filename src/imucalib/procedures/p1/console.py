@@ -4,7 +4,8 @@ The ``render_console`` hook of :class:`~imucalib.procedures.p1.procedure.P1Proce
 ``imucalib calibrate`` and the demo: every parameter in its display unit with its standard
 uncertainty (and the Birge-scaled one under a misfit, docs/processing-estimation.md), its
 repeatability verdict, each fit's χ²/ν, the verification checks, the Kalman cross-check and the
-decision (docs/reporting.md).
+decision (docs/reporting.md); and the model terms each triad fit chose with every candidate's
+χ², ν and criterion (docs/p1.md, "Model terms").
 """
 
 from __future__ import annotations
@@ -51,6 +52,14 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
     for q in getattr(result, "fit_quality", ()):
         console.print(("[bold red]" if q.misfit else "") + escape(q.summary())
                       + ("[/]" if q.misfit else ""), highlight=False)
+    selection = getattr(analysis, "model_selection", ())
+    if selection:
+        from imucalib.procedures.p1.report import MODEL_SELECTION_COLUMNS, model_selection_rows
+
+        terms = Table(*MODEL_SELECTION_COLUMNS, title="model terms (docs/p1.md)")
+        for row in model_selection_rows(selection):
+            terms.add_row(*(escape(c) for c in row))
+        console.print(terms)
     checks = Table("check", "verdict", "summary", title="verification")
     for c in analysis.checks:
         verdict = ("not assessed" if c.passed is None

@@ -10,10 +10,15 @@ neglected, per axis i:
     Each axis is the straight-line fit y = K·x + c with c = K·b (weighted least squares), and
     (K, b) with covariance J·C·Jᵀ, J = ∂(K, b)/∂(K, c) = [[1, 0], [−c/K², 1/K]].
 ``"triad"`` — the full linear triad model of :class:`~imucalib.models.triad.TriadModel`:
-    accelerometer  y = b + (I + M)·f            (12 parameters; six positions, 18 observations)
-    gyro           y = b + (I + M)·ω + G·f      (21 parameters with g-sensitivity, else 12)
-    as z = y − x = b + M·x (+ G·f), rows ordered by window then axis, built by
-    :func:`~imucalib.estimation.designs.build_design` (docs/p1.md).
+    accelerometer  y = b + (I + M)·f (+ K2⊙f⊙f)  (12 parameters, 15 with K2; six positions)
+    gyro           y = b + (I + M)·ω (+ G·f)     (21 parameters with g-sensitivity, else 12)
+    as z = y − x = b + M·x (+ K2⊙x⊙x) (+ G·f), rows ordered by window then axis, built by
+    :func:`~imucalib.estimation.designs.build_design` (docs/p1.md). The optional terms
+    (:data:`TERMS`: the accelerometer's K2, Eq. (P1.K2) of docs/p1.md, and the gyro's G) are
+    chosen per triad by the data (:func:`choose_triad_terms`,
+    :func:`~imucalib.estimation.term_selection.choose_terms`, Eqs. (TS.1)–(TS.4)) unless
+    forced; the chosen model's covariance as reported (:attr:`P1Fit.covariance`) carries the
+    model choice's Type B of (TS.4).
 
 Observations are window means weighted by their standard errors (correlated noise included), so
 the covariance is not rescaled by the residuals (known noise); the fit's χ² then tests the model.
@@ -23,13 +28,14 @@ that cannot determine a parameter raises InsufficientExcitationError naming it).
 
 Contents
 --------
-:func:`fit_p1`, :class:`P1Fit`, :class:`TriadFit`, :func:`predict_outputs`.
+:func:`fit_p1`, :func:`fit_triad`, :func:`choose_triad_terms`, :class:`P1Fit`,
+:class:`TriadFit`, :func:`predict_outputs`, :data:`TERMS`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -40,14 +46,17 @@ from imucalib.conventions import AXES
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
 from imucalib.estimation import compute_window_mean_covariance, solve_weighted_lsq
 from imucalib.estimation.designs import build_design
+from imucalib.estimation.term_selection import TermChoice, choose_terms
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names
 from imucalib.procedures.p1.windows import P1Observations, WindowObservation
 
 __all__ = [
     "MIN_EXCITATION",
+    "TERMS",
     "P1Fit",
     "TriadFit",
+    "choose_triad_terms",
     "fit_p1",
     "fit_triad",
     "gyro_windows",
@@ -57,10 +66,23 @@ __all__ = [
 
 _F64 = NDArray[np.float64]
 
+#: The optional terms of P1's triad fits (docs/p1.md, "Model terms"), per triad: the
+#: accelerometer's quadratic scale factor K2 (P1.K2), the gyro's g-sensitivity G.
+OPTIONAL_TERMS: dict[str, tuple[str, ...]] = {"accel": ("k2",), "gyro": ("g",)}
+#: Every optional term, as ``terms="+k2,-g"`` names them.
+TERMS = ("k2", "g")
+#: The groups of :func:`choose_triad_terms`, as the notes and ``model_selection`` name them.
+_GROUPS = {"accel": "accel (six positions)", "gyro": "gyro (rate points and statics)"}
+
 
 @dataclass(frozen=True, eq=False)
 class TriadFit:
-    """One triad's fit: names, estimate, covariance, design blocks and the fit's χ²."""
+    """One triad's fit: names, estimate, covariance, design blocks and the fit's χ².
+
+    ``covariance`` is the fit's own (the noise's); ``choice``, when the terms were chosen
+    (:func:`choose_triad_terms`), the choice with the model-choice σ of (TS.4) per parameter,
+    which :attr:`model_variance` returns in parameter order.
+    """
 
     triad: str
     model: str
@@ -73,6 +95,13 @@ class TriadFit:
     z: _F64
     sigma: _F64
     windows: tuple[WindowObservation, ...]
+    choice: TermChoice | None = None
+
+    @property
+    def model_variance(self) -> _F64:
+        """u²_model of (TS.4) per parameter (zeros without a choice or where it adds none)."""
+        std = {} if self.choice is None else self.choice.model_std
+        return np.array([std.get(n, 0.0) ** 2 for n in self.param_names])
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,17 +119,55 @@ class P1Fit:
 
     @property
     def estimate(self) -> _F64:
-        """All estimates, in :attr:`param_names` order."""
-        return np.concatenate([self.accel.estimate, self.gyro.estimate])
+        """All estimates, in :attr:`param_names` order (the accelerometer's K2 as (P1.K2′))."""
+        return np.concatenate([_k2_on_output(self.accel)[0], self.gyro.estimate])
 
     @property
     def covariance(self) -> _F64:
-        """Block-diagonal covariance (the triads' fits are independent)."""
+        """Block-diagonal covariance (the triads' fits are independent), with (TS.4)'s u²_model.
+
+        The model choice's Type B (:attr:`TriadFit.model_variance`) is added on the diagonal:
+        a term the data left out leaves the parameters it shares with the larger model the σ
+        of that model (docs/p1.md, "Model terms").
+        """
         na, ng = self.accel.estimate.size, self.gyro.estimate.size
         cov = np.zeros((na + ng, na + ng))
-        cov[:na, :na] = self.accel.covariance
-        cov[na:, na:] = self.gyro.covariance
+        cov[:na, :na] = _k2_on_output(self.accel)[1] + np.diag(self.accel.model_variance)
+        cov[na:, na:] = self.gyro.covariance + np.diag(self.gyro.model_variance)
         return cov
+
+    @property
+    def selection(self) -> tuple[TermChoice, ...]:
+        """Each triad's choice of optional terms (empty for the per-axis model)."""
+        return tuple(t.choice for t in (self.accel, self.gyro) if t.choice is not None)
+
+
+def _k2_on_output(fit: TriadFit) -> tuple[_F64, _F64]:
+    """Return the accelerometer's estimate and covariance with K2 as the result means it.
+
+    The design (:func:`~imucalib.estimation.designs.build_design`) fits K2 on the input,
+    K2ᵢ·fᵢ² (P1.K2); the result's model (:class:`~imucalib.models.triad.TriadModel`, the
+    correction) applies it to the scaled input u = (I + M)·f, K2ᵢ·uᵢ². At the positions that
+    see K2 (axis i up and down) uᵢ = (1 + M_ii)·fᵢ, so
+
+        K2ᵢ(u) = K2ᵢ(f) / (1 + M_ii)²                                              (P1.K2′)
+
+    with the covariance carried by its Jacobian (∂/∂K2ᵢ = (1 + M_ii)⁻², ∂/∂M_ii =
+    −2·K2ᵢ/(1 + M_ii)³). Left as fitted, a consumer unit's K2 (10³ µg/g², M_ii ~ 10⁻²) sat
+    2 % off: z RMS 1.28 over 200 twin seeds, 0.97 with it. Other fits: unchanged.
+    """
+    names = fit.param_names
+    if f"{fit.triad}_K2_x" not in names:
+        return fit.estimate, fit.covariance
+    est = fit.estimate.copy()
+    jac = np.eye(est.size)
+    for a in AXES:
+        k, m = names.index(f"{fit.triad}_K2_{a}"), names.index(f"{fit.triad}_M_{a}{a}")
+        scale = 1.0 + fit.estimate[m]
+        est[k] = fit.estimate[k] / scale**2
+        jac[k, k] = 1.0 / scale**2
+        jac[k, m] = -2.0 * fit.estimate[k] / scale**3
+    return est, jac @ fit.covariance @ jac.T
 
 
 def observation_covariance(windows: Sequence[WindowObservation], noise: NoiseModel | None
@@ -171,9 +238,13 @@ def _per_axis_fit(triad: str, x: _F64, y: _F64, se: _F64, masks: Sequence[NDArra
 
 
 def _triad_fit(triad: str, x: _F64, y: _F64, se: _F64, f: _F64 | None,
-               windows: tuple[WindowObservation, ...], cov: _F64 | None) -> TriadFit:
-    terms = ("bias", "scale_misalignment") if f is None else (
-        "bias", "scale_misalignment", "g_sensitivity")
+               windows: tuple[WindowObservation, ...], cov: _F64 | None,
+               k2: bool = False) -> TriadFit:
+    terms = ["bias", "scale_misalignment"]
+    if f is not None:
+        terms.append("g_sensitivity")
+    if k2:  # after G: the result's order (models.result.triad_parameter_names)
+        terms.append("k2")
     design = build_design(x, terms, specific_force_b=f)
     H = np.array(design.H)
     names = [f"{triad}_{n}" for n in design.param_names]
@@ -230,7 +301,7 @@ def _check_excitation(triad: str, model: str, x: _F64) -> None:
 
 def fit_triad(triad: Literal["accel", "gyro"], windows: Sequence[WindowObservation], *,
               model: str = "triad", noise: NoiseModel | None = None,
-              g_sensitivity: bool = False) -> TriadFit:
+              g_sensitivity: bool = False, k2: bool = False) -> TriadFit:
     """Fit one triad's model to windows (module docstring).
 
     Parameters
@@ -245,14 +316,21 @@ def fit_triad(triad: Literal["accel", "gyro"], windows: Sequence[WindowObservati
         standard errors alone.
     g_sensitivity : bool
         Gyro triad model: estimate G.
+    k2 : bool
+        Accelerometer triad model: estimate K2 (P1.K2 of docs/p1.md).
 
     Raises
     ------
     InsufficientExcitationError
         If the windows cannot determine a parameter; the message names it.
+    InvalidInputError
+        An unknown model, or K2 asked of the gyro or of the per-axis model.
     """
     w = tuple(windows)
     accel = triad == "accel"
+    if k2 and (not accel or model != "triad"):
+        raise InvalidInputError("K2 is a term of the accelerometer's triad model only "
+                                "(docs/p1.md, \"Model terms\")")
     x = np.array([o.force_b_mps2 if accel else o.rate_b_rps for o in w]).reshape(-1, 3)
     y = np.array([o.accel_mean_mps2 if accel else o.gyro_mean_rps for o in w]).reshape(-1, 3)
     se = np.array([o.accel_se_mps2 if accel else o.gyro_se_rps for o in w]).reshape(-1, 3)
@@ -271,11 +349,65 @@ def fit_triad(triad: Literal["accel", "gyro"], windows: Sequence[WindowObservati
         return _per_axis_fit(triad, x, y, se, masks, w, cov)
     if model != "triad":
         raise InvalidInputError(f"`model` must be 'triad' or 'per-axis'; got {model!r}")
-    return _triad_fit(triad, x, y, se, f if (g_sensitivity and not accel) else None, w, cov)
+    return _triad_fit(triad, x, y, se, f if (g_sensitivity and not accel) else None, w, cov,
+                      k2=k2)
 
 
-def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool = True,
-           repetitions: Sequence[int] | None = None, correlated: bool = True) -> P1Fit:
+def choose_triad_terms(triad: Literal["accel", "gyro"], windows: Sequence[WindowObservation],
+                       *, noise: NoiseModel | None = None,
+                       forced: Mapping[str, bool] | None = None,
+                       ruled: Mapping[str, bool] | None = None, criterion: str = "lrt",
+                       level: float = 0.05) -> TriadFit:
+    """Fit one triad's triad model with the optional terms the data choose (docs/p1.md).
+
+    Every candidate of :data:`OPTIONAL_TERMS` (``triad``'s: K2 for the accelerometer, G for the
+    gyro) not in `forced` is fitted with :func:`fit_triad` and one is chosen by `criterion`
+    (:func:`~imucalib.estimation.term_selection.choose_terms`: (TS.1)–(TS.3)); a candidate the
+    windows cannot resolve is listed as not identifiable. The returned fit carries the choice
+    (``choice``) with the model choice's σ of (TS.4) per parameter.
+
+    Parameters
+    ----------
+    triad : {"accel", "gyro"}
+    windows : sequence of WindowObservation
+        As :func:`fit_triad`.
+    noise : NoiseModel, optional
+        As :func:`fit_triad`.
+    forced : mapping of str to bool, optional
+        Terms forced in (True) or out (False); those of the other triad are ignored.
+    ruled : mapping of str to bool, optional
+        Terms the analysis's rule holds in or out unless forced (listed apart; the gyro's G
+        when the unit's specification limits it, docs/p1.md "Model terms").
+    criterion : {"lrt", "aicc", "bic"}
+    level : float
+        α of (TS.3).
+
+    Raises
+    ------
+    InsufficientExcitationError
+        The windows cannot determine even the smallest candidate.
+    InvalidInputError
+        An unknown criterion, or a level outside (0, 1).
+    """
+    optional = OPTIONAL_TERMS[triad]
+
+    def fit(terms: frozenset[str]) -> TriadFit:
+        return fit_triad(triad, windows, model="triad", noise=noise,
+                         g_sensitivity="g" in terms, k2="k2" in terms)
+
+    choice, chosen, _ = choose_terms(
+        _GROUPS[triad], optional, fit, lambda f: (f.chi2, f.dof, int(f.estimate.size)),
+        forced={k: v for k, v in (forced or {}).items() if k in optional},
+        ruled={k: v for k, v in (ruled or {}).items() if k in optional},
+        criterion=criterion, level=level,
+        estimates=lambda _t, f: (f.param_names, f.estimate, np.sqrt(np.diag(f.covariance))))
+    return replace(chosen, choice=choice)
+
+
+def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool | None = True,
+           repetitions: Sequence[int] | None = None, correlated: bool = True,
+           k2: bool | None = False, criterion: str = "lrt", level: float = 0.05,
+           ruled: Mapping[str, bool] | None = None) -> P1Fit:
     """Fit the accelerometer and gyro models to the calibration windows.
 
     Parameters
@@ -283,14 +415,24 @@ def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool = T
     obs : P1Observations
     model : {"triad", "per-axis"}
         Module docstring.
-    g_sensitivity : bool
-        Triad model only: estimate the gyro g-sensitivity G.
+    g_sensitivity : bool or None
+        Triad model only: estimate the gyro g-sensitivity G (True), not (False), or let the
+        data choose (None; :func:`choose_triad_terms`).
     repetitions : sequence of int, optional
         Use only these repetitions' windows (all when omitted).
     correlated : bool
         Weight with the full covariance of the window means (flicker and random walk shared
         between windows) when the observations carry a noise model; else each window's standard
         error alone.
+    k2 : bool or None
+        Triad model only: the accelerometer's K2 (P1.K2 of docs/p1.md), as `g_sensitivity`.
+    criterion : {"lrt", "aicc", "bic"}
+        How the data choose a term left to them (None above).
+    level : float
+        α of the likelihood-ratio test (TS.3).
+    ruled : mapping of str to bool, optional
+        Terms held in or out by the analysis's rule unless `g_sensitivity` or `k2` force them
+        (:func:`choose_triad_terms`).
 
     Raises
     ------
@@ -309,8 +451,15 @@ def fit_p1(obs: P1Observations, *, model: str = "triad", g_sensitivity: bool = T
     gyro_w = tuple(gyro_windows(obs, "calibration", repetitions))
     noise_a = obs.noise.get("accel") if correlated else None
     noise_g = obs.noise.get("gyro") if correlated else None
-    accel = fit_triad("accel", accel_w, model=model, noise=noise_a)
-    gyro = fit_triad("gyro", gyro_w, model=model, noise=noise_g, g_sensitivity=g_sensitivity)
+    if model != "triad":
+        accel = fit_triad("accel", accel_w, model=model, noise=noise_a)
+        gyro = fit_triad("gyro", gyro_w, model=model, noise=noise_g)
+        return P1Fit(model, accel, gyro)
+    forced = {name: v for name, v in (("k2", k2), ("g", g_sensitivity)) if v is not None}
+    accel = choose_triad_terms("accel", accel_w, noise=noise_a, forced=forced, ruled=ruled,
+                               criterion=criterion, level=level)
+    gyro = choose_triad_terms("gyro", gyro_w, noise=noise_g, forced=forced, ruled=ruled,
+                              criterion=criterion, level=level)
     return P1Fit(model, accel, gyro)
 
 
@@ -322,7 +471,11 @@ def predict_outputs(fit: P1Fit, w: WindowObservation) -> tuple[_F64, _F64]:
         gyro = g.estimate[:3] * (w.rate_b_rps + g.estimate[3:])
         return gyro, accel
     accel = a.estimate[:3] + (np.eye(3) + a.estimate[3:12].reshape(3, 3)) @ w.force_b_mps2
+    if "accel_K2_x" in a.param_names:
+        k = a.param_names.index("accel_K2_x")
+        accel = accel + a.estimate[k:k + 3] * w.force_b_mps2**2
     gyro = g.estimate[:3] + (np.eye(3) + g.estimate[3:12].reshape(3, 3)) @ w.rate_b_rps
-    if g.estimate.size == 21:
-        gyro = gyro + g.estimate[12:21].reshape(3, 3) @ w.force_b_mps2
+    if "gyro_G_xx" in g.param_names:
+        k = g.param_names.index("gyro_G_xx")
+        gyro = gyro + g.estimate[k:k + 9].reshape(3, 3) @ w.force_b_mps2
     return gyro, accel

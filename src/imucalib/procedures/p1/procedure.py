@@ -64,8 +64,9 @@ class P1Procedure(ProcedureDefaults):
                 progress: Callable[[float], None] | None = None) -> P1Analysis:
         """Run :func:`~imucalib.procedures.p1.analysis.analyze_p1` on a recording.
 
-        `options` may set ``model`` (``"triad"``, the default, or ``"per-axis"``) and
-        ``workers`` (processes the windows are reduced in). An open
+        `options` may set ``model`` (``"triad"``, the default, or ``"per-axis"``),
+        ``workers`` (processes the windows are reduced in) and the model terms: ``terms``
+        (``"+k2,-g"``), ``term_criterion``, ``term_level`` (docs/p1.md, "Model terms"). An open
         Recording is analysed through its path (the provenance hashes the file). `progress`,
         when given, is called with the fraction of the steps reduced to observations.
 
@@ -84,7 +85,8 @@ class P1Procedure(ProcedureDefaults):
         workers = int(opts.get("workers", 1))
         if workers < 1:
             raise InvalidInputError(f"--workers must be ≥ 1; got {workers}")
-        return analyze_p1(path, unit, P1Options(model=model, workers=workers),
+        terms = {k: opts[k] for k in ("terms", "term_criterion", "term_level") if k in opts}
+        return analyze_p1(path, unit, P1Options(model=model, workers=workers, **terms),
                           progress=progress)
 
     def report_content(self, result: Any, meta: Mapping[str, Any]) -> ReportContent:

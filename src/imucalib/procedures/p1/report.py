@@ -5,7 +5,9 @@ The ``report_content`` hook of :class:`~imucalib.procedures.p1.procedure.P1Proce
 
 The results section holds every parameter with U = k·u (R.1 of :mod:`imucalib.report.document`),
 the verification checks, the conformity table against the plan's acceptance limits, the
-residual figure (per position and rate), the held-out/repeatability figure, and the noise model
+residual figure (per position and rate), the held-out/repeatability figure, the model terms each
+triad's fit chose with every candidate's χ², ν and criterion (:func:`model_selection_rows`,
+docs/p1.md "Model terms"), and the noise model
 of the long static records that gave the window means' standard errors, as a table and as
 Allan deviation curves (docs/p1.md, docs/reporting.md).
 """
@@ -14,7 +16,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from imucalib.report.document import (
@@ -34,7 +36,11 @@ from imucalib.report.sections import (
     yes_no,
 )
 
-__all__ = ["content", "type_b_terms"]
+__all__ = ["MODEL_SELECTION_COLUMNS", "content", "model_selection_rows", "type_b_terms"]
+
+#: The columns of :func:`model_selection_rows`.
+MODEL_SELECTION_COLUMNS = ("triad fit", "terms", "χ²", "ν", "χ²/ν", "criterion",
+                           "chosen")
 
 #: The note of the analysis that states its Type B terms (``analysis._add_type_b``).
 _TYPE_B_NOTE = re.compile(r"Type B \(GUM\): table position accuracy ([0-9.eE+-]+)″ and "
@@ -61,6 +67,30 @@ def type_b_terms(result: Any) -> dict[str, float]:
         if len(parts) == 3 and parts[1] == "M" and parts[2][0] != parts[2][1]:
             out[row.name] = u_pos if parts[0] == "accel" else u_perp
     return out
+
+
+def model_selection_rows(selection: Sequence[Mapping[str, Any]]) -> list[tuple[str, ...]]:
+    """Return one row per candidate of each group's choice (the result's ``model_selection``).
+
+    The criterion column is AICc (TS.1), or BIC (TS.2) when that chose; with the
+    likelihood-ratio test (TS.3) AICc is shown beside it, as the notes do. A candidate the
+    windows cannot resolve says so.
+    """
+    rows: list[tuple[str, ...]] = []
+    for group in selection:
+        label = "BIC" if group.get("criterion") == "bic" else "AICc"
+        for c in group.get("candidates", ()):
+            terms = "+".join(c["terms"]) or "none"
+            if c.get("note"):
+                rows.append((group["group"], terms, "—", "—", "—", "not identifiable", ""))
+                continue
+            chosen = sorted(c["terms"]) == sorted(group.get("chosen", ()))
+            score = c.get("score")
+            rows.append((group["group"], terms, f"{c['chi2']:.4g}", str(c["dof"]),
+                         f"{c['reduced_chi2']:.3g}" if c.get("reduced_chi2") is not None
+                         else "—", "∞" if score is None else f"{label} {score:.4g}",
+                         "yes" if chosen else ""))
+    return rows
 
 
 def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
@@ -105,6 +135,11 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
             ("quantity", "|value|", "limit", "unit", "verdict"),
             tuple((r.name, f"{abs(r.value):.3g}", f"{r.limit:.3g}", r.unit,
                    "pass" if r.passed else "FAIL") for r in spec.rows)))
+    if analysis.model_selection:
+        tables.append(ReportTable(
+            "model terms chosen by the data (docs/p1.md, \"Model terms\"): every candidate "
+            "of each triad fit", MODEL_SELECTION_COLUMNS,
+            tuple(model_selection_rows(analysis.model_selection))))
     fit_text = [q.summary() for q in result.fit_quality]
     fig = figure_of(lambda p: save_residual_figure(analysis, p),
                     "Residual mean of each window and axis with ±2 standard-error bars "
