@@ -22,7 +22,8 @@ def test_builtins_are_known_and_satisfy_the_protocol():
         proc = registry.get(name)
         assert isinstance(proc, Procedure) and proc.name == name and proc.description
         assert proc.outputs
-    assert registry.get("p1").analysis_options == {"model", "workers"}
+    assert registry.get("p1").analysis_options == {"model", "workers", "terms", "term_criterion",
+                                                   "term_level"}
     with pytest.raises(ConfigurationError, match="unknown procedure 'p9'; known: p1, allan"):
         registry.get("p9")
 
