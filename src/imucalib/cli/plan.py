@@ -1,5 +1,7 @@
 """Commands on plan files: ``plan new NAME``, ``plan validate``, ``plan show``, ``plan schema``.
 
+``plan show PLAN --predict`` prints the plan's predicted uncertainty (docs/test-design.md).
+
 ``plan new`` has one subcommand per registered procedure, whose flags are built from the
 procedure's plan-options dataclass (:mod:`imucalib.cli.options_cli`): a procedure added to the
 registry gets its ``plan new`` with no edit here.
@@ -22,7 +24,7 @@ from imucalib.cli.options_cli import (
     given_values,
     spec_parameters,
 )
-from imucalib.errors import CalibrationError, ConfigurationError
+from imucalib.errors import CalibrationError, ConfigurationError, InsufficientExcitationError
 from imucalib.procedures.common.options import option_specs
 
 if TYPE_CHECKING:
@@ -71,16 +73,34 @@ def validate(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -
 
 
 @plan_app.command("show")
-def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> None:
-    """Print the expanded step list with each step's least duration and the total."""
+def show(
+    path: Annotated[Path, typer.Argument(help="Plan file (.toml).")],
+    predict: Annotated[bool, typer.Option(
+        "--predict", help="Print each parameter's predicted σ (Cramér–Rao bound of the "
+                          "plan's design with the unit's noise model), the identifiability and "
+                          "the station time, instead of the steps (docs/test-design.md).")] = False,
+    as_json: Annotated[bool, typer.Option(
+        "--json", help="With --predict: print the prediction as JSON.")] = False,
+) -> None:
+    """Print the expanded step list with each step's least duration and the total.
+
+    With ``--predict``, the plan's predicted uncertainty instead (docs/test-design.md); a plan
+    that cannot identify a parameter exits 2 naming the confounded ones.
+    """
     from rich.table import Table
 
     from imucalib.plan import describe_plan, load_plan
 
+    if as_json and not predict:
+        raise fail(ConfigurationError("--json goes with --predict "
+                                      "(`imucalib plan show PLAN --predict --json`)"))
     try:
         plan = load_plan(path)
     except CalibrationError as exc:
         raise fail(exc) from exc
+    if predict:
+        _show_prediction(plan, as_json)
+        return
     rows = describe_plan(plan)
     table = Table("#", "kind", "label", "what", "≥ s", "tags",
                   title=f"{plan.name} ({plan.procedure or 'no procedure'})")
@@ -92,6 +112,47 @@ def show(path: Annotated[Path, typer.Argument(help="Plan file (.toml).")]) -> No
     console.print(f"{len(rows)} steps; at least {total:,.0f} s ({total / 3600:.2f} h) without "
                   "moves and stability waits", highlight=False)
     console.print(_estimate_line(plan), highlight=False, soft_wrap=True)
+
+
+def _show_prediction(plan: Plan, as_json: bool) -> None:
+    """``plan show --predict``: the table or the JSON; exit 2 when something is confounded."""
+    from rich.table import Table
+
+    from imucalib.procedures import registry
+    from imucalib.procedures.common.prediction import predict_plan
+    from imucalib.report.console import display_unit
+
+    try:
+        if not plan.procedure:
+            raise ConfigurationError(f"plan {plan.name!r} names no procedure: nothing to "
+                                     "predict")
+        prediction = predict_plan(registry.get(plan.procedure), plan)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    if as_json:
+        typer.echo(json.dumps(prediction.to_dict(), indent=2))
+    else:
+        table = Table("parameter", "predicted σ", "unit",
+                      title=f"{plan.name} ({plan.procedure}): predicted uncertainty")
+        for p in prediction.parameters:
+            unit, scale = display_unit(p.name, p.unit)
+            sigma = "—" if p.predicted_std is None else f"{p.predicted_std / scale:.3g}"
+            table.add_row(p.name, sigma, unit)
+        console.print(table)
+        for g in prediction.groups:
+            kappa = "∞" if g.condition_number == float("inf") else f"{g.condition_number:.3g}"
+            console.print(f"{g.name}: rank {g.rank} of {g.n_parameters}, condition number "
+                          f"{kappa}", highlight=False)
+        t = prediction.station_time_s
+        console.print(f"station time with moves and settling: {t:,.0f} s ({t / 3600:.2f} h)",
+                      highlight=False)
+        for note in prediction.notes:
+            console.print(f"note: {note}", highlight=False, soft_wrap=True)
+    if prediction.confounded:
+        raise fail(InsufficientExcitationError(
+            prediction.confounded,
+            f"plan {plan.name!r} cannot identify {', '.join(prediction.confounded)} "
+            "(confounded)"))
 
 
 def _write_new_plan(procedure: str, out: Path, given: dict[str, Any]) -> None:

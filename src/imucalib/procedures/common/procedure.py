@@ -11,6 +11,10 @@ result, with code kept in its own folder: its report's sections 1–5
 batch's summary report (:meth:`Procedure.summary_report`); the report and terminal frameworks
 (:mod:`imucalib.report`) name no procedure, and a procedure without presentation of its own
 delegates to the generic one (:class:`~imucalib.procedures.common.reporting.GenericReporting`).
+A procedure may also predict its result's uncertainty from a plan before it runs: the optional
+``predict(plan) -> Prediction`` of :class:`~imucalib.procedures.common.prediction.Predicting`
+(``imucalib plan show PLAN --predict``, docs/test-design.md); it is not part of
+:class:`Procedure`, so a procedure without it still satisfies the protocol.
 docs/procedures.md says how to add one.
 
 Contents

@@ -1,6 +1,7 @@
 """P1 as a :class:`~imucalib.procedures.common.procedure.Procedure` (registered as ``"p1"``).
 
-The plan is :func:`~imucalib.procedures.p1.plan.generate_p1_plan`; the analysis
+The plan is :func:`~imucalib.procedures.p1.plan.generate_p1_plan`, its predicted uncertainty
+:func:`~imucalib.procedures.p1.predict.predict_p1` (:meth:`P1Procedure.predict`); the analysis
 :func:`~imucalib.procedures.p1.analysis.analyze_p1` (observations, fit, verification, decision),
 imported when first used. Its result, :class:`~imucalib.procedures.p1.analysis.P1Analysis`,
 writes the calibration result JSON and the full report JSON.
@@ -25,6 +26,7 @@ if TYPE_CHECKING:
 
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
+    from imucalib.procedures.common.prediction import Prediction
     from imucalib.procedures.p1.analysis import P1Analysis
     from imucalib.report.document import ReportContent
 
@@ -58,6 +60,16 @@ class P1Procedure(ProcedureDefaults):
         from imucalib.procedures.p1.plan import generate_p1_plan
 
         return generate_p1_plan(**options)
+
+    def predict(self, plan: Plan) -> Prediction:
+        """Return the predicted σ of `plan`'s result (:func:`~.p1.predict.predict_p1`).
+
+        The optional capability of :class:`~imucalib.procedures.common.prediction.Predicting`
+        (``imucalib plan show PLAN --predict``; docs/test-design.md).
+        """
+        from imucalib.procedures.p1.predict import predict_p1
+
+        return predict_p1(plan)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
                 unit: str | None = None, options: Mapping[str, Any] | None = None,

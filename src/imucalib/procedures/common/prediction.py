@@ -1,0 +1,185 @@
+"""The predicted uncertainty of a plan, before it runs: :class:`Prediction` and the hook.
+
+A procedure that can predict the uncertainty of its result from a plan alone has a method
+``predict(plan) -> Prediction`` (:class:`Predicting`); ``imucalib plan show PLAN --predict``
+calls it through :func:`predict_plan`. The bound is the Cramér–Rao bound of the procedure's
+estimator, CRLB = F⁻¹ with F = Hᵀ·C⁻¹·H (docs/test-design.md, Eqs. (TD.1)–(TD.3)), H the
+design the analysis would build from the plan's nominal windows and C the covariance of those
+windows' means under the unit's noise model (coloured noise included, Eq. (TD.2)). A
+procedure without ``predict`` is refused in one line (:class:`PredictionUnavailableError`).
+
+Contents
+--------
+:class:`PredictedParameter`, :class:`PredictionGroup`, :class:`Prediction`,
+:class:`Predicting`, :class:`PredictionUnavailableError`, :func:`predict_plan`
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+from imucalib.errors import InvalidInputError
+
+if TYPE_CHECKING:
+    from imucalib.plan.schema import Plan
+
+__all__ = ["PredictedParameter", "Predicting", "Prediction", "PredictionGroup",
+           "PredictionUnavailableError", "predict_plan"]
+
+
+class PredictionUnavailableError(InvalidInputError):
+    """The plan's procedure has no ``predict`` (docs/test-design.md: only P1's exists yet)."""
+
+
+@dataclass(frozen=True)
+class PredictedParameter:
+    """One parameter's predicted standard deviation.
+
+    Attributes
+    ----------
+    name : str
+        The parameter's name in the procedure's result (``accel_bias_x``, ``gyro_M_xy`` …).
+    predicted_std : float or None
+        √diag of the bound of Eq. (TD.3), with the Type B terms the analysis adds
+        (docs/test-design.md); None when the plan cannot identify the parameter's group.
+        [SI, `unit`]
+    unit : str
+        The result's unit of the parameter (``m/s^2``, ``rad/s``, ``1`` …).
+    """
+
+    name: str
+    predicted_std: float | None
+    unit: str
+
+
+@dataclass(frozen=True)
+class PredictionGroup:
+    """The identifiability of one design (P1: one per triad).
+
+    Attributes
+    ----------
+    name : str
+        The group (``"accel"``, ``"gyro"``).
+    n_parameters : int
+        Columns of its design.
+    rank : int
+        Numerical rank of its whitened design (:mod:`imucalib.estimation.observability`).
+    condition_number : float
+        κ of the column-scaled whitened design (inf when rank-deficient).
+    confounded : tuple of str
+        The parameters it cannot identify (empty when it identifies all).
+    """
+
+    name: str
+    n_parameters: int
+    rank: int
+    condition_number: float
+    confounded: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """What a plan will determine, before it runs (docs/test-design.md).
+
+    Attributes
+    ----------
+    procedure : str
+        The plan's procedure.
+    station_time_s : float
+        The run's expected duration with moves and settling
+        (:func:`~imucalib.plan.budget.plan_run_duration_s`). [s]
+    parameters : tuple of PredictedParameter
+        Every parameter the procedure's result will hold, in its order.
+    groups : tuple of PredictionGroup
+        Each design's rank, condition number and confounded parameters.
+    notes : tuple of str
+        What the prediction assumed (noise model, Type B, terms).
+    """
+
+    procedure: str
+    station_time_s: float
+    parameters: tuple[PredictedParameter, ...]
+    groups: tuple[PredictionGroup, ...]
+    notes: tuple[str, ...] = ()
+
+    @property
+    def rank(self) -> int:
+        """Sum of the groups' ranks."""
+        return sum(g.rank for g in self.groups)
+
+    @property
+    def n_parameters(self) -> int:
+        """Sum of the groups' columns."""
+        return sum(g.n_parameters for g in self.groups)
+
+    @property
+    def condition_number(self) -> float:
+        """The largest condition number of the groups."""
+        return max((g.condition_number for g in self.groups), default=math.nan)
+
+    @property
+    def confounded(self) -> tuple[str, ...]:
+        """Every parameter the plan cannot identify, group by group."""
+        return tuple(n for g in self.groups for n in g.confounded)
+
+    @property
+    def identifiable(self) -> bool:
+        """True when the plan identifies every parameter."""
+        return not self.confounded
+
+    def std(self) -> dict[str, float | None]:
+        """Return {name: predicted σ} (None for a parameter that is not identified)."""
+        return {p.name: p.predicted_std for p in self.parameters}
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the JSON of ``plan show --predict --json`` (docs/test-design.md).
+
+        ``station_time_s``, ``parameters`` (``name``, ``predicted_std``, ``unit``) and
+        ``confounded``, then ``procedure``, ``rank``, ``n_parameters``,
+        ``condition_number`` (None when infinite), ``groups`` and ``notes``.
+        """
+        def finite(x: float) -> float | None:
+            return x if math.isfinite(x) else None
+
+        return {
+            "station_time_s": self.station_time_s,
+            "parameters": [{"name": p.name, "predicted_std": p.predicted_std, "unit": p.unit}
+                           for p in self.parameters],
+            "confounded": list(self.confounded),
+            "procedure": self.procedure,
+            "rank": self.rank,
+            "n_parameters": self.n_parameters,
+            "condition_number": finite(self.condition_number),
+            "groups": [{"name": g.name, "n_parameters": g.n_parameters, "rank": g.rank,
+                        "condition_number": finite(g.condition_number),
+                        "confounded": list(g.confounded)} for g in self.groups],
+            "notes": list(self.notes),
+        }
+
+
+@runtime_checkable
+class Predicting(Protocol):
+    """A procedure that predicts its result's uncertainty from a plan (optional capability)."""
+
+    def predict(self, plan: Plan) -> Prediction:
+        """Return the predicted uncertainty of `plan`'s result (module docstring)."""
+        ...
+
+
+def predict_plan(procedure: object, plan: Plan) -> Prediction:
+    """Return ``procedure.predict(plan)``, or refuse a procedure without it.
+
+    Raises
+    ------
+    PredictionUnavailableError
+        The procedure has no ``predict``: "prediction is not available for procedure X yet".
+    InvalidInputError
+        A plan the procedure's prediction cannot read.
+    """
+    if not isinstance(procedure, Predicting):
+        name = getattr(procedure, "name", "?")
+        raise PredictionUnavailableError(f"prediction is not available for procedure {name} "
+                                         "yet")
+    return procedure.predict(plan)
