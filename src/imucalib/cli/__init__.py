@@ -20,6 +20,7 @@ Commands
 ``plan new NAME --out FILE``       a procedure's default plan; ``plan new NAME --help`` lists
                                    its options, grouped, each a flag
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
+``plan optimize p1 --out FILE``    the P1 plan meeting σ targets in the least station time
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 ``calibrate [PROCEDURE] DATA``     estimate, verify and decide; write the result JSON. DATA is a
                                    Recording, a CSV with ``--steps``, or (``calibrate field``) a

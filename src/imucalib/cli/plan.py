@@ -292,3 +292,107 @@ def schema(
     else:
         out.write_text(text + "\n", encoding="utf-8")
         console.print(f"wrote {out}", highlight=False)
+
+
+@plan_app.command("optimize")
+def optimize(
+    procedure: Annotated[str, typer.Argument(help="The procedure whose plan is optimised.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Plan file to write (.toml).")],
+    target_default: Annotated[bool, typer.Option(
+        "--target-default", help="Targets: each parameter's σ no worse than the default "
+                                 "plan's (the default).")] = False,
+    target: Annotated[str | None, typer.Option(
+        "--target", help="Targets NAME=σ,… in SI units (a NAME may be a prefix: gyro_bias, "
+                         "accel_M).")] = None,
+    target_from_spec: Annotated[bool, typer.Option(
+        "--target-from-spec", help="Targets σ ≤ limit/k of each parameter the plan's "
+                                   "[imu.limits] limits.")] = False,
+    k: Annotated[float, typer.Option("--k", help="The k of --target-from-spec.")] = 3.0,
+    time_budget: Annotated[float | None, typer.Option(
+        "--time-budget", help="Station time allowed [h]: the best criterion within it "
+                              "instead of the least time.")] = None,
+    criterion: Annotated[str, typer.Option(
+        "--criterion", help="targets (worst σ/target), D (log det) or A (trace) of the "
+                            "normalised covariance; D and A need --time-budget.")] = "targets",
+    grade: Annotated[str, typer.Option("--grade", help="The IMU's grade.")] = "tactical",
+    min_repetitions: Annotated[int, typer.Option(
+        "--min-repetitions", help="Margin: complete calibrations kept (repeatability).")] = 2,
+    min_static: Annotated[float, typer.Option(
+        "--min-static", help="Margin: the least level static record [s] (3600: the "
+                             "procedure's 60 min).")] = 120.0,
+    min_dof: Annotated[int, typer.Option(
+        "--min-dof", help="Margin: least lack-of-fit ν of each triad's fit.")] = 6,
+    coarse: Annotated[bool, typer.Option("--coarse", help="A small search grid (quick).")]
+    = False,
+) -> None:
+    """Write the plan that meets σ targets in the least station time (docs/test-design.md).
+
+    Prints the default plan against the optimised one: station time, each parameter's
+    predicted σ and its ratio to the target, and the worst ratio.
+    """
+    from imucalib.plan import write_plan
+
+    try:
+        result = _optimize(procedure, target_default, target, target_from_spec, k, time_budget,
+                           criterion, grade, min_repetitions, min_static, min_dof, coarse)
+        write_plan(result.plan, out)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    except OSError as exc:
+        raise fail(ConfigurationError(f"cannot write {out}: {exc.strerror or exc}")) from exc
+    _print_optimized(result, out)
+
+
+def _optimize(procedure: str, target_default: bool, target: str | None,
+              target_from_spec: bool, k: float, time_budget_h: float | None, criterion: str,
+              grade: str, min_repetitions: int, min_static_s: float, min_dof: int,
+              coarse: bool) -> Any:
+    """Build the request of ``plan optimize`` and ask the procedure's optimiser."""
+    from imucalib.procedures import registry
+    from imucalib.procedures.common.prediction import OptimizeRequest, optimize_plan
+
+    if sum([target_default, target is not None, target_from_spec]) > 1:
+        raise ConfigurationError("give one of --target-default, --target, --target-from-spec")
+    request = OptimizeRequest(
+        targets="given" if target is not None else "spec" if target_from_spec else "default",
+        target_text=target or "", spec_k=k,
+        time_budget_s=None if time_budget_h is None else time_budget_h * 3600.0,
+        criterion=criterion, grade=grade, min_repetitions=min_repetitions,
+        min_static_s=min_static_s, min_lack_of_fit_dof=min_dof, coarse=coarse)
+    return optimize_plan(registry.get(procedure), request)
+
+
+def _print_optimized(result: Any, out: Path) -> None:
+    """Print the comparison table of ``plan optimize`` (an OptimizedPlan)."""
+    from rich.table import Table
+
+    from imucalib.report.console import display_unit
+
+    ref, best = result.reference, result.prediction
+    t_ref, t_best = ref.station_time_s, best.station_time_s
+    table = Table("parameter", "unit", "default σ", "optimised σ", "target", "ratio",
+                  title=f"{result.plan.procedure}: default plan ({t_ref / 3600:.2f} h) vs "
+                        f"optimised ({t_best / 3600:.2f} h)")
+    ref_std, best_std = ref.std(), best.std()
+    for p in best.parameters:
+        unit, scale = display_unit(p.name, p.unit)
+
+        def show(v: float | None, scale: float = scale) -> str:
+            return "—" if v is None else f"{v / scale:.3g}"
+
+        ratio = result.ratios.get(p.name)
+        table.add_row(p.name, unit, show(ref_std.get(p.name)), show(best_std.get(p.name)),
+                      show(result.targets.get(p.name)),
+                      "" if ratio is None else f"{ratio:.3f}")
+    console.print(table)
+    console.print(f"optimised: {result.design}", highlight=False)
+    console.print(f"station time: default {t_ref:,.0f} s ({t_ref / 3600:.2f} h), optimised "
+                  f"{t_best:,.0f} s ({t_best / 3600:.2f} h, {t_best / t_ref:.0%})",
+                  highlight=False)
+    console.print(f"worst σ/target: default {result.reference_worst_ratio:.3f}, optimised "
+                  f"{result.worst_ratio:.3f}; criterion {result.criterion}",
+                  highlight=False)
+    for note in result.notes:
+        console.print(f"note: {note}", highlight=False, soft_wrap=True)
+    console.print(f"wrote {out}: plan {result.plan.name!r}, {len(result.plan.steps)} steps",
+                  highlight=False)

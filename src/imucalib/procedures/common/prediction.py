@@ -8,25 +8,31 @@ design the analysis would build from the plan's nominal windows and C the covari
 windows' means under the unit's noise model (coloured noise included, Eq. (TD.2)). A
 procedure without ``predict`` is refused in one line (:class:`PredictionUnavailableError`).
 
+A procedure that can also choose its plan has ``optimize_plan(request) -> OptimizedPlan``
+(:class:`Optimizing`): ``imucalib plan optimize NAME`` fills an :class:`OptimizeRequest` from
+its flags and calls it through :func:`optimize_plan` (docs/test-design.md, "The optimiser").
+
 Contents
 --------
 :class:`PredictedParameter`, :class:`PredictionGroup`, :class:`Prediction`,
-:class:`Predicting`, :class:`PredictionUnavailableError`, :func:`predict_plan`
+:class:`Predicting`, :class:`PredictionUnavailableError`, :func:`predict_plan`,
+:class:`OptimizeRequest`, :class:`OptimizedPlan`, :class:`Optimizing`, :func:`optimize_plan`
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from imucalib.errors import InvalidInputError
 
 if TYPE_CHECKING:
     from imucalib.plan.schema import Plan
 
-__all__ = ["PredictedParameter", "Predicting", "Prediction", "PredictionGroup",
-           "PredictionUnavailableError", "predict_plan"]
+__all__ = ["OptimizeRequest", "OptimizedPlan", "Optimizing", "PredictedParameter", "Predicting",
+           "Prediction", "PredictionGroup", "PredictionUnavailableError", "optimize_plan",
+           "predict_plan"]
 
 
 class PredictionUnavailableError(InvalidInputError):
@@ -183,3 +189,100 @@ def predict_plan(procedure: object, plan: Plan) -> Prediction:
         raise PredictionUnavailableError(f"prediction is not available for procedure {name} "
                                          "yet")
     return procedure.predict(plan)
+
+
+@dataclass(frozen=True)
+class OptimizeRequest:
+    """What ``imucalib plan optimize NAME`` asks of a procedure's optimiser.
+
+    Attributes
+    ----------
+    targets : {"default", "given", "spec"}
+        Each parameter's σ no worse than the default plan's; the σ of `target_text`; or
+        limit/`spec_k` of each parameter the specification limits.
+    target_text : str
+        ``NAME=σ,…`` in SI units (``"given"``).
+    spec_k : float
+        k of ``"spec"``.
+    time_budget_s : float or None
+        Station time allowed: the best criterion within it instead of the least time. [s]
+    criterion : str
+        ``"targets"`` (worst σ/target), ``"D"`` or ``"A"``.
+    grade : str
+        The unit's grade (its noise model and specification).
+    min_repetitions, min_static_s, min_lack_of_fit_dof : int, float, int
+        Margins kept beyond the optimum (docs/test-design.md).
+    coarse : bool
+        A small search grid.
+    """
+
+    targets: Literal["default", "given", "spec"] = "default"
+    target_text: str = ""
+    spec_k: float = 3.0
+    time_budget_s: float | None = None
+    criterion: str = "targets"
+    grade: str = "tactical"
+    min_repetitions: int = 2
+    min_static_s: float = 120.0
+    min_lack_of_fit_dof: int = 6
+    coarse: bool = False
+
+
+@dataclass(frozen=True)
+class OptimizedPlan:
+    """A procedure optimiser's answer, against its default plan.
+
+    Attributes
+    ----------
+    plan : Plan
+        The optimised plan.
+    prediction, reference : Prediction
+        Its predicted uncertainty and the default plan's.
+    targets : dict of str to float
+        σ_target per parameter, SI.
+    ratios : dict of str to float
+        σ/σ_target of the optimised plan per targeted parameter.
+    worst_ratio, reference_worst_ratio : float
+        The largest ratio of the optimised and of the default plan.
+    criterion : str
+    design : str
+        One line: what was chosen.
+    notes : tuple of str
+    """
+
+    plan: Plan
+    prediction: Prediction
+    reference: Prediction
+    targets: dict[str, float]
+    ratios: dict[str, float]
+    worst_ratio: float
+    reference_worst_ratio: float
+    criterion: str
+    design: str
+    notes: tuple[str, ...] = field(default=())
+
+
+@runtime_checkable
+class Optimizing(Protocol):
+    """A procedure that chooses its plan for σ targets (optional capability)."""
+
+    def optimize_plan(self, request: OptimizeRequest) -> OptimizedPlan:
+        """Return the plan meeting `request` (docs/test-design.md, "The optimiser")."""
+        ...
+
+
+def optimize_plan(procedure: object, request: OptimizeRequest) -> OptimizedPlan:
+    """Return ``procedure.optimize_plan(request)``, or refuse a procedure without it.
+
+    Raises
+    ------
+    PredictionUnavailableError
+        "the optimiser is not available for procedure X yet".
+    CalibrationError
+        Targets, budget or margins the procedure's optimiser refuses (one line).
+    """
+    if not isinstance(procedure, Optimizing):
+        name = getattr(procedure, "name", "?")
+        raise PredictionUnavailableError(f"the optimiser is not available for procedure {name} "
+                                         "yet")
+    return procedure.optimize_plan(request)

@@ -60,7 +60,7 @@ from imucalib.procedures.p1.windows import P1Observations, WindowObservation
 if TYPE_CHECKING:
     from imucalib.plan.schema import Plan
 
-__all__ = ["grade_noise", "nominal_observations", "predict_p1"]
+__all__ = ["grade_noise", "nominal_observations", "predict_p1", "predict_p1_covariance"]
 
 #: The axes of P1's dual-axis table (outer first), as the twin's and a P1 recording's.
 TABLE_AXES = ("pitch", "roll")
@@ -234,6 +234,22 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
         A plan of another procedure, without a grade (and no `noise`), or off the dual-axis
         table.
     """
+    return predict_p1_covariance(plan, noise=noise)[0]
+
+
+def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None
+                          ) -> tuple[Prediction, dict[str, tuple[tuple[str, ...], np.ndarray]]]:
+    """Return :func:`predict_p1`'s prediction and each identified triad's covariance.
+
+    The covariance is the bound (TD.3) with the Type B of (TD.4) added, SI, as
+    ``{triad: (names, covariance)}``; a triad the plan cannot identify is absent. The
+    optimiser's D and A criteria use it (docs/test-design.md, Eqs. (TD.5), (TD.6)).
+
+    Raises
+    ------
+    ConfigurationError
+        As :func:`predict_p1`.
+    """
     # the analysis's own rules, reused: G held in by the specification, the Type B of (TD.4)
     from imucalib.procedures.p1.analysis import P1Options, _add_type_b, _ruled_terms
 
@@ -245,6 +261,7 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
     accel_w = obs.select(kind="static", role="calibration", tag="six-position")
     gyro_w = gyro_windows(obs, "calibration", None)
     groups, std = [], {}
+    covariances: dict[str, tuple[tuple[str, ...], np.ndarray]] = {}
     for triad, wins, g in (("accel", accel_w, False), ("gyro", gyro_w, g_term)):
         group, s, cov = _group(triad, wins, models[triad], g)
         groups.append(group)
@@ -252,6 +269,7 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
             names = tuple(s)
             cov, _ = _add_type_b(names, cov, obs, P1Options())
             s = dict(zip(names, np.sqrt(np.diag(cov)).tolist(), strict=True))
+            covariances[triad] = (names, np.asarray(cov))
         std.update(s)
     params = tuple(PredictedParameter(n, v, triad_parameter_unit(n)) for n, v in std.items())
     kinds = ", ".join(f"{k}: {_describe(m)}" for k, m in sorted(models.items()))
@@ -264,8 +282,9 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
         f"″ and axis perpendicularity {plan.equipment.table_orthogonality_arcsec:g}″ on the "
         "misalignments (Eq. (TD.4))",
     ]
-    return Prediction(procedure="p1", station_time_s=estimate_plan_recording(plan).duration_s,
-                      parameters=params, groups=tuple(groups), notes=tuple(notes))
+    return (Prediction(procedure="p1", station_time_s=estimate_plan_recording(plan).duration_s,
+                       parameters=params, groups=tuple(groups), notes=tuple(notes)),
+            covariances)
 
 
 def _describe(m: NoiseModel) -> str:

@@ -26,7 +26,11 @@ if TYPE_CHECKING:
 
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
-    from imucalib.procedures.common.prediction import Prediction
+    from imucalib.procedures.common.prediction import (
+        OptimizedPlan,
+        OptimizeRequest,
+        Prediction,
+    )
     from imucalib.procedures.p1.analysis import P1Analysis
     from imucalib.report.document import ReportContent
 
@@ -70,6 +74,16 @@ class P1Procedure(ProcedureDefaults):
         from imucalib.procedures.p1.predict import predict_p1
 
         return predict_p1(plan)
+
+    def optimize_plan(self, request: OptimizeRequest) -> OptimizedPlan:
+        """Return the P1 plan meeting `request` (:func:`~.p1.optimize.optimize_request`).
+
+        The optional capability of :class:`~imucalib.procedures.common.prediction.Optimizing`
+        (``imucalib plan optimize p1``; docs/test-design.md, "The optimiser (P1)").
+        """
+        from imucalib.procedures.p1.optimize import optimize_request
+
+        return optimize_request(request)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
                 unit: str | None = None, options: Mapping[str, Any] | None = None,

@@ -1,0 +1,70 @@
+"""Bench: P1's plan optimiser (issue 30): run time on one core, station times, σ tables.
+
+Prints (docs/test-design.md, "The optimiser (P1)"):
+
+1. ``--target-default``: the least station time with every parameter's σ no worse than the
+   default plan's, against the default plan's time;
+2. the reverse table: the σ the optimised design reaches within the default plan's time.
+
+Run: ``.venv/bin/python bench/bench_optimize.py`` (one BLAS thread: one core).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import time  # noqa: E402
+
+from imucalib.procedures.p1.optimize import (  # noqa: E402
+    OptimizeResult,
+    OptimizeSettings,
+    default_targets,
+    optimize_p1,
+)
+from imucalib.report.console import display_unit  # noqa: E402
+
+
+def _table(result: OptimizeResult, title: str) -> None:
+    ref, best = result.reference, result.best
+    print(f"\n{title}")
+    print(f"  default plan   {ref.station_time_s:8,.0f} s ({ref.station_time_s / 3600:.2f} h)")
+    print(f"  optimised plan {best.station_time_s:8,.0f} s ({best.station_time_s / 3600:.2f} h,"
+          f" {best.station_time_s / ref.station_time_s:.0%}); worst σ/target "
+          f"{best.worst_ratio:.3f}")
+    d = best.design
+    print(f"  optimised: {d.repetitions} repetitions, record {d.record_s:g} s, static "
+          f"{d.static_s:g} s, {d.revolutions} rev, rates {', '.join(f'{r:g}' for r in d.rates_dps)}"
+          " °/s")
+    print(f"  {'parameter':<14}{'unit':<9}{'default σ':>11}{'optimised σ':>13}{'ratio':>8}")
+    ref_std, best_std = ref.prediction.std(), best.prediction.std()
+    for p in best.prediction.parameters:
+        unit, scale = display_unit(p.name, p.unit)
+        a, b = ref_std[p.name], best_std[p.name]
+        assert a is not None and b is not None
+        print(f"  {p.name:<14}{unit:<9}{a / scale:>11.3g}{b / scale:>13.3g}{b / a:>8.3f}")
+
+
+def main() -> None:
+    """Run both searches (the full grid) and print the tables."""
+    t = time.perf_counter()
+    targets = default_targets()
+    least = optimize_p1(targets=targets)
+    t_least = time.perf_counter() - t
+    t = time.perf_counter()
+    budget = least.reference.station_time_s
+    within = optimize_p1(targets=targets, settings=OptimizeSettings(time_budget_s=budget))
+    t_within = time.perf_counter() - t
+    print("P1 optimiser, tactical grade, default acceptance limits, one BLAS thread")
+    print(f"  least time, every σ ≤ default: {t_least:.1f} s ({least.n_evaluated} plans "
+          "predicted)")
+    print(f"  best worst σ/default within {budget / 3600:.2f} h: {t_within:.1f} s "
+          f"({within.n_evaluated} plans predicted)")
+    _table(least, "1. every σ no worse than the default plan's, least station time")
+    _table(within, f"2. reverse table: σ within the default plan's {budget / 3600:.2f} h")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,105 @@
+"""P1's plan optimiser (docs/test-design.md, "The optimiser (P1)"), on the coarse grid."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from imucalib import units
+from imucalib.errors import ConfigurationError
+from imucalib.procedures.p1.optimize import (
+    OptimizeSettings,
+    default_targets,
+    optimize_p1,
+    parse_targets,
+    spec_targets,
+)
+from imucalib.procedures.p1.plan import generate_p1_plan
+
+DEFAULT_H = 4.6
+
+
+@pytest.fixture(scope="module")
+def targets():
+    return default_targets()
+
+
+@pytest.fixture(scope="module")
+def least_time(targets):
+    return optimize_p1(targets=targets, settings=OptimizeSettings.coarse())
+
+
+def test_default_targets_met_in_far_less_time(least_time, targets):
+    best, ref = least_time.best, least_time.reference
+    assert ref.station_time_s == pytest.approx(DEFAULT_H * 3600, rel=0.01)
+    sigma = best.prediction.std()
+    assert all(sigma[n] <= s * (1 + 1e-6) for n, s in targets.items())
+    # the issue asks for half (2.3 h); the search reaches 58 % (the biases' flicker needs the
+    # repetitions spread in time): docs/test-design.md
+    assert best.station_time_s <= 0.6 * ref.station_time_s
+    assert best.design.repetitions >= 2 and min(best.lack_of_fit_dof.values()) >= 6
+    assert best.plan.steps and any("verification" in s.tags for s in best.plan.steps)
+
+
+def test_within_the_default_time_every_sigma_is_better(targets):
+    budget = DEFAULT_H * 3600
+    result = optimize_p1(targets=targets,
+                         settings=OptimizeSettings.coarse(time_budget_s=budget))
+    assert result.best.station_time_s <= budget
+    assert result.best.worst_ratio < 1.0
+
+
+@pytest.mark.parametrize("criterion", ["D", "A"])
+def test_d_and_a_criteria_within_a_budget(targets, criterion):
+    settings = OptimizeSettings.coarse(criterion=criterion, time_budget_s=3.0 * 3600,
+                                       max_repetitions=3, revolutions_grid=(3,),
+                                       rate_magnitudes_dps=(50.0, 100.0))
+    result = optimize_p1(targets=targets, settings=settings)
+    assert result.best.station_time_s <= 3.0 * 3600
+    assert math.isfinite(result.best.criterion_value)
+
+
+def test_impossible_target_in_a_tiny_budget_is_refused(targets):
+    tiny = dict.fromkeys(targets, 1e-12)
+    with pytest.raises(ConfigurationError, match=r"no P1 plan fits within 0\.50 h: the shortest"):
+        optimize_p1(targets=tiny, settings=OptimizeSettings.coarse(time_budget_s=1800.0))
+
+
+def test_unreachable_target_names_the_best_reached(targets):
+    settings = OptimizeSettings.coarse(max_repetitions=2, record_s_grid=(10.0,),
+                                       revolutions_grid=(3,), rate_magnitudes_dps=(50.0, 100.0))
+    with pytest.raises(ConfigurationError, match="meets the targets; the best reaches a worst "
+                                                 "σ/target of"):
+        optimize_p1(targets={"gyro_bias_z": 1e-9}, settings=settings)
+
+
+def test_criterion_needs_a_budget():
+    with pytest.raises(ConfigurationError, match="criterion D needs a time budget"):
+        OptimizeSettings(criterion="D").check()
+
+
+def test_parse_targets_prefix_and_errors(targets):
+    got = parse_targets("gyro_bias=5e-6, accel_M_xx=1e-5", list(targets))
+    assert got == {"gyro_bias_x": 5e-6, "gyro_bias_y": 5e-6, "gyro_bias_z": 5e-6,
+                   "accel_M_xx": 1e-5}
+    with pytest.raises(ConfigurationError, match="names no P1 parameter"):
+        parse_targets("gyro_nope=1", list(targets))
+    with pytest.raises(ConfigurationError, match="write NAME=σ"):
+        parse_targets("gyro_bias=-1", list(targets))
+
+
+def test_spec_targets_are_limit_over_k(targets):
+    plan = generate_p1_plan()
+    got = spec_targets(plan, list(targets), k=4.0)
+    assert got["gyro_bias_z"] == pytest.approx(20.0 * units.DEG_PER_H / 4.0)
+    assert got["accel_M_xy"] == pytest.approx(2000e-6 / 4.0)
+    assert "gyro_G_xy" in got
+    with pytest.raises(ConfigurationError, match="k must be > 0"):
+        spec_targets(plan, list(targets), k=0.0)
+
+
+def test_settings_are_checked():
+    with pytest.raises(ConfigurationError, match="≥ 10 s"):
+        dataclasses.replace(OptimizeSettings(), record_s_grid=(5.0,)).check()
