@@ -45,6 +45,7 @@ def _truth_table(result: CalibrationResult, truth: dict[str, Any]) -> Table:
         for i, a in enumerate("xyz"):
             true[f"{triad}_bias_{a}"] = tm.bias[i]
             true[f"{triad}_K2_{a}"] = np.broadcast_to(np.asarray(tm.k2, dtype=float), 3)[i]
+            true[f"{triad}_K3_{a}"] = np.broadcast_to(np.asarray(tm.k3, dtype=float), 3)[i]
             for j, b in enumerate("xyz"):
                 true[f"{triad}_M_{a}{b}"] = tm.scale_misalignment[i, j]
                 true[f"{triad}_G_{a}{b}"] = tm.g_sensitivity[i, j] if triad == "gyro" else 0.0

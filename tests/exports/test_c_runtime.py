@@ -27,6 +27,8 @@ N = 100_000
 T0 = 20.0
 T_RANGE = (-40.0, 85.0)
 CFLAGS = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+#: σ of a drawn K3 [1/(m/s²)²]: K3·u³ up to ≈ 1 m/s² at 20 m/s², h still monotonic on ±20 m/s².
+K3_SCALE = 5e-5
 
 #: The test driver: samples (g, a, T, Ṫ, ℓ) from in.bin → per sample rc_d, g_d, a_d, rc_f, g_f,
 #: a_f to out.bin (doubles); prints the legs of four rates (double, float), then the time per
@@ -172,28 +174,29 @@ def _result(names: list[str], values: np.ndarray, *, model: str = "triad",
                              temperature_models=temperature_models)
 
 
-def triad_result(rng: np.random.Generator) -> CalibrationResult:
-    """Gyro bias, M, G; accelerometer bias, M, K2; no temperature model."""
+def triad_result(rng: np.random.Generator, *, k3: bool = False) -> CalibrationResult:
+    """Gyro bias, M, G; accelerometer bias, M, K2 (and K3); no temperature model."""
     gyro = triad_parameter_names("gyro", "triad", g_sensitivity=True)
-    accel = triad_parameter_names("accel", "triad", k2=True)
+    accel = triad_parameter_names("accel", "triad", k2=True, k3=k3)
     values = np.concatenate([rng.normal(size=3) * 1e-2, rng.normal(size=9) * 2e-3,
                              rng.normal(size=9) * 1e-4, rng.normal(size=3) * 0.05,
-                             rng.normal(size=9) * 2e-3, rng.normal(size=3) * 1e-4])
+                             rng.normal(size=9) * 2e-3, rng.normal(size=3) * 1e-4,
+                             rng.normal(size=3 if k3 else 0) * K3_SCALE])
     return _result([*gyro, *accel], values)
 
 
 def temperature_result(rng: np.random.Generator, *, model: str = "triad",
-                       order: int = 3) -> CalibrationResult:
-    """Every parameter (K2 included) a polynomial of `order` in T − T0; some with rate and leg."""
+                       order: int = 3, k3: bool = False) -> CalibrationResult:
+    """Every parameter (K2, K3 included) a polynomial of `order` in T − T0; some with rate, leg."""
     if model == "triad":
         names = [*triad_parameter_names("gyro", "triad", g_sensitivity=True),
-                 *triad_parameter_names("accel", "triad", k2=True)]
+                 *triad_parameter_names("accel", "triad", k2=True, k3=k3)]
     else:
         names = [*triad_parameter_names("gyro", "per-axis"),
                  *triad_parameter_names("accel", "per-axis")]
 
     scales = [{"bias": 0.02, "b": 0.02, "M": 2e-3, "G": 1e-4, "K": 2e-3,
-               "K2": 1e-4}[n.split("_")[1]]
+               "K2": 1e-4, "K3": K3_SCALE}[n.split("_")[1]]
               for n in names]
     values = np.array([(1.0 if n.split("_")[1] == "K" else 0.0) + float(rng.normal()) * s
                        for n, s in zip(names, scales, strict=True)])
@@ -271,3 +274,63 @@ def test_runtime_reports_errors(tmp_path: Path) -> None:
     assert out[0, 0] == 2 and out[0, 7] == 2  # IMUCAL_ERR_SINGULAR
     assert out[1, 0] == 1 and out[1, 7] == 1  # IMUCAL_ERR_INPUT
 
+
+
+def test_triad_with_k3_matches_python(tmp_path: Path) -> None:
+    """K3 (C3′) in both precisions; without it the C correction would be off by K3·u³."""
+    result = triad_result(np.random.default_rng(21), k3=True)
+    _check_against_python(result, tmp_path, seed=22)
+    samples = _samples(np.random.default_rng(22))
+    out, _ = _run_c(result, tmp_path, samples)
+    _, without = correct_imu(None, samples[:, 3:6], triad_result(np.random.default_rng(21)))
+    assert without is not None and np.max(np.abs(out[:, 4:7] - without)) > 0.05
+
+
+def test_temperature_models_with_k3_match_python(tmp_path: Path) -> None:
+    _check_against_python(temperature_result(np.random.default_rng(23), k3=True), tmp_path,
+                          seed=24)
+
+
+def test_k3_zero_is_exactly_the_k2_code_path(tmp_path: Path) -> None:
+    """A result whose K3 slots are 0 gives the same bits as the result without K3 names."""
+    plain = triad_result(np.random.default_rng(25))
+    names = (*plain.param_names, "accel_K3_x", "accel_K3_y", "accel_K3_z")
+    zero_k3 = _result(list(names), np.concatenate([plain.values, np.zeros(3)]))
+    samples = _samples(np.random.default_rng(26), n=2000)
+    a, _ = _run_c(plain, tmp_path / "a", samples)
+    b, _ = _run_c(zero_k3, tmp_path / "b", samples)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_k3_outside_its_branch_is_an_error_code(tmp_path: Path) -> None:
+    """u + K3·u³ with K3 < 0 peaks at ≈ 12 m/s² (K3 = −1e-3): 15 m/s² has no root there."""
+    names = list(triad_parameter_names("accel", "triad", k3=True))
+    values = np.zeros(len(names))
+    values[names.index("accel_K3_x")] = -1e-3
+    samples = _samples(np.random.default_rng(27), n=2)
+    samples[:, 3:6] = [[15.0, 0.0, 0.0], [5.0, 1.0, -1.0]]
+    out, _ = _run_c(_result(names, values), tmp_path, samples)
+    assert out[0, 0] == 4 and out[0, 7] == 4  # IMUCAL_ERR_K3_RANGE
+    assert out[1, 0] == 0 and out[1, 7] == 0
+    with pytest.raises(InvalidInputError, match="cannot invert"):
+        correct_imu(None, samples[:1, 3:6], _result(names, values))
+
+
+def test_slot_layout_matches_the_header() -> None:
+    """_OFFSETS, the slot names and imucalib_runtime.h's macros agree (layout version 2)."""
+    import re
+    from importlib import resources
+
+    from imucalib.exports import c_runtime
+
+    header = resources.files("imucalib.exports").joinpath("c", "imucalib_runtime.h").read_text(
+        encoding="utf-8")
+    macros = {m: int(v) for m, v in re.findall(r"#define (IMUCAL_\w+) (\d+)\b", header)}
+    assert macros["IMUCAL_LAYOUT_VERSION"] == c_runtime.LAYOUT_VERSION == 2
+    assert macros["IMUCAL_TRIAD_SLOTS"] == 33 and macros["IMUCAL_N_SLOTS"] == 66
+    for symbol, offset in c_runtime._OFFSETS.items():
+        macro = {"bias": "IMUCAL_BIAS", "b": "IMUCAL_B"}.get(symbol, f"IMUCAL_{symbol}")
+        assert macros[macro] == offset
+        first = "xx" if symbol in ("M", "G") else "x"
+        for t, triad in enumerate(("gyro", "accel")):
+            assert c_runtime._SLOTS.index(f"{triad}_{symbol}_{first}") == 33 * t + offset

@@ -90,3 +90,66 @@ def test_the_cli_refuses_then_writes_with_drop_terms(tmp_path: Path):
     res = runner.invoke(app, ["export", str(result_file), "--format", "mat", "-o",
                               str(tmp_path / "m"), "--drop-terms"])
     assert res.exit_code == 2 and "--drop-terms applies to --format" in res.output
+
+
+def _with_k3(*, k2: bool, k3: float = 2e-5, seed: int = 5):
+    """_result plus accelerometer K3 terms (after K2), K3_y the largest."""
+    from imucalib.models.result import CalibrationResult
+
+    base = _result(k2=k2, seed=seed)
+    names = (*base.param_names, "accel_K3_x", "accel_K3_y", "accel_K3_z")
+    values = np.concatenate([base.values, [0.3 * k3, -k3, 0.1 * k3]])
+    cov = np.zeros((len(names), len(names)))
+    cov[:-3, :-3] = base.covariance
+    cov[-3:, -3:] = np.eye(3) * 1e-14
+    return CalibrationResult(sensor_id=base.sensor_id, procedure=base.procedure, model="triad",
+                             param_names=names, values=values, covariance=cov,
+                             units={**base.units, **dict.fromkeys(names[-3:], "1/(m/s^2)^2")})
+
+
+def test_the_refusal_states_the_error_leaving_k3_out_causes():
+    cal = _with_k3(k2=False)
+    at_1g = 2e-5 * G0_MPS2**3 / MG  # K3_y's error |K3|·f³ at 1 g [mg]
+    for export in (kalibr_intrinsics, openvins_intrinsics):
+        with pytest.raises(InvalidInputError) as err:
+            export(cal)
+        msg = str(err.value)
+        assert f"{at_1g:.3g} mg at 1 g" in msg and f"{8 * at_1g:.3g} mg at 2 g" in msg
+        assert "accelerometer K3 is not 0" in msg and "no cubic scale factor" in msg
+        assert "K3_y = -2e-05 1/(m/s²)²" in msg and "terms=-k3" in msg and "K2" not in msg
+
+
+def test_k2_and_k3_together_add_up_and_are_left_out_together(tmp_path: Path):
+    cal = _with_k3(k2=True)
+    k2 = np.abs([cal.value(f"accel_K2_{a}") for a in "xyz"])
+    k3 = np.abs([cal.value(f"accel_K3_{a}") for a in "xyz"])
+    at_1g = np.max(k2 * G0_MPS2**2 + k3 * G0_MPS2**3) / MG
+    at_2g = np.max(4 * k2 * G0_MPS2**2 + 8 * k3 * G0_MPS2**3) / MG
+    with pytest.raises(InvalidInputError) as err:
+        kalibr_intrinsics(cal)
+    msg = str(err.value)
+    assert f"{at_1g:.3g} mg at 1 g and {at_2g:.3g} mg at 2 g" in msg
+    assert "K2 and K3 are not 0" in msg and "terms=-k2,-k3" in msg
+    text = write_openvins_intrinsics(cal, tmp_path / "o.yaml", drop_terms=True).read_text(
+        encoding="utf-8")
+    assert "# K2 AND K3 LEFT OUT (--drop-terms):" in text
+    # the rest is what the result without K2 and K3 gives
+    np.testing.assert_array_equal(openvins_intrinsics(cal, drop_terms=True)["Ta"],
+                                  openvins_intrinsics(_result(k2=False, seed=5))["Ta"])
+
+
+def test_struct_ros_yaml_and_mat_carry_k3(tmp_path: Path):
+    from scipy.io import loadmat
+
+    from imucalib.exports.intrinsics import format_ros_yaml, intrinsics_struct, write_mat
+
+    cal = _with_k3(k2=True)
+    k3 = np.array([cal.value(f"accel_K3_{a}") for a in "xyz"])
+    s = intrinsics_struct(cal)
+    np.testing.assert_array_equal(s["K3_a"], k3)
+    np.testing.assert_array_equal(intrinsics_struct(_result(k2=True))["K3_a"], np.zeros(3))
+    doc = yaml.safe_load(format_ros_yaml(cal))
+    np.testing.assert_array_equal(doc["accel"]["k3"], k3)
+    assert "k3" not in yaml.safe_load(format_ros_yaml(_result(k2=True)))["accel"]
+    mat = loadmat(write_mat(cal, tmp_path / "c.mat"))["imucal"][0, 0]
+    np.testing.assert_array_equal(mat["K3_a"].ravel(), k3)

@@ -107,7 +107,8 @@ def export(
                               "(docs/exports.md).")] = None,
     drop_terms: Annotated[bool, typer.Option(
         "--drop-terms", help="For --format kalibr-imu or openvins-imu: write a result whose "
-                             "accelerometer K2 those tools' models lack without it; the file "
+                             "accelerometer K2 or K3 those tools' models lack without "
+                             "them; the file "
                              "states the error left (docs/exports.md). Refused otherwise, with "
                              "that error.")] = False,
     step: Annotated[int | None, typer.Option(help="Only this step's valid window.")] = None,
@@ -183,7 +184,7 @@ def _export_result(path: Path, out: Path, fmt: str | None, temperature_degc: flo
         if drop_terms and fmt not in TEMPERATURE_FORMATS:
             raise InvalidInputError(
                 f"--drop-terms applies to --format {' or '.join(TEMPERATURE_FORMATS)} only "
-                f"(their tools' models lack K2); {fmt} holds every term of the result")
+                f"(their tools' models lack K2 and K3); {fmt} holds every term of the result")
         result = load_result(path)
         out.mkdir(parents=True, exist_ok=True)
         written = write_outputs(result, out, formats=(fmt,), name=path.name.split(".")[0],

@@ -39,7 +39,7 @@ def combine(
     """Fuse several tests' triad parameters into one triad model (a result file).
 
     Each triad that appears must be complete (its 3 biases and 9 scale/misalignment terms;
-    G and K2 optional, all or none): a parameter two tests give gets their weighted mean, and
+    G, K2 and K3 optional, all or none): a parameter two tests give gets their weighted mean, and
     their χ² says whether they agree (a misfit scales the σ by the Birge ratio).
     """
     from imucalib.estimation.combine import TriadPart, combine_triad_parameters

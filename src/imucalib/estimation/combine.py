@@ -20,7 +20,7 @@ solve_weighted_lsq`, generalised least squares through the Cholesky factor of th
 covariance).
 
 The result is a :class:`~imucalib.models.result.CalibrationResult` of model ``"triad"``:
-every triad that appears must be complete (its 12 bias and M names; G and K2 are optional
+every triad that appears must be complete (its 12 bias and M names; G, K2 and K3 are optional
 blocks, all nine or three of them), else :class:`~imucalib.errors.InsufficientExcitationError`
 names what is missing.
 
@@ -121,7 +121,7 @@ def combine_triad_parameters(parts: Sequence[TriadPart | Any], *, sensor_id: str
             continue
         want = triad_parameter_names(
             triad, "triad", g_sensitivity=any("_G_" in n for n in mine),
-            k2=any("_K2_" in n for n in mine))
+            k2=any("_K2_" in n for n in mine), k3=any("_K3_" in n for n in mine))
         unknown = sorted(set(mine) - set(want))
         if unknown:
             raise InvalidInputError(f"not {triad} triad parameters: {unknown}")

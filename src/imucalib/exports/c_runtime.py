@@ -6,7 +6,7 @@ Contents
     A :class:`~imucalib.models.result.CalibrationResult` → ``<name>_params.h`` (generated) and
     ``imucalib_runtime.h`` / ``imucalib_runtime.c`` (copied, package data of
     ``imucalib.exports``) in one folder.
-:data:`C_RUNTIME_FILES`, :data:`MAX_TEMPERATURE_ORDER`
+:data:`C_RUNTIME_FILES`, :data:`MAX_TEMPERATURE_ORDER`, :data:`LAYOUT_VERSION`
 
 Model (docs/c-runtime.md)
 -------------------------
@@ -14,19 +14,24 @@ The runtime computes, per sample and with no allocation, what
 :func:`~imucalib.models.correct.correct_imu` computes::
 
     p(T, Ṫ, ℓ) = Σ_{j=0..m} c_j (T − T0)^j + d·Ṫ + h·ℓ                                      (C1)
-    y = b + h_K2((I + M)·x) (+ G·f, gyro)          (triad model)                            (C2)
+    y = b + h((I + M)·x) (+ G·f, gyro),  h_i(u) = u + K2_i·u² + K3_i·u³  (triad model)    (C2)
     u_i = 2 r_i / (1 + √(1 + 4 K2_i r_i)),  r = y − b (− G·f),  x = (I + M)⁻¹·u             (C3)
+    K3_i ≠ 0: u_i ← u_i − (h_i(u_i) − r_i) / h_i′(u_i), from the root of (C3)               (C3′)
     x_i = y_i / K_i − b_i                          (per-axis model, y_i = K_i·(x_i + b_i))  (C4)
 
 (C1) is Eq. (T1) of docs/processing-estimation.md; (C3) is the exact root of the quadratic
 h(u) = u + K2·u² on the branch through 0, the root :func:`~imucalib.models.triad.correct_triad`
-starts its Newton iteration from (and keeps, K3 = Koq = asymmetry = 0 being the only case a
-result file can hold). The accelerometer is corrected first and its corrected specific force
-feeds the gyro's G, as in ``correct_imu``.
+starts its Newton iteration from (and keeps when K3 = 0; Koq = asymmetry = 0 being the only
+case a result file can hold). With K3 ≠ 0, (C3′) takes Newton steps from it (at most
+``IMUCAL_K3_MAX_ITER``, until a step is ≤ 4 ε·|u|) and accepts the root only on the branch
+through 0 (h′ > 0 between 0 and it), as :func:`~imucalib.models.correct.correct_imu` does; K3 = 0
+runs exactly the code of (C3). The accelerometer is corrected first and its corrected specific
+force feeds the gyro's G, as in ``correct_imu``.
 
 Each parameter has a slot (``IMUCAL_BIAS`` … in ``imucalib_runtime.h``); a slot the result does
-not carry holds 0 (so ``I + M`` = I, no G, no K2). Parameters are written in double (``%r``,
-exact) and in float (rounded to nearest). Refused, with an
+not carry holds 0 (so ``I + M`` = I, no G, no K2, no K3). K3 is the last slot of a triad's block
+(:data:`LAYOUT_VERSION` 2; the offsets of version 1 are unchanged). Parameters are written in
+double (``%r``, exact) and in float (rounded to nearest). Refused, with an
 :class:`~imucalib.errors.InvalidInputError` naming what: a parameter the runtime has no slot for,
 a temperature model of order above :data:`MAX_TEMPERATURE_ORDER`, a `name` that is not a C
 identifier.
@@ -48,7 +53,7 @@ from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
 from imucalib.models.result import CalibrationResult
 
-__all__ = ["C_RUNTIME_FILES", "MAX_TEMPERATURE_ORDER", "write_c_runtime"]
+__all__ = ["C_RUNTIME_FILES", "LAYOUT_VERSION", "MAX_TEMPERATURE_ORDER", "write_c_runtime"]
 
 #: The fixed library's files, copied next to the generated header.
 C_RUNTIME_FILES: Final = ("imucalib_runtime.h", "imucalib_runtime.c")
@@ -60,14 +65,17 @@ _MAX_TERMS: Final = 8
 #: The highest order m of Eq. (C1) the runtime evaluates.
 MAX_TEMPERATURE_ORDER: Final = _MAX_TERMS - 1
 _TRIADS: Final = ("gyro", "accel")
-_TRIAD_SLOTS: Final = 30
+#: The slot layout's version (``IMUCAL_LAYOUT_VERSION``): 2 appended K3 (offset 30) to each
+#: triad's block of version 1 (30 slots a triad); the generated header checks it.
+LAYOUT_VERSION: Final = 2
+_TRIAD_SLOTS: Final = 33
 #: Offset of each symbol's first slot in a triad (``IMUCAL_BIAS`` … of imucalib_runtime.h).
-_OFFSETS: Final = {"bias": 0, "M": 3, "G": 12, "K2": 21, "K": 24, "b": 27}
+_OFFSETS: Final = {"bias": 0, "M": 3, "G": 12, "K2": 21, "K": 24, "b": 27, "K3": 30}
 _IDENTIFIER: Final = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
 def _slot_names() -> list[str]:
-    """Return the parameter name of every slot, in slot order (60 names)."""
+    """Return the parameter name of every slot, in slot order (66 names, :data:`_OFFSETS`)."""
     names = []
     for triad in _TRIADS:
         names += [f"{triad}_bias_{a}" for a in AXES]
@@ -76,6 +84,7 @@ def _slot_names() -> list[str]:
         names += [f"{triad}_K2_{a}" for a in AXES]
         names += [f"{triad}_K_{a}" for a in AXES]
         names += [f"{triad}_b_{a}" for a in AXES]
+        names += [f"{triad}_K3_{a}" for a in AXES]
     return names
 
 
@@ -176,7 +185,7 @@ def _params_header(result: CalibrationResult, name: str) -> str:
  * Result format version: {result.format_version}
  * Input units: {_c_comment(units)}
  * Temperature models: {len(result.temperature_models)}, T0 {t0}, fitted range {fitted}
- * Library: imucalib_runtime.h / .c (docs/c-runtime.md)
+ * Library: imucalib_runtime.h / .c (docs/c-runtime.md), slot layout version {LAYOUT_VERSION}
  * SHA-256 of the result JSON (CalibrationResult.to_json(), UTF-8):
  * {sha}
  */
@@ -184,6 +193,10 @@ def _params_header(result: CalibrationResult, name: str) -> str:
 #define {guard}
 
 #include "imucalib_runtime.h"
+
+#if !defined(IMUCAL_LAYOUT_VERSION) || IMUCAL_LAYOUT_VERSION != {LAYOUT_VERSION}
+#error "{name}_params.h needs the imucalib_runtime.h of slot layout version {LAYOUT_VERSION}"
+#endif
 
 #define {name.upper()}_FORMAT_VERSION {result.format_version}
 #define {name.upper()}_RESULT_SHA256 "{sha}"
@@ -245,8 +258,8 @@ def write_c_runtime(result: CalibrationResult, folder: str | os.PathLike[str], *
 
     Notes
     -----
-    ``imucal_correct_d`` / ``imucal_correct_f`` evaluate Eqs. (C1)–(C4) of the module docstring
-    (docs/c-runtime.md) per sample.
+    ``imucal_correct_d`` / ``imucal_correct_f`` evaluate Eqs. (C1)–(C4) and (C3′) of the module
+    docstring (docs/c-runtime.md) per sample.
     """
     if not isinstance(name, str) or not _IDENTIFIER.match(name):
         raise InvalidInputError(f"`name` must be a C identifier ([A-Za-z_][A-Za-z0-9_]*); got "

@@ -19,7 +19,9 @@ Conventions (docs/exports.md)
 -----------------------------
 imucalib's forward model, sensor frame S, per triad (docs/processing-estimation.md)::
 
-    y_g = b_g + (I + M_g)·ω + G·f,     y_a = b_a + (I + M_a)·f   (+ K2_i·f_i²)             (X1)
+    y_g = b_g + (I + M_g)·ω + G·f,     y_a = b_a + (I + M_a)·f   (+ K2_i·u_i² + K3_i·u_i³)  (X1)
+
+(u = (I + M_a)·f, the model of :class:`~imucalib.models.triad.TriadModel`; u_i ≈ f_i.)
 
 OpenVINS corrects with (docs "Analytical Propagation", IMU Intrinsic Models, and its
 propagator; D = T⁻¹ computed by its loader from the file's T)::
@@ -31,8 +33,9 @@ and keeps only the lower triangle of D_w, D_a (its ``kalibr`` intrinsic model). 
 
     (I + M)⁻¹ = Q·L,   R_xxxtoIMU = Q,   R_IMUtoxxx = Qᵀ,   T = L⁻¹,   T_g = G             (X3)
 
-which makes (X2) the exact inverse of (X1) with the IMU frame equal to S. K2 ≠ 0 and the
-biases have no place in (X2): a result with K2 ≠ 0 is refused (X6 below); the biases are written as
+which makes (X2) the exact inverse of (X1) with the IMU frame equal to S. K2, K3 ≠ 0 and the
+biases have no place in (X2): a result with K2 or K3 ≠ 0 is refused (X6 below); the biases are
+written as
 ``imucalib_bias_gyro`` / ``imucalib_bias_accel`` (OpenVINS ignores them; its biases are state).
 
 Kalibr's ``scale-misalignment`` IMU model (its source, ``IccSensors.py``,
@@ -49,14 +52,15 @@ two LQ splits (L lower triangular with positive diagonal times a rotation). C_i_
 ``imucalib_C_i_sensor`` (Kalibr's i differs from S by it; Kalibr estimates its camera–IMU
 extrinsics in i).
 
-Neither Kalibr's nor OpenVINS' model holds K2. A result with K2 ≠ 0 is refused with what leaving
-it out errs by: the accelerometer's output error K2_i·f_i² at a specific force f along the axis,
+Neither Kalibr's nor OpenVINS' model holds K2 or K3. A result with K2 or K3 ≠ 0 is refused
+with what leaving them out errs by: the accelerometer's output error K2_i·f² + K3_i·f³ at a
+specific force ±f along the axis, the larger of the two signs,
 
-    e_i(f) = |K2_i|·f²   (at 1 g and at 2 g in the message)                              (X6)
+    e_i(f) = |K2_i|·f² + |K3_i|·f³   (the largest over the axes, at 1 g and at 2 g)        (X6)
 
-and written without it only when asked (``drop_terms``, CLI ``--drop-terms``), the header then
-stating (X6). The better way is a result without K2: a field calibration lets the data choose
-the term and carries the choice in the other σ (docs/field.md, "Model terms").
+and written without them only when asked (``drop_terms``, CLI ``--drop-terms``), the header then
+stating (X6). The better way is a result without them: a field calibration lets the data choose
+the terms and carries the choice in the other σ (docs/field.md, "Model terms").
 
 Temperature models (docs/processing-estimation.md, Eq. (T1))::
 
@@ -115,9 +119,10 @@ def intrinsics_struct(cal: CalibrationResult) -> dict[str, Any]:
     """Return the result as one flat struct (docs/exports.md, "MATLAB").
 
     Per calibrated triad t ∈ {a, g}: ``b_t`` (3,), ``M_t`` (3, 3) of Eq. (X1) (row: sensor
-    axis, column: input axis); ``K2_a`` (3,) and ``G_g`` (3, 3) (zeros where the model has
-    none). A per-axis result is given in the triad form (b = K·b_axis, M = diag(K − 1)). Then
-    ``param_names``, ``values``, ``covariance``, ``units`` (aligned with ``param_names``),
+    axis, column: input axis); ``K2_a`` (3,), ``K3_a`` (3,) and ``G_g`` (3, 3) (zeros where
+    the model has none). A per-axis result is given in the triad form (b = K·b_axis,
+    M = diag(K − 1)). Then ``param_names``, ``values``, ``covariance``, ``units`` (aligned with
+    ``param_names``),
     ``sensor_id``, ``procedure``, ``model``; the values hold at T0. A result with temperature
     models adds ``temperature_models`` (:func:`temperature_models_struct`), a struct with one
     field per parameter that has a model; a result without any has no such field.
@@ -131,6 +136,7 @@ def intrinsics_struct(cal: CalibrationResult) -> dict[str, Any]:
         out[f"M_{s}"] = np.asarray(tm.scale_misalignment, dtype=np.float64).copy()
         if triad == "accel":
             out["K2_a"] = np.asarray(tm.k2, dtype=np.float64).copy()
+            out["K3_a"] = np.asarray(tm.k3, dtype=np.float64).copy()
         else:
             out["G_g"] = np.asarray(tm.g_sensitivity, dtype=np.float64).copy()
     out["param_names"] = list(cal.param_names)
@@ -307,20 +313,20 @@ def format_ros_yaml(cal: CalibrationResult) -> str:
     """Return a ROS-style parameter YAML of the result (docs/exports.md, "ROS YAML").
 
     One namespace per calibrated triad (``accel``, ``gyro``): ``bias`` (3), ``scale_misalignment``
-    (I + M of Eq. (X1), row-major, 9), ``g_sensitivity`` (gyro, row-major 9) and ``k2``
-    (accel, 3); then ``parameters`` (names), ``values``, ``covariance`` (row-major, k²) and
-    ``units``; the values hold at T0. A result with temperature models adds
-    ``temperature_models``, one mapping per parameter with a model of Eq. (T1) (the fields of
-    :func:`temperature_models_struct`, ``null`` for a term or range the model has not, the
-    held-out check as a mapping or ``null``). Floats are ``repr`` with a ``.0`` put before an
-    exponent that lacks a point (``1.0e-05``: YAML 1.1 reads ``1e-05`` as a string); they
-    round-trip exactly.
+    (I + M of Eq. (X1), row-major, 9), ``g_sensitivity`` (gyro, row-major 9), ``k2`` and
+    ``k3`` (accel, 3 each; ``k3`` only for a result with K3); then ``parameters`` (names),
+    ``values``, ``covariance`` (row-major, k²) and ``units``; the values hold at T0. A result
+    with temperature models adds ``temperature_models``, one mapping per parameter with a
+    model of Eq. (T1) (the fields of :func:`temperature_models_struct`, ``null`` for a term or
+    range the model has not, the held-out check as a mapping or ``null``). Floats are ``repr``
+    with a ``.0`` put before an exponent that lacks a point (``1.0e-05``: YAML 1.1 reads
+    ``1e-05`` as a string); they round-trip exactly.
     """
     s = intrinsics_struct(cal)
     unit = {"accel": "m/s^2", "gyro": "rad/s"}
     lines = [f"# imucalib {__version__} calibration intrinsics (docs/exports.md)",
              "# model: y = bias + scale_misalignment*x (+ g_sensitivity*f, gyro)"
-             " (+ k2_i*x_i^2, accel);",
+             " (+ k2_i*u_i^2 + k3_i*u_i^3, u = scale_misalignment*x, accel);",
              "# frame: the sensor frame; x true input, y output; matrices row-major"
              " (row: sensor axis, column: input axis)",
              f"sensor_id: {_quote(cal.sensor_id)}",
@@ -335,6 +341,8 @@ def format_ros_yaml(cal: CalibrationResult) -> str:
             lines.append(f"  g_sensitivity: {_flow(s['G_g'])}  # rad/s/(m/s^2)")
         else:
             lines.append(f"  k2: {_flow(s['K2_a'])}  # 1/(m/s^2)")
+            if "accel_K3_x" in cal.param_names:
+                lines.append(f"  k3: {_flow(s['K3_a'])}  # 1/(m/s^2)^2")
     lines += ["parameters: [" + ", ".join(_quote(n) for n in cal.param_names) + "]",
               f"values: {_flow(s['values'])}",
               f"covariance: {_flow(s['covariance'])}  # row-major, k x k",
@@ -422,26 +430,38 @@ def _lower_rotation(x: _F64, triad: str) -> tuple[_F64, _F64]:
 
 
 def _no_k2(s: dict[str, Any], tool: str, drop_terms: bool = False) -> str:
-    """Refuse a K2 ≠ 0 the tool's model lacks, stating what leaving it out errs by (X6).
+    """Refuse a K2 or K3 ≠ 0 the tool's model lacks, stating what leaving it out errs by (X6).
 
-    With `drop_terms` the K2 in `s` is set to 0 and the statement returned (for the file's
-    header); "" when there was none.
+    e_i(f) = |K2_i|·f² + |K3_i|·f³, the largest over the axes at f = 1 g and 2 g. With
+    `drop_terms` the K2 and K3 in `s` are set to 0 and the statement returned (for the file's
+    header); "" when there were none.
     """
-    if "K2_a" not in s or not np.any(s["K2_a"] != 0.0):
+    terms = [t for t in ("K2", "K3") if f"{t}_a" in s and np.any(s[f"{t}_a"] != 0.0)]
+    if not terms:
         return ""
-    k2 = np.abs(np.asarray(s["K2_a"], dtype=np.float64))
-    worst = int(np.argmax(k2))
-    at_1g = float(k2[worst]) * G0_MPS2**2
-    statement = (f"leaving the accelerometer K2 out errs by up to {at_1g / MG:.3g} mg at 1 g and "
-                 f"{4.0 * at_1g / MG:.3g} mg at 2 g (K2_{'xyz'[worst]} = "
-                 f"{float(s['K2_a'][worst]):.3g} 1/(m/s²), error K2·f²; X6)")
+    k2, k3 = (np.abs(np.asarray(s.get(f"{t}_a", np.zeros(3)), dtype=np.float64))
+              for t in ("K2", "K3"))
+    err = {g: k2 * (g * G0_MPS2) ** 2 + k3 * (g * G0_MPS2) ** 3 for g in (1, 2)}
+    worst = int(np.argmax(err[1]))
+    what = " and ".join(terms)
+    coefficients = ", ".join(
+        f"{t}_{'xyz'[worst]} = {float(s[f'{t}_a'][worst]):.3g} "
+        f"{'1/(m/s²)' if t == 'K2' else '1/(m/s²)²'}" for t in terms)
+    formula = " + ".join({"K2": "K2·f²", "K3": "K3·f³"}[t] for t in terms)
+    statement = (f"leaving the accelerometer {what} out errs by up to "
+                 f"{float(err[1][worst]) / MG:.3g} mg at 1 g and {float(np.max(err[2])) / MG:.3g}"
+                 f" mg at 2 g ({coefficients}, error {formula}; X6)")
     if not drop_terms:
+        lacks = {"K2": "quadratic", "K3": "cubic"}
+        flags = ",".join(f"-{t.lower()}" for t in terms)
         raise InvalidInputError(
-            f"the result's accelerometer K2 is not 0 and {tool}'s IMU model has no quadratic "
-            f"scale factor: {statement}; pass --drop-terms (drop_terms=True) to write it "
-            "without, or calibrate again without K2 (the field calibration: --set terms=-k2, "
+            f"the result's accelerometer {what} {'is' if len(terms) == 1 else 'are'} not 0 and "
+            f"{tool}'s IMU model has no {' or '.join(lacks[t] for t in terms)} scale factor: "
+            f"{statement}; pass --drop-terms (drop_terms=True) to write it without, or "
+            f"calibrate again without {what} (the field calibration: --set terms={flags}, "
             "or let the data choose; docs/exports.md)")
-    s["K2_a"] = np.zeros(3)
+    for t in terms:
+        s[f"{t}_a"] = np.zeros(3)
     return statement
 
 
@@ -497,7 +517,7 @@ def kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float | None 
     Raises
     ------
     InvalidInputError
-        A triad missing, K2 ≠ 0 (not in Kalibr's model) unless `drop_terms` (then written
+        A triad missing, K2 or K3 ≠ 0 (not in Kalibr's model) unless `drop_terms` (then written
         without it, :func:`_no_k2`), an I + M with determinant ≤ 0, or a temperature
         :func:`at_temperature` refuses (none given for a result with models).
     """
@@ -519,7 +539,7 @@ def format_kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float 
     """Return the intrinsics in the layout of Kalibr's ``scale-misalignment`` IMU result YAML.
 
     A result with temperature models needs `temperature_degc` (:func:`at_temperature`); the
-    file then states it as ``imucalib_temperature_degc``. A K2 left out (`drop_terms`) is
+    file then states it as ``imucalib_temperature_degc``. A K2 or K3 left out (`drop_terms`) is
     stated in the header with the error it leaves.
     """
     cal, t = at_temperature(cal, temperature_degc, "Kalibr")
@@ -549,7 +569,7 @@ def format_kalibr_intrinsics(cal: CalibrationResult, *, temperature_degc: float 
 
 
 def _dropped_lines(indent: str, statement: str) -> list[str]:
-    """Return the header lines of a K2 left out (--drop-terms), none when nothing was."""
+    """Return the header lines of a K2 and/or K3 left out (--drop-terms), none when nothing was."""
     if not statement:
         return []
     words, lines, line = statement.split(), [], ""
@@ -560,7 +580,9 @@ def _dropped_lines(indent: str, statement: str) -> list[str]:
         else:
             line = f"{line} {w}".strip()
     lines.append(line)
-    return [f"{indent}# K2 LEFT OUT (--drop-terms):", *(f"{indent}#   {x}" for x in lines)]
+    what = statement.split("leaving the accelerometer ", 1)[1].split(" out ", 1)[0]
+    return [f"{indent}# {what.upper()} LEFT OUT (--drop-terms):",
+            *(f"{indent}#   {x}" for x in lines)]
 
 
 def _temperature_lines(indent: str, temperature_degc: float | None) -> list[str]:
@@ -592,7 +614,7 @@ def openvins_intrinsics(cal: CalibrationResult, *, temperature_degc: float | Non
     Raises
     ------
     InvalidInputError
-        K2 ≠ 0 (not in OpenVINS' model) unless `drop_terms` (then written without it,
+        K2 or K3 ≠ 0 (not in OpenVINS' model) unless `drop_terms` (then written without it,
         :func:`_no_k2`), an I + M with determinant ≤ 0, or a temperature
         :func:`at_temperature` refuses (none given for a result with models).
     """

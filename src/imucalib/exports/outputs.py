@@ -282,8 +282,8 @@ def write_outputs(result: ProcedureResult, folder: str | os.PathLike[str],
         at which a result's temperature models (Eq. (T1)) are evaluated; such a result is
         refused without it (:func:`imucalib.exports.intrinsics.at_temperature`). [°C]
     drop_terms : bool
-        For :data:`TEMPERATURE_FORMATS` only: write a result whose K2 their tools' models lack
-        without it, the file stating the error left (Eq. (X6) of
+        For :data:`TEMPERATURE_FORMATS` only: write a result whose K2 or K3 their tools' models
+        lack without them, the file stating the error left (Eq. (X6) of
         :mod:`imucalib.exports.intrinsics`); refused otherwise.
     provenance : Provenance, optional
         Where the result came from (the recording, its SHA-256, the plan hash), for the result

@@ -29,8 +29,13 @@ RTOL: Final = 1e-9
 
 
 def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False,
-                          k2: bool = False) -> tuple[str, ...]:
-    """Return the parameter names of one triad under `model` (:mod:`imucalib.models.result`)."""
+                          k2: bool = False, k3: bool = False) -> tuple[str, ...]:
+    """Return the parameter names of one triad under `model` (:mod:`imucalib.models.result`).
+
+    A triad model's names: bias, M, then the optional G, K2 and K3 terms in that order (the
+    order of the result contract and of the C runtime's slots); `g_sensitivity`, `k2` and `k3`
+    are ignored for the per-axis model.
+    """
     if model == "per-axis":
         return (*(f"{triad}_K_{a}" for a in AXES), *(f"{triad}_b_{a}" for a in AXES))
     names = [*(f"{triad}_bias_{a}" for a in AXES),
@@ -39,6 +44,8 @@ def triad_parameter_names(triad: str, model: str, *, g_sensitivity: bool = False
         names += [f"{triad}_G_{i}{j}" for i in AXES for j in AXES]
     if k2:
         names += [f"{triad}_K2_{a}" for a in AXES]
+    if k3:
+        names += [f"{triad}_K3_{a}" for a in AXES]
     return tuple(names)
 
 
@@ -47,4 +54,5 @@ def triad_parameter_unit(name: str) -> str:
     triad, _, rest = name.partition("_")
     symbol = rest.split("_")[0]
     si = "m/s^2" if triad == "accel" else "rad/s"
-    return {"bias": si, "b": si, "G": "rad/s/(m/s^2)", "K2": "1/(m/s^2)"}.get(symbol, "1")
+    return {"bias": si, "b": si, "G": "rad/s/(m/s^2)", "K2": "1/(m/s^2)",
+            "K3": "1/(m/s^2)^2"}.get(symbol, "1")

@@ -173,15 +173,26 @@ class ResultReader:
         for triad in sorted(triads):
             have = {n for n in names if n.startswith(f"{triad}_")}
             base = set(triad_parameter_names(triad, model))
-            # a triad model may add the gyro's G terms or the accelerometer's K2 terms
-            extra = {"gyro": "G terms", "accel": "K2 terms"}[triad] if model == "triad" else ""
-            full = set(triad_parameter_names(triad, model, g_sensitivity=triad == "gyro",
-                                             k2=triad == "accel")) if extra else base
-            if have in (base, full):
+            # a triad model may add the gyro's G terms, or the accelerometer's K2 terms, K3
+            # terms or both (each term all three axes or none)
+            extra = {"gyro": "G terms", "accel": "K2 terms, the K3 terms or both"}[triad] \
+                if model == "triad" else ""
+            accel = triad == "accel" and model == "triad"
+            allowed = [set(triad_parameter_names(triad, model, g_sensitivity=g, k2=k2, k3=k3))
+                       for g in ((False, True) if triad == "gyro" and extra else (False,))
+                       for k2 in ((False, True) if accel else (False,))
+                       for k3 in ((False, True) if accel else (False,))]
+            full = set().union(*allowed)
+            if have in allowed:
                 continue
+            # an optional term present on some axes only lacks the others
+            partial = {n for n in full - base
+                       if any(h.rsplit("_", 1)[0] == n.rsplit("_", 1)[0] for h in have)}
             self.fail("parameters", f"the {triad} parameters of a {model} result must be "
-                      f"{sorted(base)}" + (f" (and optionally the {extra})" if extra else "")
-                      + f"; missing {sorted(base - have)}, unexpected {sorted(have - full)}")
+                      f"{sorted(base)}" + (f" (and optionally the {extra}, each on all three "
+                                           "axes)" if extra else "")
+                      + f"; missing {sorted((base | partial) - have)}, unexpected "
+                      f"{sorted(have - full)}")
 
     def covariance(self, value: object, std: list[float]) -> NDArray[np.float64]:
         k = len(std)

@@ -226,8 +226,11 @@ def correct_imu(gyro_rps: ArrayLike | None, accel_mps2: ArrayLike | None,
     -----
     With temperature models each sample is corrected with the parameters at its (T, Ṫ, ℓ),
     Eq. (T1) of docs/processing-estimation.md: x = (I + M(T))⁻¹·h⁻¹(y − b(T) − G(T)·f), with
-    h(u)_i = u_i + K2_i(T)·u_i² inverted in closed form (Eq. (C3) of docs/c-runtime.md), or
-    x_i = y_i/K_i(T) − b_i(T) for a per-axis result.
+    h(u)_i = u_i + K2_i(T)·u_i² + K3_i(T)·u_i³ inverted on its branch through 0: in closed
+    form without K3 (Eq. (C3) of docs/c-runtime.md), by Newton's method from that root with
+    K3 (Eq. (C3′)); or x_i = y_i/K_i(T) − b_i(T) for a per-axis result. Without temperature
+    models :func:`~imucalib.models.triad.correct_triad` inverts the same h (Newton from the
+    same start, safeguarded by bisection).
     """
     _check_units(result, gyro_unit, accel_unit)
     accel = None if accel_mps2 is None else as_samples3(accel_mps2, "accel_mps2")
@@ -290,7 +293,10 @@ def _values_per_sample(result: CalibrationResult, samples: _F64 | None,
 
 def _correct_per_sample(result: CalibrationResult, triad: str, values: _F64, y: _F64,
                         specific_force: _F64 | None) -> _F64:
-    """Invert y = b + h_K2((I + M)·x) + G·f (or y_i = K_i·(x_i + b_i)), per-sample parameters."""
+    """Invert y = b + h((I + M)·x) + G·f (or y_i = K_i·(x_i + b_i)), per-sample parameters.
+
+    h(u)_i = u_i + K2_i·u_i² + K3_i·u_i³ (Eq. (C2)); inverted by Eq. (C3), or (C3′) with K3.
+    """
     index = {name: i for i, name in enumerate(result.param_names)}
 
     def cols(names: list[str]) -> _F64:
@@ -310,8 +316,12 @@ def _correct_per_sample(result: CalibrationResult, triad: str, values: _F64, y: 
                 raise InvalidInputError("this result has a gyro g-sensitivity: correcting the "
                                         "gyro needs the accelerometer data too")
             rest = rest - np.einsum("nij,nj->ni", g, specific_force)
-    if f"{triad}_K2_x" in index:
-        rest = _k2_inverse(cols([f"{triad}_K2_{a}" for a in AXES]), rest, triad)
+    k2, k3 = (cols([f"{triad}_{symbol}_{a}" for a in AXES]) if f"{triad}_{symbol}_x" in index
+              else None for symbol in ("K2", "K3"))
+    if k3 is not None and np.any(k3 != 0.0):
+        rest = _k3_inverse(np.zeros_like(k3) if k2 is None else k2, k3, rest, triad)
+    elif k2 is not None:
+        rest = _k2_inverse(k2, rest, triad)
     a = cols([f"{triad}_M_{i}{j}" for i in AXES for j in AXES]).reshape(n, 3, 3) + np.eye(3)
     try:
         return np.asarray(np.linalg.solve(a, rest[..., None])[..., 0], dtype=np.float64)
@@ -336,6 +346,55 @@ def _k2_inverse(k2: _F64, r: _F64, triad: str) -> _F64:
             f"value(s) (largest |measured - bias| {float(np.max(np.abs(r[bad]))):g}): outside "
             "its monotonic range")
     return np.asarray(2.0 * r / (1.0 + np.sqrt(disc)), dtype=np.float64)
+
+
+#: Most Newton steps of :func:`_k3_inverse` (from the K2 root it needs two or three). [–]
+K3_MAX_ITER: Final = 20
+#: :func:`_k3_inverse` has converged where a Newton step is at most this times |u|. [–]
+_K3_STEP_RTOL: Final = 4.0 * float(np.finfo(np.float64).eps)
+
+
+def _k3_inverse(k2: _F64, k3: _F64, r: _F64, triad: str) -> _F64:
+    """Solve u + K2·u² + K3·u³ = r per axis on the branch through 0 (Eq. (C3′), docs/c-runtime.md).
+
+    Newton's method from the closed-form root of the quadratic part (Eq. (C3), with
+    1 + 4·K2·r clipped at 0), at most :data:`K3_MAX_ITER` steps, each stopping where a step is
+    within 4 ε·|u|. An axis whose K3 is 0 keeps the closed-form root (no step: bit for bit what
+    :func:`_k2_inverse` gives). The root is accepted only on the branch through 0: the slope
+    1 + 2·K2·t + 3·K3·t² is > 0 for every t between 0 and u. It is the root
+    :func:`~imucalib.models.triad.correct_triad` converges to (Koq and the asymmetry being 0).
+
+    Raises
+    ------
+    InvalidInputError
+        A value whose Newton iteration does not converge, or whose root leaves the branch
+        through 0 (outside the range where h is monotonic); also, on an axis with K3 = 0,
+        1 + 4·K2·r < 0 (as :func:`_k2_inverse`).
+    """
+    disc = 1.0 + 4.0 * k2 * r
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        u = 2.0 * r / (1.0 + np.sqrt(np.maximum(disc, 0.0)))
+        active = k3 != 0.0
+        for _ in range(K3_MAX_ITER):
+            slope = 1.0 + u * (2.0 * k2 + 3.0 * k3 * u)
+            step = np.where(active, (u + u * u * (k2 + k3 * u) - r) / slope, 0.0)
+            u = u - step
+            active &= ~(np.abs(step) <= _K3_STEP_RTOL * np.abs(u))
+            if not active.any():
+                break
+        # g'(t) = 1 + 2 K2 t + 3 K3 t² > 0 on [0, u]: at both ends and at the vertex inside
+        lowest = np.minimum(1.0, 1.0 + u * (2.0 * k2 + 3.0 * k3 * u))
+        vertex = np.where(k3 != 0.0, -k2 / (3.0 * np.where(k3 != 0.0, k3, 1.0)), 0.0)
+        inside = (k3 > 0.0) & (vertex * (vertex - u) < 0.0)
+        lowest = np.where(inside, np.minimum(lowest, 1.0 + k2 * vertex), lowest)
+        failed = active | ~(lowest > 0.0) | ((k3 == 0.0) & ~(disc >= 0.0))
+    if np.any(failed):
+        raise InvalidInputError(
+            f"cannot invert the {triad} K2/K3 model u + K2·u² + K3·u³ for "
+            f"{int(np.count_nonzero(failed))} value(s) (largest |measured - bias| "
+            f"{float(np.max(np.abs(r[failed]))):g}): outside its monotonic range (the root "
+            f"leaves the branch through 0) or no convergence in {K3_MAX_ITER} Newton steps")
+    return np.asarray(u, dtype=np.float64)
 
 
 def correct_imu_frame(df: pd.DataFrame, result: CalibrationResult, *,

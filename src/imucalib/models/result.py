@@ -21,8 +21,12 @@ Parameter names
 - ``bias_x`` … the bias b of y = b + (I + M)·x [m/s² | rad/s];
 - ``M_xy`` … the scale/misalignment matrix M (row: sensor axis, column: input axis) [–];
 - ``G_xy`` … gyro g-sensitivity, y += G·f [rad/s per m/s²];
-- ``K2_x`` … accelerometer quadratic scale factor, y_i += K2_i·x_i² [1/(m/s²)] (procedure P2,
-  docs/p2.md);
+- ``K2_x`` … accelerometer quadratic scale factor, y_i += K2_i·u_i² with u = (I + M)·x
+  [1/(m/s²)] (procedure P2, docs/p2.md);
+- ``K3_x`` … accelerometer cubic scale factor, y_i += K3_i·u_i³ [1/(m/s²)²] (the field
+  calibration's terms chosen by the data, docs/field.md); after the K2 names when both are
+  present. K2 and K3 are those of :class:`~imucalib.models.triad.TriadModel` (``k2``, ``k3``);
+  a triad model's accelerometer may carry K2, K3, both or neither;
 - the per-axis model of procedure P1 (docs/p1.md, steps 1 and 3), y_i = K_i·(x_i + b_i):
   ``K_x`` [–] and ``b_x`` (a bias in input units) [m/s² | rad/s].
 
@@ -43,7 +47,7 @@ A result file is checked field by field before anything uses it
 - the values: strings where strings belong, numbers that are numbers (not strings, booleans or
   null) and finite (the JSON extensions NaN and Infinity are refused, in ``details`` too); the
   parameter names exactly one model's set per triad (optional G terms only for the gyro and
-  K2 terms only for the accelerometer of a triad model); known ``input_units``; residual
+  K2 and/or K3 terms only for the accelerometer of a triad model); known ``input_units``; residual
   counts that are integers ≥ 0;
 - the covariance: k × k for k parameters, variances ≥ 0, symmetric to a relative 10⁻⁹, each
   ``std`` equal to √ of its variance to 10⁻⁹ (a hand-edited value is caught), zero rows where
@@ -389,7 +393,7 @@ class CalibrationResult:
         return any(n.startswith(f"{triad}_") for n in self.param_names)
 
     def triad_model(self, triad: TriadKind, *, leg: int = 0) -> TriadModel:
-        """Return the deterministic model of one triad (bias, scale/misalignment, G).
+        """Return the deterministic model of one triad (bias, scale/misalignment, G, K2, K3).
 
         The per-axis model y_i = K_i·(x_i + b_i) becomes bias K_i·b_i and M = diag(K − 1).
 
@@ -431,8 +435,9 @@ class CalibrationResult:
         if f"{triad}_G_xx" in v:
             kwargs["g_sensitivity"] = np.array([[v[f"{triad}_G_{i}{j}"] for j in AXES]
                                                 for i in AXES])
-        if f"{triad}_K2_x" in v:
-            kwargs["k2"] = np.array([v[f"{triad}_K2_{a}"] for a in AXES])
+        for symbol in ("K2", "K3"):  # y_i += K2_i·u_i² + K3_i·u_i³, u = (I + M)·x
+            if f"{triad}_{symbol}_x" in v:
+                kwargs[symbol.lower()] = np.array([v[f"{triad}_{symbol}_{a}"] for a in AXES])
         if mine:
             kwargs["temperature"] = self._temperature_dependence(triad, mine)
         return TriadModel(kind=triad, bias=bias, scale_misalignment=m, **kwargs)
@@ -445,7 +450,8 @@ class CalibrationResult:
             "bias": [(r, f"{triad}_bias_{a}") for r, a in enumerate(AXES)],
             "scale_misalignment": [(pos, f"{triad}_M_{ij}") for pos, ij in pairs],
             "g_sensitivity": [(pos, f"{triad}_G_{ij}") for pos, ij in pairs],
-            "k2": [(r, f"{triad}_K2_{a}") for r, a in enumerate(AXES)]}
+            "k2": [(r, f"{triad}_K2_{a}") for r, a in enumerate(AXES)],
+            "k3": [(r, f"{triad}_K3_{a}") for r, a in enumerate(AXES)]}
         by_name = {tm.name: tm for tm in models}
         coefficients: dict[str, NDArray[np.float64]] = {}
         rates: dict[str, NDArray[np.float64]] = {}
@@ -453,7 +459,7 @@ class CalibrationResult:
             present = [(pos, by_name[n]) for pos, n in entries if n in by_name]
             if not present:
                 continue
-            shape = (3,) if field_name in ("bias", "k2") else (3, 3)
+            shape = (3,) if field_name in ("bias", "k2", "k3") else (3, 3)
             order = max(tm.order for _, tm in present)
             if order > 0:
                 poly = np.zeros((order, *shape))

@@ -216,7 +216,7 @@ class StoredResult:
 def _is_triad_name(name: str) -> bool:
     triad = name.split("_")[0]
     return triad in ("accel", "gyro") and name in triad_parameter_names(
-        triad, "triad", g_sensitivity=True, k2=True)
+        triad, "triad", g_sensitivity=True, k2=True, k3=True)
 
 
 def stored_from_calibration(cal: CalibrationResult, *, decision: Decision | None = None,
@@ -388,7 +388,8 @@ def applicable_calibration(result: ProcedureResult) -> tuple[CalibrationResult, 
         if not mine:
             continue
         want = triad_parameter_names(triad, "triad", g_sensitivity=any("_G_" in n for n in mine),
-                                     k2=any("_K2_" in n for n in mine))
+                                     k2=any("_K2_" in n for n in mine),
+                                     k3=any("_K3_" in n for n in mine))
         nominal = [n for n in want if n not in mine]
         if nominal:
             notes.append(f"{result.procedure} does not estimate {len(nominal)} {triad} "

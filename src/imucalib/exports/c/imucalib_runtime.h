@@ -7,8 +7,9 @@
  *
  * Model (docs/c-runtime.md, Eqs. (C1)-(C4); the same as imucalib.models.correct.correct_imu):
  *   p(T, Tdot, leg) = sum_j c_j (T - T0)^j + d*Tdot + h*leg                       (C1)
- *   triad:     y = b + h_K2((I + M) x) (+ G f, gyro)                               (C2)
+ *   triad:     y = b + h((I + M) x) (+ G f, gyro),  h_i(u) = u + K2_i u^2 + K3_i u^3   (C2)
  *              u_i = 2 r_i / (1 + sqrt(1 + 4 K2_i r_i)),  r = y - b (- G f)        (C3)
+ *              K3_i != 0: Newton steps on h_i(u) = r_i from that root            (C3')
  *              x = (I + M)^-1 u
  *   per-axis:  y_i = K_i (x_i + b_i)  ->  x_i = y_i / K_i - b_i                    (C4)
  * The accelerometer is corrected first; its corrected specific force f feeds the gyro's G.
@@ -23,7 +24,10 @@ extern "C" {
 #endif
 
 /* Parameter slots of one triad (t = IMUCAL_GYRO or IMUCAL_ACCEL): slot = t * IMUCAL_TRIAD_SLOTS
- * + offset; the 3 x 3 matrices row-major (row: sensor axis, column: input axis). */
+ * + offset; the 3 x 3 matrices row-major (row: sensor axis, column: input axis).
+ * Layout version 2 appended IMUCAL_K3 at the end of a triad's slots (version 1: 30 slots a
+ * triad, no K3); a generated <name>_params.h refuses to compile against another layout. */
+#define IMUCAL_LAYOUT_VERSION 2
 #define IMUCAL_GYRO 0
 #define IMUCAL_ACCEL 1
 #define IMUCAL_BIAS 0   /* b_x b_y b_z of a triad model */
@@ -32,8 +36,9 @@ extern "C" {
 #define IMUCAL_K2 21    /* K2_x K2_y K2_z (quadratic scale factor) */
 #define IMUCAL_K 24     /* K_x K_y K_z of a per-axis model */
 #define IMUCAL_B 27     /* b_x b_y b_z of a per-axis model (input units) */
-#define IMUCAL_TRIAD_SLOTS 30
-#define IMUCAL_N_SLOTS 60
+#define IMUCAL_K3 30    /* K3_x K3_y K3_z (cubic scale factor; layout version 2) */
+#define IMUCAL_TRIAD_SLOTS 33
+#define IMUCAL_N_SLOTS 66
 /* Polynomial terms c_0 ... c_7 of Eq. (C1) per slot (order 7 at most). */
 #define IMUCAL_MAX_TERMS 8
 
@@ -46,6 +51,11 @@ extern "C" {
 #define IMUCAL_ERR_INPUT 1       /* a non-finite input, or leg not in {-1, 0, +1} */
 #define IMUCAL_ERR_SINGULAR 2    /* I + M singular (or K_i = 0) at this temperature */
 #define IMUCAL_ERR_K2_RANGE 3    /* 1 + 4 K2_i r_i < 0: outside the invertible range */
+#define IMUCAL_ERR_K3_RANGE 4    /* K3_i != 0: no root on the branch through 0 (h not monotonic
+                                  * between 0 and it), or no convergence (C3') */
+
+/* Newton steps of Eq. (C3') at most; it stops where a step is <= 4 epsilon |u|. */
+#define IMUCAL_K3_MAX_ITER 20
 
 /* Dead band of imucal_temperature_leg_*: |Tdot| at or below it is leg 0. [degC/s] */
 #define IMUCAL_LEG_DEAD_BAND_DEGC_PS 0.002

@@ -3,7 +3,8 @@
  *
  * Not a header to include: imucalib_runtime.c includes it twice (write_c_runtime inlines it
  * there, so the folder it writes stands alone), with IMUCAL_REAL double then float, IMUCAL_NAME(f) adding the _d or _f suffix, IMUCAL_PARAMS the parameter block type,
- * IMUCAL_LIT(x) a literal of that type and IMUCAL_SQRT sqrt or sqrtf.
+ * IMUCAL_LIT(x) a literal of that type, IMUCAL_SQRT sqrt or sqrtf, IMUCAL_FABS fabs or fabsf
+ * and IMUCAL_EPS DBL_EPSILON or FLT_EPSILON.
  */
 
 /* Eq. (C1): one parameter at (T, Tdot, leg); the powers (T - T0)^j built by repeated products. */
@@ -21,7 +22,43 @@ static IMUCAL_REAL IMUCAL_NAME(param)(const IMUCAL_PARAMS *p, int slot, IMUCAL_R
     return sum + p->rate[slot] * rate + p->leg[slot] * leg;
 }
 
-/* Eqs. (C2)-(C4): one triad measured -> true; f (may be 0) is the specific force for G. */
+/* Eq. (C3'): u + K2 u^2 + K3 u^3 = r (K3 != 0) on the branch through 0, by Newton's method from
+ * the root of (C3) (1 + 4 K2 r clipped at 0), as imucalib.models.correct does: at most
+ * IMUCAL_K3_MAX_ITER steps, stopping where a step is <= 4 epsilon |u|; the root is accepted
+ * only where h'(t) = 1 + 2 K2 t + 3 K3 t^2 > 0 for every t between 0 and u. */
+static int IMUCAL_NAME(k3_root)(IMUCAL_REAL k2, IMUCAL_REAL k3, IMUCAL_REAL r, IMUCAL_REAL *out)
+{
+    const IMUCAL_REAL disc = IMUCAL_LIT(1.0) + IMUCAL_LIT(4.0) * k2 * r;
+    IMUCAL_REAL u = IMUCAL_LIT(2.0) * r
+                    / (IMUCAL_LIT(1.0) + IMUCAL_SQRT(disc > IMUCAL_LIT(0.0) ? disc
+                                                                             : IMUCAL_LIT(0.0)));
+    IMUCAL_REAL lowest;
+    int it, done = 0;
+    for (it = 0; it < IMUCAL_K3_MAX_ITER && !done; ++it) {
+        const IMUCAL_REAL slope = IMUCAL_LIT(1.0)
+                                  + u * (IMUCAL_LIT(2.0) * k2 + IMUCAL_LIT(3.0) * k3 * u);
+        const IMUCAL_REAL step = (u + u * u * (k2 + k3 * u) - r) / slope;
+        u = u - step;
+        done = IMUCAL_FABS(step) <= IMUCAL_LIT(4.0) * IMUCAL_EPS * IMUCAL_FABS(u);
+    }
+    lowest = IMUCAL_LIT(1.0) + u * (IMUCAL_LIT(2.0) * k2 + IMUCAL_LIT(3.0) * k3 * u);
+    if (lowest > IMUCAL_LIT(1.0)) {
+        lowest = IMUCAL_LIT(1.0);
+    }
+    if (k3 > IMUCAL_LIT(0.0)) { /* h' has its minimum at t = -K2 / (3 K3) */
+        const IMUCAL_REAL vertex = -k2 / (IMUCAL_LIT(3.0) * k3);
+        if (vertex * (vertex - u) < IMUCAL_LIT(0.0) && IMUCAL_LIT(1.0) + k2 * vertex < lowest) {
+            lowest = IMUCAL_LIT(1.0) + k2 * vertex;
+        }
+    }
+    if (!done || !(lowest > IMUCAL_LIT(0.0))) {
+        return IMUCAL_ERR_K3_RANGE;
+    }
+    *out = u;
+    return IMUCAL_OK;
+}
+
+/* Eqs. (C2)-(C4), (C3'): one triad measured -> true; f (may be 0) is the specific force for G. */
 static int IMUCAL_NAME(triad)(const IMUCAL_PARAMS *p, int triad, const IMUCAL_REAL y[3],
                               const IMUCAL_REAL *f,
                    IMUCAL_REAL dt, IMUCAL_REAL rate, IMUCAL_REAL leg, IMUCAL_REAL x[3])
@@ -59,7 +96,13 @@ static int IMUCAL_NAME(triad)(const IMUCAL_PARAMS *p, int triad, const IMUCAL_RE
     }
     for (i = 0; i < 3; ++i) {
         const IMUCAL_REAL k2 = IMUCAL_NAME(param)(p, base + IMUCAL_K2 + i, dt, rate, leg);
-        if (k2 != IMUCAL_LIT(0.0)) {
+        const IMUCAL_REAL k3 = IMUCAL_NAME(param)(p, base + IMUCAL_K3 + i, dt, rate, leg);
+        if (k3 != IMUCAL_LIT(0.0)) {
+            const int rc = IMUCAL_NAME(k3_root)(k2, k3, r[i], &r[i]);
+            if (rc != IMUCAL_OK) {
+                return rc;
+            }
+        } else if (k2 != IMUCAL_LIT(0.0)) {
             const IMUCAL_REAL disc = IMUCAL_LIT(1.0) + IMUCAL_LIT(4.0) * k2 * r[i];
             if (!(disc >= IMUCAL_LIT(0.0))) {
                 return IMUCAL_ERR_K2_RANGE;
