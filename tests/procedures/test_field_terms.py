@@ -54,8 +54,8 @@ def test_forced_terms_hold_and_add_no_model_uncertainty():
     tactical = handheld_session("tactical", seed=104, noise="white")
     assert "accel_K2_x" in _fit(tactical, terms="+k2").result.param_names
     assert "accel_K2_x" in free.result.param_names
-    with pytest.raises(InvalidInputError, match="unknown term 'k3'"):
-        FieldOptions(terms="+k3")
+    with pytest.raises(InvalidInputError, match="unknown term 'k4'"):
+        FieldOptions(terms="+k4")
     with pytest.raises(InvalidInputError, match="term_criterion"):
         FieldOptions(term_criterion="aic")
 
@@ -83,7 +83,7 @@ def test_the_choice_and_its_evidence_are_in_the_result_document():
     assert [d["group"] for d in doc] == ["accel (gravity norm)", "gyro (static poses)"]
     accel = doc[0]
     assert accel["criterion"] == "lrt" and accel["level"] == 0.05
-    assert accel["ruled"] == {"drift": True}
+    assert accel["ruled"] == {"drift": True, "k3": False}  # K3: the poses cannot separate it
     assert {tuple(c["terms"]) for c in accel["candidates"]} == {("drift",), ("drift", "k2")}
     assert all(c["reduced_chi2"] > 0 and c["score"] is not None for c in accel["candidates"])
     assert any(n.startswith("accel (gravity norm) model terms: drift+k2 (by likelihood-ratio")
@@ -183,3 +183,32 @@ def test_the_temperature_term_can_be_forced_and_needs_a_temperature():
         FieldOptions(accel_temperature="maybe")
     same = _fit(s, temperature=True, accel_temperature="yes")
     assert same.model_selection[0]["forced"] == {"temp": True}
+
+
+def test_k3_is_a_candidate_only_where_the_poses_separate_it():
+    """In 1 g a cubic term is nearly a scale factor: on a hand-held session the poses cannot
+    separate it (the scale factors' σ grow several-fold with it), so it is ruled out and the
+    separation reported; forced in, the result holds it (with K2) and the K3 column is what
+    the forward model's cubic term is."""
+    from imucalib.procedures.field.analysis import K3_SEPARATION_MAX
+
+    s = harsh_handheld_session("consumer", seed=2)
+    r = _fit(s)
+    accel = r.model_selection[0]
+    assert accel["ruled"]["k3"] is False and "k3" not in accel["chosen"]
+    assert r.details["k3_separation"] > K3_SEPARATION_MAX
+    assert "accel_K3_x" not in r.result.param_names
+    forced = _fit(s, terms="+k3")
+    assert forced.model_selection[0]["forced"] == {"k3": True}
+    assert {"k2", "k3"} <= set(forced.model_selection[0]["chosen"])
+    names = forced.result.param_names
+    assert [n for n in names if n.startswith("accel_K")] == [
+        "accel_K2_x", "accel_K2_y", "accel_K2_z", "accel_K3_x", "accel_K3_y", "accel_K3_z"]
+    rows = {p.name: p for p in forced.parameter_rows()}
+    assert rows["accel_K3_x"].unit == "1/(m/s^2)^2"
+    # the scale factors carry K3's correlation: their σ several times wider
+    assert rows["accel_M_xx"].std > 2.0 * {p.name: p for p in r.parameter_rows()}[
+        "accel_M_xx"].std
+    with pytest.raises(InvalidInputError, match=r"K3 \(\+k3\) is a term of the gravity-norm"):
+        _fit(handheld_session("consumer", seed=1001, noise="white"), terms="+k3",
+             accel_form="six-position")

@@ -21,7 +21,14 @@ optional model
     a = T·(I + diag s)·(d − k2∘d²),   d = y − b                                          (F.1′)
 
 (k2 per axis, [1/(m/s²)]; to first order the forward model's y_i += K2_i·x_i², K2 = k2) adds
-three unknowns. A bias that wanders over the session (a consumer accelerometer's bias
+three unknowns; its cubic extension
+
+    a = T·(I + diag s)·(d − k2∘d² − k3∘d³)                                              (F.1⁗)
+
+(k3 [1/(m/s²)²], K3 = k3 to first order) three more. Gravity's components at a pose near a
+face are ±g and a little, where k3·d³ is g²·k3·d: a scale factor; only poses with gravity
+between the axes tell the two apart (:func:`k3_separation` says how well a pose set does).
+A bias that wanders over the session (a consumer accelerometer's bias
 instability) is a misfit the Birge ratio covers badly (it is correlated in time); the optional
 linear drift
 
@@ -57,6 +64,7 @@ Contents
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -65,13 +73,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
-from imucalib.errors import ConvergenceError, InvalidInputError
+from imucalib.errors import (
+    ConvergenceError,
+    InsufficientExcitationError,
+    InvalidInputError,
+)
 from imucalib.estimation._common import check_rank
 from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
-__all__ = ["DRIFT_PARAMETERS", "K2_PARAMETERS", "PARAMETERS", "TEMPERATURE_PARAMETERS",
-           "GravityNormFit", "correct_accel", "fit_gravity_norm", "pose_coverage"]
+__all__ = ["DRIFT_PARAMETERS", "K2_PARAMETERS", "K3_PARAMETERS", "PARAMETERS",
+           "TEMPERATURE_PARAMETERS", "GravityNormFit", "correct_accel", "fit_gravity_norm",
+           "k3_separation", "pose_coverage"]
 
 _F64 = NDArray[np.float64]
 #: The unknowns of (F.1), in order.
@@ -79,6 +92,8 @@ PARAMETERS: Final = ("bias_x", "bias_y", "bias_z", "scale_x", "scale_y", "scale_
                      "alpha_yz", "alpha_zy", "alpha_zx")
 #: The optional quadratic terms of (F.1′), after :data:`PARAMETERS`.
 K2_PARAMETERS: Final = ("k2_x", "k2_y", "k2_z")
+#: The optional cubic terms of (F.1⁗), after the quadratic ones. [1/(m/s²)²]
+K3_PARAMETERS: Final = ("k3_x", "k3_y", "k3_z")
 #: The optional bias rates of (F.1″), last. [m/s³]
 DRIFT_PARAMETERS: Final = ("bias_rate_x", "bias_rate_y", "bias_rate_z")
 #: The optional scale factors' temperature coefficients of (F.1‴), after the rates. [1/°C]
@@ -95,37 +110,47 @@ _BETWEEN: Final = tuple(tuple(v) for v in (
 def correct_accel(theta: ArrayLike, y: ArrayLike) -> _F64:
     """Apply (F.1) or (F.1′): the corrected specific force of outputs `y` (n, 3). [m/s²]
 
-    θ holds the nine values of :data:`PARAMETERS`, or twelve with the quadratic terms of
-    :data:`K2_PARAMETERS`.
+    θ holds the nine values of :data:`PARAMETERS`, twelve with the quadratic terms of
+    :data:`K2_PARAMETERS`, or fifteen with the cubic ones of :data:`K3_PARAMETERS` too (F.1⁗).
     """
     p = np.asarray(theta, dtype=np.float64)
-    if p.shape not in ((9,), (12,)):
-        raise InvalidInputError(f"`theta` must hold 9 or 12 values; got shape {p.shape}")
-    return _jacobian(p, np.atleast_2d(as_array(y, "y")))[0]
+    if p.shape not in ((9,), (12,), (15,)):
+        raise InvalidInputError(f"`theta` must hold 9, 12 or 15 values; got shape {p.shape}")
+    return _jacobian(p, np.atleast_2d(as_array(y, "y")), k3=p.size == 15)[0]
 
 
-def _jacobian(p: _F64, y: _F64, scale_offset: _F64 | None = None) -> tuple[_F64, _F64]:
-    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9 or 12) of (F.1) or (F.1′).
+def _jacobian(p: _F64, y: _F64, scale_offset: _F64 | None = None, *, k2: bool | None = None,
+              k3: bool = False) -> tuple[_F64, _F64]:
+    """Return the corrected forces (n, 3) and ∂‖a‖/∂θ (n, 9, 12 or 15) of (F.1)–(F.1⁗).
 
-    `scale_offset` (n, 3) adds to s pose by pose: ṡ_T·(T_k − T̄) of (F.1‴).
+    `scale_offset` (n, 3) adds to s pose by pose: ṡ_T·(T_k − T̄) of (F.1‴). θ holds the
+    quadratic terms when `k2` (by default: when it holds 12 values), then the cubic ones when
+    `k3`.
     """
+    has_k2 = p.size in (12, 15) if k2 is None else k2
     d = y - p[:3]                                   # y − b
     k = 1.0 + p[3:6] if scale_offset is None else 1.0 + p[3:6] + scale_offset
-    k2 = p[9:12] if p.size == 12 else np.zeros(3)
-    w = d - k2 * d**2                               # the quadratic term removed (F.1′)
-    v = w * k                                       # (I + diag s)(y − b − k2∘(y − b)²)
+    k2v = p[9:12] if has_k2 else np.zeros(3)
+    k3v = p[9 + 3 * has_k2:12 + 3 * has_k2] if k3 else None
+    w = d - k2v * d**2                              # the quadratic term removed (F.1′)
+    if k3v is not None:
+        w = w - k3v * d**3                          # and the cubic one (F.1⁗)
+    v = w * k                                       # (I + diag s)(y − b − k2∘(y − b)² …)
     t = np.array([[1.0, -p[6], p[7]], [0.0, 1.0, -p[8]], [0.0, 0.0, 1.0]])
     a = v @ t.T
     u = a / np.linalg.norm(a, axis=1, keepdims=True)
     # ∂a/∂b = −T·diag(k·(1 − 2 k2 d)); ∂a/∂s_j = T[:, j]·w_j; ∂a/∂α: a_x −= α_yz v_y,
     # a_x += α_zy v_z, a_y −= α_zx v_z; ∂a/∂k2_j = −T[:, j]·k_j·d_j²
     ut = u @ t
-    jb = -ut * k * (1.0 - 2.0 * k2 * d)
+    dw = 1.0 - 2.0 * k2v * d if k3v is None else 1.0 - 2.0 * k2v * d - 3.0 * k3v * d**2
+    jb = -ut * k * dw
     js = ut * w
     ja = np.column_stack([-u[:, 0] * v[:, 1], u[:, 0] * v[:, 2], -u[:, 1] * v[:, 2]])
     cols = [jb, js, ja]
-    if p.size == 12:
+    if has_k2:
         cols.append(-ut * k * d**2)
+    if k3v is not None:                             # ∂a/∂k3_j = −T[:, j]·k_j·d_j³
+        cols.append(-ut * k * d**3)
     return a, np.column_stack(cols)
 
 
@@ -171,14 +196,16 @@ def _check_rank(j: _F64, sw: _F64, names: Sequence[str]) -> None:
 
 
 def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
-                     k2: bool = False, times_s: ArrayLike | None = None,
+                     k2: bool = False, k3: bool = False, times_s: ArrayLike | None = None,
                      temperatures_degc: ArrayLike | None = None, max_iter: int = 50,
                      tol: float = 1e-12) -> GravityNormFit:
     """Solve (F.2) by Gauss–Newton from b = 0, s = 0, α = 0 (module docstring).
 
     With ``k2=True`` the model is (F.1′), three quadratic terms more (:data:`K2_PARAMETERS`,
     [1/(m/s²)]): their poses need every axis at several |x_i| (tilted poses), else the design
-    is refused as rank-deficient. With `times_s` (each pose's mid-time) the bias drifts
+    is refused as rank-deficient; ``k3=True`` adds the cubic terms of (F.1⁗)
+    (:data:`K3_PARAMETERS`, after the quadratic ones), which only poses with gravity between the
+    axes separate from the scale factors. With `times_s` (each pose's mid-time) the bias drifts
     linearly over the session (F.1″): y_k is replaced by y_k − ḃ·(t_k − t̄), t̄ the mean time,
     three rates more (:data:`DRIFT_PARAMETERS`); b is then the bias at t̄. With
     `temperatures_degc` (each pose's mean temperature) the scale factors move with it (F.1‴),
@@ -206,7 +233,8 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     yy = as_array(y, "y", shape=(None, 3))
     sy = as_array(y_std, "y_std", shape=yy.shape)
     n = yy.shape[0]
-    core = len(PARAMETERS) + (len(K2_PARAMETERS) if k2 else 0)
+    core = len(PARAMETERS) + (len(K2_PARAMETERS) if k2 else 0) + (len(K3_PARAMETERS) if k3
+                                                                  else 0)
     drift = times_s is not None
     dt = np.zeros(n)
     if times_s is not None:
@@ -228,9 +256,10 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
 
     def evaluate(p: _F64) -> tuple[_F64, _F64]:
         if not drift and dtemp is None:
-            return _jacobian(p, yy)
+            return _jacobian(p, yy, k2=k2, k3=k3)
         ya = yy - np.outer(dt, p[core:core + 3]) if drift else yy
-        a, j = _jacobian(p[:core], ya, None if dtemp is None else np.outer(dtemp, p[t0:]))
+        a, j = _jacobian(p[:core], ya, None if dtemp is None else np.outer(dtemp, p[t0:]),
+                         k2=k2, k3=k3)
         cols = [j]
         if drift:
             cols.append(j[:, :3] * dt[:, None])
@@ -238,7 +267,8 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
             cols.append(j[:, 3:6] * dtemp[:, None])
         return a, np.column_stack(cols)
 
-    names = [*(*PARAMETERS, *K2_PARAMETERS)[:core], *(DRIFT_PARAMETERS if drift else ()),
+    names = [*PARAMETERS, *(K2_PARAMETERS if k2 else ()), *(K3_PARAMETERS if k3 else ()),
+             *(DRIFT_PARAMETERS if drift else ()),
              *(TEMPERATURE_PARAMETERS if dtemp is not None else ())]
 
     forces: list[_F64] = []
@@ -272,6 +302,47 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
                           covariance_noise=cov, quality=quality, residuals=r, iterations=it,
                           forces=forces[0])
+
+
+def k3_separation(y: ArrayLike, y_std: ArrayLike, theta: ArrayLike) -> float:
+    """How well the poses tell the cubic terms (F.1⁗) from the scale factors.
+
+    At θ (the 9 values of (F.1) or 12 of (F.1′), k3 = 0) the Cramér–Rao σ of each parameter is
+    computed from the design of (F.2) with and without the three k3 columns (one solver,
+    :func:`~imucalib.estimation.linear.solve_weighted_lsq`, on a zero right-hand side); the
+    largest ratio σ_with/σ_without over the shared parameters is returned (∞ when the k3
+    columns make the design rank-deficient). Near 1, the poses separate K3; poses near the faces
+    give 15–60 (hand-held sessions of the twin: 3–60), the scale factors then taking K3's
+    place.
+
+    Parameters
+    ----------
+    y, y_std : array_like, shape (n, 3)
+        The poses' mean outputs and their standard errors. [m/s²]
+    theta : array_like, shape (9,) or (12,)
+        Where the design is evaluated (a fit of (F.1) or (F.1′)).
+    """
+    yy = as_array(y, "y", shape=(None, 3))
+    sy = as_array(y_std, "y_std", shape=yy.shape)
+    p = np.asarray(theta, dtype=np.float64)
+    if p.shape not in ((9,), (12,)):
+        raise InvalidInputError(f"`theta` must hold 9 or 12 values; got shape {p.shape}")
+    with_k3 = np.concatenate([p, np.zeros(3)])
+    a, j = _jacobian(with_k3, yy, k2=p.size == 12, k3=True)
+    u = a / np.linalg.norm(a, axis=1, keepdims=True)
+    sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
+    names = [*PARAMETERS, *(K2_PARAMETERS if p.size == 12 else ()), *K3_PARAMETERS]
+    zero = np.zeros(yy.shape[0])
+    without = solve_weighted_lsq(j[:, :p.size], zero, sigma=sr, param_names=names[:p.size],
+                                 context="gravity-norm Jacobian")
+    try:
+        with_ = solve_weighted_lsq(j, zero, sigma=sr, param_names=names,
+                                   context="gravity-norm Jacobian")
+    except InsufficientExcitationError:
+        return math.inf
+    ratio = np.sqrt(np.diag(with_.covariance_noise)[:p.size]
+                    / np.diag(without.covariance_noise))
+    return float(np.max(ratio))
 
 
 def pose_coverage(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,

@@ -88,9 +88,13 @@ _G_RANGE_MPS2 = (9.7803, 9.8322)
 #: Relative standard uncertainty of normal gravity as local g (anomalies, ~50 mGal).
 _ANOMALY_REL = 3e-5
 #: The optional model terms the data choose among (docs/field.md, "Model terms"): the
-#: accelerometer's K2 (F.1′), its bias drift (F.1″), its scale factors' temperature
-#: coefficients (F.1‴, "temp"), the gyro's g-sensitivity G (FL.2).
-TERMS = ("k2", "drift", "g", "temp")
+#: accelerometer's K2 (F.1′), its K3 (F.1⁗), its bias drift (F.1″), its scale factors'
+#: temperature coefficients (F.1‴, "temp"), the gyro's g-sensitivity G (FL.2).
+TERMS = ("k2", "k3", "drift", "g", "temp")
+#: K3 (F.1⁗) is a candidate only when the poses separate it from the scale factors: with it
+#: no shared parameter's σ more than this many times its σ without it
+#: (:func:`~imucalib.estimation.gravity_norm.k3_separation`; docs/field.md, "Model terms").
+K3_SEPARATION_MAX = 2.0
 #: Fewest poses with which the accelerometer's bias drift is fitted unless told (15 unknowns):
 #: a rule, not the data's choice (docs/field.md, "Model terms": the criteria, built on white
 #: noise, under-select a term that stands for the bias's wander).
@@ -126,7 +130,7 @@ class FieldOptions:
         gravity-norm form, when the log has a temperature ("auto": by `term_criterion`); the
         scale factors are then those at the poses' mean temperature.
     terms : str
-        Terms forced in or out, ``"+k2,-drift,+g"`` (of :data:`TERMS`); overrides
+        Terms forced in or out, ``"+k2,+k3,-drift,+g"`` (of :data:`TERMS`); overrides
         `accel_k2`, `accel_drift` and `gyro_g_sensitivity`.
     term_criterion : {"lrt", "aicc", "bic"}
         How "auto" terms are chosen (:func:`~imucalib.estimation.term_selection.choose_terms`):
@@ -344,46 +348,65 @@ def _accel_names(terms: Collection[str], six: bool) -> list[str]:
     from imucalib.estimation.gravity_norm import (
         DRIFT_PARAMETERS,
         K2_PARAMETERS,
+        K3_PARAMETERS,
         PARAMETERS,
         TEMPERATURE_PARAMETERS,
     )
 
     core = [f"p{i}" for i in range(12)] if six else list(PARAMETERS)
     return [*core, *(K2_PARAMETERS if "k2" in terms else ()),
+            *(K3_PARAMETERS if "k3" in terms else ()),
             *(DRIFT_PARAMETERS if "drift" in terms else ()),
             *(TEMPERATURE_PARAMETERS if "temp" in terms else ())]
 
 
 def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, temps: _F64 | None,
-                  forced: dict[str, bool], opt: FieldOptions) -> TermChoice:
+                  forced: dict[str, bool], opt: FieldOptions) -> tuple[TermChoice, float]:
     """Step 3's gravity-norm fit: K2 (F.1′) and (F.1‴) by the data, the drift (F.1″) by rule.
 
     The scale factors' temperature coefficients (F.1‴) are a candidate when the poses have
-    temperatures (`temps`).
+    temperatures (`temps`); K3 (F.1⁗, with K2 only) when the poses separate it from the scale
+    factors (:data:`K3_SEPARATION_MAX`; returned: the separation, NaN when not computed).
     The drift stands for the bias's wander (its random walk and flicker), which the white-noise
     χ² the criteria are built on does not see as a likelihood would: left to AICc it is dropped
     and the accelerometer's z spread on the twin's grade noise rises from 1.2–1.3 to 2.1
     (docs/field.md, "Model terms"). It is fitted with at least 20 poses unless forced.
     """
-    from imucalib.estimation.gravity_norm import fit_gravity_norm
+    from imucalib.estimation.gravity_norm import fit_gravity_norm, k3_separation
 
-    optional = ("k2", "drift") if temps is None else ("k2", "drift", "temp")
+    optional = ("k2", "k3", "drift") if temps is None else ("k2", "k3", "drift", "temp")
+    ruled = {"drift": len(y) >= _DRIFT_MIN_POSES}
+    separation = math.nan
+    if "k3" not in forced:
+        try:
+            separation = k3_separation(y, sy, fit_gravity_norm(y, sy, g, k2=True).values)
+        except CalibrationError:
+            separation = math.inf
+        ruled["k3"] = separation <= K3_SEPARATION_MAX
+
+    def fit(t: frozenset[str]) -> Any:
+        if "k3" in t and "k2" not in t:
+            raise InsufficientExcitationError(
+                [f"accel_K3_{a}" for a in "xyz"],
+                "K3 is fitted with K2 (a cubic term without the quadratic one is no sensor's "
+                "nonlinearity)")
+        return fit_gravity_norm(y, sy, g, k2="k2" in t, k3="k3" in t,
+                                times_s=times if "drift" in t else None,
+                                temperatures_degc=temps if "temp" in t else None)
+
     choice, _, _ = choose_terms(
-        "accel (gravity norm)", optional,
-        lambda t: fit_gravity_norm(y, sy, g, k2="k2" in t,
-                                   times_s=times if "drift" in t else None,
-                                   temperatures_degc=temps if "temp" in t else None),
+        "accel (gravity norm)", optional, fit,
         lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
         forced={k: v for k, v in forced.items() if k in optional},
-        ruled={"drift": len(y) >= _DRIFT_MIN_POSES},
+        ruled=ruled,
         criterion=opt.term_criterion, level=opt.term_level,
         estimates=lambda t, f: _accel_estimates(t, f, six=False))
-    return choice
+    return choice, separation
 
 
 def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
                  times: _F64 | None, gravity_std_mps2: float,
-                 temps: _F64 | None = None) -> float:
+                 temps: _F64 | None = None, k3: bool = False) -> float:
     """Return the accelerometer's pose-noise floor by Paule–Mandel (Eq. (PM.1)) for the form."""
     from imucalib.estimation.dark_uncertainty import paule_mandel_floor
     from imucalib.estimation.gravity_norm import fit_gravity_norm
@@ -391,7 +414,7 @@ def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
 
     if form == "gravity-norm":
         def chi2_of(s: float) -> tuple[float, int]:
-            q = fit_gravity_norm(y, np.hypot(sy, s), g, k2=k2, times_s=times,
+            q = fit_gravity_norm(y, np.hypot(sy, s), g, k2=k2, k3=k3, times_s=times,
                                  temperatures_degc=temps).quality
             return float(q.chi2), int(q.dof)
     else:
@@ -501,17 +524,21 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
             "the temperature term (+temp) needs the gravity-norm form and a log with the IMU's "
             f"temperature; got the {form} form and "
             f"{'no temperature column' if temps is None else 'a temperature'}")
+    if forced.get("k3") and form != "gravity-norm":
+        raise InvalidInputError("K3 (+k3) is a term of the gravity-norm form; got the "
+                                f"{form} form")
+    separation = math.nan
     if form == "gravity-norm":
-        choice_a = _choose_accel(y, sy, g, times, temps, forced, opt)
+        choice_a, separation = _choose_accel(y, sy, g, times, temps, forced, opt)
     else:
         choice_a, six = _choose_six(y, sy, g, sg, forced, opt)
     selection = [choice_a]
-    k2, drift = choice_a.has("k2"), choice_a.has("drift")
+    k2, k3, drift = choice_a.has("k2"), choice_a.has("k3"), choice_a.has("drift")
     tt = temps if choice_a.has("temp") else None
     notes.append(choice_a.summary())
     floor = None
     if opt.accel_instability_auto:
-        floor = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt)
+        floor = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt, k3)
         poses = [dataclasses.replace(p, accel_se=np.hypot(p.accel_se, floor)) for p in poses]
         sy = np.array([p.accel_se for p in poses])
         notes.append(f"accelerometer pose-noise floor {floor / UG:.3g} µg estimated from the "
@@ -520,12 +547,12 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                      "accelerometer pose-noise floor: none (auto): the poses scatter no more "
                      "than their white noise says")
     if form == "gravity-norm":
-        fit = fit_gravity_norm(y, sy, g, k2=k2, times_s=times if drift else None,
+        fit = fit_gravity_norm(y, sy, g, k2=k2, k3=k3, times_s=times if drift else None,
                                temperatures_degc=tt)
         core = fit.values.size - (3 if drift else 0) - (0 if tt is None else 3)
         # g's Type B: refit with g + δ (the norms scale with g)
         dg = 1e-4 * g
-        jg = (fit_gravity_norm(y, sy, g + dg, k2=core == 12, times_s=times if drift else None,
+        jg = (fit_gravity_norm(y, sy, g + dg, k2=k2, k3=k3, times_s=times if drift else None,
                                temperatures_degc=tt).values - fit.values) / dg
         full_cov = fit.covariance_noise + np.outer(jg, jg) * sg**2
         full_cov = full_cov + np.diag(_model_var(choice_a, _accel_names(choice_a.chosen, False)))
@@ -566,7 +593,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if (floor is None and opt.accel_instability_mps2 == 0.0 and accel_quality.dof > 0
             and accel_quality.chi2 > scipy.stats.chi2.ppf(_SUGGEST_FLOOR_QUANTILE,
                                                            accel_quality.dof)):
-        suggested = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt)
+        suggested = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt, k3)
         notes.append(
             f"the poses scatter more than their white noise (accelerometer χ²/ν = "
             f"{accel_quality.reduced_chi2:.3g}): a bias instability of about "
@@ -695,6 +722,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         details={"latitude_deg": lat, "n_samples": int(log.time_s.size),
                  "temperature_span_degc": None if span is None else list(span),
                  "reference_temperature_degc": reference_degc,
+                 "k3_separation": None if not math.isfinite(separation) else separation,
                  "window_s": opt.window_s, "accel_values": accel_values,
                  "accel_covariance": accel_cov},
         decision=field_decision(tuple(quality)))

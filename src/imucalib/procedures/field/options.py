@@ -80,7 +80,7 @@ class FieldAnalysisOptions:
         "auto", help="Fit the gyro's g-sensitivity G from the static poses (auto: with six "
                      "poses or more, by term_criterion).")
     terms: str = option(
-        "", help="Model terms forced in or out, e.g. +k2,-drift,+g (k2, drift, g, temp); "
+        "", help="Model terms forced in or out, e.g. +k2,-drift,+g (k2, k3, drift, g, temp); "
                  "overrides accel_k2, accel_drift, accel_temperature and gyro_g_sensitivity.")
     term_criterion: Literal["lrt", "aicc", "bic"] = option(
         "lrt", help="How the data choose the auto terms: a likelihood-ratio test at "

@@ -69,7 +69,10 @@ def accel_matrix(theta: NDArray[np.float64]) -> _F64:
 
 
 def _accel_triad(theta: _F64) -> _F64:
-    """(b, M row-major[, K2]) of (FL.1) from θ of (F.1) or (F.1′) (K2 = k2 to first order)."""
+    """(b, M row-major[, K2[, K3]]) of (FL.1) from θ of (F.1), (F.1′) or (F.1⁗).
+
+    K2 = k2 and K3 = k3 to first order.
+    """
     return np.concatenate([theta[:3], (accel_matrix(theta) - np.eye(3)).ravel(), theta[9:]])
 
 
@@ -110,7 +113,9 @@ def triad_from_field(accel_form: str, accel_values: _F64, accel_cov: _F64,
     else:
         jac = np.eye(accel_values.size)
         a_vals = accel_values.copy()
-    names = list(triad_parameter_names("accel", "triad", k2=a_vals.size == 15))
+    # 12 values of (b, M), then K2 (F.1′) and K3 (F.1⁗) when fitted (K3 only with K2)
+    names = list(triad_parameter_names("accel", "triad", k2=a_vals.size >= 15,
+                                       k3=a_vals.size == 18))
     values = [a_vals]
     blocks = [jac @ accel_cov @ jac.T]
     if gyro_m is None or gyro_m_cov is None:
