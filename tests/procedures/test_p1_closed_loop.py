@@ -41,11 +41,11 @@ def normalized_errors(path) -> tuple[np.ndarray, object]:
 def test_every_estimate_within_4_sigma_of_the_truth(p1_tools, grade, seed, tmp_path):
     path = p1_tools.run_twin(p1_tools.p1_plan(grade, seed), tmp_path / "r.h5")
     z, analysis = normalized_errors(path)
-    # accelerometer bias + M (+ K2), gyro bias + M (+ G): the terms the data chose, G by rule
-    # where the grade's specification limits it (docs/p1.md, "Model terms")
+    # accelerometer bias + M (+ K2, the data's choice), gyro bias + M + G (G by rule;
+    # docs/p1.md, "Model terms")
     accel, gyro = analysis.model_selection
-    assert z.size == 24 + 3 * ("k2" in accel["chosen"]) + 9 * ("g" in gyro["chosen"])
-    assert gyro["ruled"] == ({} if grade == "navigation" else {"g": True})
+    assert z.size == 33 + 3 * ("k2" in accel["chosen"])
+    assert gyro["ruled"] == {"g": True} and gyro["chosen"] == ["g"]
     by_name = dict(zip(analysis.result.param_names, np.round(z, 2), strict=True))
     assert np.all(np.abs(z) < 4.0), by_name
     # a correct model on honest data passes its own residual rule and the held-out check

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import shutil
 
 import h5py
@@ -47,14 +46,14 @@ def test_a_recording_without_its_plan_calibrates_the_same(tactical_run, tmp_path
     """Without the plan (and the facts a run writes from it): the same windows, estimates and
     Type B (the defaults, which the generated plan also uses); no specification to accept
     against, so that check is not assessed, and the held-out limits are the generic defaults
-    (the checks still pass). The model's terms: the plan's specification limits the gyro's
-    g-sensitivity, which holds G in by rule; without it the data choose (docs/p1.md, "Model
-    terms"), so the comparison holds G in on both."""
+    (the checks still pass). The model's terms are the same too: G by rule with or without
+    the plan, K2 by the same data (docs/p1.md, "Model terms")."""
     bare = _planless_copy(tactical_run, tmp_path / "bare.h5")
-    assert analyze_p1(bare, options=FAST).model_selection[1]["ruled"] == {}
-    assert analyze_p1(tactical_run, options=FAST).model_selection[1]["ruled"] == {"g": True}
-    with_plan = analyze_p1(tactical_run, options=dataclasses.replace(FAST, terms="+g"))
-    without = analyze_p1(bare, options=dataclasses.replace(FAST, terms="+g"))
+    with_plan = analyze_p1(tactical_run, options=FAST)
+    without = analyze_p1(bare, options=FAST)
+    assert with_plan.model_selection[1]["ruled"] == without.model_selection[1]["ruled"] == {
+        "g": True}
+    assert with_plan.result.param_names == without.result.param_names
     assert not without.observations.context.has_plan and without.observations.imu_spec is None
     np.testing.assert_array_equal(without.result.values, with_plan.result.values)
     np.testing.assert_array_equal(without.result.covariance, with_plan.result.covariance)

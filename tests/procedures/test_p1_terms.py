@@ -94,17 +94,20 @@ def test_forced_terms_hold_and_add_no_model_uncertainty():
     assert {"terms", "term_criterion", "term_level"} <= PROCEDURE.analysis_options
 
 
-def test_the_specification_rules_g_in_and_the_choice_is_in_the_result():
+def test_g_is_ruled_in_with_or_without_a_specification_and_the_choice_is_in_the_result():
+    """G by rule whatever the plan says: the same windows give the same model with and without
+    a specification (docs/p1.md, "Model terms")."""
     model = synth.truth("tactical", 2)
     obs = synth.observations(model, "tactical", 2)
-    free = analyze_p1_observations(obs, FAST)  # no specification: the data choose G
-    assert free.model_selection[1]["ruled"] == {}
+    free = analyze_p1_observations(obs, FAST)  # no specification
     specified = analyze_p1_observations(
         dataclasses.replace(obs, imu_spec=default_specification("tactical")), FAST)
-    gyro = specified.model_selection[1]
-    assert gyro["ruled"] == {"g": True} and gyro["chosen"] == ["g"]
-    assert "gyro_G_xx" in specified.result.param_names
-    assert any("G by rule" in n for n in specified.notes)
+    for analysis in (free, specified):
+        gyro = analysis.model_selection[1]
+        assert gyro["ruled"] == {"g": True} and gyro["chosen"] == ["g"]
+        assert "gyro_G_xx" in analysis.result.param_names
+        assert any("G by rule" in n for n in analysis.notes)
+    np.testing.assert_array_equal(free.result.values, specified.result.values)
     doc = json.loads(json.dumps(free.to_dict()))["model_selection"]
     assert [d["group"] for d in doc] == ["accel (six positions)",
                                          "gyro (rate points and statics)"]

@@ -335,18 +335,22 @@ def _acceptance(obs: P1Observations, opt: P1Options) -> tuple[str, float]:
 
 
 #: Why the gyro's G is in the model by rule (:func:`_ruled_terms`), said after the choice's note.
-_G_RULE_NOTE = (" — G by rule: the unit's specification limits the g-sensitivity, and its "
-                "conformity check needs G's estimate (terms=-g forces it out)")
+_G_RULE_NOTE = (" — G by rule: P1's rate points and statics are planned to determine it, the "
+                "specification's check needs its estimate, and a recording calibrates to the "
+                "same model with or without its plan (terms=-g forces it out)")
 
 
-def _ruled_terms(spec: ImuSpecConfig) -> dict[str, bool]:
+def _ruled_terms(spec: ImuSpecConfig | None = None) -> dict[str, bool]:
     """Terms held in by rule, not chosen by the data (docs/p1.md, "Model terms").
 
-    The gyro's G when the specification limits the g-sensitivity: a term the data left out
-    has no estimate to check against its limit (a tactical unit's 1 °/h/g is below what the
-    rate points resolve, yet its datasheet bounds it).
+    The gyro's G, always: P1's plan is made to determine it, a specification that limits it
+    needs its estimate (a tactical unit's 1 °/h/g is near what the windows resolve, so the
+    data would often leave it out and the limit go unchecked), and a rule that depended on
+    the plan's limits would give a recording analysed without its plan (a CSV with a step
+    file, a v1 file) another model than with it. `spec` is accepted for the callers that
+    pass it; the rule does not depend on it.
     """
-    return {"g": True} if spec.limits.gyro_g_sensitivity_dph_per_g is not None else {}
+    return {"g": True}
 
 
 def _specification_rows(result: CalibrationResult, obs: P1Observations, spec: ImuSpecConfig

@@ -376,8 +376,8 @@ def choose_triad_terms(triad: Literal["accel", "gyro"], windows: Sequence[Window
     forced : mapping of str to bool, optional
         Terms forced in (True) or out (False); those of the other triad are ignored.
     ruled : mapping of str to bool, optional
-        Terms the analysis's rule holds in or out unless forced (listed apart; the gyro's G
-        when the unit's specification limits it, docs/p1.md "Model terms").
+        Terms the analysis's rule holds in or out unless forced (listed apart; the gyro's G,
+        docs/p1.md "Model terms").
     criterion : {"lrt", "aicc", "bic"}
     level : float
         α of (TS.3).

@@ -12,7 +12,7 @@ settle phase). The windows are then selected, weighted and fitted as the analysi
 rate points and statics (:func:`~imucalib.procedures.p1.fit.gyro_windows`), the coloured-noise
 covariance of their means (:func:`~imucalib.procedures.p1.fit.observation_covariance`,
 Eq. (TD.2)), the triad design (:func:`~imucalib.estimation.designs.build_design`, with the
-gyro's G when the specification limits it, as the analysis's rule holds it in) and its
+gyro's G, which the analysis's rule holds in) and its
 Cramér–Rao bound (:func:`~imucalib.estimation.crlb.compute_crlb`, Eqs. (TD.1), (TD.3)). The
 equipment's Type B terms are added as the analysis adds them (docs/p1.md, "Equipment
 uncertainty"; Eq. (TD.4)).
@@ -276,7 +276,7 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
     notes = [
         f"noise model ({'given' if noise is not None else 'grade ' + _grade(plan)}): {kinds}; "
         "window means correlated by flicker and random walk (Eq. (TD.2))",
-        f"gyro G {'held in by rule (the specification limits it)' if g_term else 'not in'}; "
+        f"gyro G {'held in by rule' if g_term else 'not in'}; "
         "the accelerometer's K2 and the model choice's uncertainty (TS.4) are not predicted",
         f"Type B (GUM): table position accuracy {plan.equipment.table_position_accuracy_arcsec:g}"
         f"″ and axis perpendicularity {plan.equipment.table_orthogonality_arcsec:g}″ on the "
