@@ -1,9 +1,13 @@
 """The README's shell commands run as shown, in order, without a terminal (examples are tests).
 
-Every command of README.md's ``sh`` blocks runs in one fresh folder as ``python -m imucalib …``
-with stdin closed and no terminal, so a command that would ask a question or needs a file the
-README does not make fails here. Only the commands in :data:`SKIPPED` are not run, each for the
-reason it gives; :data:`EXPECTED_EXIT` names the commands whose documented exit code is not 0.
+Every command of README.md's ``sh`` blocks runs as ``python -m imucalib …`` with stdin closed and
+no terminal, so a command that would ask a question or needs a file the README does not make
+fails here. The blocks form independent chains (:func:`readme_chains`: a block that names a file
+an earlier block names continues that block's chain, any other starts its own), each run in
+order in one fresh folder, so that the suite's workers run the chains side by side; a block that
+needs an earlier chain's file without naming it fails here too. Only the commands in
+:data:`SKIPPED` are not run, each for the reason it gives; :data:`EXPECTED_EXIT` names the
+commands whose documented exit code is not 0.
 """
 
 from __future__ import annotations
@@ -35,16 +39,45 @@ EXPECTED_EXIT = {
 }
 
 
-def readme_commands() -> list[str]:
-    """The commands of README.md's ``sh`` blocks, in order, without their comments."""
+def _blocks() -> list[list[str]]:
+    """The commands of each of README.md's ``sh`` blocks, without their comments."""
     blocks = re.findall(r"```sh\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
-    commands = []
+    out = []
     for block in blocks:
+        commands = []
         for line in block.splitlines():
             words = shlex.split(line, comments=True)
             if words:
                 commands.append(shlex.join(words))
-    return commands
+        out.append(commands)
+    return out
+
+
+def readme_commands() -> list[str]:
+    """The commands of README.md's ``sh`` blocks, in order, without their comments."""
+    return [c for block in _blocks() for c in block]
+
+
+def _files(commands: list[str]) -> set[str]:
+    """The file names a block's commands name (words with a dot that are not options)."""
+    return {w for c in commands for w in shlex.split(c)[1:]
+            if "." in w and not w.startswith("-")}
+
+
+def readme_chains() -> list[list[str]]:
+    """The README's commands as chains of blocks that share files (module docstring)."""
+    chains: list[list[str]] = []
+    names: list[set[str]] = []
+    for block in _blocks():
+        files = _files(block)
+        joined = next((i for i in reversed(range(len(chains))) if files & names[i]), None)
+        if joined is None:
+            chains.append(list(block))
+            names.append(set(files))
+        else:
+            chains[joined] += block
+            names[joined] |= files
+    return [c for c in chains if any(cmd not in SKIPPED for cmd in c)]
 
 
 def test_the_readme_has_commands_and_the_skip_list_is_current():
@@ -56,12 +89,24 @@ def test_the_readme_has_commands_and_the_skip_list_is_current():
         assert command.startswith("imucalib ") or command in SKIPPED, command
 
 
+def test_the_chains_hold_every_command_once_in_the_readme_order():
+    chains = readme_chains()
+    assert len(chains) >= 2  # the P1 walk, the Allan walk, the twin's scenarios
+    run = [c for chain in chains for c in chain]
+    commands = [c for c in readme_commands() if any(c in chain for chain in chains)]
+    assert sorted(run) == sorted(commands) and len(set(run)) == len(run)
+    for chain in chains:  # each chain keeps the README's order
+        positions = [commands.index(c) for c in chain]
+        assert positions == sorted(positions)
+
+
 @pytest.mark.slow
-def test_readme_commands_run_as_shown(tmp_path):
+@pytest.mark.parametrize("chain", readme_chains(), ids=lambda chain: chain[0].split()[1])
+def test_readme_commands_run_as_shown(tmp_path, chain):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(ROOT / "src"), *filter(None, [os.environ.get("PYTHONPATH")])])}
     env.pop("COLUMNS", None)
-    for command in readme_commands():
+    for command in chain:
         if command in SKIPPED:
             continue
         argv = [sys.executable, "-m", "imucalib", *shlex.split(command)[1:]]
