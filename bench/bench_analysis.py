@@ -20,12 +20,20 @@ default) and ``blosc-lz4``. Then, for each measurement, a fresh child process
    it unseen). ``ru_maxrss`` alone would carry the warm-up's and the bare read's peaks, and the
    parent's (it survives fork and exec).
 
+The measuring children run with one thread of every numerical library (BLAS, OpenMP, Blosc,
+numba, the Allan engine; ``--threads default`` leaves them alone): the aim is the analysis on
+one core, and on a shared machine the BLAS threads' contention otherwise swamps the
+measurement (docs/performance.md, "BLAS threads on a busy machine").
+
 Printed: a markdown table, one row a procedure (IMU samples of every unit, file sizes, bare
-reads, analysis, analysis / gzip read, peak memory, and for P1 and P2 the analysis with 2
+reads, analysis, analysis / gzip read by wall-clock and by process CPU time — the latter moves
+less when other processes share the cores —, peak memory, and for P1 and P2 the analysis with 2
 workers and its speed-up), then for P1 and P2 the peak memory of longer recordings (P1: the
 static and position records ×4, which makes the longest step 4× longer, and the repetitions ×4,
 which does not; P2: the sample rate ×4, since the twin's P2 run costs station time, not
-samples), the codecs' file sizes and the machine.
+samples), for the field calibration the marginal analysis / read ratio (its recording at twice
+the sample rate, the same poses: (A₂ − A₁)/(R₂ − R₁), the cost of a sample without the fixed
+costs that dominate so small a read), the codecs' file sizes and the machine.
 
 Run:  .venv/bin/python bench/bench_analysis.py [--quick] [--keep DIR] [--only p1,p2,...]
       [--repeat 2] [--profile NAME|slowest]
@@ -68,6 +76,10 @@ class Spec:
     #: the memory rows (P1, P2): (what was made longer, full flags, quick flags)
     longer: tuple[tuple[str, str, str], ...] = ()
     workers: bool = False  # time the analysis with 2 workers too
+    #: (what was made longer, full flags, quick flags) of a second length: the marginal
+    #: analysis / read ratio, (A₂ − A₁)/(R₂ − R₁), for a procedure whose ratio its fixed costs
+    #: dominate
+    marginal: tuple[str, str, str] | None = None
 
 
 _P2 = ("--n-imus {n} --static-s {s} --settle-s 2 --sample-rate-hz {hz} --revolutions 1 "
@@ -94,7 +106,9 @@ SPECS = (
     Spec("tumble", "tumble", full="--sample-rate-hz 200",
          quick="--record-s 5 --settle-s 2 --sample-rate-hz 100"),
     Spec("field", "field calibration", full="--sample-rate-hz 1000 --n-poses 24",
-         quick="--static-s 3 --init-static-s 10 --sample-rate-hz 100"),
+         quick="--static-s 3 --init-static-s 10 --sample-rate-hz 100",
+         marginal=("sample rate ×2", "--sample-rate-hz 2000 --n-poses 24",
+                   "--static-s 3 --init-static-s 10 --sample-rate-hz 200")),
     Spec("allan", "Allan characterisation", full="--record-s 600 --warm-up-s 5",
          quick="--record-s 600 --warm-up-s 5 --sample-rate-hz 50"),
 )
@@ -199,9 +213,14 @@ def _malloc_trim() -> bool:
 
 def _bare_read(path: Path) -> float:
     """Open `path` with h5py and read every dataset under /streams whole [s]."""
+    return _bare_read_times(path)[0]
+
+
+def _bare_read_times(path: Path) -> tuple[float, float]:
+    """:func:`_bare_read`'s wall-clock and process CPU times [s]."""
     import h5py
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with h5py.File(path, "r") as f:
         names: list[str] = []
         f["streams"].visititems(
@@ -209,7 +228,7 @@ def _bare_read(path: Path) -> float:
         for n in names:
             data = f["streams"][n][()]
             del data
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 def child(job: dict[str, Any]) -> dict[str, Any]:
@@ -229,7 +248,9 @@ def child(job: dict[str, Any]) -> dict[str, Any]:
     out["warm_s"] = time.perf_counter() - t0
     for codec in reversed(CODECS):  # the analysed codec last, right before the analysis
         if codec in job["reads"]:
-            out[f"read_{codec}"] = min(_bare_read(Path(job["reads"][codec])) for _ in range(3))
+            reads = [_bare_read_times(Path(job["reads"][codec])) for _ in range(3)]
+            out[f"read_{codec}"] = min(r[0] for r in reads)
+            out[f"read_{codec}_cpu"] = min(r[1] for r in reads)
     gc.collect()
     out["trimmed"] = _malloc_trim()
     try:
@@ -252,12 +273,14 @@ def child(job: dict[str, Any]) -> dict[str, Any]:
         pstats.Stats(prof, stream=text).sort_stats("cumulative").print_stats(job["profile"])
         out["profile"] = text.getvalue()
     else:
-        times = []
+        times, cpu = [], []
         for _ in range(job["repeat"]):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             proc.analyze(path, unit=None, options=options)
             times.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
         out["analysis_s"] = min(times)
+        out["analysis_cpu_s"] = min(cpu)
     out["peak_mib"] = max(_status("VmHWM") - rss0, 0) / 1024
     return out
 
@@ -307,7 +330,7 @@ def kernels(n: int = 3_300_000, repeat: int = 3) -> None:
     ways: list[tuple[str, Any]] = [("partition (numpy)",
                                     lambda: mk.neighbour_median(x, 4, backend="numpy"))]
     if found is not None:
-        general, eight = found
+        general, eight = found[0], found[1]
         out = np.zeros(n)
         ways = [("sorting network (numba)", lambda: eight(x, out)),
                 ("sorted window (numba)", lambda: general(x, 4, out)), *ways]
@@ -373,6 +396,9 @@ def main() -> None:
                     help="one more analysis of NAME under cProfile; print its top entries")
     ap.add_argument("--profile-top", type=int, default=15)
     ap.add_argument("--repeat", type=int, default=2, help="analyses per child (the best)")
+    ap.add_argument("--threads", choices=("one", "default"), default="one",
+                    help="one thread of every numerical library in the measuring children "
+                         "(default: the analysis on one core), or the libraries' defaults")
     ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child is not None:
@@ -382,6 +408,10 @@ def main() -> None:
         kernels()
         return
     specs = [s for s in SPECS if not args.only or s.name in args.only.split(",")]
+    if args.threads == "one":  # inherited by the children (workers.py's list)
+        from imucalib.procedures.common.workers import THREAD_VARIABLES
+
+        os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
     tmp = None
     if args.keep is None:
         tmp = tempfile.TemporaryDirectory(prefix="bench-analysis-")
@@ -395,6 +425,7 @@ def main() -> None:
     load0 = os.getloadavg()
     try:
         rows, mem_rows, measured = [], [], {}
+        marginal_rows: list[str] = []
         for spec in specs:
             log(f"{spec.label}:")
             warm = recording(base, spec.name, spec.quick)
@@ -406,7 +437,9 @@ def main() -> None:
             cells = [label, f"{main_files.imu_samples / 1e6:.2f} M",
                      " / ".join(f"{_mb(main_files.paths[c]):.1f}" for c in CODECS),
                      *(f"{m[f'read_{c}']:.2f}" for c in CODECS), f"{m['analysis_s']:.2f}",
-                     f"{m['analysis_s'] / read_gz:.1f}", f"{m['peak_mib']:.0f}"]
+                     f"{m['analysis_s'] / read_gz:.1f}",
+                     f"{m['analysis_cpu_s'] / m[f'read_{CODECS[0]}_cpu']:.1f}",
+                     f"{m['peak_mib']:.0f}"]
             if spec.workers and "workers" in registry.get(spec.name).analysis_options:
                 w = measure(main_files, warm.analysed, options={"workers": 2}, reads=False,
                             repeat=args.repeat)
@@ -422,6 +455,19 @@ def main() -> None:
                 versions.append((how, longer, lm))
                 log(f"  {how}: {longer.imu_samples:,} samples, {lm['analysis_s']:.2f} s, "
                     f"{lm['peak_mib']:.0f} MiB")
+            if spec.marginal is not None:
+                how, full, quick = spec.marginal
+                second = recording(base, spec.name, quick if args.quick else full)
+                sm = measure(second, warm.analysed, repeat=args.repeat)
+                d_an = sm["analysis_s"] - m["analysis_s"]
+                d_read = sm[f"read_{CODECS[0]}"] - read_gz
+                marginal_rows.append(
+                    f"{label}, {how} ({main_files.imu_samples / 1e6:.2f} → "
+                    f"{second.imu_samples / 1e6:.2f} M samples): analysis {m['analysis_s']:.3f} → "
+                    f"{sm['analysis_s']:.3f} s, gzip read {read_gz:.3f} → "
+                    f"{sm[f'read_{CODECS[0]}']:.3f} s; marginal analysis / read "
+                    + (f"{d_an / d_read:.1f}" if d_read > 0 else "n/a (the read did not grow)"))
+                log(f"  {marginal_rows[-1]}")
             for how, f, mm in versions if spec.longer else ():
                 mem_rows.append(_row([label, how, f"{f.imu_samples / 1e6:.2f} M",
                                       f"{f.largest_step:,}", f"{_mb(f.analysed):.1f}",
@@ -436,13 +482,15 @@ def main() -> None:
               "untimed" + (" (with --quick: the measured one itself)" if args.quick else "")
               + f"; bare reads best of 3, page cache warm; analysis of the gzip copy best of "
               f"{args.repeat}; peak memory: VmHWM (reset before the analyses) minus VmRSS before "
-              "them (after malloc_trim)")
+              "them (after malloc_trim); "
+              + ("one thread of every numerical library (--threads one)"
+                 if args.threads == "one" else "the numerical libraries' default threads"))
         print()
         print(_row(["procedure", "IMU samples", "file MB gzip / blosc-lz4",
                     "read gzip [s]", "read blosc-lz4 [s]", "analysis [s]",
-                    "analysis / read gzip", "peak memory [MiB]", "analysis, 2 workers [s]",
-                    "speed-up"]))
-        print(_row(["---"] * 10))
+                    "analysis / read gzip", "the same, CPU times", "peak memory [MiB]",
+                    "analysis, 2 workers [s]", "speed-up"]))
+        print(_row(["---"] * 11))
         print("\n".join(rows))
         if mem_rows:
             print()
@@ -450,6 +498,10 @@ def main() -> None:
                         "file MB (gzip)", "analysis [s]", "peak memory [MiB]"]))
             print(_row(["---"] * 7))
             print("\n".join(mem_rows))
+        if marginal_rows:
+            print()
+            print("marginal cost (a second recording of the same plan, more samples per "
+                  "window): " + "; ".join(marginal_rows))
         print()
         sizes = "; ".join(
             f"{label} " + ", ".join(f"{c} {_mb(files.paths[c]):.1f} MB" for c in CODECS)

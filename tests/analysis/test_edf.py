@@ -153,3 +153,24 @@ def test_confidence_intervals_cover_the_truth() -> None:
         hits += int(np.sum((res.ci_low <= truth) & (truth <= res.ci_high)))
         total += truth.size
     assert 0.60 <= hits / total <= 0.76
+
+
+def test_lag1_detrending_line_is_polyfits_to_rounding() -> None:
+    """The closed-form line: the same α as ``np.polyfit``'s detrending, ρ to rounding."""
+    from imucalib.analysis.edf import _detrended, _lag1
+
+    rng = np.random.default_rng(3)
+    for i in range(400):
+        n = int(rng.integers(30, 1200))
+        z = rng.standard_normal(n)
+        z = (z, np.cumsum(z), np.cumsum(np.cumsum(z)), z + 1e3 + 0.01 * np.arange(n))[i % 4]
+        k = np.arange(n, dtype=np.float64)
+        slow = z - np.polyval(np.polyfit(k, z, 1), k)
+        fast = _detrended(z)
+        np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-9 * float(np.max(np.abs(z))))
+        assert abs(_lag1(fast) - _lag1(slow)) < 1e-10
+        d = 0
+        while d < 2:  # the identified α: one rounding of 2δ after d differences
+            r_fast, r_slow = _lag1(fast), _lag1(slow)
+            assert round(2 * r_fast / (1 + r_fast)) == round(2 * r_slow / (1 + r_slow))
+            fast, slow, d = np.diff(fast), np.diff(slow), d + 1

@@ -33,13 +33,13 @@ def test_network_sorts_every_binary_input():
 @pytest.mark.parametrize("kind", ["normal", "ties", "constant", "ramp"])
 def test_backends_equal_the_definition(h: int, kind: str):
     rng = np.random.default_rng(h)
-    n = 600
-    x = {"normal": rng.normal(size=n), "ties": rng.integers(0, 4, n).astype(float),
-         "constant": np.full(n, 2.5), "ramp": np.linspace(-1.0, 1.0, n)}[kind]
-    want = _reference(x, h)
-    for backend in ("auto", "numpy"):
-        got = neighbour_median(x, h, backend=backend)
-        assert np.array_equal(got[h:n - h], want[h:n - h]), backend
+    for n in (2 * h + 1, 2 * h + 2, 2 * h + 3, 600, 601):  # h = 4: pairs, and one left over
+        x = {"normal": rng.normal(size=n), "ties": rng.integers(0, 4, n).astype(float),
+             "constant": np.full(n, 2.5), "ramp": np.linspace(-1.0, 1.0, n)}[kind]
+        want = _reference(x, h)
+        for backend in ("auto", "numpy"):
+            got = neighbour_median(x, h, backend=backend)
+            assert np.array_equal(got[h:n - h], want[h:n - h]), (backend, n)
 
 
 def test_shortest_column():

@@ -38,3 +38,19 @@ def test_block_means_equal_numpys(m):
         got = block_means(x, m)
         assert got.shape == (g, 6)
         np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("k", [1, 3, 6])
+def test_mean_rows_equals_numpys_mean(k):
+    """x.mean(axis=0) of C-ordered slices bit for bit; other layouts go to numpy."""
+    from imucalib.processing.moments import mean_rows
+
+    rng = np.random.default_rng(k)
+    big = rng.normal(size=(60_000, k)) * 3.0 + 9.80665
+    for _ in range(50):
+        a = int(rng.integers(0, 1_000))
+        x = big[a:a + int(rng.integers(1, 50_000))]
+        np.testing.assert_array_equal(mean_rows(x), x.mean(axis=0))
+    assert moments._STATE["kernels"] is not None, moments._STATE["error"]
+    strided = big[::3, :]
+    np.testing.assert_array_equal(mean_rows(strided), strided.mean(axis=0))

@@ -74,3 +74,23 @@ def test_a_log_that_does_not_begin_at_rest_is_refused(log):
     start = np.searchsorted(t, 3.2)  # inside the first rotation
     with pytest.raises(InvalidInputError, match="are not at rest"):
         detect_static_and_rotations(t[start:], gyro[start:], accel[start:], init_static_s=1.0)
+
+
+def test_thresholds_share_curves_and_interval_means(log):
+    """Each detection of detect_for_thresholds equals its own detect_static_and_rotations."""
+    from imucalib.processing.static_detector import detect_for_thresholds
+
+    t, gyro, accel, _, _ = log
+    ks = (4.0, 6.0, 9.0)
+    together = detect_for_thresholds(t, gyro, accel, threshold_factors=ks)
+    for k, got in zip(ks, together, strict=True):
+        alone = detect_static_and_rotations(t, gyro, accel, threshold_factor=k)
+        assert [(s.start_index, s.stop_index) for s in got.static] == [
+            (s.start_index, s.stop_index) for s in alone.static]
+        for a, b in zip(got.static, alone.static, strict=True):
+            np.testing.assert_array_equal(a.mean_rate_rps, b.mean_rate_rps)
+            np.testing.assert_array_equal(a.mean_specific_force_mps2, b.mean_specific_force_mps2)
+            np.testing.assert_array_equal(a.mean_rate_rps, gyro[a.start_index:a.stop_index]
+                                          .mean(axis=0))
+        np.testing.assert_array_equal(got.accel_variance, alone.accel_variance)
+        assert not got.accel_variance.flags.writeable

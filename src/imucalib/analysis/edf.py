@@ -328,6 +328,20 @@ def _lag1(z: NDArray[np.float64]) -> float:
     return float(np.dot(z[:-1], z[1:]) / den) if den > 0 else 0.0
 
 
+def _detrended(z: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Return z minus its least-squares straight line on the index 0 … n − 1.
+
+    In closed form on centred data (k̄ = (n − 1)/2 exactly): b̂ = Σ(k − k̄)(z − z̄)/Σ(k − k̄)²,
+    the line z̄ + b̂·(k − k̄). ``np.polyfit``'s Vandermonde matrix and SVD give the same line to
+    rounding (the residuals' last bits: ρ moves by ~1e-13, α, an integer, not at all) at four
+    times the cost; an Allan record identifies 90 τ-averages series, a tenth of its analysis.
+    """
+    dk = np.arange(z.size, dtype=np.float64) - (z.size - 1) / 2.0
+    z_bar = float(z.mean())
+    slope = float(dk @ (z - z_bar)) / float(dk @ dk)
+    return np.asarray(z - (z_bar + slope * dk), dtype=np.float64)
+
+
 def identify_noise_lag1(averages: ArrayLike, *, max_differences: int = 2,
                         min_points: int = 30) -> NoiseIdentification:
     """Identify the dominant power-law noise of consecutive τ-averages of the rate.
@@ -347,8 +361,7 @@ def identify_noise_lag1(averages: ArrayLike, *, max_differences: int = 2,
         raise InvalidInputError(f"noise identification needs at least {min_points} τ-averages; "
                                 f"got {z.size}")
     n_points = int(z.size)
-    k = np.arange(z.size, dtype=np.float64)
-    z = z - np.polyval(np.polyfit(k, z, 1), k)
+    z = _detrended(z)
     d = 0
     while True:
         r1 = _lag1(z)

@@ -15,8 +15,9 @@ Applied Statistics 44(2):258–264) in its simplest form, which is the fastest f
 outlier rule uses (h = 4).
 
 For h = 4, the outlier rule's default, the 8 neighbours go through a 19-comparator sorting
-network instead (branch-free min/max: about 4 ns a sample against 23 for the sorted window and
-107 for the partition on the project's 2-core machine, ``bench/bench_analysis.py --kernels``).
+network instead (branch-free min/max, two samples side by side in vector registers: about
+0.8 ns a sample against 4 for one sample at a time, 23 for the sorted window and 107 for the
+partition on the project's 2-core machine, ``bench/bench_analysis.py --kernels``).
 The numba kernels are compiled on first use (cached on disk); without numba the numpy path of
 :func:`_neighbour_median_np` gives the same values.
 """
@@ -77,30 +78,69 @@ NETWORK_8 = ((0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7), (0,
 
 
 def _median8_loop(x: _F64, out: _F64) -> None:  # pragma: no cover - numba
-    """With h = 4, sort each sample's 8 neighbours with :data:`NETWORK_8` (branch-free min/max)."""
-    for i in range(4, x.size - 4):
-        v0, v1, v2, v3 = x[i - 4], x[i - 3], x[i - 2], x[i - 1]
-        v4, v5, v6, v7 = x[i + 1], x[i + 2], x[i + 3], x[i + 4]
-        v0, v2 = min(v0, v2), max(v0, v2)
-        v1, v3 = min(v1, v3), max(v1, v3)
-        v4, v6 = min(v4, v6), max(v4, v6)
-        v5, v7 = min(v5, v7), max(v5, v7)
-        v0, v4 = min(v0, v4), max(v0, v4)
-        v1, v5 = min(v1, v5), max(v1, v5)
-        v2, v6 = min(v2, v6), max(v2, v6)
-        v3, v7 = min(v3, v7), max(v3, v7)
-        v0, v1 = min(v0, v1), max(v0, v1)
-        v2, v3 = min(v2, v3), max(v2, v3)
-        v4, v5 = min(v4, v5), max(v4, v5)
-        v6, v7 = min(v6, v7), max(v6, v7)
-        v2, v4 = min(v2, v4), max(v2, v4)
-        v3, v5 = min(v3, v5), max(v3, v5)
-        v1, v4 = min(v1, v4), max(v1, v4)
-        v3, v6 = min(v3, v6), max(v3, v6)
-        v1, v2 = min(v1, v2), max(v1, v2)
-        v3, v4 = min(v3, v4), max(v3, v4)
-        v5, v6 = min(v5, v6), max(v5, v6)
-        out[i] = 0.5 * (v3 + v4)
+    """With h = 4, sort each sample's 8 neighbours with :data:`NETWORK_8` (branch-free min/max).
+
+    Two neighbouring samples i (values a) and i + 1 (values b) go through the network side by
+    side, comparator for comparator: the compiler packs each pair of identical operations on
+    adjacent data into one vector instruction (about 0.8 ns a sample against 4 for one sample
+    at a time; the loop must keep this form: others tried were not vectorised). A comparator
+    is ``(u if u < v else v), (v if u < v else u)``, the min/max that vectorises; with a tie
+    both are the same value. An odd count leaves one sample, whose 8 neighbours are sorted.
+    """
+    n = x.size
+    i = 4
+    while i + 2 <= n - 4:
+        a0, a1, a2, a3 = x[i - 4], x[i - 3], x[i - 2], x[i - 1]
+        a4, a5, a6, a7 = x[i + 1], x[i + 2], x[i + 3], x[i + 4]
+        b0, b1, b2, b3 = x[i - 3], x[i - 2], x[i - 1], x[i]
+        b4, b5, b6, b7 = x[i + 2], x[i + 3], x[i + 4], x[i + 5]
+        a0, a2 = (a0 if a0 < a2 else a2), (a2 if a0 < a2 else a0)
+        b0, b2 = (b0 if b0 < b2 else b2), (b2 if b0 < b2 else b0)
+        a1, a3 = (a1 if a1 < a3 else a3), (a3 if a1 < a3 else a1)
+        b1, b3 = (b1 if b1 < b3 else b3), (b3 if b1 < b3 else b1)
+        a4, a6 = (a4 if a4 < a6 else a6), (a6 if a4 < a6 else a4)
+        b4, b6 = (b4 if b4 < b6 else b6), (b6 if b4 < b6 else b4)
+        a5, a7 = (a5 if a5 < a7 else a7), (a7 if a5 < a7 else a5)
+        b5, b7 = (b5 if b5 < b7 else b7), (b7 if b5 < b7 else b5)
+        a0, a4 = (a0 if a0 < a4 else a4), (a4 if a0 < a4 else a0)
+        b0, b4 = (b0 if b0 < b4 else b4), (b4 if b0 < b4 else b0)
+        a1, a5 = (a1 if a1 < a5 else a5), (a5 if a1 < a5 else a1)
+        b1, b5 = (b1 if b1 < b5 else b5), (b5 if b1 < b5 else b1)
+        a2, a6 = (a2 if a2 < a6 else a6), (a6 if a2 < a6 else a2)
+        b2, b6 = (b2 if b2 < b6 else b6), (b6 if b2 < b6 else b2)
+        a3, a7 = (a3 if a3 < a7 else a7), (a7 if a3 < a7 else a3)
+        b3, b7 = (b3 if b3 < b7 else b7), (b7 if b3 < b7 else b3)
+        a0, a1 = (a0 if a0 < a1 else a1), (a1 if a0 < a1 else a0)
+        b0, b1 = (b0 if b0 < b1 else b1), (b1 if b0 < b1 else b0)
+        a2, a3 = (a2 if a2 < a3 else a3), (a3 if a2 < a3 else a2)
+        b2, b3 = (b2 if b2 < b3 else b3), (b3 if b2 < b3 else b2)
+        a4, a5 = (a4 if a4 < a5 else a5), (a5 if a4 < a5 else a4)
+        b4, b5 = (b4 if b4 < b5 else b5), (b5 if b4 < b5 else b4)
+        a6, a7 = (a6 if a6 < a7 else a7), (a7 if a6 < a7 else a6)
+        b6, b7 = (b6 if b6 < b7 else b7), (b7 if b6 < b7 else b6)
+        a2, a4 = (a2 if a2 < a4 else a4), (a4 if a2 < a4 else a2)
+        b2, b4 = (b2 if b2 < b4 else b4), (b4 if b2 < b4 else b2)
+        a3, a5 = (a3 if a3 < a5 else a5), (a5 if a3 < a5 else a3)
+        b3, b5 = (b3 if b3 < b5 else b5), (b5 if b3 < b5 else b3)
+        a1, a4 = (a1 if a1 < a4 else a4), (a4 if a1 < a4 else a1)
+        b1, b4 = (b1 if b1 < b4 else b4), (b4 if b1 < b4 else b1)
+        a3, a6 = (a3 if a3 < a6 else a6), (a6 if a3 < a6 else a3)
+        b3, b6 = (b3 if b3 < b6 else b6), (b6 if b3 < b6 else b3)
+        a1, a2 = (a1 if a1 < a2 else a2), (a2 if a1 < a2 else a1)
+        b1, b2 = (b1 if b1 < b2 else b2), (b2 if b1 < b2 else b1)
+        a3, a4 = (a3 if a3 < a4 else a4), (a4 if a3 < a4 else a3)
+        b3, b4 = (b3 if b3 < b4 else b4), (b4 if b3 < b4 else b3)
+        a5, a6 = (a5 if a5 < a6 else a6), (a6 if a5 < a6 else a5)
+        b5, b6 = (b5 if b5 < b6 else b6), (b6 if b5 < b6 else b5)
+        out[i] = 0.5 * (a3 + a4)
+        out[i + 1] = 0.5 * (b3 + b4)
+        i += 2
+    if i < n - 4:
+        nb = np.empty(8)
+        for j in range(4):
+            nb[j], nb[4 + j] = x[i - 4 + j], x[i + 1 + j]
+        nb.sort()
+        out[i] = 0.5 * (nb[3] + nb[4])
 
 
 def _neighbour_median_np(x: _F64, h: int, out: _F64) -> None:

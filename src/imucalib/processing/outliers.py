@@ -103,8 +103,10 @@ from scipy import stats
 from imucalib._checks import check_positive
 from imucalib.errors import InvalidInputError
 from imucalib.processing._common import as_columns, as_time, restore_shape
+from imucalib.processing._flag_kernel import flag_far, residuals
+from imucalib.processing._flag_kernel import kernels as flag_kernels
 from imucalib.processing._median_kernel import curvature_margin, neighbour_median
-from imucalib.processing._select_kernel import median
+from imucalib.processing._select_kernel import median, median_abs_deviation
 
 __all__ = [
     "MAD_TO_SIGMA",
@@ -425,24 +427,50 @@ def reject_outliers_robust(
     t = None if time_s is None else as_time(time_s, "time_s", cols.shape[0])
     n, k = cols.shape
     k_n = robust_threshold(n, alpha, min_threshold)
+    flagged, counts, scale = _robust_flags(cols, h, k_n)
+    mask = flagged.T  # (n, k), each column contiguous
+    iters = np.ones(k, dtype=np.int64)
+    center = _kept_median(cols, mask)
+    return _finish(cols, one_d, mask, center, scale, iters, "robust", method, t, k_n, counts)
+
+
+def _robust_flags(cols: NDArray[np.float64], h: int, k_n: float, backend: str = "auto"
+                  ) -> tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.float64]]:
+    """Return the flags (k, n), their counts per column and the scales s of the robust rule.
+
+    With numba the residuals and the flags are two compiled passes per column
+    (:mod:`._flag_kernel`: the margin computed as they go, the MAD selected without the
+    deviations' array); with ``backend="numpy"`` or without numba numpy makes each step. The
+    same operations in the same order: the same flags and scales bit for bit.
+    """
+    n, k = cols.shape
     by_column = np.ascontiguousarray(cols.T)  # each column contiguous: every pass below streams
+    fused = None if backend == "numpy" else flag_kernels()
     flagged = np.empty((k, n), dtype=bool)
+    counts = np.empty(k, dtype=np.int64)
     scale = np.empty(k)
     for j in range(k):
         x = by_column[j]
-        c, margin = _running_median(x, h)
-        r = x - c
-        med_r = median(r)  # np.median's value bit for bit, by Floyd–Rivest selection
-        dev = np.abs(r - med_r)
-        s = MAD_TO_SIGMA * median(dev)
-        if s <= 0.0:
-            s = float(np.std(r, ddof=1))
-        np.greater(dev, k_n * s + margin, out=flagged[j])  # Eq. (2)
+        if fused is not None and n >= 2 * (2 * h + 1):
+            c = neighbour_median(x, h)
+            r = residuals(x, c, h)  # the edges of c extrapolated, r = x − c
+            med_r = median(r)  # np.median's value bit for bit, by Floyd–Rivest selection
+            s = MAD_TO_SIGMA * median_abs_deviation(r, med_r)
+            if s <= 0.0:
+                s = float(np.std(r, ddof=1))
+            counts[j] = flag_far(r, c, h, med_r, k_n * s, flagged[j])  # Eq. (2)
+        else:
+            c, margin = _running_median(x, h)
+            r = x - c
+            med_r = median(r, backend=backend)
+            dev = np.abs(r - med_r)
+            s = MAD_TO_SIGMA * median(dev, backend=backend)
+            if s <= 0.0:
+                s = float(np.std(r, ddof=1))
+            np.greater(dev, k_n * s + margin, out=flagged[j])  # Eq. (2)
+            counts[j] = np.count_nonzero(flagged[j])
         scale[j] = s
-    mask = np.ascontiguousarray(flagged.T)
-    iters = np.ones(k, dtype=np.int64)
-    center = _kept_median(cols, mask)
-    return _finish(cols, one_d, mask, center, scale, iters, "robust", method, t, k_n)
+    return flagged, counts, scale
 
 
 def _kept_median(cols: NDArray[np.float64], mask: NDArray[np.bool_]
@@ -558,20 +586,25 @@ def _location_scale(x: NDArray[np.float64], robust: bool) -> tuple[float, float]
 def _finish(cols: NDArray[np.float64], one_d: bool, mask: NDArray[np.bool_],
             center: _Center, scale: NDArray[np.float64], iters: NDArray[np.int64],
             test: str, method: str, t: NDArray[np.float64] | None,
-            threshold: float = math.nan) -> OutlierResult:
+            threshold: float = math.nan,
+            counts: NDArray[np.int64] | None = None) -> OutlierResult:
+    """Replace or drop the flagged samples; `counts`: the flags per column when known."""
     n = cols.shape[0]
+    n_out = mask.sum(axis=0).astype(np.int64) if counts is None else counts
     if method == "drop":
-        kept = np.asarray(~mask.any(axis=1), dtype=bool)
+        kept = (np.asarray(~mask.any(axis=1), dtype=bool) if n_out.any()
+                else np.ones(n, dtype=bool))
         out = cols[kept].copy()
     else:
         kept = np.ones(n, dtype=bool)
         out = cols  # as_columns' own copy; a flagged sample is filled from kept ones only
-        axis = np.arange(n, dtype=np.float64) if t is None else t
-        for j in np.flatnonzero(mask.any(axis=0)):
-            bad = np.flatnonzero(mask[:, j])
-            near = _kept_neighbours(bad, n)
-            out[bad, j] = np.interp(axis[bad], axis[near], cols[near, j])
-    n_out = mask.sum(axis=0).astype(np.int64)
+        columns = np.flatnonzero(n_out)
+        if columns.size:
+            axis = np.arange(n, dtype=np.float64) if t is None else t
+            for j in columns:
+                bad = np.flatnonzero(mask[:, j])
+                near = _kept_neighbours(bad, n)
+                out[bad, j] = np.interp(axis[bad], axis[near], cols[near, j])
     values = restore_shape(out, one_d)
     mask_out = mask[:, 0].copy() if one_d else mask
     for arr in (values, mask_out, kept, n_out, scale, iters):

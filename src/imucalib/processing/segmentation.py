@@ -261,6 +261,24 @@ def _moving_mean_and_unsteadiness(x: NDArray[np.float64], w: int
     over blocks b and b + 1 after subtracting block b's mean, so no running sum grows beyond 2w
     terms and the variance is exact however large the rate (no cancellation of Σx² − (Σx)²/w).
     """
+    ref, s1, s2 = _window_moments(x, w)
+    n, k = x.shape
+    n_start = n - w + 1
+    mean_s = (ref[:, None, :] + s1).reshape(-1, k)[:n_start]
+    start = _window_starts(n, w)
+    return mean_s[start], _variance_sum(s1, s2, n_start)[start]
+
+
+def _moving_unsteadiness(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
+    """Return the Σ_axes moving variance of :func:`_moving_mean_and_unsteadiness` alone."""
+    _, s1, s2 = _window_moments(x, w)
+    n = x.shape[0]
+    return _variance_sum(s1, s2, n - w + 1)[_window_starts(n, w)]
+
+
+def _window_moments(x: NDArray[np.float64], w: int
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Block means (nb, k) and the windows' mean and mean square about them (nb, w, k)."""
     n, k = x.shape
     n_start = n - w + 1
     nb = -(-n_start // w)
@@ -275,10 +293,20 @@ def _moving_mean_and_unsteadiness(x: NDArray[np.float64], w: int
     c2 = np.concatenate([zero, np.cumsum(pair * pair, axis=1)], axis=1)
     s1 = (c1[:, w:2 * w] - c1[:, :w]) / w
     s2 = (c2[:, w:2 * w] - c2[:, :w]) / w
-    mean_s = (ref[:, None, :] + s1).reshape(nb * w, k)[:n_start]
-    var_s = np.maximum(s2 - s1 * s1, 0.0).reshape(nb * w, k)[:n_start].sum(axis=1)
-    start = np.clip(np.arange(n) - w // 2, 0, n_start - 1)
-    return mean_s[start], var_s[start]
+    return ref, s1, s2
+
+
+def _variance_sum(s1: NDArray[np.float64], s2: NDArray[np.float64], n_start: int
+                  ) -> NDArray[np.float64]:
+    """Σ over the columns of each window's variance, windows 0 … n_start − 1."""
+    k = s1.shape[2]
+    return np.asarray(np.maximum(s2 - s1 * s1, 0.0).reshape(-1, k)[:n_start].sum(axis=1),
+                      dtype=np.float64)
+
+
+def _window_starts(n: int, w: int) -> NDArray[np.intp]:
+    """Return the window of each sample: its centred one, clipped at the record's ends."""
+    return np.clip(np.arange(n) - w // 2, 0, n - w)
 
 
 def _runs(labels: NDArray[np.int8]) -> list[tuple[int, int, int]]:

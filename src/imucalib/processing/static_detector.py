@@ -52,9 +52,10 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib._checks import as_array, check_positive
 from imucalib.errors import InvalidInputError
 from imucalib.processing._common import as_time
+from imucalib.processing.moments import mean_rows
 from imucalib.processing.segmentation import (
     Segment,
-    _moving_mean_and_unsteadiness,
+    _moving_unsteadiness,
     _runs,
 )
 
@@ -146,7 +147,7 @@ def _edges(n: int, w: int) -> NDArray[np.bool_]:
 
 def _variance_norm(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
     """‖(var_w of each column)‖ over centred windows of w samples."""
-    per_axis = [_moving_mean_and_unsteadiness(x[:, [i]], w)[1] for i in range(x.shape[1])]
+    per_axis = [_moving_unsteadiness(x[:, i:i + 1], w) for i in range(x.shape[1])]
     return np.asarray(np.sqrt(np.sum(np.square(per_axis), axis=0)), dtype=np.float64)
 
 
@@ -268,16 +269,38 @@ def detect_for_thresholds(
             f"{init_a:.3g} (m/s²)² is {init_a / quiet:.3g} times that of the quietest windows; "
             "the detector needs the log to begin with the IMU still (Tedaldi's initial static "
             "interval): shorten `init_static_s` (--init-static-s) or trim the log")
-    return [_detect(t, gyro, accel, var_a, var_g, init_a, init_g, w, k, min_static, min_rot)
-            for k in ks]
+    for arr in (var_a, var_g):  # read-only: the detections share the curves
+        arr.setflags(write=False)
+    means: _Means = {}  # the detections share most of their intervals
+    return [_detect(t, gyro, accel, var_a, var_g, init_a, init_g, w, k, min_static, min_rot,
+                    means) for k in ks]
+
+
+#: An interval's mean rate and mean specific force, by (start, stop) index.
+_Means = dict[tuple[int, int], tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+
+def _interval_means(gyro: NDArray[np.float64], accel: NDArray[np.float64], start: int,
+                    stop: int, means: _Means) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return the mean rate and specific force of samples start … stop − 1 (read-only, kept).
+
+    :func:`~imucalib.processing.moments.mean_rows`: ``mean(axis=0)``'s values, computed once
+    per interval for all the thresholds that find it.
+    """
+    found = means.get((start, stop))
+    if found is None:
+        rate, force = mean_rows(gyro[start:stop]), mean_rows(accel[start:stop])
+        rate.setflags(write=False)
+        force.setflags(write=False)
+        found = means[start, stop] = (rate, force)
+    return found
 
 
 def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np.float64],
             var_a: NDArray[np.float64], var_g: NDArray[np.float64], init_a: float,
-            init_g: float, w: int, k: float, min_static: float, min_rot: float
-            ) -> StaticDetection:
+            init_g: float, w: int, k: float, min_static: float, min_rot: float,
+            means: _Means) -> StaticDetection:
     """Detect with one threshold factor k: steps 2–4 of the module docstring."""
-    var_a, var_g = var_a.copy(), var_g.copy()  # each detection holds its own curves
     thr_a, thr_g = k * init_a, k * init_g
     still = (var_a < thr_a) & (var_g < thr_g)
     still &= ~_edges(t.size, w)
@@ -288,10 +311,7 @@ def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np
         if t[stop - 1] - t[start] < min_static:
             still[start:stop] = False
             continue
-        rate = gyro[start:stop].mean(axis=0)
-        force = accel[start:stop].mean(axis=0)
-        rate.setflags(write=False)
-        force.setflags(write=False)
+        rate, force = _interval_means(gyro, accel, start, stop, means)
         static.append(Segment(kind="static", start_index=start, stop_index=stop,
                               start_time_s=float(t[start]), end_time_s=float(t[stop - 1]),
                               mean_rate_rps=rate, mean_specific_force_mps2=force))
@@ -308,8 +328,7 @@ def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np
             rotations.append(Rotation(start_index=a, stop_index=b, start_time_s=float(t[a]),
                                       end_time_s=float(t[b - 1]), angle_rad=theta,
                                       bias_rps=bias))
-    for arr in (still, var_a, var_g):
-        arr.setflags(write=False)
+    still.setflags(write=False)
     return StaticDetection(static=tuple(static), rotations=tuple(rotations), is_static=still,
                            accel_variance=var_a, gyro_variance=var_g, accel_threshold=thr_a,
                            gyro_threshold=thr_g, threshold_factor=k, window_samples=w)

@@ -532,7 +532,9 @@ def _segment(label: str, index: int | None, chunks: Iterable[Any],
                                           memory_limit_samples=opts.memory_limit_samples)
                            for c, s, _ in chans}
             for c, _, factor in chans:
-                values = np.asarray(chunk.columns[c], dtype=np.float64) * factor
+                values = np.asarray(chunk.columns[c], dtype=np.float64)
+                if factor != 1.0:  # x·1 is x: no pass and no copy for SI columns
+                    values = values * factor
                 try:
                     streams[c].append(values)
                 except InvalidInputError as exc:

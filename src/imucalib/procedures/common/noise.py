@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.processing.moments import block_means
 
 __all__ = ["FLICKER_FACTOR", "StaticWindow", "block_variance", "estimate_noise",
            "pooled_white_density", "window_mean_se"]
@@ -127,7 +128,7 @@ def block_variance(values: NDArray[np.float64], period_s: float, block_s: float
     k = cols.shape[0] // per_block
     if k < 3:
         return 0, np.full(cols.shape[1], math.nan)
-    means = cols[: k * per_block].reshape(k, per_block, cols.shape[1]).mean(axis=1)
+    means = block_means(cols, per_block)  # the reshaped mean(axis=1), bit for bit
     return k - 1, np.asarray(np.var(means, axis=0, ddof=1) * per_block * period_s,
                              dtype=np.float64)
 

@@ -37,6 +37,7 @@ from imucalib.errors import (
     RecordingError,
 )
 from imucalib.procedures.common.noise import block_variance, pooled_white_density
+from imucalib.processing.moments import mean_rows
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -188,7 +189,7 @@ def static_poses(log: FieldLog, detection: StaticDetection, *, block_s: float = 
             memo[sl.start, sl.stop] = (
                 block_variance(np.column_stack([log.accel_mps2[sl], log.gyro_rps[sl]]),
                                period, block_s),
-                log.accel_mps2[sl].mean(axis=0), log.gyro_rps[sl].mean(axis=0))
+                mean_rows(log.accel_mps2[sl]), mean_rows(log.gyro_rps[sl]))  # mean(axis=0)
     reduced = [memo[sl.start, sl.stop] for sl in slices]
     blocks = [r[0] for r in reduced]
     density = pooled_white_density(blocks)

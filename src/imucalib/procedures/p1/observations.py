@@ -341,7 +341,8 @@ class _Extractor:
                                              max_iterations=self.opt.outlier_passes)
             else:
                 res = reject_outliers_grubbs(values, method=method, time_s=t)
-            rows = np.flatnonzero(res.outlier_mask.any(axis=1))[:OUTLIER_TIMES_KEPT]
+            rows = (np.flatnonzero(res.outlier_mask.any(axis=1))[:OUTLIER_TIMES_KEPT]
+                    if res.n_outliers.any() else np.empty(0, dtype=np.intp))
             flagged = _Flagged(per_channel=np.asarray(res.n_outliers, dtype=np.int64),
                                times_s=[float(x) for x in t[rows]], tested=True)
             values = res.values
