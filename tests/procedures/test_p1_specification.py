@@ -162,7 +162,9 @@ def test_the_specification_and_rule_come_from_the_recording_whether_old_or_new(p
     for other in results[1:]:
         np.testing.assert_array_equal(other.result.values, results[0].result.values)
         np.testing.assert_array_equal(other.result.covariance, results[0].result.covariance)
-        assert other.result.notes == results[0].result.notes
+        # a recording without its plan TOML has no predicted σ to compare (and says so)
+        assert [n for n in other.result.notes if not n.startswith("predicted σ not compared")] \
+            == list(results[0].result.notes)
         assert other.result.provenance.details == details
         assert other.to_dict()["checks"] == results[0].to_dict()["checks"]
         assert other.decision == results[0].decision

@@ -15,6 +15,10 @@ fit of the chosen model (:mod:`.fit`), then the verification of
   difference from least squares in standard deviations;
 - the Cramér–Rao bound of the design with the same observation covariance
   (docs/processing-estimation.md);
+- with the plan the recording holds, each parameter's predicted σ (the plan's, with the grade's
+  noise and with the noise the analysis fitted) beside the achieved σ, and a note when the
+  achieved σ is worse than predicted (:mod:`.achieved`, docs/test-design.md, "Predicted
+  against achieved");
 - the optional model terms (the accelerometer's K2, the gyro's G) chosen per triad by the data
   (:func:`~imucalib.procedures.p1.fit.choose_triad_terms`, docs/p1.md "Model terms"), each
   choice a note and, with every candidate's χ², ν and criterion, the report's
@@ -33,7 +37,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Literal
@@ -49,7 +53,7 @@ from imucalib.analysis.verification import (
     decide,
     decision_rule_text,
 )
-from imucalib.errors import InvalidInputError
+from imucalib.errors import ConfigurationError, InvalidInputError
 from imucalib.estimation import compute_crlb, refine_with_kalman
 from imucalib.estimation.term_selection import CRITERIA, parse_terms
 from imucalib.io.hashing import file_sha256
@@ -64,8 +68,9 @@ from imucalib.models.result import (
     triad_parameter_unit,
 )
 from imucalib.models.triad import correct_triad
-from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
+from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig, Plan
 from imucalib.procedures.common.spec_decision import spec_field
+from imucalib.procedures.p1.achieved import PredictionCheck, compare_with_prediction
 from imucalib.procedures.p1.fit import (
     TERMS,
     P1Fit,
@@ -192,7 +197,9 @@ class P1Analysis(ResultDefaults):
     whose covariance as reported the :meth:`triad_parameters`; ``model_selection`` each
     triad's choice of optional terms with every candidate's χ², ν, χ²/ν and criterion
     (:meth:`~imucalib.estimation.term_selection.TermChoice.to_dict`; docs/p1.md, "Model
-    terms"; empty for the per-axis model); ``decision`` is the one of
+    terms"; empty for the per-axis model); ``prediction`` the plan's predicted σ beside the
+    achieved σ (:class:`~imucalib.procedures.p1.achieved.PredictionCheck`; None without the
+    plan, which the notes then say); ``decision`` is the one of
     :data:`~imucalib.analysis.verification.DECISION_RULE` over :attr:`checks` (docs/p1.md,
     rules 5–7); ``passed`` is its verdict.
     """
@@ -205,6 +212,7 @@ class P1Analysis(ResultDefaults):
     crlb_ratio: dict[str, float]
     observations: P1Observations
     model_selection: tuple[dict[str, Any], ...] = ()
+    prediction: PredictionCheck | None = None
 
     @property
     def procedure(self) -> str:
@@ -257,6 +265,7 @@ class P1Analysis(ResultDefaults):
                             for q in self.result.fit_quality],
             "std_scaled": self.result.std(scaled=True),
             "model_selection": list(self.model_selection),
+            "prediction": None if self.prediction is None else self.prediction.to_dict(),
         }
 
 
@@ -440,9 +449,37 @@ def _held_out(result: CalibrationResult, obs: P1Observations
     return accel_err, gyro_err
 
 
+#: The note of a recording without its plan: nothing to compare the achieved σ with.
+NO_PREDICTION_NOTE = ("predicted σ not compared: the recording holds no plan to predict it from "
+                      "(docs/test-design.md, \"Predicted against achieved\")")
+
+
+def _prediction(plan: Plan | None, obs: P1Observations, result: CalibrationResult
+                ) -> tuple[PredictionCheck | None, list[str]]:
+    """Return the plan's predicted σ beside the achieved σ and its notes, (PA.1)–(PA.4).
+
+    No plan, or one the prediction cannot use (no grade, another model's parameters): no
+    check, one note saying why. A run worse than predicted: the warning as a note.
+    """
+    if plan is None:
+        return None, [NO_PREDICTION_NOTE]
+    try:
+        check = compare_with_prediction(plan, obs, result.param_names,
+                                        result.std(scaled=True), result.units)
+    except ConfigurationError as exc:
+        return None, [f"predicted σ not compared: {exc}"]
+    warning = check.warning()
+    return check, [warning] if warning else []
+
+
 def analyze_p1_observations(obs: P1Observations, options: P1Options | None = None, *,
-                            provenance: Provenance | None = None) -> P1Analysis:
-    """Fit, verify and decide from extracted observations (see :func:`analyze_p1`)."""
+                            provenance: Provenance | None = None,
+                            plan: Plan | None = None) -> P1Analysis:
+    """Fit, verify and decide from extracted observations (see :func:`analyze_p1`).
+
+    `plan`, the plan the recording ran, gives each parameter's predicted σ beside the achieved
+    σ (:mod:`.achieved`); without it the notes say there is none.
+    """
     opt = options or P1Options()
     forced = opt.forced_terms()
     spec = _imu_spec(obs)
@@ -483,6 +520,9 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                      [c.summary() + (_G_RULE_NOTE if c.ruled.get("g") else "")
                       for c in fit.selection]
                      + [q.summary() for q in quality if q.misfit], quality)
+    prediction, prediction_notes = _prediction(plan, obs, result)
+    if prediction_notes:
+        result = replace(result, notes=(*result.notes, *prediction_notes))
     accel_err, gyro_err = _held_out(result, obs)
     checks.append(check_accuracy("held-out accelerometer accuracy", accel_err,
                                  limit=opt.accel_accuracy_g or spec.accel_accuracy_g, unit="g",
@@ -523,7 +563,8 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
                                       rule=decision_rule_text(rule, guard_k)),
                       kalman_max_difference_sigma=kalman,
                       crlb_ratio=crlb, observations=obs,
-                      model_selection=tuple(c.to_dict() for c in fit.selection))
+                      model_selection=tuple(c.to_dict() for c in fit.selection),
+                      prediction=prediction)
 
 
 def analyze_p1(path: str | Path, sensor_id: str | None = None,
@@ -555,6 +596,7 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
     with open_recording(p) as rec:
         obs = extract_p1_observations(rec, sensor_id, processing=opt.processing,
                                       progress=progress, workers=opt.workers)
+        plan = _stored_plan(rec.metadata)
     gyro_w = gyro_windows(obs, "calibration", None)
     spec = _imu_spec(obs)
     rule, guard_k = _acceptance(obs, opt)
@@ -579,4 +621,17 @@ def analyze_p1(path: str | Path, sensor_id: str | None = None,
                                    "accel_accuracy_g": spec.accel_accuracy_g,
                                    "gyro_accuracy_dps": spec.gyro_accuracy_dps},
                  "acceptance": {"rule": rule, "guard_band_k": guard_k}})
-    return analyze_p1_observations(obs, opt, provenance=prov)
+    return analyze_p1_observations(obs, opt, provenance=prov, plan=plan)
+
+
+def _stored_plan(metadata: Any) -> Plan | None:
+    """Return the plan a recording stores (``plan_toml``), or None without a valid one."""
+    from imucalib.plan import parse_plan
+
+    text = metadata.get("plan_toml")
+    if not text:
+        return None
+    try:
+        return parse_plan(str(text))
+    except ConfigurationError:
+        return None

@@ -4,8 +4,10 @@ The ``render_console`` hook of :class:`~imucalib.procedures.p1.procedure.P1Proce
 ``imucalib calibrate`` and the demo: every parameter in its display unit with its standard
 uncertainty (and the Birge-scaled one under a misfit, docs/processing-estimation.md), its
 repeatability verdict, each fit's χ²/ν, the verification checks, the Kalman cross-check and the
-decision (docs/reporting.md); and the model terms each triad fit chose with every candidate's
-χ², ν and criterion (docs/p1.md, "Model terms").
+decision (docs/reporting.md); the model terms each triad fit chose with every candidate's
+χ², ν and criterion (docs/p1.md, "Model terms"); and the achieved σ against the plan's
+predicted σ in one line, with one ``note:`` line when the run is worse than predicted
+(docs/test-design.md, "Predicted against achieved").
 """
 
 from __future__ import annotations
@@ -70,6 +72,12 @@ def render_calibration(console: Console, analysis: Any, written: Sequence[Path])
         console.print(f"Kalman refinement agrees with least squares to "
                       f"{analysis.kalman_max_difference_sigma:.2g} σ; reported σ / Cramér–Rao "
                       f"bound: {max(analysis.crlb_ratio.values()):.4f}", highlight=False)
+    prediction = getattr(analysis, "prediction", None)
+    if prediction is not None:
+        console.print(prediction.summary(), highlight=False, soft_wrap=True, markup=False)
+        warning = prediction.warning()
+        if warning:
+            console.print(f"note: {warning}", highlight=False, soft_wrap=True, markup=False)
     colour = "green" if analysis.decision.passed else "red"
     console.print(f"[bold {colour}]{analysis.decision.summary()}[/]", highlight=False)
     print_written(console, written)

@@ -7,9 +7,12 @@ The results section holds every parameter with U = k·u (R.1 of :mod:`imucalib.r
 the verification checks, the conformity table against the plan's acceptance limits, the
 residual figure (per position and rate), the held-out/repeatability figure, the model terms each
 triad's fit chose with every candidate's χ², ν and criterion (:func:`model_selection_rows`,
-docs/p1.md "Model terms"), and the noise model
+docs/p1.md "Model terms"), the noise model
 of the long static records that gave the window means' standard errors, as a table and as
-Allan deviation curves (docs/p1.md, docs/reporting.md).
+Allan deviation curves (docs/p1.md, docs/reporting.md), and, when the recording holds its plan,
+each parameter's predicted σ (the plan's, with the grade's noise and with the fitted noise)
+beside the achieved σ (:func:`prediction_rows`; docs/test-design.md, "Predicted against
+achieved").
 """
 
 from __future__ import annotations
@@ -36,11 +39,16 @@ from imucalib.report.sections import (
     yes_no,
 )
 
-__all__ = ["MODEL_SELECTION_COLUMNS", "content", "model_selection_rows", "type_b_terms"]
+__all__ = ["MODEL_SELECTION_COLUMNS", "PREDICTION_COLUMNS", "content", "model_selection_rows",
+           "prediction_rows", "type_b_terms"]
 
 #: The columns of :func:`model_selection_rows`.
 MODEL_SELECTION_COLUMNS = ("triad fit", "terms", "χ²", "ν", "χ²/ν", "criterion",
                            "chosen")
+
+#: The columns of :func:`prediction_rows`.
+PREDICTION_COLUMNS = ("parameter", "predicted σ (plan, grade noise)",
+                      "predicted σ (fitted noise)", "achieved σ", "unit", "achieved / predicted")
 
 #: The note of the analysis that states its Type B terms (``analysis._add_type_b``).
 _TYPE_B_NOTE = re.compile(r"Type B \(GUM\): table position accuracy ([0-9.eE+-]+)″ and "
@@ -93,6 +101,28 @@ def model_selection_rows(selection: Sequence[Mapping[str, Any]]) -> list[tuple[s
     return rows
 
 
+def prediction_rows(check: Any) -> list[tuple[str, ...]]:
+    """Return one row per parameter of a :class:`~imucalib.procedures.p1.achieved.PredictionCheck`.
+
+    The σ in the parameter's display unit (:func:`~imucalib.report.console.display_parameter`),
+    then σ_achieved / σ_predicted (grade noise), Eq. (PA.1) of docs/test-design.md.
+    """
+    from imucalib.report.console import display_parameter
+
+    def shown(name: str, sigma: float | None, unit: str) -> tuple[str, str]:
+        if sigma is None:
+            return "—", display_parameter(name, 0.0, 1.0, unit)[2]
+        _, text, du = display_parameter(name, 0.0, sigma, unit)
+        return text, du
+
+    rows: list[tuple[str, ...]] = []
+    for r in check.rows:
+        nominal, du = shown(r.name, r.predicted_std, r.unit)
+        rows.append((r.name, nominal, shown(r.name, r.predicted_fitted_std, r.unit)[0],
+                     shown(r.name, r.achieved_std, r.unit)[0], du, f"{r.ratio:.2f}"))
+    return rows
+
+
 def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
     """Return P1's sections 1–5 (None for a result without its observations)."""
     from imucalib.procedures.p1.analysis import P1Analysis
@@ -140,6 +170,12 @@ def content(analysis: Any, meta: Mapping[str, Any]) -> ReportContent | None:
             "model terms chosen by the data (docs/p1.md, \"Model terms\"): every candidate "
             "of each triad fit", MODEL_SELECTION_COLUMNS,
             tuple(model_selection_rows(analysis.model_selection))))
+    prediction = getattr(analysis, "prediction", None)
+    if prediction is not None:
+        tables.append(ReportTable(
+            "predicted σ of the plan beside the achieved σ (docs/test-design.md, \"Predicted "
+            "against achieved\"): " + prediction.summary(), PREDICTION_COLUMNS,
+            tuple(prediction_rows(prediction))))
     fit_text = [q.summary() for q in result.fit_quality]
     fig = figure_of(lambda p: save_residual_figure(analysis, p),
                     "Residual mean of each window and axis with ±2 standard-error bars "
