@@ -46,10 +46,11 @@ from imucalib.errors import ConfigurationError, InsufficientExcitationError
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.budget import estimate_plan_recording
 from imucalib.plan.schema import Plan
+from imucalib.procedures.common.grade import grade_noise
 from imucalib.procedures.common.prediction import OptimizedPlan, OptimizeRequest, Prediction
 from imucalib.procedures.p1.options import P1PlanOptions
 from imucalib.procedures.p1.plan import generate_p1_plan
-from imucalib.procedures.p1.predict import grade_noise, predict_p1_covariance
+from imucalib.procedures.p1.predict import predict_p1_covariance
 from imucalib.procedures.p1.roles import P1_ACCEL_POSITION, P1_GYRO_BIAS, P1_GYRO_RATE
 
 __all__ = ["Candidate", "OptimizeResult", "OptimizeSettings", "P1Design", "default_targets",

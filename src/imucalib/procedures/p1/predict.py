@@ -26,7 +26,8 @@ choice's uncertainty (TS.4), which depend on the data.
 
 Contents
 --------
-:func:`predict_p1`, :func:`nominal_observations`, :func:`grade_noise`
+:func:`predict_p1`, :func:`nominal_observations` (the grade's noise:
+:func:`~imucalib.procedures.common.grade.grade_noise`)
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names, triad_parameter_unit
 from imucalib.plan.budget import MIN_SETTLE_PHASE_S, estimate_plan_recording
 from imucalib.plan.schema import PositionStep, RateStep, StaticStep
+from imucalib.procedures.common.grade import grade_noise, plan_grade
 from imucalib.procedures.common.prediction import PredictedParameter, Prediction, PredictionGroup
 from imucalib.procedures.common.reference import rate_inputs_b, site_vectors, static_inputs_b
 from imucalib.procedures.p1.fit import (
@@ -60,7 +62,7 @@ from imucalib.procedures.p1.windows import P1Observations, WindowObservation
 if TYPE_CHECKING:
     from imucalib.plan.schema import Plan
 
-__all__ = ["grade_noise", "nominal_observations", "predict_p1", "predict_p1_covariance"]
+__all__ = ["nominal_observations", "predict_p1", "predict_p1_covariance"]
 
 #: The axes of P1's dual-axis table (outer first), as the twin's and a P1 recording's.
 TABLE_AXES = ("pitch", "roll")
@@ -70,38 +72,6 @@ DEFAULT_LATITUDE_DEG = 45.0
 _ROLE_TAGS = {P1_ACCEL_POSITION: "six-position", P1_GYRO_BIAS: "gyro-bias",
               P1_GYRO_RATE: "rate"}
 _Z3 = np.zeros(3)
-
-
-def _grade(plan: Plan) -> str:
-    """Return the unit's grade: the plan's ``[imu]``, else its twin's IMU."""
-    if plan.imu.grade:
-        return plan.imu.grade
-    if plan.twin is not None and plan.twin.imus:
-        return plan.twin.imus[0].grade
-    raise ConfigurationError(f"plan {plan.name!r} states no IMU grade ([imu] grade or a twin "
-                             "IMU): the prediction needs the unit's noise model")
-
-
-def grade_noise(plan: Plan) -> dict[str, NoiseModel]:
-    """Return the noise models ``{"accel", "gyro"}`` of the plan's unit grade.
-
-    The coefficients :func:`~imucalib.models.imu.sample_imu_model` gives a unit of the grade
-    (white noise, bias instability, the gyro's rate random walk; the draw does not change them),
-    white terms only when the plan's twin IMU has ``noise = "white"``.
-
-    Raises
-    ------
-    ConfigurationError
-        The plan states no grade, or an unknown one.
-    """
-    from imucalib.models.imu import sample_imu_model
-
-    model = sample_imu_model(_grade(plan), 0, nonlinear=False)
-    white = plan.twin is not None and bool(plan.twin.imus) and plan.twin.imus[0].noise == "white"
-    out = {"accel": model.accel_noise, "gyro": model.gyro_noise}
-    if white:
-        out = {k: NoiseModel(white_density=v.white_density) for k, v in out.items()}
-    return out
 
 
 def _window(step_index: int, kind: str, role: str, tags: tuple[str, ...], label: str,
@@ -219,7 +189,8 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
     plan : Plan
         A P1 plan.
     noise : mapping of str to NoiseModel, optional
-        ``{"accel": …, "gyro": …}``; the grade's (:func:`grade_noise`) when omitted.
+        ``{"accel": …, "gyro": …}``; when omitted, the grade's
+        (:func:`~imucalib.procedures.common.grade.grade_noise`).
 
     Returns
     -------
@@ -274,7 +245,7 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
     params = tuple(PredictedParameter(n, v, triad_parameter_unit(n)) for n, v in std.items())
     kinds = ", ".join(f"{k}: {_describe(m)}" for k, m in sorted(models.items()))
     notes = [
-        f"noise model ({'given' if noise is not None else 'grade ' + _grade(plan)}): {kinds}; "
+        f"noise model ({'given' if noise is not None else 'grade ' + plan_grade(plan)}): {kinds}; "
         "window means correlated by flicker and random walk (Eq. (TD.2))",
         f"gyro G {'held in by rule' if g_term else 'not in'}; "
         "the accelerometer's K2 and the model choice's uncertainty (TS.4) are not predicted",

@@ -25,6 +25,7 @@ from imucalib.procedures.rate_transfer.roles import ROLES
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
+    from imucalib.procedures.common.prediction import Prediction
     from imucalib.procedures.rate_transfer.analysis import RateTransferResult
 
 __all__ = ["PROCEDURE", "RateTransferProcedure"]
@@ -49,6 +50,15 @@ class RateTransferProcedure(ProcedureDefaults):
         from imucalib.procedures.rate_transfer.plan import generate_rate_transfer_plan
 
         return generate_rate_transfer_plan(**options)
+
+    def predict(self, plan: Plan) -> Prediction:
+        """Return :func:`~imucalib.procedures.rate_transfer.predict.predict_rate_transfer`.
+
+        The Predicting capability (``imucalib plan show PLAN --predict``).
+        """
+        from imucalib.procedures.rate_transfer.predict import predict_rate_transfer
+
+        return predict_rate_transfer(plan)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
                 unit: str | None = None, options: Mapping[str, Any] | None = None,
