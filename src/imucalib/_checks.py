@@ -42,7 +42,7 @@ def as_array(value: ArrayLike, name: str, *, shape: tuple[int | None, ...] | Non
         if not ok:
             want_txt = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
             raise InvalidInputError(f"`{name}` must have shape {want_txt}; got {arr.shape}")
-    if not allow_nan and not np.all(np.isfinite(arr)):
+    if not allow_nan and not np.isfinite(arr).all():
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise InvalidInputError(f"`{name}` must be finite; got {bad} NaN or infinite value(s)")
     return arr

@@ -255,11 +255,8 @@ def solve_weighted_lsq(
     >>> sol.fit_quality.misfit, sol.dof
     (False, 1)
     """
-    A0 = as_design(H, "H")
+    A0, y, names, whitener, known = _checked(H, z, param_names, weights, covariance, sigma)
     m, p = A0.shape
-    names = as_names(param_names, p)
-    y = as_array(z, "z", shape=(m,))
-    whitener, known = make_whitener(m, weights=weights, covariance=covariance, sigma=sigma)
     scale = (not known) if scale_covariance is None else bool(scale_covariance)
     dof = m - p
     if scale and not known and dof <= 0:
@@ -286,6 +283,91 @@ def solve_weighted_lsq(
         condition_number=report.condition_number, rank=report.rank, observability=report,
         noise_known=known, gain=k, **stats,
     )
+
+
+def _checked(H: ArrayLike, z: ArrayLike, param_names: Sequence[str], weights: ArrayLike | None,
+             covariance: ArrayLike | None, sigma: ArrayLike | None
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[str, ...], Whitener, bool]:
+    """Check the arguments of :func:`solve_weighted_lsq`: design, observations, names, noise."""
+    A0 = as_design(H, "H")
+    m, p = A0.shape
+    names = as_names(param_names, p)
+    y = as_array(z, "z", shape=(m,))
+    whitener, known = make_whitener(m, weights=weights, covariance=covariance, sigma=sigma)
+    return A0, y, names, whitener, known
+
+
+@dataclass(frozen=True, eq=False)
+class _KnownFit:
+    """What the internal core :func:`_solve_known` returns: Eqs. (1)–(3) and, asked, K."""
+
+    estimate: NDArray[np.float64]
+    covariance_noise: NDArray[np.float64]
+    chi2: float
+    dof: int
+    gain: NDArray[np.float64] | None
+
+
+def _solve_known(A0: NDArray[np.float64], y: NDArray[np.float64], whitener: Whitener,
+                 names: tuple[str, ...], *, cond_limit: float = DEFAULT_COND_LIMIT,
+                 context: str = "design matrix H", advice: str | None = None,
+                 gain: bool = False, yw: NDArray[np.float64] | None = None) -> _KnownFit:
+    """Solve as :func:`solve_weighted_lsq` does, for arguments :func:`_checked` accepts.
+
+    The same operations as :func:`solve_weighted_lsq` with known noise and the noise-only
+    covariance (``scale_covariance`` False), so the same bits for x̂ (Eq. (1)), Σ_x (Eq. (2)),
+    χ² (Eq. (3)) and K, and the same :class:`~imucalib.errors.InsufficientExcitationError` for
+    an unobservable design; what a caller of this path does not read (the observability
+    report of an observable design, the normalised residuals, the Birge-scaled covariance, the
+    :class:`FitQuality`) is not made. `A0` (m, p) and `y` (m,) finite float64, `names` of p
+    distinct strings, `whitener` from :func:`make_whitener`; `yw` = W·y when the caller has it.
+    """
+    m, p = A0.shape
+    A = whitener.whiten(A0)
+    if yw is None:
+        yw = whitener.whiten(y)
+    U, s, vt, norms = _factorise_checked(A, names, cond_limit, context, advice)
+    x_hat = (vt.T @ ((U.T @ yw) / s)) / norms  # Eq. (1)
+    r = y - A0 @ x_hat  # Eq. (3)
+    rw = whitener.whiten(r)
+    k = whitener.whiten_transpose((U / s) @ vt / norms).T if gain else None
+    return _KnownFit(estimate=x_hat, covariance_noise=_covariance(s, vt, norms),
+                          chi2=float(rw @ rw), dof=m - p, gain=k)
+
+
+
+def _factorise_checked(A: NDArray[np.float64], names: tuple[str, ...], cond_limit: float,
+                       context: str, advice: str | None
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                  NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`_factorise` and the observability check, the report made only when it fails.
+
+    The check is :meth:`ObservabilityReport.is_observable` of :func:`report_from_svd`'s
+    report (the same rank tolerance and condition number); a design that fails it gets that
+    report and its error.
+    """
+    m, p = A.shape
+    if m >= p:
+        norms = np.sqrt(np.einsum("ij,ij->j", A, A))
+        U, s, vt = _scaled_svd_factors(A, np.where(norms > 0.0, norms, 1.0))
+        s1 = float(s[0])
+        if s1 > 0:
+            rank = int(np.count_nonzero(s > max(m, p) * _EPS * s1))
+            if rank == p and s1 / float(s[-1]) <= cond_limit:
+                return U, s, vt, norms
+    U, s, vt, report = _factorise(A, names, cond_limit)
+    report.raise_if_unobservable(context, advice)
+    return U, s, vt, report.column_norms
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+def _covariance(s: NDArray[np.float64], vt: NDArray[np.float64], norms: NDArray[np.float64]
+                ) -> NDArray[np.float64]:
+    """Σ_x of Eq. (2), symmetrised, from the SVD of the column-scaled whitened design."""
+    cov = (vt.T / s**2) @ vt / np.outer(norms, norms)
+    return 0.5 * (cov + cov.T)
 
 
 def _factorise(A: NDArray[np.float64], names: tuple[str, ...], cond_limit: float
@@ -324,8 +406,7 @@ def _fit_statistics(U: NDArray[np.float64], s: NDArray[np.float64], vt: NDArray[
     noise is as given and (6)–(7) decide on a misfit. `scale`: report the scaled covariance.
     Returns the :class:`LsqStatistics` fields that depend on the noise, by name.
     """
-    cov = (vt.T / s**2) @ vt / np.outer(norms, norms)  # Eq. (2)
-    cov = 0.5 * (cov + cov.T)
+    cov = _covariance(s, vt, norms)  # Eq. (2)
     rw = whitener.whiten(r)
     chi2 = float(rw @ rw)  # Eq. (3)
     var_factor = chi2 / dof if dof > 0 else float("nan")  # Eq. (4)

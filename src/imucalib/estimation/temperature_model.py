@@ -68,7 +68,8 @@ from scipy import stats
 
 from imucalib._checks import as_array, check_finite_scalar
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
-from imucalib.estimation.linear import solve_weighted_lsq
+from imucalib.estimation._common import Whitener, make_whitener
+from imucalib.estimation.linear import _solve_known, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = [
@@ -246,7 +247,9 @@ def _cholesky(covariance: ArrayLike, n: int, name: str = "covariance") -> NDArra
         cov = np.diag(cov)
     if cov.shape != (n, n):
         raise InvalidInputError(f"`{name}` must have shape ({n}, {n}); got {cov.shape}")
-    if not np.allclose(cov, cov.T, rtol=1e-10, atol=0.0):
+    # np.allclose(cov, cov.T, rtol=1e-10, atol=0) for the finite values as_array passes,
+    # without its general-case machinery
+    if not (np.abs(cov - cov.T) <= 1e-10 * np.abs(cov.T)).all():
         raise InvalidInputError(f"`{name}` must be symmetric")
     try:
         return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
@@ -287,12 +290,22 @@ def _unscale(order: int, has_rate: bool, has_leg: bool, sc: _Scaling) -> NDArray
     return np.array(factors)
 
 
-def _gls(a: NDArray[np.float64], p: NDArray[np.float64], cov: NDArray[np.float64]
+def _gls(a: NDArray[np.float64], p: NDArray[np.float64], cov: NDArray[np.float64],
+         noise: tuple[Whitener, NDArray[np.float64]] | None = None
          ) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None:
-    """β̂, C_β, χ² of Eqs. (2)–(3) by the one solver; None when the design is singular."""
+    """β̂, C_β, χ² of Eqs. (2)–(3) by the one solver; None when the design is singular.
+
+    `noise`: the whitening of `cov` and W·p, which :func:`fit_temperature_model` makes once for
+    all its orders (:func:`make_whitener` of `cov`, as the solver's own checks would); then a
+    finite design goes through the solver's core without the checks it has passed.
+    """
+    names = tuple(f"beta_{j}" for j in range(a.shape[1]))
     try:
+        if noise is not None and np.isfinite(a).all():
+            core = _solve_known(a, p, noise[0], names, cond_limit=_COND_LIMIT, yw=noise[1])
+            return core.estimate, core.covariance_noise, core.chi2
         fit = solve_weighted_lsq(a, p, covariance=cov, cond_limit=_COND_LIMIT,
-                                 param_names=[f"beta_{j}" for j in range(a.shape[1])])
+                                 param_names=names)
     except InsufficientExcitationError:
         return None
     return fit.estimate, fit.covariance_noise, fit.chi2
@@ -440,9 +453,13 @@ def fit_temperature_model(
     fits: dict[int, tuple[NDArray[np.float64], NDArray[np.float64], float]] = {}
     aicc: dict[int, float] = {}
     cv: dict[int, float] = {}
+    noise: tuple[Whitener, NDArray[np.float64]] | None = None  # C's whitening, made once
     for m in orders:
         a = _design(temp, rate, legs, m, sc)
-        fit = _gls(a, p, cov)
+        if noise is None and np.isfinite(a).all():
+            whitener = make_whitener(k, covariance=cov)[0]
+            noise = (whitener, whitener.whiten(p))
+        fit = _gls(a, p, cov, noise)
         if fit is None:
             if order is not None or m == 0:
                 raise _order_error(m, temp, n_extra,
@@ -533,10 +550,15 @@ def gls_weights(fit: TemperatureModelFit, temperature_degc: ArrayLike, variances
     if np.any(var <= 0):
         raise InvalidInputError("`variances` must be positive")
     a = _model_design(fit.model, temp, temperature_rate_degc_ps, leg)
-    gls = solve_weighted_lsq(a, np.zeros(temp.size), covariance=var, gain=True,
-                             param_names=[f"beta_{j}" for j in range(a.shape[1])])
-    assert gls.gain is not None  # asked for
-    return np.array(gls.gain)  # K of Eq. (1) of estimation.linear
+    names = tuple(f"beta_{j}" for j in range(a.shape[1]))
+    if np.isfinite(a).all():  # the solver's checks passed (V's as make_whitener's): its core
+        gain = _solve_known(a, np.zeros(temp.size), Whitener(np.sqrt(var), None), names,
+                            gain=True).gain
+    else:
+        gain = solve_weighted_lsq(a, np.zeros(temp.size), covariance=var, gain=True,
+                                  param_names=names).gain
+    assert gain is not None  # asked for
+    return np.array(gain)  # K of Eq. (1) of estimation.linear
 
 
 def _coefficient_vector(model: TemperaturePolynomial) -> NDArray[np.float64]:

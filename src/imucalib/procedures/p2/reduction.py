@@ -13,7 +13,8 @@ equation):
   (the framework's design, :func:`~imucalib.estimation.designs.build_design`), the
   accelerometer by Gauss–Newton because the centripetal term multiplies the scale matrix,
   Eq. (P2.10), with χ²/ν and the Birge scaling of a misfit; every linear (and Gauss–Newton)
-  step is solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
+  step is solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq` (its checks and
+  core).
 
 Model (docs/p2.md, Eqs. (P2.1)–(P2.3)); u_o the body-frame up vector of orientation o (a
 signed unit axis), ω the table rate, Ω_U the vertical Earth rate, g local gravity, r the IMU's
@@ -48,7 +49,7 @@ from numpy.typing import NDArray
 from imucalib.conventions import AXES
 from imucalib.errors import InvalidInputError
 from imucalib.estimation.designs import build_design
-from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
+from imucalib.estimation.linear import _checked, _solve_known
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = [
@@ -344,13 +345,27 @@ def closed_form(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
 # the least squares
 
 
-def _solve(h: _F64, z: _F64, se: _F64, names: Sequence[str], what: str, group: str
-           ) -> LsqSolution:
-    """Weighted LSQ z = H·θ by the one solver, refusing a rank-deficient design (named)."""
-    return solve_weighted_lsq(h, z, param_names=names, sigma=se, group=group,
-                              context=f"{what} design",
-                              advice="the six orientations and both turning directions are "
-                                     "needed")
+@dataclass(frozen=True)
+class _Step:
+    """What the fits here read of a solution: x̂, its noise-only Σ_x and the FitQuality."""
+
+    estimate: _F64
+    covariance_noise: _F64
+    fit_quality: FitQuality
+
+
+def _solve(h: _F64, z: _F64, se: _F64, names: Sequence[str], what: str, group: str) -> _Step:
+    """Weighted LSQ z = H·θ by the one solver, refusing a rank-deficient design (named).
+
+    :func:`~imucalib.estimation.linear.solve_weighted_lsq`'s checks and core (the same
+    errors and bits), without the parts of its solution no fit here reads (the normalised
+    residuals, the Birge-scaled covariance, the observability report of a good design).
+    """
+    a0, y, names_t, whitener, _ = _checked(h, z, names, None, None, se)
+    core = _solve_known(a0, y, whitener, names_t, context=f"{what} design",
+                        advice="the six orientations and both turning directions are needed")
+    return _Step(estimate=core.estimate, covariance_noise=core.covariance_noise,
+                 fit_quality=assess_fit(group, core.chi2, core.dof))
 
 
 def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate",
