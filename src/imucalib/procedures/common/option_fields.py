@@ -11,7 +11,8 @@ Contents
 :func:`seed_field`, :func:`latitude_field`, :func:`twin_noise_field`, :func:`errors_field`,
 :func:`twin_field`, :func:`plan_name_field`, :func:`record_field`, :func:`settle_field`,
 :func:`warm_up_field`, :func:`gravity_field`, :func:`noise_block_field`,
-:func:`max_lost_fraction_field`, :func:`max_gap_field`
+:func:`max_lost_fraction_field`, :func:`max_gap_field`, :data:`TermCriterion`,
+:func:`terms_field`, :func:`term_criterion_field`, :func:`term_level_field`
 """
 
 from __future__ import annotations
@@ -27,15 +28,18 @@ from imucalib.plan.bounds import (
 )
 from imucalib.procedures.common.options import option
 
-__all__ = ["Grade", "TwinNoise", "errors_field", "grade_field", "gravity_field",
+__all__ = ["Grade", "TermCriterion", "TwinNoise", "errors_field", "grade_field", "gravity_field",
            "latitude_field", "max_gap_field", "max_lost_fraction_field", "noise_block_field",
            "plan_name_field", "record_field", "sample_rate_field", "seed_field", "settle_field",
-           "twin_field", "twin_noise_field", "warm_up_field"]
+           "term_criterion_field", "term_level_field", "terms_field", "twin_field",
+           "twin_noise_field", "warm_up_field"]
 
 #: The IMU grades a plan accepts.
 Grade = Literal["consumer", "tactical", "navigation"]
 #: The twin IMU's noise: the grade's full model, or white noise only.
 TwinNoise = Literal["grade", "white"]
+#: How the data choose a fit's optional model terms (estimation/term_selection.py).
+TermCriterion = Literal["lrt", "aicc", "bic"]
 
 _TWIN_EDIT = "edit the plan's [twin] table instead"
 
@@ -127,3 +131,23 @@ def max_gap_field(default: float) -> Any:
     """Return the rate windows' ``max_gap_s`` field [s]."""
     return option(default, help="The longest single dropout in a window.", unit="s", min=0.0,
                   group="timing")
+
+
+def terms_field(help: str) -> Any:
+    """Return a ``terms`` field: model terms forced in or out (``"+k2,-g"``).
+
+    `help` names the procedure's terms; the others are chosen by the data
+    (:func:`~imucalib.estimation.term_selection.choose_terms`).
+    """
+    return option("", help=help)
+
+
+def term_criterion_field(doc: str) -> Any:
+    """Return the ``term_criterion`` field (default: the likelihood-ratio test; `doc` the page)."""
+    return option("lrt", help="How the data choose the terms: a likelihood-ratio test at "
+                              f"term_level, AICc or BIC ({doc}, \"Model terms\").")
+
+
+def term_level_field() -> Any:
+    """Return the ``term_level`` field: α of the likelihood-ratio test (default 5 %)."""
+    return option(0.05, help="The likelihood-ratio test's level α.", min=1e-9, max=0.5)

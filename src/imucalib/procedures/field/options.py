@@ -18,6 +18,7 @@ from imucalib.io.import_spec import ImportSpec
 from imucalib.plan.bounds import MAX_RECORD_S, MAX_STEPS
 from imucalib.procedures.common.option_fields import (
     Grade,
+    TermCriterion,
     grade_field,
     gravity_field,
     latitude_field,
@@ -25,6 +26,9 @@ from imucalib.procedures.common.option_fields import (
     plan_name_field,
     sample_rate_field,
     seed_field,
+    term_criterion_field,
+    term_level_field,
+    terms_field,
 )
 from imucalib.procedures.common.options import option
 
@@ -79,14 +83,11 @@ class FieldAnalysisOptions:
     gyro_g_sensitivity: Literal["auto", "yes", "no"] = option(
         "auto", help="Fit the gyro's g-sensitivity G from the static poses (auto: with six "
                      "poses or more, by term_criterion).")
-    terms: str = option(
-        "", help="Model terms forced in or out, e.g. +k2,-drift,+g (k2, k3, drift, g, temp); "
-                 "overrides accel_k2, accel_drift, accel_temperature and gyro_g_sensitivity.")
-    term_criterion: Literal["lrt", "aicc", "bic"] = option(
-        "lrt", help="How the data choose the auto terms: a likelihood-ratio test at "
-                    "term_level, AICc or BIC (docs/field.md, \"Model terms\").")
-    term_level: float = option(0.05, help="The likelihood-ratio test's level α.", min=1e-9,
-                               max=0.5)
+    terms: str = terms_field(
+        "Model terms forced in or out, e.g. +k2,-drift,+g (k2, k3, drift, g, temp); overrides "
+        "accel_k2, accel_drift, accel_temperature and gyro_g_sensitivity.")
+    term_criterion: TermCriterion = term_criterion_field("docs/field.md")
+    term_level: float = term_level_field()
     gravity_mps2: float | None = gravity_field(
         help="Local gravity (default: normal gravity at the latitude).")
     gravity_std_mps2: float | None = option(

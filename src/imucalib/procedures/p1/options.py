@@ -22,12 +22,16 @@ from imucalib.plan.bounds import (
     MAX_TABLE_RATE_DPS,
 )
 from imucalib.procedures.common.option_fields import (
+    TermCriterion,
     latitude_field,
     plan_name_field,
     record_field,
     sample_rate_field,
     seed_field,
     settle_field,
+    term_criterion_field,
+    term_level_field,
+    terms_field,
     warm_up_field,
 )
 from imucalib.procedures.common.options import option
@@ -89,12 +93,9 @@ class P1AnalysisOptions:
         "triad", help="The model fitted: the full triad model or the procedure's per-axis one.")
     workers: int = option(1, help="Local processes the windows are reduced in (1: this one); "
                                   "the result is the same.", min=1)
-    terms: str = option(
-        "", help="Model terms forced in or out, e.g. +k2,-g (k2: the accelerometer's quadratic "
-                 "scale factor; g: the gyro's g-sensitivity); the others are chosen by the "
-                 "data (docs/p1.md, \"Model terms\").")
-    term_criterion: Literal["lrt", "aicc", "bic"] = option(
-        "lrt", help="How the data choose the terms: a likelihood-ratio test at term_level, "
-                    "AICc or BIC (docs/p1.md, \"Model terms\").")
-    term_level: float = option(0.05, help="The likelihood-ratio test's level α.", min=1e-9,
-                               max=0.5)
+    terms: str = terms_field(
+        "Model terms forced in or out, e.g. +k2,-g (k2: the accelerometer's quadratic scale "
+        "factor; g: the gyro's g-sensitivity); the others are chosen by the data (docs/p1.md, "
+        "\"Model terms\").")
+    term_criterion: TermCriterion = term_criterion_field("docs/p1.md")
+    term_level: float = term_level_field()
