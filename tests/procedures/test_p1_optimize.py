@@ -26,12 +26,19 @@ def targets():
     return default_targets()
 
 
+#: Statics from 120 s, the shortest the analysis accepts: predicted well, but their calibrations
+#: under-report the biases' σ (docs/test-design.md, "Truth on the twin"); the search's
+#: mechanics are tested on them, the default keeps the procedure's 60 min.
+SHORT_STATIC_S = 120.0
+
+
 @pytest.fixture(scope="module")
 def least_time(targets):
-    return optimize_p1(targets=targets, settings=OptimizeSettings.coarse())
+    return optimize_p1(targets=targets,
+                       settings=OptimizeSettings.coarse(min_static_s=SHORT_STATIC_S))
 
 
-def test_default_targets_met_in_far_less_time(least_time, targets):
+def test_default_targets_met_in_far_less_time_with_short_statics(least_time, targets):
     best, ref = least_time.best, least_time.reference
     assert ref.station_time_s == pytest.approx(DEFAULT_H * 3600, rel=0.01)
     sigma = best.prediction.std()
@@ -43,10 +50,22 @@ def test_default_targets_met_in_far_less_time(least_time, targets):
     assert best.plan.steps and any("verification" in s.tags for s in best.plan.steps)
 
 
+def test_with_the_procedures_60_min_static_no_shorter_plan_meets_the_default(targets):
+    """The default margin: the optimiser keeps the static the noise model needs, and then
+    the default plan is already the shortest meeting its own σ (docs/test-design.md)."""
+    assert OptimizeSettings().min_static_s == 3600.0
+    result = optimize_p1(targets=targets, settings=OptimizeSettings.coarse())
+    assert result.best.design.static_s >= 3600.0
+    assert result.best.station_time_s == pytest.approx(result.reference.station_time_s,
+                                                       rel=0.01)
+    assert result.best.worst_ratio <= 1.0 + 1e-6
+
+
 def test_within_the_default_time_every_sigma_is_better(targets):
     budget = DEFAULT_H * 3600
     result = optimize_p1(targets=targets,
-                         settings=OptimizeSettings.coarse(time_budget_s=budget))
+                         settings=OptimizeSettings.coarse(time_budget_s=budget,
+                                                          min_static_s=SHORT_STATIC_S))
     assert result.best.station_time_s <= budget
     assert result.best.worst_ratio < 1.0
 
@@ -54,6 +73,7 @@ def test_within_the_default_time_every_sigma_is_better(targets):
 @pytest.mark.parametrize("criterion", ["D", "A"])
 def test_d_and_a_criteria_within_a_budget(targets, criterion):
     settings = OptimizeSettings.coarse(criterion=criterion, time_budget_s=3.0 * 3600,
+                                       min_static_s=SHORT_STATIC_S,
                                        max_repetitions=3, revolutions_grid=(3,),
                                        rate_magnitudes_dps=(50.0, 100.0))
     result = optimize_p1(targets=targets, settings=settings)

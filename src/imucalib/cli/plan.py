@@ -318,8 +318,9 @@ def optimize(
     min_repetitions: Annotated[int, typer.Option(
         "--min-repetitions", help="Margin: complete calibrations kept (repeatability).")] = 2,
     min_static: Annotated[float, typer.Option(
-        "--min-static", help="Margin: the least level static record [s] (3600: the "
-                             "procedure's 60 min).")] = 120.0,
+        "--min-static", help="Margin: the least level static record [s] (the procedure's "
+                             "60 min; shorter ones leave the biases' σ under-reported, "
+                             "docs/test-design.md).")] = 3600.0,
     min_dof: Annotated[int, typer.Option(
         "--min-dof", help="Margin: least lack-of-fit ν of each triad's fit.")] = 6,
     coarse: Annotated[bool, typer.Option("--coarse", help="A small search grid (quick).")]

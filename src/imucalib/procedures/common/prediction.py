@@ -223,7 +223,7 @@ class OptimizeRequest:
     criterion: str = "targets"
     grade: str = "tactical"
     min_repetitions: int = 2
-    min_static_s: float = 120.0
+    min_static_s: float = 3600.0
     min_lack_of_fit_dof: int = 6
     coarse: bool = False
 

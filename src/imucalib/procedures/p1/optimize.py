@@ -111,9 +111,13 @@ class OptimizeSettings:
     max_repetitions : int
         The largest number of repetitions tried.
     min_static_s, max_static_s : float
-        The static record's range. The least (120 s) is the shortest record the analysis
-        fits its noise model to; the procedure's own ≥ 60 min is a dwell rule the σ targets
-        replace (``min_static_s=3600`` restores it). [s]
+        The static record's range. The least is by default the procedure's 60 min
+        (docs/p1.md, step 2): the analysis fits the noise model of every window mean's σ to it,
+        and a record of minutes cannot show the flicker floor, so the calibration of a plan
+        with a short static under-reports the biases' σ (×0.13 accelerometer, ×0.21 gyro of
+        their Monte-Carlo spread on the twin at 120 s; docs/test-design.md, "Truth on the
+        twin"). 120 s is the shortest the analysis accepts; a plan that short is predicted
+        well but not calibrated honestly. [s]
     static_tolerance_s : float
         The 1-D search's resolution on the static record. [s]
     min_lack_of_fit_dof : int
@@ -132,7 +136,7 @@ class OptimizeSettings:
     time_budget_s: float | None = None
     min_repetitions: int = 2
     max_repetitions: int = 6
-    min_static_s: float = 120.0
+    min_static_s: float = 3600.0
     max_static_s: float = 3600.0
     static_tolerance_s: float = 30.0
     min_lack_of_fit_dof: int = 6
