@@ -271,12 +271,9 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
              *(DRIFT_PARAMETERS if drift else ()),
              *(TEMPERATURE_PARAMETERS if dtemp is not None else ())]
 
-    forces: list[_F64] = []
-
-    def linearised(p: _F64, check: bool) -> tuple[LsqSolution, _F64, _F64]:
-        """Solve the Gauss–Newton step at p by the one solver: (step solution, r, σ_r)."""
+    def linearised(p: _F64, check: bool) -> tuple[LsqSolution, _F64, _F64, _F64]:
+        """Solve the Gauss–Newton step at p by the one solver: (step solution, r, σ_r, a)."""
         a, j = evaluate(p)
-        forces[:] = [a]
         u = a / np.linalg.norm(a, axis=1, keepdims=True)
         sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
         r = np.linalg.norm(a, axis=1) - gravity_mps2
@@ -285,7 +282,7 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
         return solve_weighted_lsq(
             j, -r, sigma=sr, param_names=names, context="gravity-norm Jacobian",
             advice="poses along the axes alone cannot see the non-orthogonality; add tilted "
-                   "poses, or use the six-position form for a fixture's faces"), r, sr
+                   "poses, or use the six-position form for a fixture's faces"), r, sr, a
 
     p = np.zeros(m)
     for it in range(1, max_iter + 1):
@@ -296,12 +293,12 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
     else:
         raise ConvergenceError(f"the gravity-norm fit did not converge in {max_iter} "
                                "iterations")
-    at_solution, r, sr = linearised(p, True)     # checked at the solution too: axis poses
+    at_solution, r, sr, forces = linearised(p, True)  # checked at the solution too: axis poses
     cov = at_solution.covariance_noise
     quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - m)
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
                           covariance_noise=cov, quality=quality, residuals=r, iterations=it,
-                          forces=forces[0])
+                          forces=forces)
 
 
 def k3_separation(y: ArrayLike, y_std: ArrayLike, theta: ArrayLike) -> float:

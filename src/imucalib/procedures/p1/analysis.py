@@ -40,7 +40,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Literal
+from types import MappingProxyType
+from typing import Any, Final, Literal
 
 import numpy as np
 
@@ -343,23 +344,16 @@ def _acceptance(obs: P1Observations, opt: P1Options) -> tuple[str, float]:
             opt.guard_band_k if opt.guard_band_k is not None else stated.guard_band_k)
 
 
-#: Why the gyro's G is in the model by rule (:func:`_ruled_terms`), said after the choice's note.
+#: Terms held in by rule, not chosen by the data (docs/p1.md, "Model terms"): the gyro's G,
+#: always — P1's plan is made to determine it, a specification that limits it needs its estimate
+#: (a tactical unit's 1 °/h/g is near what the windows resolve, so the data would often leave it
+#: out and the limit go unchecked), and a rule that depended on the plan's limits would give a
+#: recording analysed without its plan (a CSV with a step file, a v1 file) another model.
+RULED_TERMS: Final = MappingProxyType({"g": True})
+#: Why the gyro's G is in the model by rule (:data:`RULED_TERMS`), said after the choice's note.
 _G_RULE_NOTE = (" — G by rule: P1's rate points and statics are planned to determine it, the "
                 "specification's check needs its estimate, and a recording calibrates to the "
                 "same model with or without its plan (terms=-g forces it out)")
-
-
-def _ruled_terms(spec: ImuSpecConfig | None = None) -> dict[str, bool]:
-    """Terms held in by rule, not chosen by the data (docs/p1.md, "Model terms").
-
-    The gyro's G, always: P1's plan is made to determine it, a specification that limits it
-    needs its estimate (a tactical unit's 1 °/h/g is near what the windows resolve, so the
-    data would often leave it out and the limit go unchecked), and a rule that depended on
-    the plan's limits would give a recording analysed without its plan (a CSV with a step
-    file, a v1 file) another model than with it. `spec` is accepted for the callers that
-    pass it; the rule does not depend on it.
-    """
-    return {"g": True}
 
 
 def _specification_rows(result: CalibrationResult, obs: P1Observations, spec: ImuSpecConfig
@@ -485,7 +479,7 @@ def analyze_p1_observations(obs: P1Observations, options: P1Options | None = Non
     spec = _imu_spec(obs)
     fit = fit_p1(obs, model=opt.model, g_sensitivity=forced.get("g"), k2=forced.get("k2"),
                  correlated=opt.correlated, criterion=opt.term_criterion,
-                 level=opt.term_level, ruled=_ruled_terms(spec))
+                 level=opt.term_level, ruled=RULED_TERMS)
     accel_w = fit.accel.windows
     gyro_w = list(fit.gyro.windows)
     accel_groups = _residual_groups(fit, list(accel_w), "accel")

@@ -221,14 +221,14 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
     ConfigurationError
         As :func:`predict_p1`.
     """
-    # the analysis's own rules, reused: G held in by the specification, the Type B of (TD.4)
-    from imucalib.procedures.p1.analysis import P1Options, _add_type_b, _ruled_terms
+    # the analysis's own rules, reused: G held in by rule, the Type B of (TD.4)
+    from imucalib.procedures.p1.analysis import RULED_TERMS, P1Options, _add_type_b
 
     if plan.procedure and plan.procedure != "p1":
         raise ConfigurationError(f"plan {plan.name!r} is a {plan.procedure} plan, not a p1 plan")
     models = dict(noise) if noise is not None else grade_noise(plan)
     obs = nominal_observations(plan, models)
-    g_term = bool(_ruled_terms(plan.imu).get("g"))
+    g_term = bool(RULED_TERMS.get("g"))
     accel_w = obs.select(kind="static", role="calibration", tag="six-position")
     gyro_w = gyro_windows(obs, "calibration", None)
     groups, std = [], {}
