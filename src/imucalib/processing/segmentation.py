@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from imucalib import units
 from imucalib._checks import as_array, check_positive
 from imucalib.errors import InvalidInputError
+from imucalib.processing import _variance_kernel
 from imucalib.processing._common import as_time
 
 __all__ = ["SEGMENT_LABELS", "Segment", "SegmentKind", "SegmentationResult", "detect_segments"]
@@ -252,7 +253,7 @@ def detect_segments(
                               static_rate_threshold_rps=rate_thr, window_samples=w)
 
 
-def _moving_mean_and_unsteadiness(x: NDArray[np.float64], w: int
+def _moving_mean_and_unsteadiness(x: NDArray[np.float64], w: int, *, backend: str = "auto"
                                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Centred moving mean (n, 3) and Σ_axes moving variance (n,) over windows of w samples.
 
@@ -260,7 +261,14 @@ def _moving_mean_and_unsteadiness(x: NDArray[np.float64], w: int
     sums are accumulated block-wise: the windows starting in block b (w samples) are summed
     over blocks b and b + 1 after subtracting block b's mean, so no running sum grows beyond 2w
     terms and the variance is exact however large the rate (no cancellation of Σx² − (Σx)²/w).
+    `backend` ``"auto"`` takes the compiled pass (:mod:`._variance_kernel`, the same values
+    bit for bit) when numba is there, ``"numpy"`` the numpy path (n ≥ w).
     """
+    if backend != "numpy" and _variance_kernel.kernel() is not None:
+        zeta, mean = _variance_kernel.moving_variance(x, _block_means(x, w), w,
+                                                      _variance_kernel.SUM)
+        assert mean is not None
+        return mean, zeta
     ref, s1, s2 = _window_moments(x, w)
     n, k = x.shape
     n_start = n - w + 1
@@ -270,10 +278,27 @@ def _moving_mean_and_unsteadiness(x: NDArray[np.float64], w: int
 
 
 def _moving_unsteadiness(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
-    """Return the Σ_axes moving variance of :func:`_moving_mean_and_unsteadiness` alone."""
+    """Return the Σ_axes moving variance of :func:`_moving_mean_and_unsteadiness` alone (numpy).
+
+    The static detector's numpy path, one column at a time (:func:`~imucalib.processing.
+    static_detector._variance_norm`).
+    """
     _, s1, s2 = _window_moments(x, w)
     n = x.shape[0]
     return _variance_sum(s1, s2, n - w + 1)[_window_starts(n, w)]
+
+
+def _block_means(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
+    """Return the block means of :func:`_window_moments` (nb, k), the same numpy reduction.
+
+    The blocks b < nb lie inside the record (nb·w ≤ n), so no padding: the rows are copied to
+    a C-ordered array of the padded one's layout, and reduced over the same (nb, w, k) shape
+    (pairwise for one column, row after row for several), so the means are the same bits.
+    """
+    n, k = x.shape
+    nb = -(-(n - w + 1) // w)
+    blocks = np.ascontiguousarray(x[:nb * w], dtype=np.float64).reshape(nb, w, k)
+    return np.asarray(blocks.mean(axis=1), dtype=np.float64)
 
 
 def _window_moments(x: NDArray[np.float64], w: int
@@ -309,9 +334,13 @@ def _window_starts(n: int, w: int) -> NDArray[np.intp]:
     return np.clip(np.arange(n) - w // 2, 0, n - w)
 
 
-def _runs(labels: NDArray[np.int8]) -> list[tuple[int, int, int]]:
-    """(start, stop, label) of each run of equal labels."""
-    change = np.flatnonzero(np.diff(labels)) + 1
+def _runs(labels: NDArray[np.int8] | NDArray[np.bool_]) -> list[tuple[int, int, int]]:
+    """(start, stop, label) of each run of equal labels (int8, or bool: labels 0 and 1).
+
+    The changes are found on a boolean mask (``np.flatnonzero`` of an int8 difference takes
+    several times as long).
+    """
+    change = np.flatnonzero(labels[1:] != labels[:-1]) + 1
     starts = np.concatenate([[0], change])
     stops = np.concatenate([change, [labels.size]])
     return [(int(a), int(b), int(labels[a])) for a, b in zip(starts, stops, strict=True)]

@@ -51,10 +51,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array, check_positive
 from imucalib.errors import InvalidInputError
+from imucalib.processing import _angle_kernel, _variance_kernel
 from imucalib.processing._common import as_time
 from imucalib.processing.moments import mean_rows
 from imucalib.processing.segmentation import (
     Segment,
+    _block_means,
     _moving_unsteadiness,
     _runs,
 )
@@ -145,8 +147,19 @@ def _edges(n: int, w: int) -> NDArray[np.bool_]:
     return edge
 
 
-def _variance_norm(x: NDArray[np.float64], w: int) -> NDArray[np.float64]:
-    """‖(var_w of each column)‖ over centred windows of w samples."""
+def _variance_norm(x: NDArray[np.float64], w: int, *, backend: str = "auto"
+                   ) -> NDArray[np.float64]:
+    """‖(var_w of each column)‖ over centred windows of w samples (step 1), n ≥ w.
+
+    Each column's variance is :func:`~imucalib.processing.segmentation._moving_unsteadiness`
+    of that column alone (block-wise, exact at any rate). `backend` ``"auto"`` computes all the
+    columns in one compiled pass (:mod:`~imucalib.processing._variance_kernel`; the block means
+    by the same numpy reduction, one column at a time), equal to the ``"numpy"`` path bit for
+    bit (``tests/processing/test_variance_kernel.py``).
+    """
+    if backend != "numpy" and _variance_kernel.kernel() is not None:
+        ref = np.column_stack([_block_means(x[:, i:i + 1], w) for i in range(x.shape[1])])
+        return _variance_kernel.moving_variance(x, ref, w, _variance_kernel.NORM)[0]
     per_axis = [_moving_unsteadiness(x[:, i:i + 1], w) for i in range(x.shape[1])]
     return np.asarray(np.sqrt(np.sum(np.square(per_axis), axis=0)), dtype=np.float64)
 
@@ -262,7 +275,8 @@ def detect_for_thresholds(
             f"the initial static interval (first {t_init:g} s) has zero variance (accelerometer "
             f"{init_a:.3g}, gyro {init_g:.3g}): a constant or clipped signal; the detector needs "
             "the sensor noise")
-    quiet = float(np.percentile(var_a[~_edges(t.size, w)], _QUIET_PERCENTILE))
+    inside = ~_edges(t.size, w)
+    quiet = float(np.percentile(var_a[inside], _QUIET_PERCENTILE))
     if init_a > _NOT_AT_REST * quiet:
         raise InvalidInputError(
             f"the first {t_init:g} s are not at rest: their accelerometer variance "
@@ -272,8 +286,9 @@ def detect_for_thresholds(
     for arr in (var_a, var_g):  # read-only: the detections share the curves
         arr.setflags(write=False)
     means: _Means = {}  # the detections share most of their intervals
-    return [_detect(t, gyro, accel, var_a, var_g, init_a, init_g, w, k, min_static, min_rot,
-                    means) for k in ks]
+    inside.setflags(write=False)
+    return [_detect(t, gyro, accel, var_a, var_g, init_a, init_g, inside, w, k, min_static,
+                    min_rot, means) for k in ks]
 
 
 #: An interval's mean rate and mean specific force, by (start, stop) index.
@@ -298,14 +313,18 @@ def _interval_means(gyro: NDArray[np.float64], accel: NDArray[np.float64], start
 
 def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np.float64],
             var_a: NDArray[np.float64], var_g: NDArray[np.float64], init_a: float,
-            init_g: float, w: int, k: float, min_static: float, min_rot: float,
-            means: _Means) -> StaticDetection:
-    """Detect with one threshold factor k: steps 2–4 of the module docstring."""
+            init_g: float, inside: NDArray[np.bool_], w: int, k: float, min_static: float,
+            min_rot: float, means: _Means) -> StaticDetection:
+    """Detect with one threshold factor k: steps 2–4 of the module docstring.
+
+    `inside` marks the samples whose window lies inside the record (``~_edges(n, w)``).
+    """
     thr_a, thr_g = k * init_a, k * init_g
-    still = (var_a < thr_a) & (var_g < thr_g)
-    still &= ~_edges(t.size, w)
+    still = var_a < thr_a
+    still &= var_g < thr_g
+    still &= inside
     static: list[Segment] = []
-    for start, stop, lab in _runs(still.astype(np.int8)):
+    for start, stop, lab in _runs(still):
         if lab == 0:
             continue
         if t[stop - 1] - t[start] < min_static:
@@ -316,12 +335,11 @@ def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np
                               start_time_s=float(t[start]), end_time_s=float(t[stop - 1]),
                               mean_rate_rps=rate, mean_specific_force_mps2=force))
     rotations: list[Rotation] = []
-    for before, after in itertools.pairwise(static):
-        a, b = before.stop_index - 1, after.start_index + 1
-        bias = 0.5 * (before.mean_rate_rps + after.mean_rate_rps)
-        rate = gyro[a:b] - bias
-        step = np.diff(t[a:b])
-        theta = np.sum(0.5 * (rate[1:] + rate[:-1]) * step[:, None], axis=0)  # trapezoid
+    pairs = list(itertools.pairwise(static))
+    spans = [(before.stop_index - 1, after.start_index + 1) for before, after in pairs]
+    biases = [0.5 * (before.mean_rate_rps + after.mean_rate_rps) for before, after in pairs]
+    for (a, b), bias, theta in zip(spans, biases, _gap_angles(t, gyro, spans, biases),
+                                   strict=True):
         if np.linalg.norm(theta) >= min_rot:
             theta.setflags(write=False)
             bias.setflags(write=False)
@@ -332,3 +350,25 @@ def _detect(t: NDArray[np.float64], gyro: NDArray[np.float64], accel: NDArray[np
     return StaticDetection(static=tuple(static), rotations=tuple(rotations), is_static=still,
                            accel_variance=var_a, gyro_variance=var_g, accel_threshold=thr_a,
                            gyro_threshold=thr_g, threshold_factor=k, window_samples=w)
+
+
+def _gap_angles(t: NDArray[np.float64], gyro: NDArray[np.float64],
+                spans: Sequence[tuple[int, int]], biases: Sequence[NDArray[np.float64]], *,
+                backend: str = "auto") -> list[NDArray[np.float64]]:
+    """θ = ∫(ω − b) dt over each gap's samples a … b − 1 by the trapezoid rule (step 5).
+
+    `backend` ``"auto"`` computes every gap in one compiled call
+    (:func:`~imucalib.processing._angle_kernel.gap_angles`, numpy's operations in its order:
+    the same values bit for bit), ``"numpy"`` one gap at a time.
+    """
+    if backend != "numpy" and spans and _angle_kernel.kernel() is not None:
+        index = np.array(spans, dtype=np.int64)
+        found = _angle_kernel.gap_angles(t, gyro, np.ascontiguousarray(index[:, 0]),
+                                         np.ascontiguousarray(index[:, 1]), np.array(biases))
+        return [row.copy() for row in found]
+    thetas = []
+    for (a, b), bias in zip(spans, biases, strict=True):
+        rate = gyro[a:b] - bias
+        step = np.diff(t[a:b])
+        thetas.append(np.sum(0.5 * (rate[1:] + rate[:-1]) * step[:, None], axis=0))  # trapezoid
+    return thetas

@@ -247,12 +247,19 @@ _TEMPERATURE_SPAN_NOTE_DEGC = 1.0
 
 
 def _pose_temperatures(log: FieldLog, poses: list[StaticPose]) -> _F64 | None:
-    """Each pose's mean temperature, when the log has a finite one for every pose. [°C]"""
+    """Each pose's mean temperature, when the log has a finite one for every pose. [°C]
+
+    A pose's samples are those with start ≤ t ≤ end; the log's time increasing (the detector
+    has checked it), they are the index range that two binary searches find, the same values
+    in the same order as the boolean mask's without two comparisons of the whole log a pose.
+    """
     if log.temperature_degc is None:
         return None
     temps = []
-    for p in poses:
-        t = log.temperature_degc[(log.time_s >= p.start_time_s) & (log.time_s <= p.end_time_s)]
+    first = np.searchsorted(log.time_s, [p.start_time_s for p in poses], side="left")
+    stop = np.searchsorted(log.time_s, [p.end_time_s for p in poses], side="right")
+    for a, b in zip(first, stop, strict=True):
+        t = log.temperature_degc[a:b]
         t = t[np.isfinite(t)]
         if not t.size:          # a pose without a reading: no temperature for the fit
             return None
