@@ -113,3 +113,15 @@ def test_cli_writes_a_p2_plan_with_its_options(tmp_path):
     assert rates == {90.0}
     remounts = [s.remount for s in plan.steps if getattr(s, "remount", None)]
     assert remounts[:6] == ["+z", "-z", "+y", "-y", "+x", "-x"]
+
+
+def test_a_zero_resoak_leaves_the_resoak_out():
+    """resoak_s=0 is the option's minimum: no re-soak after a remount, not an invalid step."""
+    with_resoak = generate_p2_plan(resoak_s=120.0)
+    without = generate_p2_plan(resoak_s=0.0)
+    resoaks = [s for s in with_resoak.steps
+               if isinstance(s, SoakStep) and (s.label or "").startswith("re-soak")]
+    assert resoaks and all(s.stable_for_s == 120.0 for s in resoaks)
+    assert not [s for s in without.steps
+                if isinstance(s, SoakStep) and (s.label or "").startswith("re-soak")]
+    assert len(without.steps) == len(with_resoak.steps) - len(resoaks)

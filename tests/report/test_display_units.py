@@ -38,6 +38,13 @@ G0 = 9.80665
     ("accel_bias_rate_x", 2.0 * G0 * 1e-6, 0.5 * G0 * 1e-6, "m/s^3", ("+2.00", "0.50", "µg/s")),
     ("gyro_bias_rate_x", 1.0e-6, 1.0e-7, "rad/s^2", ("+0.206", "0.021", "(°/h)/s")),
     ("accel_M_zz_tc", 2.2e-4, 7.6e-5, "1/K", ("+220", "76", "ppm/K")),
+    # a temperature model's coefficients (P2's prediction: <name>_c1 … _c3): the base
+    # quantity's display unit per K^j, an off-diagonal M's in ppm/K, not µrad
+    ("accel_M_xy_c1", 2.0e-6, 1.0e-7, "1/K", ("+2.00", "0.10", "ppm/K")),
+    ("accel_M_xy_c2", 2.0e-8, 1.0e-9, "1/K^2", ("+0.0200", "0.0010", "ppm/K^2")),
+    ("accel_bias_x_c1", 2.0 * G0 * 1e-6, 0.5 * G0 * 1e-6, "m/s^2/K", ("+2.00", "0.50",
+                                                                      "µg/K")),
+    ("gyro_bias_x_c1", 1.0e-6, 1.0e-7, "rad/s/K", ("+0.206", "0.021", "(°/h)/K")),
     # a quantity without a display unit stays in SI
     ("latitude_from_gyro_x", 45.123, 0.05, "deg", ("+45.123", "0.050", "deg")),
     ("c", 1.0e-6, 1.0e-7, "m/(rad/s)^2", ("+1.00e-6", "0.10e-6", "m/(rad/s)^2")),

@@ -63,6 +63,21 @@ def _is_misalignment(parts: list[str]) -> bool:
             and parts[2][0] != parts[2][1])
 
 
+#: A unit per kelvin power: a temperature model's coefficient (``m/s^2/K``, ``1/K^2``).
+_PER_KELVIN = re.compile(r"^(?P<base>.+)/K(\^(?P<power>[2-9]))?$")
+
+
+def _per_kelvin(si_unit: str) -> tuple[str, float] | None:
+    """Display unit of a temperature coefficient: its base quantity's, per K^j (same scale)."""
+    m = _PER_KELVIN.match(si_unit)
+    if m is None or m["base"] not in DISPLAY_UNITS:
+        return None
+    text, scale = DISPLAY_UNITS[m["base"]]
+    if "/" in text and not (text.startswith("(") and text.endswith(")")):
+        text = f"({text})"
+    return f"{text}/K" + (f"^{m['power']}" if m["power"] else ""), scale
+
+
 def display_parameter(name: str, value: float, sigma: float, si_unit: str
                       ) -> tuple[str, str, str]:
     """(value, uncertainty, unit) cells of one parameter in its display unit, GUM 7.2.6 rounding.
@@ -91,13 +106,17 @@ def display_unit(name: str, si_unit: str) -> tuple[str, float]:
     quantity keeps its SI unit (scale 1).
     """
     parts = name.split("_")
-    if _is_misalignment(parts):
+    if _is_misalignment(parts) and si_unit in ("", "1"):
+        # a dimensionless one (gyro_M_xy_closed too); its temperature coefficient
+        # (gyro_M_xy_c1, 1/K) is shown by its own unit
         return _OFF_DIAGONAL
     if len(parts) == 3 or (len(parts) >= 2 and si_unit in ("", "1")):
         # a triad parameter's kind is its name's (whatever unit it was given); a longer name
         # with a unit of its own (accel_bias_rate_x in m/s^3) is another quantity
         si_unit = _P1_SI_UNITS.get((parts[0], parts[1]), si_unit)
-    return DISPLAY_UNITS.get(si_unit, (si_unit, 1.0))
+    if si_unit in DISPLAY_UNITS:
+        return DISPLAY_UNITS[si_unit]
+    return _per_kelvin(si_unit) or (si_unit, 1.0)
 
 
 #: The SI unit of each symbol of the triad model (docs/reporting.md).

@@ -16,23 +16,25 @@ Contents
 --------
 :class:`PredictedParameter`, :class:`PredictionGroup`, :class:`Prediction`,
 :class:`Predicting`, :class:`PredictionUnavailableError`, :func:`predict_plan`,
-:class:`OptimizeRequest`, :class:`OptimizedPlan`, :class:`Optimizing`, :func:`optimize_plan`
+:class:`OptimizeRequest`, :class:`OptimizedPlan`, :class:`Optimizing`, :func:`optimize_plan`,
+:func:`parse_target_text`
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
-from imucalib.errors import InvalidInputError
+from imucalib.errors import ConfigurationError, InvalidInputError
 
 if TYPE_CHECKING:
     from imucalib.plan.schema import Plan
 
 __all__ = ["OptimizeRequest", "OptimizedPlan", "Optimizing", "PredictedParameter", "Predicting",
            "Prediction", "PredictionGroup", "PredictionUnavailableError", "optimize_plan",
-           "predict_plan"]
+           "parse_target_text", "predict_plan"]
 
 
 class PredictionUnavailableError(InvalidInputError):
@@ -286,3 +288,38 @@ def optimize_plan(procedure: object, request: OptimizeRequest) -> OptimizedPlan:
         raise PredictionUnavailableError(f"the optimiser is not available for procedure {name} "
                                          "yet")
     return procedure.optimize_plan(request)
+
+
+def parse_target_text(text: str, names: Sequence[str], procedure: str) -> dict[str, float]:
+    """Parse ``--target NAME=σ,…`` (SI, the result's units) into targets for `procedure`.
+
+    A NAME is one of `names` (``gyro_bias_z``) or a prefix of several (``gyro_bias``,
+    ``accel_M``).
+
+    Raises
+    ------
+    ConfigurationError
+        A malformed item, a name that is none of `names` nor a prefix of one, or a σ that is
+        not > 0 (one line).
+    """
+    out: dict[str, float] = {}
+    for item in (t.strip() for t in text.split(",")):
+        if not item:
+            continue
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        try:
+            sigma = float(value)
+        except ValueError:
+            sigma = math.nan
+        if not sep or not sigma > 0 or not math.isfinite(sigma):
+            raise ConfigurationError(f"target {item!r}: write NAME=σ with σ > 0 in SI units "
+                                     "(e.g. gyro_bias=5e-6)")
+        hits = [n for n in names if n == key or n.startswith(key + "_")]
+        if not hits:
+            raise ConfigurationError(f"target {key!r} names no {procedure} parameter (e.g. "
+                                     f"{', '.join(list(names)[:2])})")
+        out.update(dict.fromkeys(hits, sigma))
+    if not out:
+        raise ConfigurationError("--target names no parameter")
+    return out

@@ -79,7 +79,7 @@ class P2PlanOptions:
                                              "end a soak.", unit="s", min=0.0, max=MAX_WAIT_S,
                                  group="timing")
     resoak_s: float = option(120.0, help="The re-soak after each remount (the chamber was "
-                                         "opened).", unit="s", min=0.0, max=MAX_WAIT_S,
+                                         "opened); 0: none.", unit="s", min=0.0, max=MAX_WAIT_S,
                              group="timing")
     soak_timeout_s: float = option(14400.0, help="Time-out of each soak.", unit="s", min=0.0,
                                    max=MAX_WAIT_S, group="timing")

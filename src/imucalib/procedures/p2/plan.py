@@ -177,7 +177,7 @@ def generate_p2_plan(
     static_s, settle_s : float
         Record length of each static window, settling before each record. [s]
     ramp_degc_per_min, band_degc, imu_band_degc, stable_for_s, resoak_s, soak_timeout_s :
-        The soak criteria (the re-soak after a remount holds for `resoak_s`).
+        The soak criteria (the re-soak after a remount holds for `resoak_s`; 0: none).
     pose_order : {"temperature-major", "pose-major"}
         Six remounts at every temperature, or six temperature sweeps.
     sample_rate_hz, seed, half_edge_m : float, int, float
@@ -255,7 +255,8 @@ def generate_p2_plan(
             steps.append(soak(k, temp, leg, held, stable_for_s, "soak"))
             for pose in POSES:
                 steps.append(remount(k, temp, leg, held, pose))
-                steps.append(soak(k, temp, leg, held, resoak_s, "re-soak"))
+                if resoak_s > 0.0:  # 0: no re-soak (the option's minimum)
+                    steps.append(soak(k, temp, leg, held, resoak_s, "re-soak"))
                 steps += pose_steps(k, temp, leg, held, pose)
     else:
         for pose in POSES:

@@ -1,6 +1,9 @@
 """P2 as a :class:`~imucalib.procedures.common.procedure.Procedure` (registered as ``"p2"``).
 
-The plan is :func:`~imucalib.procedures.p2.plan.generate_p2_plan`; the analysis
+The plan is :func:`~imucalib.procedures.p2.plan.generate_p2_plan`, its predicted uncertainty
+:func:`~imucalib.procedures.p2.predict.predict_p2` (:meth:`P2Procedure.predict`) and its
+optimiser :func:`~imucalib.procedures.p2.optimize.optimize_request`
+(:meth:`P2Procedure.optimize_plan`, docs/test-design.md, "P2: temperature points"); the analysis
 :func:`~imucalib.procedures.p2.batch.analyze_p2` (every unit of the array, each through
 :func:`~imucalib.procedures.p2.analysis.analyze_unit`), imported when first used. With `unit`
 given, only that unit is analysed; the result is a
@@ -26,6 +29,11 @@ if TYPE_CHECKING:
 
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
+    from imucalib.procedures.common.prediction import (
+        OptimizedPlan,
+        OptimizeRequest,
+        Prediction,
+    )
     from imucalib.procedures.p2.batch import P2BatchResult
     from imucalib.report.document import ReportContent, ReportDocument
 
@@ -63,6 +71,26 @@ class P2Procedure(ProcedureDefaults):
         from imucalib.procedures.p2.plan import generate_p2_plan
 
         return generate_p2_plan(**options)
+
+    def predict(self, plan: Plan) -> Prediction:
+        """Return the predicted σ of `plan`'s temperature models (:func:`~.p2.predict.predict_p2`).
+
+        The optional capability of :class:`~imucalib.procedures.common.prediction.Predicting`
+        (``imucalib plan show PLAN --predict``; docs/test-design.md, "P2: temperature points").
+        """
+        from imucalib.procedures.p2.predict import predict_p2
+
+        return predict_p2(plan)
+
+    def optimize_plan(self, request: OptimizeRequest) -> OptimizedPlan:
+        """Return the P2 plan meeting `request` (:func:`~.p2.optimize.optimize_request`).
+
+        The optional capability of :class:`~imucalib.procedures.common.prediction.Optimizing`
+        (``imucalib plan optimize p2``; docs/test-design.md, "P2: temperature points").
+        """
+        from imucalib.procedures.p2.optimize import optimize_request
+
+        return optimize_request(request)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
                 unit: str | None = None, options: Mapping[str, Any] | None = None,
