@@ -166,7 +166,7 @@ def test_a_revision_0002_database_is_upgraded_with_its_records_intact(records_ur
     with engine.connect() as conn:
         version = conn.execute(text("SELECT version_num FROM alembic_version")).scalar()
     engine.dispose()
-    assert version == records_engine.head_revision() == "0003"
+    assert version == records_engine.head_revision() == "0004"
 
 
 def _downgrade_last_unit(rec):

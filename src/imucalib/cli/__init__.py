@@ -20,7 +20,7 @@ Commands
 ``plan new NAME --out FILE``       a procedure's default plan; ``plan new NAME --help`` lists
                                    its options, grouped, each a flag
 ``plan validate|show|schema``      check a plan, print its expanded steps, export its JSON Schema
-``plan optimize p1 --out FILE``    the P1 plan meeting σ targets in the least station time
+``plan optimize p1|p2 --out FILE`` the plan meeting σ targets in the least station time
 ``run PLAN [--station sim|FILE]``  execute a plan on the twin or on equipment (``--resume FILE``)
 ``calibrate [PROCEDURE] DATA``     estimate, verify and decide; write the result JSON. DATA is a
                                    Recording, a CSV with ``--steps``, or (``calibrate field``) a
@@ -33,6 +33,8 @@ Commands
 ``station check STATION.toml``     connect to real equipment, identify, read status; move nothing
 ``records list|show|history|…``    the calibration records database (docs/records.md)
 ``users add|list|disable|enable``  the people who act on the records and their roles
+``users set-password NAME``        a user's password for the web page (argon2 hash, records)
+``serve``                          the station's operator web page (docs/web.md)
 ``report RESULT|RECORDING``        the calibration report (certificate) as PDF or HTML; an
                                    array's units and summary; ``--run N`` from the records
 """
@@ -55,6 +57,7 @@ from imucalib.cli import (  # noqa: F401 (register)
     report,
     results,
     run,
+    serve,
     station,
     twin,
     users,

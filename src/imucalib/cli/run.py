@@ -38,26 +38,6 @@ class _PromptOperator:
         return OperatorAnswer(ok, self.who)
 
 
-def make_station(spec: str, plan: Plan, start_time_s: float = 0.0) -> tuple[Station, str]:
-    """Build the station named by ``--station`` (``sim`` or a station TOML file).
-
-    Returns the station and the station file's text (empty for the twin).
-    """
-    if spec == "sim":
-        from imucalib.station.sim import SimStation
-
-        if plan.twin is None:
-            raise ConfigurationError(
-                f"plan {plan.name!r} has no [twin] table describing the simulated station; "
-                "add one (see `imucalib plan schema`) or give --station STATION.toml")
-        return SimStation(plan.twin, start_time_s=start_time_s), ""
-    from imucalib.drivers import load_driver_station
-
-    path = Path(spec)
-    station: Station = load_driver_station(path, start_time_s=start_time_s)
-    return station, path.read_text(encoding="utf-8")
-
-
 def _view(status: RunStatus) -> Table:
     from rich.table import Table
 
@@ -153,7 +133,9 @@ def run(
     from rich.live import Live
 
     from imucalib.cli._user import acting_user
+    from imucalib.drivers.station_spec import make_station
     from imucalib.plan import load_plan, plan_hash
+    from imucalib.records.run_entry import run_environment, run_metadata
     from imucalib.station.operator import AutoOperator
     from imucalib.station.runner import RunOptions, resume_run, run_plan
 
@@ -224,7 +206,7 @@ def run(
             started = datetime.now(UTC)
             with live_view or _nothing():
                 summary = run_plan(plan, st, path, options=options,
-                                   extra_metadata=_run_metadata(who, equipment, overdue,
+                                   extra_metadata=run_metadata(who, equipment, overdue,
                                                                 override_due, customer))
             ended = datetime.now(UTC)
     except CalibrationError as exc:
@@ -244,7 +226,7 @@ def run(
                     recording=summary.path, operator=who,
                     station=station_name if equipment else None,
                     equipment=[e.equipment_id for e in equipment],
-                    environment=_run_environment(summary.status, overdue, override_due,
+                    environment=run_environment(summary.status, overdue, override_due,
                                                  customer),
                     started_utc=started, ended_utc=ended)
                 console.print(f"recorded run {run_id} in {records.url}", highlight=False,
@@ -275,91 +257,16 @@ def _compression_option(name: str | None, resume: Path | None) -> str | None:
     return compression_from_name(name, "--compression")
 
 
-def _equipment_row(e: Any) -> dict[str, Any]:
-    """One piece of equipment as the run's environment and its recording describe it."""
-    return {"equipment_id": e.equipment_id, "kind": e.kind, "model": e.model,
-            "serial": e.serial, "certificate": e.certificate,
-            "calibrated_on": e.calibrated_on.isoformat() if e.calibrated_on else None,
-            "due_on": e.due_on.isoformat() if e.due_on else None}
-
-
-def _run_environment(status: str, overdue: list[Any], override: str | None,
-                     customer: str | None = None) -> dict[str, Any]:
-    """Return the run's ``environment_json``: its status, the customer and any due override."""
-    env: dict[str, Any] = {"opened_by": "run", "status": status,
-                           "override_due": (override or "").strip() if overdue else ""}
-    if customer and customer.strip():
-        env["customer"] = customer.strip()
-    if overdue:
-        env["overdue_equipment"] = [_equipment_row(e) for e in overdue]
-    return env
-
-
-def _run_metadata(who: str, equipment: list[Any], overdue: list[Any],
-                  override: str | None, customer: str | None = None) -> dict[str, str]:
-    """Return what the recording keeps of the run for the records.
-
-    ``calibrate`` of a recording no run recorded (``run --no-record``) opens its run from these
-    (docs/records.md, "One calibration, one run").
-    """
-    import json
-
-    meta = {"run_operator": who}
-    if customer and customer.strip():
-        meta["customer"] = customer.strip()
-    if equipment:
-        meta["station_equipment_json"] = json.dumps([_equipment_row(e) for e in equipment])
-    if overdue:
-        meta["override_due"] = (override or "").strip()
-    return meta
-
-
 def _check_due(db: str | None, station_name: str, override: str | None, *,
                create: bool = True) -> tuple[list[Any], list[Any]]:
-    """Return the station's current equipment and the overdue part of it.
+    """:func:`imucalib.records.run_entry.check_due`, with the terminal's overdue warning."""
+    from imucalib.records.run_entry import check_due
 
-    Overdue equipment is refused unless `override` gives a reason. With ``create=False``
-    (``run --no-record``) the check is made all the same, but a records database that does not
-    exist yet (an SQLite file not there: nothing is registered) is not created.
-    """
-    from datetime import date
-
-    from imucalib.records import open_records
-
-    if not create and not _records_exist(db):
-        return [], []
-    with open_records(db) as records:
-        mine = [e for e in records.equipment() if e.station == station_name]
-    overdue = [e for e in mine if e.due_on is not None and e.due_on < date.today()]
-    if overdue and not (override or "").strip():
-        names = "; ".join(f"{e.kind} {e.model} {e.serial} (equipment {e.equipment_id}, "
-                          f"certificate {e.certificate or '?'}, due {e.due_on})"
-                          for e in overdue)
-        raise ConfigurationError(f"station {station_name!r} has equipment overdue for "
-                                 f"calibration: {names}; once recalibrated, record its new "
-                                 "certificate (`imucalib records recertify EQUIPMENT_ID "
-                                 "--certificate NUM --calibrated-on DATE --due-on DATE`), or "
-                                 "pass --override-due REASON (recorded with the run)")
+    mine, overdue = check_due(db, station_name, override, create=create)
     if overdue:
         err_console.print(f"[yellow]warning:[/] running with overdue equipment: {override}",
                           highlight=False)
     return mine, overdue
-
-
-def _records_exist(db: str | None) -> bool:
-    """Return False only for an SQLite records file that is not there (nothing registered)."""
-    from sqlalchemy.engine import make_url
-    from sqlalchemy.exc import ArgumentError
-
-    from imucalib.records.engine import resolve_url
-
-    try:
-        url = make_url(resolve_url(db))
-    except ArgumentError:
-        return True                    # open_records names what is wrong with it
-    if url.get_backend_name() != "sqlite" or url.database in (None, "", ":memory:"):
-        return True
-    return Path(url.database).exists()
 
 
 class _nothing:  # noqa: N801 - a no-op context manager

@@ -1,6 +1,7 @@
 """``imucalib users …``: the people who act on the records and their roles (docs/records.md).
 
-``add``, ``list``, ``disable``, ``enable``; every command takes ``--db URL``. Who is acting
+``add``, ``list``, ``disable``, ``enable``, ``set-password`` (the web page's login,
+docs/web.md); every command takes ``--db URL``. Who is acting
 (``--user NAME``, else ``$IMUCALIB_USER``) is resolved by
 :func:`imucalib.records.users.resolve_user`: once the database has users, adding, disabling or
 enabling one needs an active user (an admin, once there is one), and none named is refused.
@@ -109,4 +110,42 @@ def enable(name: Annotated[str, typer.Argument(help="The user's name.")], reason
     except CalibrationError as exc:
         raise fail(exc) from exc
     console.print(f"user {name} enabled (event {eid}): {reason}", highlight=False,
+                  soft_wrap=True)
+
+
+@users_app.command("set-password")
+def set_password(
+        name: Annotated[str, typer.Argument(help="The user whose password is set.")],
+        password_stdin: Annotated[bool, typer.Option(
+            "--password-stdin", help="Read the password from the first line of standard input "
+                                     "(for scripts) instead of asking twice.")] = False,
+        user: Acting = None, db: Db = None) -> None:
+    """Set a user's password for the station's web page (docs/web.md).
+
+    A user sets their own (--user NAME, or $IMUCALIB_USER, naming them); an admin sets anyone's.
+    The password is asked for twice without echo, or read from standard input; it is stored as
+    an argon2id hash in a new chained row.
+    """
+    import os
+    import sys
+
+    from imucalib.errors import InvalidInputError
+    from imucalib.records.users import USER_ENV
+
+    try:
+        if password_stdin:
+            password = sys.stdin.readline().rstrip("\r\n")
+        else:
+            password = typer.prompt(f"new password for {name}", hide_input=True,
+                                    confirmation_prompt=True)
+        if not password:
+            raise InvalidInputError("a password is needed; got an empty one")
+        with _open(db) as records:
+            actor = user or os.environ.get(USER_ENV) or name
+            rid = records.set_password(name, password, by=actor)
+    except CalibrationError as exc:
+        raise fail(exc) from exc
+    except typer.Abort as exc:
+        raise fail(InvalidInputError("no password was given (the prompt was closed)")) from exc
+    console.print(f"password of {name} set (row {rid}), by {actor}", highlight=False,
                   soft_wrap=True)

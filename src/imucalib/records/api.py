@@ -32,6 +32,7 @@ from sqlalchemy.orm import Session
 from imucalib.errors import CalibrationError, InvalidInputError, RecordsError
 from imucalib.io.hashing import file_sha256
 from imucalib.records import chain, queries
+from imucalib.records.access_api import AccessRecords
 from imucalib.records.canonical import canonical_json
 from imucalib.records.engine import BEGIN_OPTION, make_engine, resolve_url, safe_url, upgrade
 from imucalib.records.queries import dangling, to_utc
@@ -117,8 +118,11 @@ def parameter_rows(result: ProcedureResult | CalibrationResult) -> list[Paramete
             if math.isfinite(r.value) and math.isfinite(r.std)]
 
 
-class Records:
+class Records(AccessRecords):
     """The calibration records of one database (use :func:`open_records`).
+
+    The web page's methods (passwords, sessions, the audit trail, the station lock) come from
+    :class:`~imucalib.records.access_api.AccessRecords`.
 
     Parameters
     ----------

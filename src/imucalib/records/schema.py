@@ -5,13 +5,18 @@ Contents
 :class:`Base`
     The declarative base; ``Base.metadata`` is what the migrations create.
 :class:`Unit`, :class:`Station`, :class:`Equipment`, :class:`Run`, :class:`Result`,
-:class:`Review`, :class:`User`, :class:`UserEvent`, :class:`SigningKey`
+:class:`Review`, :class:`User`, :class:`UserEvent`, :class:`SigningKey`, :class:`Credential`,
+:class:`AuditEvent`
     The chained tables: each row carries ``seq`` (1, 2, … per table, equal to its ``id``),
     ``prev_hash`` and ``row_hash`` (docs/records.md, Eqs. (R.1)–(R.3)).
 :class:`RunEquipment`, :class:`ResultParameter`
     Child rows hashed with their parent (a run's equipment, a result's parameters).
 :data:`CHAINED`
     The chained models in the order :meth:`~imucalib.records.api.Records.verify` checks them.
+:class:`WebSession`, :class:`StationLock`
+    The web server's working state (docs/web.md): sessions and the station lock. They are not
+    records: rows are updated and deleted (a logout, a lock released), nothing is hashed; what
+    happened is in :class:`AuditEvent`.
 
 Nothing here is ever updated or deleted by :class:`~imucalib.records.api.Records`: an amendment
 is a new :class:`Result` whose ``replaces_id`` names the one it replaces, a new certificate a new
@@ -42,7 +47,9 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
 __all__ = [
     "CHAINED",
+    "AuditEvent",
     "Base",
+    "Credential",
     "Equipment",
     "Result",
     "ResultParameter",
@@ -51,9 +58,11 @@ __all__ = [
     "RunEquipment",
     "SigningKey",
     "Station",
+    "StationLock",
     "Unit",
     "User",
     "UserEvent",
+    "WebSession",
 ]
 
 #: Constraint names Alembic can find again (the migrations use the same convention).
@@ -232,7 +241,69 @@ class SigningKey(_Chained, Base):
     heads_json: Mapped[str] = mapped_column(Text, default="{}")
 
 
+class Credential(_Chained, Base):
+    """A user's password, set (docs/web.md, "Users and passwords").
+
+    ``password_hash`` is an argon2id hash in its PHC string form (salt and parameters inside);
+    ``by_user`` who set it (the user, or an admin). The newest row of a user is their password;
+    a row is never updated, so a swapped hash breaks the chain and ``records verify`` says so.
+    """
+
+    __tablename__ = "user_credentials"
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id"), index=True)
+    password_hash: Mapped[str] = mapped_column(Text)
+    by_user: Mapped[str] = mapped_column(String(200), default="")
+
+
+class AuditEvent(_Chained, Base):
+    """Who did what at the station's web page, and when (docs/web.md, "The audit trail").
+
+    ``actor`` the user's name (the name tried, for a failed login); ``action`` one of
+    :data:`imucalib.records.access.AUDIT_ACTIONS`; ``station`` the station's name; ``run_ref``
+    the run the action was about ("" for none); ``details_json`` canonical JSON.
+    """
+
+    __tablename__ = "audit_events"
+    actor: Mapped[str] = mapped_column(String(200), default="")
+    action: Mapped[str] = mapped_column(String(40), index=True)
+    station: Mapped[str] = mapped_column(String(200), default="")
+    run_ref: Mapped[str] = mapped_column(String(200), default="", index=True)
+    details_json: Mapped[str] = mapped_column(Text, default="{}")
+
+
+class WebSession(Base):
+    """A login to the web page: its cookie token's SHA-256, whose, until when, its CSRF token.
+
+    Working state, not a record (module docstring): a logout or an expiry deletes the row.
+    """
+
+    __tablename__ = "web_sessions"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    token_hash: Mapped[str] = mapped_column(String(HASH_LEN), unique=True)
+    user_name: Mapped[str] = mapped_column(String(200), index=True)
+    created_utc: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    expires_utc: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    csrf_token: Mapped[str] = mapped_column(String(HASH_LEN))
+
+
+class StationLock(Base):
+    """Who holds a station (one operator at a time), since when, and who asked for it.
+
+    Working state, not a record (module docstring): taking, releasing and requesting the lock
+    are audit rows.
+    """
+
+    __tablename__ = "station_locks"
+    station: Mapped[str] = mapped_column(String(200), primary_key=True)
+    holder: Mapped[str] = mapped_column(String(200), default="")
+    since_utc: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
+    requested_by: Mapped[str] = mapped_column(String(200), default="")
+    requested_utc: Mapped[datetime | None] = mapped_column(DateTime(timezone=True),
+                                                           nullable=True)
+
+
 #: The chained tables, in the order verify checks them (and PostgreSQL takes their locks;
 #: a new table is appended, so the lock keys of the others stay).
 CHAINED: Final[tuple[type[_Chained], ...]] = (Unit, Station, Equipment, Run, Result, Review,
-                                              User, UserEvent, SigningKey)
+                                              User, UserEvent, SigningKey, Credential,
+                                              AuditEvent)

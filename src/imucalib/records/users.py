@@ -29,8 +29,9 @@ Rules
       review's reviewer was authorised under (U.3) *when the review was made* (the users and
       their state changes up to the review's ``created_utc``). A review made while the database
       had no users authorises nothing, so nothing is released without registered reviewers.
-(U.5) Once users exist, a run's operator is an active user (any role), recorded by name
-      (:meth:`Records.record_run <imucalib.records.api.Records.record_run>` refuses another).
+(U.5) Once users exist, a run's operator is an active user (any role but observer), recorded
+      by name (:meth:`Records.record_run <imucalib.records.api.Records.record_run>` refuses
+      another).
 """
 
 from __future__ import annotations
@@ -50,11 +51,14 @@ from imucalib.records.views import ReleaseStatus, UserEventView, UserView
 if TYPE_CHECKING:
     from imucalib.records.api import Records
 
-__all__ = ["REVIEW_ROLES", "ROLES", "USER_ENV", "add_user", "change_user", "check_operator",
-           "check_review", "release_status", "resolve_user", "user_view", "users_of"]
+__all__ = ["RECORD_ROLES", "REVIEW_ROLES", "ROLES", "USER_ENV", "add_user", "change_user",
+           "check_operator", "check_review", "release_status", "resolve_user", "user_view",
+           "users_of"]
 
-#: The roles a user can have.
-ROLES: Final = ("operator", "engineer", "reviewer", "admin")
+#: The roles a user of the records can have.
+RECORD_ROLES: Final = ("operator", "engineer", "reviewer", "admin")
+#: Every role: the records' and ``observer``, who only watches the web pages (docs/web.md).
+ROLES: Final = (*RECORD_ROLES, "observer")
 #: The roles that may review (approve or reject) a result.
 REVIEW_ROLES: Final = frozenset({"reviewer", "admin"})
 #: The environment variable naming who is acting.
@@ -205,7 +209,8 @@ def add_user(session: Session, name: str, initials: str, role: str, by: str | No
     if not name:
         raise InvalidInputError("a user needs a name; got an empty one")
     if role not in ROLES:
-        raise InvalidInputError(f"role must be one of {', '.join(ROLES)}; got {role!r}")
+        raise InvalidInputError(f"role must be one of {', '.join(RECORD_ROLES)}; got {role!r} "
+                                "(or observer: read-only web pages)")
     initials = initials.strip()
     chain.lock(session, User)
     actor = _actor(session, by, "add a user")
@@ -255,8 +260,11 @@ def check_operator(session: Session, operator: str) -> str:
         return operator                                 # (U.1): recorded as given
     name = operator.strip()
     user = _find(session, name) if name else None
-    if user is not None and _active_at(session, user, None):
+    if user is not None and _active_at(session, user, None) and user.role != "observer":
         return user.name
+    if user is not None and user.role == "observer" and _active_at(session, user, None):
+        raise RecordsError(f"a run's operator must not be an observer (observers only watch); "
+                           f"{user.name} is an observer")
     active = _names([u for u in users_of(session) if u.active])
     what = ("no operator was named" if not name else
             f"the operator {name!r} is {'disabled' if user else 'not a user of the records'}")

@@ -77,6 +77,7 @@ REFERENCES: Final = {
     ("results", "unit_id"): "units", ("results", "replaces_id"): "results",
     ("reviews", "result_id"): "results", ("user_events", "user_id"): "users",
     ("signing_keys", "previous_key_id"): "signing_keys",
+    ("user_credentials", "user_id"): "users",
 }
 
 

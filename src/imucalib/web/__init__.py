@@ -1,0 +1,1 @@
+"""The station's operator web page: the server, its pages, and the run supervisor it drives."""

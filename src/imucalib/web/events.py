@@ -1,0 +1,86 @@
+"""The live events of a supervised run, and the bounded queue a subscriber reads them from.
+
+Every event is a JSON-serialisable dict with a ``"type"`` and the ``"run_id"``
+(docs/web-runs.md, "Events"):
+
+``snapshot``
+    The whole :class:`~imucalib.web.run_view.RunView` (``"view"``): the first event of every
+    subscription.
+``status``
+    The run's status changed (``"status"``, ``"error"``).
+``step``
+    A step changed state (``"index"``, ``"state"``: running, done, failed).
+``prompt`` / ``prompt_closed``
+    An operator check waits for an answer (``"prompt_id"``, ``"step_index"``, ``"text"``,
+    ``"details"``) / was answered (``"confirmed"``, ``"who"``).
+``log``
+    One line of the run's log (``"line"``).
+``safe_stop``
+    The runner stopped a device safely (``"device"``, ``"latency_s"`` from the abort command
+    when there was one).
+``command_rejected``
+    The worker refused a command that had gone stale on its way (``"reason"``).
+``signals``
+    Decimated live values (``"signals"``, ``"time_s"``, ``"step_index"``, ``"time_left_s"``); at
+    most a few a second. The only kind a slow subscriber loses: the oldest first.
+``end``
+    The worker ended (``"status"``).
+"""
+
+from __future__ import annotations
+
+import queue
+from typing import Any
+
+__all__ = ["DROPPABLE", "MAX_SAMPLES", "MAX_TOTAL", "SubscriberQueue"]
+
+#: Event types a subscriber that falls behind may lose (the oldest first): live samples.
+DROPPABLE = frozenset({"signals"})
+#: Live-sample events a subscriber's queue holds at most.
+MAX_SAMPLES = 50
+#: Events a subscriber's queue holds at most; beyond it the oldest log lines go too (state,
+#: step and prompt events are never dropped).
+MAX_TOTAL = 2000
+
+
+class SubscriberQueue(queue.Queue[dict[str, Any]]):
+    """A queue of events that drops the oldest live samples, never a state or prompt event.
+
+    Readers use it as any :class:`queue.Queue` (``get``, ``get_nowait``); the supervisor adds
+    events with :meth:`publish`. ``dropped`` counts the events lost.
+
+    Parameters
+    ----------
+    max_samples : int
+        Live-sample events (:data:`DROPPABLE`) kept at most.
+    max_total : int
+        Events kept at most before log lines are dropped too.
+    """
+
+    def __init__(self, max_samples: int = MAX_SAMPLES, max_total: int = MAX_TOTAL) -> None:
+        super().__init__()
+        self.max_samples = max_samples
+        self.max_total = max_total
+        self.dropped = 0
+
+    def publish(self, event: dict[str, Any]) -> None:
+        """Add `event`, first dropping the oldest sample (or log line) when the queue is full."""
+        with self.mutex:
+            items = self.queue
+            if event.get("type") in DROPPABLE:
+                samples = [e for e in items if e.get("type") in DROPPABLE]
+                if len(samples) >= self.max_samples:
+                    items.remove(samples[0])
+                    self.dropped += 1
+                    self.unfinished_tasks -= 1
+            if len(items) >= self.max_total:
+                for kind in (DROPPABLE, frozenset({"log"})):
+                    oldest = next((e for e in items if e.get("type") in kind), None)
+                    if oldest is not None:
+                        items.remove(oldest)
+                        self.dropped += 1
+                        self.unfinished_tasks -= 1
+                        break
+            items.append(event)
+            self.unfinished_tasks += 1
+            self.not_empty.notify()
