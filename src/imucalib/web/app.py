@@ -111,9 +111,20 @@ def create_app(records_url: str | None, runs_dir: Path, supervisor: Any = None, 
 
 def routers() -> list[Any]:
     """Return the routers of the server, in the order they are matched (/runs/new first)."""
-    from imucalib.web import audit, auth, live, lock, pages, run_start, users_page
+    from imucalib.web import (
+        audit,
+        auth,
+        live,
+        lock,
+        overview,
+        pages,
+        results,
+        run_start,
+        users_page,
+    )
 
-    return [m.router for m in (auth, lock, run_start, pages, live, audit, users_page)]
+    return [m.router for m in (auth, lock, run_start, pages, results, live, overview, audit,
+                               users_page)]
 
 
 def route_table() -> list[tuple[str, str]]:

@@ -5,8 +5,6 @@
 ``GET /runs/{id}``
     A run: its steps and progress, the prompt dialog, the abort button, live values (the page's
     script subscribes to ``/ws/runs/{id}``, :mod:`imucalib.web.live`).
-``GET /runs/{id}/results``
-    The run's results (the report once the recording is calibrated).
 ``POST /runs/{id}/answer``, ``POST /runs/{id}/abort``, ``POST /runs/{id}/resume``
     The commands: each carries the run id (its path) and the step (and prompt) the page showed,
     so a stale page never acts on a newer state (409); each is audited.
@@ -84,14 +82,6 @@ async def run_page(request: Request, run_id: str,
     """Show a run (the live values come over the WebSocket)."""
     view = await supervised(request, lambda s: s.view(run_id))
     return render(request, "run.html", run=view, view_json=view.to_dict())
-
-
-@router.get("/runs/{run_id}/results")
-async def results_page(request: Request, run_id: str,
-                       login: Annotated[LoginSession, Depends(require("view"))]) -> Response:
-    """Show what the run produced (the report once its recording is calibrated)."""
-    view = await supervised(request, lambda s: s.view(run_id))
-    return render(request, "results.html", run=view)
 
 
 def _done(request: Request, run_id: str, what: str) -> Response:
