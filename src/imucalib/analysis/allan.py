@@ -177,6 +177,41 @@ class SamplingCheck:
         t = np.asarray(time_s, dtype=np.float64).ravel()
         if t.size == 0:
             return
+        if not self._within(t):
+            self._check(t)  # the stamp-by-stamp checks name what is wrong
+        if self._first is None:
+            self._first = float(t[0])
+        self._last = float(t[-1])
+        self._count += t.size
+
+    def _within(self, t: NDArray[np.float64]) -> bool:
+        """Whether every interval of `t` passes the checks, from the extreme intervals alone.
+
+        Finite stamps have finite intervals; an interval is out of order, a gap or off the
+        nominal exactly when the shortest or the longest one is (|dt/T − 1| is monotonic in dt
+        on either side of T, in floating point too), so the smallest and largest interval
+        decide, with the nominal interval taken from the first chunk as :meth:`_check` does.
+        False sends the chunk to :meth:`_check`, which raises or accepts it.
+        """
+        dt = np.empty(t.size - (1 if self._last is None else 0))
+        if dt.size == 0 or not math.isfinite(float(t[0])):
+            return False
+        if self._last is not None:
+            dt[0] = t[0] - self._last
+        np.subtract(t[1:], t[:-1], out=dt[dt.size - (t.size - 1):])
+        lo, hi = float(dt.min()), float(dt.max())
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            return False
+        nominal = float(np.median(dt)) if self._nominal is None else self._nominal
+        if not (lo > 0 and nominal > 0 and hi <= 1.5 * nominal):
+            return False
+        if max(abs(lo / nominal - 1), abs(hi / nominal - 1)) > self.rtol:
+            return False
+        self._nominal = nominal
+        return True
+
+    def _check(self, t: NDArray[np.float64]) -> None:
+        """Check the stamps `t` one by one against the previous chunk's; raise on a defect."""
         if not np.all(np.isfinite(t)):
             raise InvalidInputError("`time_s` must be finite; got NaN or infinite stamps")
         full = t if self._last is None else np.concatenate([[self._last], t])
@@ -204,10 +239,6 @@ class SamplingCheck:
                     f"non-uniform sampling: the interval after t = {full[i]:.6f} s is "
                     f"{dt[i]:.6g} s, {dev[i]:.2%} off the nominal {nominal:.6g} s (tolerance "
                     f"{self.rtol:.2%}); resample onto a uniform grid first")
-        if self._first is None:
-            self._first = float(t[0])
-        self._last = float(t[-1])
-        self._count += t.size
 
     @property
     def n_samples(self) -> int:

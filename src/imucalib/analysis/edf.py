@@ -33,6 +33,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -157,9 +158,13 @@ def _white_pm_inverse_edf(d: int, big_m: float, r: float) -> float:
     return total / big_m
 
 
+@functools.lru_cache(maxsize=4096)
 def compute_edf_greenhall(alpha: int, order: int, m: int, n_phase: int, *, overlapping: bool,
                           modified: bool) -> float:
     """Equivalent degrees of freedom of a difference variance for power-law noise.
+
+    A pure function of its arguments, remembered: the channels of one record (and the records
+    of one length) ask for the same (α, m, N) again.
 
     Parameters
     ----------

@@ -273,8 +273,8 @@ def _amplitudes(names: Sequence[str], c: F64) -> tuple[dict[str, float], float]:
     return amps, ramp
 
 
-def _gls(x: F64, a: F64, sigma: F64) -> tuple[F64, F64]:
-    """NNLS on the Cholesky-whitened system; return the coefficients c and Σ⁻¹."""
+def _gls_fit(x: F64, a: F64, sigma: F64) -> tuple[F64, F64, F64]:
+    """NNLS on the Cholesky-whitened system: the coefficients c, the factor L and 1/√diag Σ."""
     d = 1 / np.sqrt(np.diag(sigma))
     corr = sigma * np.outer(d, d)
     chol = linalg.cholesky(corr + 1e-12 * np.eye(d.size), lower=True)
@@ -282,8 +282,14 @@ def _gls(x: F64, a: F64, sigma: F64) -> tuple[F64, F64]:
     xw = linalg.solve_triangular(chol, x * d[:, None], lower=True)
     scale = 1 / np.maximum(np.linalg.norm(xw, axis=0), 1e-300)
     sol, _ = optimize.nnls(xw * scale, aw, maxiter=50 * x.shape[1])
+    return sol * scale, chol, d
+
+
+def _gls(x: F64, a: F64, sigma: F64) -> tuple[F64, F64]:
+    """NNLS on the Cholesky-whitened system; return the coefficients c and Σ⁻¹."""
+    c, chol, d = _gls_fit(x, a, sigma)
     inv = np.outer(d, d) * linalg.cho_solve((chol, True), np.eye(d.size))
-    return sol * scale, inv
+    return c, inv
 
 
 def _sigma(names: Sequence[str], c: F64, tau: F64, a: F64, edf: F64, ms: tuple[int, ...],
@@ -372,13 +378,13 @@ def fit_noise_terms(result: DeviationResult, *, sensor: str = "gyro",
     if search:
         tc = _best_markov_tc(names, tau, a, sigma, tau0)
     x = _design(names, tau, tc)
-    c, _ = _gls(x, a, sigma)
+    c = _gls_fit(x, a, sigma)[0]  # the re-weighting reads only c
     for it in range(max_iterations):
         sigma = _sigma(names, c, tau, a, edf, ms, n_phase, tau0, tc)
         if search and it < 3:  # T_c against the full covariance, a few times
             tc = _best_markov_tc(names, tau, a, sigma, tau0)
             x = _design(names, tau, tc)
-        c_new, _ = _gls(x, a, sigma)
+        c_new = _gls_fit(x, a, sigma)[0]
         done = np.allclose(c_new, c, rtol=1e-7, atol=1e-12 * float(np.max(np.abs(c_new)) + 1e-300))
         c = c_new
         if done:

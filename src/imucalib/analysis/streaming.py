@@ -26,10 +26,13 @@ record length; reads are ``pread`` calls, so the process does not map the file.
 
 The mean is accumulated over fixed 2^20-sample chunks and the reduction blocks are fixed, so
 the streamed result **equals the in-memory one bit for bit** whatever the chunking (tested).
+A record held in memory takes those sums from the record itself when it is computed; a spilled
+one accumulates them as it is written.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from collections.abc import Iterable
@@ -195,8 +198,11 @@ class AllanStream:
         """The scratch file, once the stream has spilled to disk."""
         return self._path
 
-    def append(self, samples: ArrayLike) -> None:
-        """Append the next samples (1-D, finite) [unit].
+    def append(self, samples: ArrayLike, *, copy: bool = True) -> float:
+        """Append the next samples (1-D, finite) [unit]; return their sum (``np.sum``).
+
+        With ``copy=False`` the stream may keep `samples` itself instead of a copy until it is
+        computed (the caller hands over an array it will not change: a chunk just read).
 
         Raises
         ------
@@ -210,24 +216,28 @@ class AllanStream:
         y = np.asarray(samples, dtype=np.float64)
         if y.ndim != 1:
             raise InvalidInputError(f"`samples` must be 1-D; got shape {y.shape}")
-        bad = ~np.isfinite(y)
-        if bad.any():
-            i = self._n + int(np.argmax(bad))
+        with np.errstate(over="ignore", invalid="ignore"):
+            total = float(np.sum(y))  # finite unless a sample is not (or the sum overflows)
+        if not math.isfinite(total) and not np.isfinite(y).all():
+            i = self._n + int(np.argmax(~np.isfinite(y)))
             raise InvalidInputError(
                 f"sample {i} (t = {i / self.sample_rate_hz:g} s from the start) is NaN or "
                 "infinite; an Allan sum across a gap is not defined: split the record there")
         if y.size == 0:
-            return
-        y = np.ascontiguousarray(y)
-        if self.data_type == "rate":
-            self._accumulate_mean(y)
+            return total
         if self._fd is None and self._n + y.size > self.memory_limit_samples:
             self._spill()
         if self._fd is None:
-            self._chunks.append(y.copy())
+            # held in memory: the mean is taken from the whole record when it is computed
+            kept = np.ascontiguousarray(y)
+            self._chunks.append(kept.copy() if copy else kept)
         else:
+            y = np.ascontiguousarray(y)
+            if self.data_type == "rate":
+                self._accumulate_mean(y)
             os.write(self._fd, y.tobytes())
         self._n += y.size
+        return total
 
     def _accumulate_mean(self, y: F64) -> None:
         if self._pending.size == 0:
@@ -250,6 +260,8 @@ class AllanStream:
                                     dir=self.scratch_dir)
         self._fd, self._path = fd, Path(name)
         for c in self._chunks:
+            if self.data_type == "rate":
+                self._accumulate_mean(c)
             os.write(fd, c.tobytes())
         self._chunks = []
 
@@ -261,16 +273,26 @@ class AllanStream:
         if self._n < n_min:
             raise InvalidInputError(f"data too short: need at least {n_min} samples; got "
                                     f"{self._n}")
+        y: F64 | None = None
+        tail = self._pending[:self._pending_n]
+        if self._fd is None:
+            y = np.concatenate(self._chunks) if len(self._chunks) > 1 else self._chunks[0]
+            self._chunks = []
+            if self.data_type == "rate":  # the canonical 2^20-sample sums, in order, in place
+                full = y.size - y.size % _MEAN_CHUNK
+                with np.errstate(over="ignore", invalid="ignore"):
+                    for a in range(0, full, _MEAN_CHUNK):
+                        self._sum += float(np.sum(y[a:a + _MEAN_CHUNK]))
+                tail = y[full:]
         mean = 0.0
         if self.data_type == "rate":
             with np.errstate(over="ignore", invalid="ignore"):
-                mean = (self._sum + float(np.sum(self._pending[:self._pending_n]))) / self._n
+                mean = (self._sum + float(np.sum(tail))) / self._n
             if not np.isfinite(mean):
                 raise InvalidInputError("the samples are too large to sum in float64: rescale "
                                         "them")
         if self._fd is None:
-            y = np.concatenate(self._chunks)
-            self._chunks = []
+            assert y is not None
             x = phase_from_rate(y, self.sample_rate_hz, mean) if self.data_type == "rate" else y
             self._source = eng.ArrayPhase(x)
         elif self.data_type == "angle":

@@ -77,6 +77,8 @@ References
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -87,11 +89,13 @@ from scipy import optimize
 from imucalib._checks import as_array, check_positive
 from imucalib.analysis._allan_engine import (
     PARALLEL_PHASE_MIN,
+    PARALLEL_SUM_MIN,
     integrate_phase,
     n_terms,
     sum_overlapping_rows,
 )
-from imucalib.analysis._allan_kernels import get_kernels
+from imucalib.analysis._allan_engine import _windows as overlap_windows
+from imucalib.analysis._allan_kernels import PHASE_BLOCK, get_kernels
 from imucalib.analysis.allan import canonical_mean
 from imucalib.errors import InvalidInputError
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
@@ -104,6 +108,8 @@ __all__ = [
     "WindowStatistics",
     "compute_integer_revolution_window",
     "compute_window_statistics",
+    "unwrap_angle",
+    "window_noise_fit",
 ]
 
 _MIN_TAU_POINTS = 3
@@ -202,11 +208,7 @@ def compute_window_statistics(
     """
     cols, _ = as_columns(values, "values", min_samples=2, copy=False)  # only read
     fs = check_positive(sample_rate_hz, "sample_rate_hz")
-    if isinstance(min_cluster_samples, bool) or not isinstance(min_cluster_samples,
-                                                               int | np.integer) \
-            or min_cluster_samples < 1:
-        raise InvalidInputError(f"`min_cluster_samples` must be an integer ≥ 1; got "
-                                f"{min_cluster_samples!r}")
+    ms = _cluster_sizes(cols.shape[0], min_cluster_samples)
     method = se_method or ("noise-model" if noise_model is not None else "allan-fit")
     if method not in ("noise-model", "allan-fit", "white"):
         raise InvalidInputError(f"`se_method` must be 'noise-model', 'allan-fit' or 'white'; got "
@@ -228,7 +230,6 @@ def compute_window_statistics(
                                     f"got {k}")
         se = compute_theoretical_adev(noise_model, [duration])[0]  # Eq. (1)
     elif method == "allan-fit":
-        ms = _OCTAVES[(_OCTAVES >= min_cluster_samples) & (_OCTAVES <= n // 2)]
         if ms.size < _MIN_TAU_POINTS:
             method, se = "white", se_white.copy()
         else:
@@ -249,6 +250,120 @@ def compute_window_statistics(
                             se_method=method)
 
 
+def window_noise_fit(values: ArrayLike, sample_rate_hz: float, *,
+                     min_cluster_samples: int = 1
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return a window's column means and the noise terms of its Allan fit, Eq. (2).
+
+    What :func:`compute_window_statistics` (``se_method="allan-fit"``) gives as ``mean`` and
+    as ``white_density``, ``flicker_variance``, ``random_walk``, bit for bit, without the
+    window's other statistics (its spread and standard error), for a caller that pools the
+    noise terms of many windows into one model (P2, docs/p2.md).
+
+    Parameters
+    ----------
+    values : array_like, shape (n,) or (n, k)
+        Uniformly sampled window, n ≥ 2. [any unit]
+    sample_rate_hz : float
+        f_s. [Hz]
+    min_cluster_samples : int
+        Smallest cluster size m of the fit, ≥ 1.
+
+    Returns
+    -------
+    mean : ndarray, shape (k,)
+        The column means. [units of `values`]
+    fit : ndarray, shape (3, k)
+        Rows N̂ [units·√s], Ĉ_B [units²] and K̂ [units/√s] of Eq. (2); NaN for a window too
+        short for three cluster sizes.
+
+    Raises
+    ------
+    InvalidInputError
+        Fewer than 2 samples, values not finite, or a parameter out of range.
+    """
+    cols, _ = as_columns(values, "values", min_samples=2, copy=False)  # only read
+    fs = check_positive(sample_rate_hz, "sample_rate_hz")
+    ms = _cluster_sizes(cols.shape[0], min_cluster_samples)
+    mean = cols.mean(axis=0)
+    if ms.size < _MIN_TAU_POINTS:
+        return mean, np.full((3, cols.shape[1]), np.nan)
+    coefs = _fit_allan(cols - mean, 1.0 / fs, ms)
+    return mean, np.vstack([np.sqrt(coefs[:, 0]), coefs[:, 1], np.sqrt(3.0 * coefs[:, 2])])
+
+
+def _cluster_sizes(n: int, min_cluster_samples: int) -> NDArray[np.int64]:
+    """Return the cluster sizes m = 1, 2, 4, … of the fit (2): ≥ `min_cluster_samples`, ≤ n/2."""
+    if isinstance(min_cluster_samples, bool) or not isinstance(min_cluster_samples,
+                                                               int | np.integer) \
+            or min_cluster_samples < 1:
+        raise InvalidInputError(f"`min_cluster_samples` must be an integer ≥ 1; got "
+                                f"{min_cluster_samples!r}")
+    return _OCTAVES[(_OCTAVES >= min_cluster_samples) & (_OCTAVES <= n // 2)]
+
+
+@dataclass(frozen=True, eq=False)
+class _AllanPlan:
+    """Everything of the window fit (2) but the data, for n samples of k columns (private).
+
+    Cached per (n, k, cluster sizes, Δt) by :func:`_allan_plan`: a station's windows come in a
+    few lengths, and forming these arrays again cost more than the window's sums themselves.
+    The arrays are read-only.
+
+    Attributes
+    ----------
+    tau : ndarray, shape (M,)
+        τ = m·Δt of each cluster size. [s]
+    count : ndarray of int64, shape (M,)
+        Terms of the overlapping sum at each τ, n + 1 − 2m.
+    scale : ndarray, shape (M,)
+        2·count·τ², the divisor of the sums in NIST SP 1065 Eq. (8). [s²]
+    basis : ndarray, shape (M, 3)
+        The power laws of Eq. (2) at each τ: 1/τ, 1, τ.
+    rel_sd : ndarray, shape (M,)
+        σ(σ̂²)/σ² = √(2/edf) of each τ (NIST SP 1065 §5.2.4).
+    starts, wins, counts : ndarray of int64 or None
+        The one kernel call of :func:`~imucalib.analysis._allan_engine.sum_overlapping_rows`
+        for k rows of n + 1 phase points (its windows and term counts); None when its terms
+        reach the engine's threaded path, which then runs itself.
+    """
+
+    tau: NDArray[np.float64]
+    count: NDArray[np.int64]
+    scale: NDArray[np.float64]
+    basis: NDArray[np.float64]
+    rel_sd: NDArray[np.float64]
+    starts: NDArray[np.int64] | None
+    wins: NDArray[np.int64] | None
+    counts: NDArray[np.int64] | None
+
+
+@functools.lru_cache(maxsize=64)
+def _allan_plan(n: int, k: int, ms_key: tuple[int, ...], dt: float) -> _AllanPlan:
+    """Return the :class:`_AllanPlan` of n samples in k columns at cluster sizes `ms_key`."""
+    ms = np.array(ms_key, dtype=np.int64)
+    count = n_terms("oadev", ms, n + 1)
+    tau = np.asarray(ms * dt, dtype=np.float64)
+    starts = wins = counts = None
+    if int(count.sum()) * k < PARALLEL_SUM_MIN:
+        # sum_overlapping_rows' layout: row j's windows moved on by j·(n + 1); its job groups
+        # are one group below PARALLEL_SUM_MIN terms, the one kernel call made here
+        offsets, win = overlap_windows(ms, 2)
+        rows = np.arange(k, dtype=np.int64)
+        starts = (offsets[None, :] + (n + 1) * rows[:, None]).reshape(-1)
+        wins = np.ascontiguousarray(
+            (win[None, :, :] + offsets.size * rows[:, None, None]).reshape(-1, win.shape[1]))
+        counts = np.tile(count.astype(np.int64), k)
+    plan = _AllanPlan(tau=tau, count=count, scale=2.0 * count * tau**2,
+                      basis=np.column_stack([1.0 / tau, np.ones_like(tau), tau]),
+                      rel_sd=np.sqrt(2.0 / _edf_white(n, ms)), starts=starts, wins=wins,
+                      counts=counts)
+    for arr in (plan.tau, plan.count, plan.scale, plan.basis, plan.rel_sd, starts, wins, counts):
+        if arr is not None:
+            arr.setflags(write=False)
+    return plan
+
+
 def _overlapping_avar(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]
                       ) -> NDArray[np.float64]:
     """Overlapping Allan variance of rate samples (n, k) at τ = m·dt; shape (len(ms), k).
@@ -261,24 +376,41 @@ def _overlapping_avar(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]
 
     The k phase series are integrated into the rows of one array and their sums taken in one
     kernel pass (:func:`~imucalib.analysis._allan_engine.sum_overlapping_rows`), the same
-    operations as column by column.
+    operations as column by column. A window of one phase block (n ≤ ``PHASE_BLOCK``, every
+    window statistic of a calibration) has its phase formed for all columns at once: the
+    canonical phase of one block is ``(0 + Σ_{i≤j}(yᵢ − ȳ))·τ0``, a sequential sum, which
+    ``np.cumsum`` along each row forms by the same operations (``_allan_kernels``' numpy
+    twin does just that), and ȳ the row's ``np.sum`` over n (the canonical mean of fewer than
+    2^20 samples).
     """
     n, k = x.shape
-    count = n_terms("oadev", ms, n + 1)
-    tau = ms * dt
+    plan = _allan_plan(n, k, tuple(ms.tolist()), dt)
     tau0 = 1.0 / (1.0 / dt)  # phase_from_rate(·, 1/dt)'s step
     phase = np.empty((k, n + 1))
     phase[:, 0] = 0.0
-    # below PARALLEL_PHASE_MIN integrate_phase runs this one kernel: call it without its dispatch
-    phase_kernel = get_kernels()["phase"] if n < PARALLEL_PHASE_MIN else None
-    for j in range(k):
-        col = np.ascontiguousarray(x[:, j])
-        if phase_kernel is None:
-            integrate_phase(col, canonical_mean(col), tau0, phase[j, 1:])
-        else:
-            phase_kernel(col, canonical_mean(col), tau0, phase[j, 1:], 0.0)
-    sums = sum_overlapping_rows(phase, ms, count, 2)
-    out: NDArray[np.float64] = (sums / (2.0 * count * tau**2)).T
+    if n <= PHASE_BLOCK:
+        rows = np.ascontiguousarray(x.T)
+        mean = (0.0 + np.sum(rows, axis=1)) / n  # canonical_mean of each row
+        np.multiply(0.0 + np.cumsum(rows - mean[:, None], axis=1), tau0, out=phase[:, 1:])
+    else:
+        # below PARALLEL_PHASE_MIN integrate_phase runs this one kernel: call it without its
+        # dispatch
+        phase_kernel = get_kernels()["phase"] if n < PARALLEL_PHASE_MIN else None
+        for j in range(k):
+            col = np.ascontiguousarray(x[:, j])
+            if phase_kernel is None:
+                integrate_phase(col, canonical_mean(col), tau0, phase[j, 1:])
+            else:
+                phase_kernel(col, canonical_mean(col), tau0, phase[j, 1:], 0.0)
+    if plan.counts is None:
+        sums = sum_overlapping_rows(phase, ms, plan.count, 2)
+    else:
+        assert plan.starts is not None and plan.wins is not None
+        totals = np.zeros(plan.counts.size)
+        get_kernels()["sumsq_overlap"](phase.reshape(-1), plan.starts, plan.wins, plan.counts,
+                                       2, totals)
+        sums = totals.reshape(k, ms.size)
+    out: NDArray[np.float64] = (sums / plan.scale).T
     return out
 
 
@@ -291,24 +423,61 @@ def _edf_white(n: int, m: NDArray[np.int64]) -> NDArray[np.float64]:
     return np.asarray(np.maximum(edf, 1.0), dtype=np.float64)
 
 
+def _nnls_core() -> Callable[..., tuple[NDArray[np.float64], float, int]] | None:
+    """Return scipy's compiled NNLS when :func:`scipy.optimize.nnls` calls exactly it, else None.
+
+    ``nnls(A, b)`` checks its arguments (finite, shapes) and then returns this core's answer
+    for ``maxiter = 3·n``; the fit below calls the core on arrays it has checked itself (one
+    check for every column), which is most of the cost of a 9 × 3 problem.
+    """
+    try:
+        from scipy.optimize import _nnls as wrapper
+        from scipy.optimize._slsqplib import nnls as core
+    except ImportError:  # pragma: no cover - another scipy
+        return None
+    found = getattr(wrapper, "_nnls", None)
+    return core if found is core else None
+
+
+_NNLS = _nnls_core()
+
+
+def _nnls(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``scipy.optimize.nnls(a, b)[0]`` for finite, C-ordered float64 `a` (m, n) and `b` (m,)."""
+    if _NNLS is None:  # pragma: no cover - another scipy
+        return np.asarray(optimize.nnls(a, b)[0], dtype=np.float64)
+    coef, _, info = _NNLS(a, b, 3 * a.shape[1])
+    if info == 3:  # pragma: no cover - nnls' own refusal
+        raise RuntimeError("Maximum number of iterations reached.")
+    return np.asarray(coef, dtype=np.float64)
+
+
 def _fit_allan(x: NDArray[np.float64], dt: float, ms: NDArray[np.int64]) -> NDArray[np.float64]:
-    """Non-negative weighted fit of Eq. (2) per column; returns (k, 3): N², C_B, K²/3."""
+    """Non-negative weighted fit of Eq. (2) per column; returns (k, 3): N², C_B, K²/3.
+
+    Each column with some positive variance is fitted twice, the weights first from its
+    variances, then from the fitted model (where positive); the weighted designs of every
+    column are formed at once (the same element-wise operations as one column at a time).
+    """
     avar = _overlapping_avar(x, dt, ms)
-    tau = ms * dt
-    basis = np.column_stack([1.0 / tau, np.ones_like(tau), tau])
-    rel_sd = np.sqrt(2.0 / _edf_white(x.shape[0], ms))  # σ(σ̂²)/σ² of each point
-    out = np.zeros((x.shape[1], 3))
-    for j in range(x.shape[1]):
-        a = avar[:, j]
-        if not np.any(a > 0):
-            continue
-        model = np.maximum(a, 1e-300)
-        for _ in range(2):  # weights from the data, then from the fitted model
-            sd = model * rel_sd
-            coef, _ = optimize.nnls(basis / sd[:, None], a / sd)
-            fitted = basis @ coef
-            model = np.where(fitted > 0, fitted, model)
-        out[j] = coef
+    k = x.shape[1]
+    plan = _allan_plan(x.shape[0], k, tuple(ms.tolist()), dt)
+    out = np.zeros((k, 3))
+    rows = np.ascontiguousarray(avar.T)  # (k, M): each column's variances
+    live = np.flatnonzero(np.any(rows > 0, axis=1)).tolist()
+    if not live:
+        return out
+    model = np.maximum(rows, 1e-300)
+    for _ in range(2):  # weights from the data, then from the fitted model
+        sd = model * plan.rel_sd
+        design = plan.basis[None, :, :] / sd[:, :, None]
+        rhs = rows / sd
+        checked = bool(np.isfinite(design).all() and np.isfinite(rhs).all())
+        for j in live:
+            coef = _nnls(design[j], rhs[j]) if checked else optimize.nnls(design[j], rhs[j])[0]
+            fitted = plan.basis @ coef
+            np.copyto(model[j], fitted, where=fitted > 0)  # the fitted model where positive
+            out[j] = coef
     return out
 
 
@@ -406,25 +575,28 @@ def compute_integer_revolution_window(
     if weighting not in ("angle", "time"):
         raise InvalidInputError(f"`weighting` must be 'angle' or 'time'; got {weighting!r}")
     if angle_rad is not None:
-        theta = np.unwrap(_as_vector(angle_rad, "angle_rad", t.size))
+        theta = unwrap_angle(_as_vector(angle_rad, "angle_rad", t.size))
     elif rate_rps is not None:
         w = _as_vector(rate_rps, "rate_rps", t.size)
         theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
     step = np.diff(theta)
     sign = 1.0 if step.sum() >= 0 else -1.0
-    if np.any(sign * step <= 0):
+    forward = sign * step
+    if np.any(forward <= 0):
         raise InvalidInputError(
             "the table angle must change monotonically through the step (one direction of "
-            f"rotation); got {int(np.sum(sign * step <= 0))} sample step(s) against it"
+            f"rotation); got {int(np.sum(forward <= 0))} sample step(s) against it"
         )
     th = sign * theta
+    n = t.size
     # boundary angle after each sample: θ_{i+1}, the last one extrapolated
-    bound = np.concatenate([th, [th[-1] + (th[-1] - th[-2])]])
-    t_bound = np.concatenate([t, [t[-1] + (t[-1] - t[-2])]])
+    bound = np.empty(n + 1)
+    bound[:n] = th
+    bound[n] = th[-1] + (th[-1] - th[-2])
     # a span short of N revolutions by less than half a sample step counts as N (the servo's
     # rate noise moves the last boundary by a fraction of a step); the window's angle_error_rad
     # says by how much
-    median_step = median(step * sign)
+    median_step = median(forward)
     half_step = 0.5 * median_step
     n_rev = int(np.floor((bound[-1] - bound[0] + half_step) / (2.0 * np.pi) + 1e-12))
     if n_rev < 1:
@@ -432,36 +604,69 @@ def compute_integer_revolution_window(
             "the step must cover at least one revolution; got "
             f"{np.degrees(bound[-1] - bound[0]):.6g}°"
         )
-    target = bound[:-1] + 2.0 * np.pi * n_rev
-    stop = np.searchsorted(bound, target)
-    cand_a = np.arange(t.size)
-    best_err = np.full(t.size, np.inf)
-    best_stop = np.zeros(t.size, dtype=np.int64)
-    for s in (stop - 1, stop):
-        ok = (s > cand_a) & (s < bound.size)
-        err = np.full(t.size, np.inf)
-        err[ok] = np.abs(bound[s[ok]] - target[ok])
-        better = err < best_err
-        best_err[better], best_stop[better] = err[better], s[better]
-    finite = np.isfinite(best_err)
-    scale = max(median_step, 1e-300)
-    # smallest angle error (to a 1e-9 fraction of a sample), then the most central window
-    score = np.round(best_err / scale, 9)
-    center_off = np.abs((cand_a + best_stop) / 2.0 - t.size / 2.0)
-    order = np.lexsort((center_off, score))
-    a = int(next(i for i in order if finite[i]))
-    b = int(best_stop[a])
+    a, b = _closest_span(bound, bound[:-1] + 2.0 * np.pi * n_rev, max(median_step, 1e-300))
     dtheta = np.diff(bound[a: b + 1])
     weights = dtheta if weighting == "angle" else np.ones(b - a)
     mean = (weights @ cols[a:b]) / weights.sum()
     covered = float(bound[b] - bound[a])
+    end_time = float(t[b]) if b < n else float(t[-1] + (t[-1] - t[-2]))
     mean.setflags(write=False)
     return RevolutionWindow(start_index=a, stop_index=b, n_revolutions=n_rev,
                             covered_angle_rad=covered,
                             angle_error_rad=covered - 2.0 * np.pi * n_rev,
-                            start_time_s=float(t[a]), end_time_s=float(t_bound[b]),
+                            start_time_s=float(t[a]), end_time_s=end_time,
                             mean=mean,
                             weighting=weighting)
+
+
+def _closest_span(bound: NDArray[np.float64], target: NDArray[np.float64], scale: float
+                  ) -> tuple[int, int]:
+    """Return the window (a, b), samples a … b − 1, whose covered angle is closest to 2π·n.
+
+    `bound` (n + 1,) holds the increasing boundary angles, ``target[a] = bound[a] + 2π·n`` (n
+    whole revolutions) and `scale` the median step. For each start a the stop b is the
+    boundary next below or above the target (below when the two are equally close), b > a;
+    among the starts, the smallest error in units of `scale` rounded to 1e-9 wins, then the
+    most central window, then the earliest: a lexicographic sort's first entry (module
+    docstring, "Integer revolutions"), found by two minima.
+    """
+    n = target.size
+    starts = np.arange(n)
+    above = np.searchsorted(bound, target)     # first boundary ≥ the target
+    below = above - 1                          # the last below it
+    inf = np.inf
+    err_below = np.where(below > starts, np.abs(bound[below] - target), inf)
+    inside = (above > starts) & (above < bound.size)
+    err_above = np.where(inside, np.abs(bound[np.minimum(above, n)] - target), inf)
+    take_above = err_above < err_below
+    best_err = np.where(take_above, err_above, err_below)
+    best_stop = np.where(take_above, above, below)
+    live = np.flatnonzero(np.isfinite(best_err))
+    if not live.size:  # pragma: no cover - the first start always has a stop
+        raise InvalidInputError("no window of whole revolutions in the step")
+    score = np.round(best_err[live] / scale, 9)
+    live = live[score == score.min()]
+    center_off = np.abs((live + best_stop[live]) / 2.0 - n / 2.0)
+    a = int(live[np.argmin(center_off)])
+    return a, int(best_stop[a])
+
+
+def unwrap_angle(angle_rad: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``np.unwrap(angle_rad)`` (period 2π), bit for bit, without its work on a continuous angle.
+
+    np.unwrap adds to sample i the running sum of the corrections of the steps before it,
+    each zero where |Δθ| < π: on an angle with no such jump (a table's feedback unwrapped
+    already, 100 Hz samples of a turn) the sum is 0 and the result ``θ[0], θ[1:] + 0.0``,
+    formed here from one test of the steps. Anything else is np.unwrap's. [rad]
+    """
+    p = np.asarray(angle_rad)
+    if p.ndim != 1 or p.dtype != np.float64 or p.size < 2 \
+            or not bool(np.all(np.abs(np.diff(p)) < np.pi)):
+        unwrapped: NDArray[np.float64] = np.unwrap(p)
+        return unwrapped
+    out = p + 0.0
+    out[0] = p[0]
+    return out
 
 
 def _as_vector(value: ArrayLike, name: str, n: int) -> NDArray[np.float64]:

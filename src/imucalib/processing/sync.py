@@ -408,9 +408,15 @@ def reconstruct_time_base(
             f"`counter` must increase at every sample (modulo `counter_modulus`); got "
             f"counter[{i}] = {int(c_int[i])} after counter[{i - 1}] = {int(c_int[i - 1])}"
         )
-    c = np.concatenate([[0], np.cumsum(step)]) + c_int[0]
-    gaps = np.flatnonzero(step > 1) + 1
-    n_missing = int(np.sum(step[step > 1] - 1))
+    jumps = step > 1
+    if counter_modulus is not None or jumps.any():
+        c = np.concatenate([[0], np.cumsum(step)]) + c_int[0]
+        gaps = np.flatnonzero(jumps) + 1
+        n_missing = int(np.sum(step[jumps] - 1))
+    else:  # every raw step 1: the counter is its own unwrapped form (copied: flags change)
+        c = c_int.copy()
+        gaps = np.zeros(0, dtype=np.int64)
+        n_missing = 0
 
     x = (c - c[0]).astype(np.float64)
     y = t_host - t_host[0]

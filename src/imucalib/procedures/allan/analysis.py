@@ -473,7 +473,8 @@ def _analyze(rec: Recording, device: str, unit: str | None, steps: Iterable[int]
     for done, (label, index, t0, t1) in enumerate(records, start=1):
         chunks = rec.iter_stream(device, unit, chunk_samples, columns, t0, t1)
         where = f"the window [{t0}, {t1}) s of {device}/{unit}"
-        segments.append(_segment(label, index, chunks, chans, has_temp, where, fit_options))
+        segments.append(_segment(label, index, chunks, chans, has_temp, where, fit_options,
+                                 owned=True))
         if progress is not None:
             progress(done / len(records))
     return _characterization(str(rec.path), device, unit, segments, fit_options, tau_min_s)
@@ -516,8 +517,12 @@ class _Chunk:
 
 def _segment(label: str, index: int | None, chunks: Iterable[Any],
              chans: Sequence[tuple[str, str, float]], has_temp: bool, where: str,
-             opts: _FitOptions) -> SegmentNoise:
-    """Stream `chunks` (``time_s``, ``columns``) through the deviations and fit each channel."""
+             opts: _FitOptions, *, owned: bool = False) -> SegmentNoise:
+    """Stream `chunks` (``time_s``, ``columns``) through the deviations and fit each channel.
+
+    `owned`: the chunks' columns are arrays no one else holds (read from the recording), which
+    the streams keep instead of copying them.
+    """
     check = SamplingCheck(rtol=opts.sampling_rtol)
     streams: dict[str, AllanStream] = {}
     names = [c for c, _, _ in chans] + ([TEMPERATURE_COLUMN] if has_temp else [])
@@ -535,11 +540,11 @@ def _segment(label: str, index: int | None, chunks: Iterable[Any],
                 values = np.asarray(chunk.columns[c], dtype=np.float64)
                 if factor != 1.0:  # x·1 is x: no pass and no copy for SI columns
                     values = values * factor
-                try:
-                    streams[c].append(values)
+                try:  # an array of our own (read, converted or scaled here) is kept, not copied
+                    sums[c] += streams[c].append(
+                        values, copy=not (owned or values is not chunk.columns[c]))
                 except InvalidInputError as exc:
                     raise InvalidInputError(f"{label}, column {c}: {exc}") from exc
-                sums[c] += float(np.sum(values))
             if has_temp:
                 sums[TEMPERATURE_COLUMN] += float(np.sum(chunk.columns[TEMPERATURE_COLUMN],
                                                          dtype=np.float64))

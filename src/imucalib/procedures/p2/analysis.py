@@ -37,7 +37,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -151,6 +151,25 @@ def _combine(means: Sequence[_F64], ses: Sequence[_F64]) -> tuple[_F64, _F64]:
     return m, se
 
 
+def _combine_each(groups: Sequence[Sequence[P2Window]], attr: str, se_attr: str
+                  ) -> tuple[_F64, _F64]:
+    """:func:`_combine` of each orientation's group of windows, shape (6, 3) each.
+
+    Groups of one size (a station's plan: two static windows and one turn each way per
+    orientation) are combined in one reduction along the group axis, which numpy sums window
+    by window as it does the group alone (tests/procedures/test_p2_pooled_se.py).
+    """
+    sizes = {len(g) for g in groups}
+    if len(sizes) == 1:
+        size = sizes.pop()
+        means = np.array([[getattr(w, attr) for w in g] for g in groups])      # (6, size, 3)
+        ses = np.array([[getattr(w, se_attr) for w in g] for g in groups])
+        return np.mean(means, axis=1), np.sqrt(np.sum(ses**2, axis=1)) / size
+    each = [_combine([getattr(w, attr) for w in g], [getattr(w, se_attr) for w in g])
+            for g in groups]
+    return np.array([m for m, _ in each]), np.array([se for _, se in each])
+
+
 def assemble_point(unit: str, point: int, windows: Sequence[P2Window], gravity_mps2: float,
                    earth_rate_up_rps: float) -> PointWindows:
     """Group one point's windows by orientation into :class:`PointWindows`.
@@ -162,11 +181,13 @@ def assemble_point(unit: str, point: int, windows: Sequence[P2Window], gravity_m
         names the unit, the point and the orientation.
     """
     temp = float(np.mean([w.temperature_degc for w in windows])) if windows else math.nan
-    rows: dict[str, list[Any]] = {k: [] for k in (
-        "s_a", "s_ase", "p_g", "p_gse", "m_g", "m_gse", "p_a", "p_ase", "m_a", "m_ase", "p_w",
-        "m_w")}
+    by_orientation: dict[str, list[P2Window]] = {o: [] for o in ORIENTATIONS}
+    for w in windows:
+        if w.orientation in by_orientation:
+            by_orientation[w.orientation].append(w)
+    statics, pluses, minuses = [], [], []
     for o in ORIENTATIONS:
-        mine = [w for w in windows if w.orientation == o]
+        mine = by_orientation[o]
         static = [w for w in mine if w.kind == "static"]
         plus = [w for w in mine if w.kind == "rate" and w.table_rate_rps > 0]
         minus = [w for w in mine if w.kind == "rate" and w.table_rate_rps < 0]
@@ -178,26 +199,22 @@ def assemble_point(unit: str, point: int, windows: Sequence[P2Window], gravity_m
                 f"{where(unit, point, temp, None)}: orientation {o} up has no "
                 f"{' and no '.join(missing)} (orientations seen: {have}); P2 needs every body "
                 "axis up and down, each static and turning both ways")
-        for key, group, attr in (("s_a", static, "accel_mean_mps2"),
-                                 ("p_g", plus, "gyro_mean_rps"), ("m_g", minus, "gyro_mean_rps"),
-                                 ("p_a", plus, "accel_mean_mps2"),
-                                 ("m_a", minus, "accel_mean_mps2")):
-            se_attr = "accel_se_mps2" if attr.startswith("accel") else "gyro_se_rps"
-            m, se = _combine([getattr(w, attr) for w in group], [getattr(w, se_attr)
-                                                                  for w in group])
-            rows[key].append(m)
-            rows[key + "se"].append(se)
-        rows["p_w"].append(np.mean([w.table_rate_rps for w in plus]))
-        rows["m_w"].append(np.mean([w.table_rate_rps for w in minus]))
-    arr = {k: np.array(v) for k, v in rows.items()}
+        statics.append(static)
+        pluses.append(plus)
+        minuses.append(minus)
+    s_a, s_ase = _combine_each(statics, "accel_mean_mps2", "accel_se_mps2")
+    p_g, p_gse = _combine_each(pluses, "gyro_mean_rps", "gyro_se_rps")
+    m_g, m_gse = _combine_each(minuses, "gyro_mean_rps", "gyro_se_rps")
+    p_a, p_ase = _combine_each(pluses, "accel_mean_mps2", "accel_se_mps2")
+    m_a, m_ase = _combine_each(minuses, "accel_mean_mps2", "accel_se_mps2")
     return PointWindows(
-        static_accel_mps2=arr["s_a"], static_accel_se_mps2=arr["s_ase"],
-        plus_gyro_rps=arr["p_g"], plus_gyro_se_rps=arr["p_gse"],
-        minus_gyro_rps=arr["m_g"], minus_gyro_se_rps=arr["m_gse"],
-        plus_accel_mps2=arr["p_a"], plus_accel_se_mps2=arr["p_ase"],
-        minus_accel_mps2=arr["m_a"], minus_accel_se_mps2=arr["m_ase"],
-        plus_rate_rps=arr["p_w"], minus_rate_rps=arr["m_w"], gravity_mps2=gravity_mps2,
-        earth_rate_up_rps=earth_rate_up_rps)
+        static_accel_mps2=s_a, static_accel_se_mps2=s_ase,
+        plus_gyro_rps=p_g, plus_gyro_se_rps=p_gse, minus_gyro_rps=m_g, minus_gyro_se_rps=m_gse,
+        plus_accel_mps2=p_a, plus_accel_se_mps2=p_ase,
+        minus_accel_mps2=m_a, minus_accel_se_mps2=m_ase,
+        plus_rate_rps=np.array([np.mean([w.table_rate_rps for w in g]) for g in pluses]),
+        minus_rate_rps=np.array([np.mean([w.table_rate_rps for w in g]) for g in minuses]),
+        gravity_mps2=gravity_mps2, earth_rate_up_rps=earth_rate_up_rps)
 
 
 def _point(obs: UnitObservations, point: int, windows: Sequence[P2Window],
@@ -293,10 +310,11 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         t_h = np.array([p.temperature_degc for p in held])
         r_h = np.array([p.temperature_rate_degc_ps for p in held])
         l_h = np.array([_leg_value(p.leg) for p in held])
+        var_h = [np.diag(p.least_squares.covariance_scaled()).tolist() for p in held]
         for i, name in enumerate(PARAM_NAMES):
             checks[name] = check_held_out(
                 models[name], t_h, [p.least_squares.values[i] for p in held],
-                [math.sqrt(p.least_squares.covariance_scaled()[i, i]) for p in held],
+                [math.sqrt(v[i]) for v in var_h],
                 temperature_rate_degc_ps=r_h if opt.rate_term else None,
                 leg=l_h if use_leg else None, limit=HELD_OUT_Z_LIMIT, alpha=HELD_OUT_ALPHA)
     judged = held or cal

@@ -12,9 +12,11 @@ the number of units):
    sample interpolated from the feedback
    (:func:`~imucalib.processing.statistics.compute_integer_revolution_window`), and it must hold
    the commanded number of whole revolutions;
-4. the standard error of each mean from the window's own Allan variance
-   (:func:`~imucalib.processing.statistics.compute_window_statistics`), a turning window's
-   taken about its mean and once-per-revolution harmonic (what the averaging cancels);
+4. the noise terms of the first windows of each point from their own Allan variance
+   (:func:`~imucalib.processing.statistics.window_noise_fit`), a turning window's taken about
+   its mean and once-per-revolution harmonic (what the averaging cancels), and the standard
+   error of every mean from the noise model pooled over the point
+   (:func:`pooled_standard_errors`);
 5. the internal temperature's mean and slope over the window.
 
 Which orientation a window belongs to is read from the data: each pose's static windows say
@@ -30,8 +32,8 @@ Contents
 
 from __future__ import annotations
 
-import dataclasses
 import math
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -40,18 +42,19 @@ from numpy.typing import NDArray
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS, TEMPERATURE_COLUMN
 from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentError, RecordingError
-from imucalib.io.reader import Recording, StepRecord, StreamData
+from imucalib.io.reader import Recording, StepRecord, StreamData, StreamInfo
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
-from imucalib.models.noise import NoiseModel
-from imucalib.procedures.common.noise import FLICKER_FACTOR, window_mean_se
+from imucalib.models.noise import NoiseModel, compute_theoretical_adev
+from imucalib.procedures.common.noise import FLICKER_FACTOR
 from imucalib.procedures.common.reference import site_vectors
 from imucalib.procedures.common.window_checks import WindowLimits, checked_samples
 from imucalib.procedures.common.windows import counter_times, table_angle_at
 from imucalib.procedures.p2.reduction import orientation_of
 from imucalib.procedures.p2.roles import P2_RATE, P2_STATIC
-from imucalib.processing import (
+from imucalib.processing.statistics import (
     compute_integer_revolution_window,
-    compute_window_statistics,
+    unwrap_angle,
+    window_noise_fit,
 )
 
 __all__ = ["P2Processing", "P2Window", "UnitObservations", "extract_unit_observations",
@@ -175,13 +178,16 @@ def _tag_int(step: StepRecord, key: str) -> int | None:
                              "integer") from None
 
 
-def _slope(t: _F64, y: _F64) -> float:
-    """Return the least-squares slope of y on t (0 for fewer than three points)."""
+def _slope(t: _F64, y: _F64, y_mean: float) -> float:
+    """Return the least-squares slope of y on t (0 for fewer than three points).
+
+    `y_mean` is ``float(np.mean(y))`` (the caller has it).
+    """
     if t.size < 3:
         return 0.0
     dt = t - t.mean()
     den = float(dt @ dt)
-    return float(dt @ (y - y.mean()) / den) if den > 0 else 0.0
+    return float(dt @ (y - y_mean) / den) if den > 0 else 0.0
 
 
 def where(unit: str, point: int, temperature_degc: float | None, step: StepRecord | None) -> str:
@@ -192,10 +198,37 @@ def where(unit: str, point: int, temperature_degc: float | None, step: StepRecor
     return f"unit {unit}, temperature point {point}{temp}{at}"
 
 
+@dataclass(frozen=True)
+class _RecordingFacts:
+    """What every unit of a recording reads alike: its streams and its site."""
+
+    streams: tuple[StreamInfo, ...]
+    latitude_deg: float
+    heading_deg: float
+
+
+#: One :class:`_RecordingFacts` per open Recording: the streams are declared and the root
+#: attributes written when a recording is created, so the units of a lot read them once
+_FACTS: weakref.WeakKeyDictionary[Recording, _RecordingFacts] = weakref.WeakKeyDictionary()
+
+
+def _facts_of(rec: Recording) -> _RecordingFacts:
+    """Return the streams and site of `rec` (read on its first unit, then remembered)."""
+    facts = _FACTS.get(rec)
+    if facts is None:
+        meta = rec.metadata
+        facts = _RecordingFacts(streams=tuple(rec.streams),
+                                latitude_deg=float(meta.get("latitude_deg", math.nan)),
+                                heading_deg=float(meta.get("heading_deg", 0.0)))
+        _FACTS[rec] = facts
+    return facts
+
+
 class _Reducer:
-    def __init__(self, rec: Recording, unit: str, opt: P2Processing) -> None:
+    def __init__(self, rec: Recording, unit: str, opt: P2Processing,
+                 streams: tuple[StreamInfo, ...]) -> None:
         self.rec, self.unit, self.opt = rec, unit, opt
-        tables = [s for s in rec.streams if s.device == DEVICE_TABLE]
+        tables = [s for s in streams if s.device == DEVICE_TABLE]
         if not tables:
             raise RecordingError(f"{rec.path} has no table stream: P2 needs the table feedback")
         self.table = tables[0]
@@ -209,80 +242,80 @@ class _Reducer:
         self._fitted: dict[int, int] = {}
 
     def read(self, step: StepRecord, point: int, data: StreamData
-             ) -> tuple[_F64, _F64, _F64, int]:
-        """Return (counter times, values (n, 6), temperatures, samples lost) of a window."""
+             ) -> tuple[_F64, _F64, _F64, float, int]:
+        """Return (counter times, values (n, 6), temperatures, their mean, samples lost)."""
         here = where(self.unit, point, None, step)
         values = checked_samples(here, data, _COLUMNS)
         temp = np.asarray(data.columns[TEMPERATURE_COLUMN], dtype=np.float64)
         if not np.all(np.isfinite(temp)):
             raise InvalidInputError(f"{here}: the window holds NaN or infinite samples")
+        temp_mean = float(np.mean(temp))
         # a turn's mean weights samples by the table angle at their own instants: the counter's
         # time base (receive-time jitter removed); a static mean needs no instants
         t, period, lost = counter_times(
-            where(self.unit, point, float(np.mean(temp)), step), data.columns["counter"],
-            data.time_s,
+            where(self.unit, point, temp_mean, step), data.columns["counter"], data.time_s,
             max_lost_fraction=self.opt.max_lost_fraction, max_gap_s=self.opt.max_gap_s,
             reconstruct=step.role == P2_RATE)
         if self.sample_rate_hz <= 0.0 and period > 0:
             self.sample_rate_hz = 1.0 / period
-        return t, values, temp, lost
+        return t, values, temp, temp_mean, lost
 
     def reduce(self, step: StepRecord, point: int, leg: str, held: bool, data: StreamData,
                fb: StreamData | None) -> P2Window:
         """Reduce one window (`data`: the unit's rows; `fb`: the table's, for a turn)."""
         kind = "rate" if step.role == P2_RATE else "static"
-        t, values, temp, lost = self.read(step, point, data)
+        t, values, temp, temp_mean, lost = self.read(step, point, data)
         fs = self.sample_rate_hz
         n_rev, rate = 0, 0.0
+        fit: _F64 | None = None
         if kind == "rate":
             assert fb is not None
             if len(fb) < 2:
                 raise MissingSegmentError(f"{where(self.unit, point, None, step)}: fewer than 2 "
                                           "table feedback samples in the window")
-            angle = table_angle_at(t, fb.time_s, np.unwrap(fb.columns[self.angle_col]))
+            angle = table_angle_at(t, fb.time_s, unwrap_angle(fb.columns[self.angle_col]))
             try:
                 win = compute_integer_revolution_window(t, values, angle_rad=angle)
             except InvalidInputError as exc:
-                raise MissingSegmentError(f"{where(self.unit, point, float(np.mean(temp)), step)}"
-                                          f": {exc}") from None
+                raise MissingSegmentError(f"{where(self.unit, point, temp_mean, step)}: {exc}"
+                                          ) from None
             wanted = step.commanded.get("revolutions") if isinstance(step.commanded,
                                                                       dict) else None
             n_rev = int(win.n_revolutions)
             if isinstance(wanted, int | float) and n_rev < int(wanted):
                 raise MissingSegmentError(
-                    f"{where(self.unit, point, float(np.mean(temp)), step)}: the turn holds "
+                    f"{where(self.unit, point, temp_mean, step)}: the turn holds "
                     f"{n_rev} whole revolution(s) of the {int(wanted)} commanded (short of an "
                     "integer number of revolutions)")
             sl = slice(win.start_index, win.stop_index)
             mean = np.asarray(win.mean, dtype=np.float64)
-            fit_noise = self.count(point)
-            if fit_noise:
+            if self.count(point):
+                # the noise about the mean and the once-per-revolution harmonic
                 a = angle[sl]
                 design = np.column_stack([np.ones(a.size), np.sin(a), np.cos(a)])
                 coef, *_ = np.linalg.lstsq(design, values[sl], rcond=None)
-                stats = compute_window_statistics(values[sl] - design @ coef, fs)
+                fit = window_noise_fit(values[sl] - design @ coef, fs)[1]
             span_t = t[sl]
             rate = float((angle[sl][-1] - angle[sl][0]) / (span_t[-1] - span_t[0]))
             t_used, temp_used = span_t, temp[sl]
+            temp_mean_used = float(np.mean(temp_used))
         else:
-            fit_noise = self.count(point)
-            if fit_noise:
-                stats = compute_window_statistics(values, fs)
-            mean = values.mean(axis=0)
-            t_used, temp_used = t, temp
-        slope = _slope(t_used, temp_used)
+            if self.count(point):
+                mean, fit = window_noise_fit(values, fs)
+            else:
+                mean = values.mean(axis=0)
+            t_used, temp_used, temp_mean_used = t, temp, temp_mean
         # the pooled model (pooled_standard_errors) gives every window its standard error
-        se = np.asarray(stats.standard_error, dtype=np.float64) if fit_noise \
-            else np.full(6, np.nan)
+        se = np.full(6, np.nan)
         return P2Window(
             step_index=step.index, label=step.label, point=point, leg=leg, held_out=held,
             pose=step.tag_value("pose") or "", kind=kind, table_rate_rps=rate,
             n_revolutions=n_rev, gyro_mean_rps=mean[:3], accel_mean_mps2=mean[3:],
             gyro_se_rps=se[:3], accel_se_mps2=se[3:],
-            temperature_degc=float(np.mean(temp_used)), temperature_rate_degc_ps=slope,
+            temperature_degc=temp_mean_used,
+            temperature_rate_degc_ps=_slope(t_used, temp_used, temp_mean_used),
             duration_s=float(t_used[-1] - t_used[0]), n_samples=int(t_used.size), n_lost=lost,
-            allan_fit=np.vstack([stats.white_density, stats.flicker_variance,
-                                 stats.random_walk]) if fit_noise else None)
+            allan_fit=fit)
 
     def count(self, point: int) -> bool:
         """Whether this window of `point` is one whose noise is fitted (and count it)."""
@@ -314,21 +347,21 @@ def extract_unit_observations(rec: Recording, unit: str, *,
         No IMU stream `unit`, no table stream, no latitude, or no step with a P2 role.
     """
     opt = processing or P2Processing()
-    units = p2_units(rec)
+    facts = _facts_of(rec)
+    units = [s.unit for s in facts.streams if s.device == DEVICE_IMU]  # p2_units
     if unit not in units:
         raise RecordingError(f"{rec.path} has no IMU stream {unit!r}; it has {units}")
-    meta = rec.metadata
-    lat = float(meta.get("latitude_deg", math.nan))
+    lat = facts.latitude_deg
     if not math.isfinite(lat):
         raise RecordingError(f"{rec.path} does not record the latitude (latitude_deg): the "
                              "vertical Earth rate needs it")
-    g, earth_t = site_vectors(lat, float(meta.get("heading_deg", 0.0)), opt.gravity_mps2)
+    g, earth_t = site_vectors(lat, facts.heading_deg, opt.gravity_mps2)
     steps = [s for s in (rec.steps if steps is None else steps)
              if s.role in (P2_STATIC, P2_RATE) and s.concerns(unit)]
     if not steps:
         raise RecordingError(f"{rec.path}: no step has a P2 role ({P2_STATIC}, {P2_RATE}); "
                              "is it a P2 recording?")
-    red = _Reducer(rec, unit, opt)
+    red = _Reducer(rec, unit, opt, facts.streams)
     windows: list[P2Window] = []
     failures: dict[int, str] = {}
     points = {}
@@ -378,7 +411,7 @@ def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
     and temperature point sees the same sensor noise: the median of the windows' white,
     flicker and random-walk coefficients is a noise model (:class:`~imucalib.models.noise.
     NoiseModel`) whose Allan deviation at each window's duration is its standard error
-    (:func:`~imucalib.procedures.common.noise.window_mean_se`).
+    (:func:`~imucalib.procedures.common.noise.window_mean_se`, for all of them at once).
     """
     by_point: dict[int, list[P2Window]] = {}
     for w in windows:
@@ -397,10 +430,35 @@ def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
                                                             / FLICKER_FACTOR),
                                    random_walk=np.maximum(fit[2, cols], 0.0))
                  for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6)))}
-        for w in mine:
-            gyro, accel = window_mean_se(noise, w.duration_s)
-            out[id(w)] = dataclasses.replace(w, gyro_se_rps=gyro, accel_se_mps2=accel)
+        gyro, accel = _window_mean_ses(noise, [w.duration_s for w in mine])
+        for w, g_se, a_se in zip(mine, gyro, accel, strict=True):
+            out[id(w)] = _replaced(w, gyro_se_rps=g_se, accel_se_mps2=a_se)
     return [out.get(id(w), w) for w in windows]
+
+
+def _window_mean_ses(noise: dict[str, NoiseModel], durations_s: list[float]
+                     ) -> tuple[_F64, _F64]:
+    """:func:`~imucalib.procedures.common.noise.window_mean_se` of many durations, row by row.
+
+    The model's Allan deviation at τ = each duration (at least 1 ms), floored at 1e-300, in
+    one evaluation (:func:`~imucalib.models.noise.compute_theoretical_adev` is element-wise
+    in τ: each row equals the one-window call bit for bit). [rad/s], [m/s²], shape (m, 3)
+    """
+    tau = np.array([max(d, 1e-3) for d in durations_s])
+    gyro = compute_theoretical_adev(noise["gyro"], tau)
+    accel = compute_theoretical_adev(noise["accel"], tau)
+    return np.maximum(gyro, 1e-300), np.maximum(accel, 1e-300)
+
+
+def _replaced(w: P2Window, **changes: object) -> P2Window:
+    """``dataclasses.replace(w, **changes)`` without its pass over the fields' definitions.
+
+    Every field of :class:`P2Window` is an ``__init__`` field held in the instance's
+    ``__dict__``: the copy of that dict with `changes` builds the same window.
+    """
+    fields = dict(w.__dict__)
+    fields.update(changes)
+    return P2Window(**fields)
 
 
 def detect_orientations(obs: UnitObservations, opt: P2Processing | None = None
@@ -431,5 +489,5 @@ def detect_orientations(obs: UnitObservations, opt: P2Processing | None = None
     out = []
     for w in obs.windows:
         o = by_key.get((w.point, w.pose), "")
-        out.append(dataclasses.replace(w, orientation=o))
+        out.append(_replaced(w, orientation=o))
     return out, failures

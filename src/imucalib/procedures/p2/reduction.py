@@ -256,7 +256,8 @@ def _closed_form_batch(w: PointWindows, mode: str, means: _F64) -> _F64:
     turn = 0.5 * (ap + am)
     p_r = np.zeros_like(turn)
     lever = np.zeros((nb, 3))
-    for _ in range(3):
+    # the naive analysis ("ignore") sets r to zero below and reads nothing the iteration forms
+    for _ in range(0 if mode == "ignore" else 3):
         quad = k2_a[:, None, :] * omega4[None, :, None] * p_r**2
         pr = -np.linalg.solve(k_a, (turn - s - quad).transpose(0, 2, 1)).transpose(0, 2, 1) \
             / omega2[None, :, None]                                 # P_o·r, (B, 6, 3)
