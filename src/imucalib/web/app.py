@@ -114,6 +114,7 @@ def routers() -> list[Any]:
     from imucalib.web import (
         audit,
         auth,
+        history,
         live,
         lock,
         overview,
@@ -123,8 +124,8 @@ def routers() -> list[Any]:
         users_page,
     )
 
-    return [m.router for m in (auth, lock, run_start, pages, results, live, overview, audit,
-                               users_page)]
+    return [m.router for m in (auth, lock, run_start, pages, results, history, live, overview,
+                               audit, users_page)]
 
 
 def route_table() -> list[tuple[str, str]]:
