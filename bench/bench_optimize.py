@@ -5,8 +5,9 @@ Prints (docs/test-design.md, "The optimiser (P1)"):
 1. ``--target-default``: the least station time with every parameter's σ no worse than the
    default plan's, against the default plan's time, with the procedure's 60-min static (the
    default margin);
-2. the same with statics from 120 s (predicted well, but not calibrated honestly: the biases'
-   σ are under-reported, docs/test-design.md "Truth on the twin");
+2. the same with statics from 120 s (their calibrations take the grade's flicker and random
+   walk as a Type B input, docs/p1.md "Noise model of the window means"; checked on the twin in
+   docs/test-design.md "Truth on the twin");
 3. the reverse table: the σ the design with short statics reaches within the default plan's
    time.
 
@@ -58,8 +59,8 @@ def main() -> None:
     targets = default_targets()
     least = optimize_p1(targets=targets)            # the procedure's 60-min static kept
     t_least = time.perf_counter() - t
-    # the same with statics down to 120 s: predicted well, but their calibrations under-report
-    # the biases' σ (docs/test-design.md, "Truth on the twin")
+    # the same with statics down to 120 s: their calibrations rest the biases' σ on the grade's
+    # declared flicker (docs/p1.md, "Noise model of the window means")
     short = OptimizeSettings(min_static_s=120.0)
     t = time.perf_counter()
     least_short = optimize_p1(targets=targets, settings=short)
@@ -78,7 +79,7 @@ def main() -> None:
           f"({within.n_evaluated} plans predicted)")
     _table(least, "1. every σ no worse than the default plan's, least station time, the "
                   "procedure's 60-min static")
-    _table(least_short, "2. the same with statics from 120 s (not calibrated honestly)")
+    _table(least_short, "2. the same with statics from 120 s (the grade's flicker, Type B)")
     _table(within, f"3. reverse table, statics from 120 s: σ within the default plan's "
                    f"{budget / 3600:.2f} h")
 

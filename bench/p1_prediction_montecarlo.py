@@ -12,12 +12,19 @@ grade's white + coloured noise) within 10 % of the Monte-Carlo spread of the est
    recomputed with ``predict_p1`` on the exact plan that is run).
 2. For seeds 1…N: the twin seed set (a new unit truth drawn from the grade and new noise), the
    plan run on the twin (:class:`~imucalib.station.sim.SimStation`), analysed with
-   ``terms="-k2,+g"`` (the model ``predict_p1`` predicts), and per parameter the error
+   ``--terms`` (default ``"-k2,+g"``; ``"+k2,+g"`` fits the twin's K2, and ``predict_p1`` then
+   predicts it, ``accel_k2=True``), and per parameter the error
    (estimate − truth, the truth mapped as ``imucalib.demo._truth_table``), the reported σ
    (noise-only ``result.std()`` and ``result.std(scaled=True)``) recorded.
 3. Per parameter: predicted σ, the Monte-Carlo spread (std of the errors, about their mean) with
    its 95 % χ² interval, the RMS error (mean included), the mean reported σ, and the ratios; then
-   the fraction within 10 % and the worst.
+   the fraction within 10 % and the worst, and per group (bias, M_ii, misalignment, K2, G) the
+   pooled ratios (:func:`group_summary`).
+
+Options for a fair comparison: ``--table-as-twin`` states the twin's table in the plan's
+``[equipment]`` (its Type B, Eq. (TD.4), in the prediction and the calibration; the twin's
+table errors are the same in every run, so they move the mean error, not the spread);
+``--white`` runs the twin IMU with white noise only (and predicts it so).
 
 Intermediate results are written to ``--out`` (JSON lines, one per run, appended) so a partial
 run is not lost; ``--resume`` reuses them, ``--report-only`` prints the table from them.
@@ -26,7 +33,7 @@ Run (one core)::
 
     OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1 OMP_NUM_THREADS=1 \\
         nice -n 5 .venv/bin/python bench/p1_prediction_montecarlo.py --n 200 --max-minutes 32 \\
-        --out /tmp/p1_mc.jsonl
+        --terms=+k2,+g --table-as-twin --out /tmp/p1_mc.jsonl
 
 (about 11 s a run on one core: 9.7 s twin, 1.4 s analysis; 171 runs fit in 32 minutes).
 Runs written before ``truth_k2`` was recorded take the K2 truths from ``--k2-truth`` (JSON lines
@@ -71,22 +78,48 @@ from imucalib.station.sim import SimStation  # noqa: E402
 TERMS = "-k2,+g"
 
 
-def optimised_options(full: bool, rate_hz: float) -> tuple[P1PlanOptions, Any]:
+def optimised_options(full: bool, rate_hz: float, min_static_s: float = 120.0
+                      ) -> tuple[P1PlanOptions, Any]:
     """Return the optimised design's plan options at `rate_hz`, and the optimiser's result."""
     base = P1PlanOptions(grade="tactical")
     # statics from 120 s: the design the optimiser finds when the procedure's 60-min static is
     # not kept (with it the optimum is the default plan itself; docs/test-design.md)
-    settings = (OptimizeSettings(min_static_s=120.0) if full
-                else OptimizeSettings.coarse(min_static_s=120.0))
+    settings = (OptimizeSettings(min_static_s=min_static_s) if full
+                else OptimizeSettings.coarse(min_static_s=min_static_s))
     result = optimize_p1(base, targets=default_targets(base), settings=settings)
     opts = dataclasses.replace(result.best.design.options(base), sample_rate_hz=rate_hz)
     return opts, result
 
 
-def make_plan(opts: P1PlanOptions, seed: int) -> Plan:
+#: The twin's dual-axis table ("high" grade, ``sim/table.py``): 1″ RMS encoder error and 1″
+#: wobble per axis, 2″ non-orthogonality. ``--table-as-twin`` declares them in the plan's
+#: ``[equipment]`` (a/√3 = the RMS: a = √3·√(1² + 1²)″ for the positions, 2″ for the axis pair)
+#: so that the Type B of Eq. (TD.4), in the prediction and the calibration, is the twin's.
+TWIN_TABLE_POSITION_ARCSEC = math.sqrt(3.0) * math.sqrt(2.0)
+TWIN_TABLE_ORTHOGONALITY_ARCSEC = 2.0
+
+
+def make_plan(opts: P1PlanOptions, seed: int, *, white: bool = False,
+              table_as_twin: bool = False) -> Plan:
+    """The plan of `opts` with twin seed `seed`.
+
+    `white`: the twin IMU's white noise only (``noise = "white"``; the prediction and the
+    declared noise then have no flicker). `table_as_twin`: the plan's equipment states the
+    twin's table (:data:`TWIN_TABLE_POSITION_ARCSEC`, :data:`TWIN_TABLE_ORTHOGONALITY_ARCSEC`).
+    """
     kwargs = {f.name: getattr(opts, f.name) for f in dataclasses.fields(opts)}
     kwargs["seed"] = seed
-    return generate_p1_plan(**kwargs)
+    plan = generate_p1_plan(**kwargs)
+    assert plan.twin is not None
+    if white:
+        imu = plan.twin.imus[0].model_copy(update={"noise": "white"})
+        plan = plan.model_copy(update={"twin": plan.twin.model_copy(update={"imus": (imu,)})})
+    if table_as_twin:
+        eq = plan.equipment.model_copy(update={
+            "table_position_accuracy_arcsec": TWIN_TABLE_POSITION_ARCSEC,
+            "table_orthogonality_arcsec": TWIN_TABLE_ORTHOGONALITY_ARCSEC})
+        plan = plan.model_copy(update={"equipment": eq})
+    return plan
 
 
 def truth_values(truth: dict[str, Any], sensor_id: str) -> dict[str, float]:
@@ -105,9 +138,10 @@ def truth_values(truth: dict[str, Any], sensor_id: str) -> dict[str, float]:
     return true
 
 
-def one_run(opts: P1PlanOptions, seed: int, workdir: Path) -> dict[str, Any]:
+def one_run(opts: P1PlanOptions, seed: int, workdir: Path, *, terms: str = TERMS,
+            white: bool = False, table_as_twin: bool = False) -> dict[str, Any]:
     """Run the plan with twin seed `seed`; return errors and reported σ per parameter."""
-    plan = make_plan(opts, seed)
+    plan = make_plan(opts, seed, white=white, table_as_twin=table_as_twin)
     assert plan.twin is not None
     path = workdir / f"run-{seed}.h5"
     t0 = time.perf_counter()
@@ -117,7 +151,7 @@ def one_run(opts: P1PlanOptions, seed: int, workdir: Path) -> dict[str, Any]:
     if summary.status != "done":
         raise RuntimeError(f"seed {seed}: run not done: {summary.reason}")
     t_run = time.perf_counter() - t0
-    analysis = analyze_p1(path, options=P1Options(terms=TERMS, hash_recording=False))
+    analysis = analyze_p1(path, options=P1Options(terms=terms, hash_recording=False))
     t_an = time.perf_counter() - t0 - t_run
     res = analysis.result
     with open_recording(path) as rec:
@@ -128,7 +162,8 @@ def one_run(opts: P1PlanOptions, seed: int, workdir: Path) -> dict[str, Any]:
             "misfit": [q.group for q in res.fit_quality if q.misfit],
             "err": {n: res.value(n) - truth[n] for n in res.param_names},
             "sigma": std, "sigma_scaled": std_s,
-            "truth_k2": {k: v for k, v in truth.items() if k.startswith("accel_K2")}}
+            "truth_k2": {k: v for k, v in truth.items() if k.startswith("accel_K2")},
+            "notes": [n for n in res.notes if "noise" in n]}
 
 
 def without_type_b(plan: Plan) -> Plan:
@@ -151,6 +186,43 @@ def k2_residuals(rows: list[dict[str, Any]], name: str) -> np.ndarray | None:
     e = np.array([r["err"][name] for r in rows])
     coef, *_ = np.linalg.lstsq(x, e, rcond=None)
     return e - x @ coef
+
+
+def _group_of(name: str) -> str:
+    """The parameter group of a result name: bias, M_ii, misalignment, K2, G, per triad."""
+    triad, kind = name.split("_")[:2]
+    if kind == "M":
+        kind = "M_ii" if name[-1] == name[-2] else "misalignment"
+    return f"{triad} {kind}"
+
+
+def group_summary(rows: list[dict[str, Any]], predicted: dict[str, float | None],
+                  predicted_nb: dict[str, float | None]) -> None:
+    """Per group: the pooled ratios √(mean (s/σ_p)²) of spread, RMS and reported σ.
+
+    The spread (about the mean) against the prediction without Type B (the twin's table errors
+    are the same in every run: they move the mean, not the spread); the RMS error (mean
+    included) and the mean reported σ against the prediction with it (Eq. (TD.4)). A
+    parameter's spread is known to ±1/√(2N) (1σ); the group's pooled ratio a little better.
+    """
+    n = len(rows)
+    groups: dict[str, list[tuple[float, float, float]]] = {}
+    for k in rows[0]["err"]:
+        p, pnb = predicted.get(k), predicted_nb.get(k)
+        if not p or not pnb:
+            continue
+        e = np.array([r["err"][k] for r in rows])
+        rep = float(np.mean([r["sigma"][k] for r in rows]))
+        groups.setdefault(_group_of(k), []).append(
+            (float(np.std(e, ddof=1)) / pnb, float(np.sqrt(np.mean(e**2))) / p, rep / p))
+    print(f"\nper group, N = {n} (a parameter's spread to ±{100 / math.sqrt(2 * n):.1f} %, 1σ):")
+    print(f"  {'group':<20}{'n':>3}{'spread/pred(noB)':>18}{'RMS/pred':>10}{'reported/pred':>15}"
+          f"{'range spread':>16}")
+    for g, vals in groups.items():
+        a = np.array(vals)
+        pooled = np.sqrt(np.mean(a**2, axis=0))
+        print(f"  {g:<20}{len(vals):>3}{pooled[0]:>18.3f}{pooled[1]:>10.3f}{pooled[2]:>15.3f}"
+              f"{f'[{a[:, 0].min():.2f}, {a[:, 0].max():.2f}]':>16}")
 
 
 def report(rows: list[dict[str, Any]], predicted: dict[str, float | None],
@@ -187,9 +259,10 @@ def report(rows: list[dict[str, Any]], predicted: dict[str, float | None],
         rep_nb = math.sqrt(max(rep**2 - tb2, 0.0))
         resid = k2_residuals(rows, k)
         extra.append((k, unit, scale, pnb, s, rep_nb, resid))
-    print("\nwithout the equipment's Type B (Eq. (TD.4); the twin's table is 'high' grade, 1″"
-          " encoder, 2″ non-orthogonality, against the plan's stated 10″/5″), and the accelerometer"
-          " errors with the unmodelled K2 regressed out:")
+    print("\nwithout the equipment's Type B (Eq. (TD.4): the twin's table errors, 'high' grade, 1″"
+          " encoder, 1″ wobble, 2″ non-orthogonality, are the same in every run, so they shift"
+          " the mean, not the spread), and the accelerometer errors with the twin's K2 regressed"
+          " out (meaningful when the model leaves K2 out):")
     print(f"{'parameter':<12}{'unit':<8}{'pred noB':>10}{'MC spread':>10}{'spr/pnoB':>9}"
           f"{'rep noB':>10}{'rep/pnoB':>9}{'K2-free spr':>12}{'95% CI':>19}{'/pnoB':>7}")
     nu = n - 4
@@ -238,6 +311,7 @@ def report(rows: list[dict[str, Any]], predicted: dict[str, float | None],
               f" median × {np.median([x[2] for x in sel]):.3f}")
     mis = sum(1 for r in rows if r["misfit"])
     print(f"  runs with a misfit group (σ scaled by the Birge ratio): {mis}/{n}")
+    group_summary(rows, predicted, predicted_nb)
     t = np.array([r["t_run_s"] + r["t_analysis_s"] for r in rows])
     print(f"  per run: {np.mean(t):.1f} s (twin {np.mean([r['t_run_s'] for r in rows]):.1f} s, "
           f"analysis {np.mean([r['t_analysis_s'] for r in rows]):.1f} s)")
@@ -253,13 +327,22 @@ def main() -> None:
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--k2-truth", type=Path, default=None,
                     help="JSON lines of {seed, truth} for rows written without truth_k2")
+    ap.add_argument("--white", action="store_true",
+                    help="the twin IMU's white noise only (and so the prediction's)")
+    ap.add_argument("--terms", default=TERMS, help=f"the analysis's terms (default {TERMS!r})")
+    ap.add_argument("--table-as-twin", action="store_true",
+                    help="the plan's equipment states the twin's table (fair Type B)")
+    ap.add_argument("--min-static", type=float, default=120.0,
+                    help="the optimiser's shortest static record [s]")
     ap.add_argument("--max-minutes", type=float, default=None,
                     help="stop starting runs after this wall time")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    opts, result = optimised_options(args.full, args.rate)
-    plan = make_plan(opts, 1)
-    prediction = predict_p1(plan)
+    opts, result = optimised_options(args.full, args.rate, args.min_static)
+    kind = {"white": args.white, "table_as_twin": args.table_as_twin}
+    plan = make_plan(opts, 1, **kind)
+    k2 = "+k2" in args.terms.replace(" ", "").split(",")
+    prediction = predict_p1(plan, accel_k2=k2)
     predicted = prediction.std()
     d = result.best.design
     print(f"optimised plan (tactical, --target-default, {'full' if args.full else 'coarse'} grid,"
@@ -270,7 +353,8 @@ def main() -> None:
           f"(optimiser {result.best.station_time_s / 3600:.2f} h at "
           f"{P1PlanOptions().sample_rate_hz:g} Hz)")
     p1000 = result.best.prediction.std()
-    drift = max(abs(predicted[k] / p1000[k] - 1) for k in predicted if predicted[k] and p1000[k])
+    drift = max(abs(predicted[k] / p1000[k] - 1) for k in predicted  # type: ignore[operator]
+                if predicted[k] and p1000.get(k))
     print(f"predicted σ at {args.rate:g} Hz against the optimiser's: largest change "
           f"{drift:.2%}")
     for note in prediction.notes:
@@ -289,7 +373,7 @@ def main() -> None:
                 if args.max_minutes and time.perf_counter() - t0 > 60 * args.max_minutes:
                     print(f"time limit: stopped before seed {seed}")
                     break
-                r = one_run(opts, seed, Path(tmp))
+                r = one_run(opts, seed, Path(tmp), terms=args.terms, **kind)
                 fh.write(json.dumps(r) + "\n")
                 fh.flush()
                 rows.append(r)
@@ -305,7 +389,7 @@ def main() -> None:
             for r in rows:
                 r.setdefault("truth_k2", k2.get(r["seed"]))
         report(rows, predicted, {p.name: p.unit for p in prediction.parameters},
-               predict_p1(without_type_b(plan)).std())
+               predict_p1(without_type_b(plan), accel_k2=k2).std())
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 
 import h5py
@@ -11,7 +12,7 @@ import pytest
 from imucalib.errors import RecordingError
 from imucalib.io import open_recording
 from imucalib.plan import parse_plan
-from imucalib.procedures.p1.analysis import P1Options, analyze_p1
+from imucalib.procedures.p1.analysis import P1Options, analyze_p1, analyze_p1_observations
 
 FAST = P1Options(hash_recording=False)
 #: What a run writes of its plan: the plan, its hash and the facts read from it (io/context.py).
@@ -47,7 +48,10 @@ def test_a_recording_without_its_plan_calibrates_the_same(tactical_run, tmp_path
     Type B (the defaults, which the generated plan also uses); no specification to accept
     against, so that check is not assessed, and the held-out limits are the generic defaults
     (the checks still pass). The model's terms are the same too: G by rule with or without
-    the plan, K2 by the same data (docs/p1.md, "Model terms")."""
+    the plan, K2 by the same data (docs/p1.md, "Model terms"). One input is the plan's: its
+    grade's flicker and random walk, which the 5-min static cannot show for the tactical gyro
+    (docs/p1.md, "Noise model of the window means"); given the same noise model, the planless
+    recording's estimates and covariance are those of the run with its plan, bit for bit."""
     bare = _planless_copy(tactical_run, tmp_path / "bare.h5")
     with_plan = analyze_p1(tactical_run, options=FAST)
     without = analyze_p1(bare, options=FAST)
@@ -55,8 +59,18 @@ def test_a_recording_without_its_plan_calibrates_the_same(tactical_run, tmp_path
         "g": True}
     assert with_plan.result.param_names == without.result.param_names
     assert not without.observations.context.has_plan and without.observations.imu_spec is None
-    np.testing.assert_array_equal(without.result.values, with_plan.result.values)
-    np.testing.assert_array_equal(without.result.covariance, with_plan.result.covariance)
+    assert any("flicker floor is not determined" in n for n in with_plan.observations.notes)
+    assert not any("flicker floor" in n for n in without.observations.notes)
+    a, b = with_plan.observations, without.observations
+    for wa, wb in zip(a.windows, b.windows, strict=True):
+        np.testing.assert_array_equal(wa.accel_mean_mps2, wb.accel_mean_mps2)
+        np.testing.assert_array_equal(wa.gyro_mean_rps, wb.gyro_mean_rps)
+    same_noise = dataclasses.replace(b, noise=a.noise, windows=tuple(
+        dataclasses.replace(wb, accel_se_mps2=wa.accel_se_mps2, gyro_se_rps=wa.gyro_se_rps)
+        for wa, wb in zip(a.windows, b.windows, strict=True)))
+    again = analyze_p1_observations(same_noise, FAST)
+    np.testing.assert_array_equal(again.result.values, with_plan.result.values)
+    np.testing.assert_array_equal(again.result.covariance, with_plan.result.covariance)
     spec_without = {c.name: c for c in without.checks}.pop("specification")
     assert spec_without.passed is None and "not assessed" in spec_without.summary
     assert {c.name: c.passed for c in with_plan.checks}["specification"] is True

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import os
+import sys
 
 import numpy as np
 import pytest
@@ -11,7 +13,8 @@ import pytest
 from imucalib.errors import InvalidInputError
 from imucalib.io import open_recording
 from imucalib.procedures import registry
-from imucalib.procedures.common.workers import balanced_groups
+from imucalib.procedures.common.workers import START_VARIABLE, balanced_groups
+from imucalib.procedures.p1 import observations as p1_observations
 from imucalib.procedures.p1.observations import extract_p1_observations
 
 
@@ -31,19 +34,83 @@ def _same(a, b) -> bool:
     return a == b
 
 
-def test_two_workers_give_the_serial_observations_and_progress(consumer_run):
+@pytest.fixture
+def shared(monkeypatch):
+    """Share every recording's windows with the workers, however small (the test runs are)."""
+    monkeypatch.setattr(p1_observations, "PARALLEL_ROWS_MIN", 0)
+    monkeypatch.delenv(START_VARIABLE, raising=False)
+
+
+@pytest.mark.parametrize("start", ["auto", "spawn"])
+def test_two_workers_give_the_serial_observations_and_progress(consumer_run, shared, monkeypatch,
+                                                               start):
+    monkeypatch.setenv(START_VARIABLE, start)  # auto: forked on Linux
     fractions: list[float] = []
     with open_recording(consumer_run) as rec:
         serial = extract_p1_observations(rec)
         parallel = extract_p1_observations(rec, workers=2, progress=fractions.append)
+        three = extract_p1_observations(rec, workers=3)
     assert len(parallel.windows) == len(serial.windows) > 3
     assert _same(_fields(parallel), _fields(serial))
+    assert _same(_fields(three), _fields(serial))
     assert parallel.sample_rate_hz == serial.sample_rate_hz
     assert parallel.cutoff_hz == serial.cutoff_hz
+    assert parallel.notes == serial.notes
     assert all(b > a for a, b in itertools.pairwise(fractions)) and fractions[-1] == 1.0
 
 
-def test_calibrate_option_workers_gives_the_same_parameters(consumer_run):
+def test_the_windows_go_to_forked_workers(consumer_run, shared, monkeypatch):
+    """The pool is started once, with fork on Linux, and its workers reduce windows."""
+    from imucalib.procedures.common import workers
+
+    started: list[str] = []
+    pids: list[int] = []
+    real_pool, real_share = workers.local_pool, workers.share_with_workers
+
+    def pool(*args, **kwargs):
+        started.append(workers.start_method(kwargs.get("start")))
+        return real_pool(*args, **kwargs)
+
+    def share(items, sizes, n, *, there, **kwargs):
+        def where(job):  # a closure: fine for a forked worker, which inherits it
+            return [(os.getpid(), w) for w in there(job)]
+
+        serial_here = kwargs.pop("here")
+
+        def here(item):
+            return (os.getpid(), serial_here(item))
+
+        out = real_share(items, sizes, n, there=where, here=here, **kwargs)
+        pids.extend(pid for pid, _ in out)
+        return [w for _, w in out]
+
+    monkeypatch.setattr(workers, "local_pool", pool)
+    monkeypatch.setattr(workers, "share_with_workers", share)
+    with open_recording(consumer_run) as rec:
+        serial = extract_p1_observations(rec)
+        parallel = extract_p1_observations(rec, workers=2)
+    assert _same(_fields(parallel), _fields(serial))
+    assert started == [("fork" if sys.platform.startswith("linux") else "spawn")]
+    if sys.platform.startswith("linux"):
+        assert os.getpid() in pids and set(pids) - {os.getpid()}  # both reduced windows
+
+
+def test_a_small_recording_is_reduced_here_alone(consumer_run, monkeypatch):
+    """Below PARALLEL_ROWS_MIN IMU rows a pool costs more than it saves: none is started."""
+    from imucalib.procedures.common import workers
+
+    def no_pool(*args, **kwargs):
+        raise AssertionError("a pool was started")
+
+    monkeypatch.setattr(workers, "local_pool", no_pool)
+    monkeypatch.setattr(p1_observations, "PARALLEL_ROWS_MIN", 1 << 40)
+    with open_recording(consumer_run) as rec:
+        serial = extract_p1_observations(rec)
+        two = extract_p1_observations(rec, workers=2)
+    assert _same(_fields(two), _fields(serial))
+
+
+def test_calibrate_option_workers_gives_the_same_parameters(consumer_run, shared):
     p1 = registry.get("p1")
     one = p1.analyze(consumer_run, options={"workers": 1})
     two = p1.analyze(consumer_run, options={"workers": 2})

@@ -182,6 +182,21 @@ def _pool() -> ThreadPoolExecutor:
     return _POOL
 
 
+def _forget_pool_in_child() -> None:
+    """Drop the parent's thread pool in a forked child: its threads did not survive the fork.
+
+    The inherited executor still counts them (idle), so it would start none and a job would wait
+    forever; the child makes its own pool on first use (a worker of
+    :func:`~imucalib.procedures.common.workers.local_pool`, docs/performance.md "Workers").
+    """
+    global _POOL
+    _POOL = None
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool_in_child)
+
+
 #: Samples below which the phase is integrated by one thread (the split costs a second pass).
 PARALLEL_PHASE_MIN = 1 << 21
 

@@ -319,8 +319,8 @@ def optimize(
         "--min-repetitions", help="Margin: complete calibrations kept (repeatability).")] = 2,
     min_static: Annotated[float, typer.Option(
         "--min-static", help="Margin: the least level static record [s] (the procedure's "
-                             "60 min; shorter ones leave the biases' σ under-reported, "
-                             "docs/test-design.md).")] = 3600.0,
+                             "60 min; a shorter one rests the biases' flicker on the "
+                             "grade's declared noise, docs/test-design.md).")] = 3600.0,
     min_dof: Annotated[int, typer.Option(
         "--min-dof", help="Margin: least lack-of-fit ν of each triad's fit.")] = 6,
     coarse: Annotated[bool, typer.Option("--coarse", help="A small search grid (quick).")]

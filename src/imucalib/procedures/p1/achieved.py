@@ -42,7 +42,7 @@ from scipy import stats
 from imucalib.analysis.edf import compute_edf_greenhall
 from imucalib.errors import ConfigurationError, InsufficientExcitationError
 from imucalib.models.noise import NoiseModel
-from imucalib.procedures.common.noise import NOISE_RECORD_MIN_S
+from imucalib.procedures.common.noise import noise_records
 
 if TYPE_CHECKING:
     from imucalib.plan.schema import Plan
@@ -192,17 +192,11 @@ def _flicker_dof(obs: P1Observations) -> float:
     ≤ n/2 samples, :func:`~imucalib.processing.statistics.compute_window_statistics`): where
     the flicker plateau rests; 1.0–2.6 per record. The records
     :func:`~imucalib.procedures.common.noise.estimate_noise` pools (static, with an Allan fit,
-    at least :data:`NOISE_RECORD_MIN_S` and half the longest).
+    at least :data:`~imucalib.procedures.common.noise.NOISE_RECORD_MIN_S` and half the longest,
+    :func:`~imucalib.procedures.common.noise.noise_records`).
     """
-    static = [w for w in obs.windows if w.kind == "static" and w.allan_fit is not None
-              and w.duration_s >= NOISE_RECORD_MIN_S]
-    if not static:
-        return 0.0
-    longest = max(w.duration_s for w in static)
     total = 0.0
-    for w in static:
-        if w.duration_s < 0.5 * longest:
-            continue
+    for w in noise_records(obs.windows):
         n = max(round(w.duration_s * obs.sample_rate_hz), 8)
         m = 1 << max((n // 2).bit_length() - 1, 0)
         total += compute_edf_greenhall(-1, 2, m, n + 1, overlapping=True, modified=False)

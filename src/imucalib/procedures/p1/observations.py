@@ -71,14 +71,21 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imucalib.conventions import ACCEL_COLUMNS, GYRO_COLUMNS
-from imucalib.errors import InvalidInputError, RecordingError
+from imucalib.errors import ConfigurationError, InvalidInputError, RecordingError
 from imucalib.io.context import RecordingContext
 from imucalib.io.reader import Recording, StepRecord
 from imucalib.io.step_roles import role_from_tags
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig
-from imucalib.procedures.common.noise import NOISE_RECORD_MIN_S, estimate_noise, window_mean_se
+from imucalib.procedures.common.noise import (
+    NOISE_RECORD_MIN_S,
+    estimate_noise,
+    longest_cluster_s,
+    noise_records,
+    window_mean_se,
+    with_declared_floor,
+)
 from imucalib.procedures.common.reference import axis_vector as _axis_vector
 from imucalib.procedures.common.reference import (
     rate_inputs_b,
@@ -91,6 +98,7 @@ from imucalib.procedures.common.windows import RunningMoments as _Moments
 from imucalib.procedures.common.windows import counter_times
 from imucalib.procedures.common.windows import harmonic_residual_std as _harmonic_residual_std
 from imucalib.procedures.common.windows import table_angle_at as _angle_at
+from imucalib.procedures.common.workers import one_thread
 from imucalib.procedures.p1.roles import (
     P1_ACCEL_POSITION,
     P1_GYRO_BIAS,
@@ -583,9 +591,12 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
         windows = _observe_parallel(ex, jobs, workers, tick)
     else:
         windows = []
-        for job in jobs:
-            windows.append(ex.observe(*job))
-            tick()
+        # one BLAS thread, as every worker runs: the serial result equals the shared one bit
+        # for bit whatever OpenBLAS's default threads (docs/performance.md, "Workers")
+        with one_thread():
+            for job in jobs:
+                windows.append(ex.observe(*job))
+                tick()
     tick.finish()
     if not windows:
         why = "; ".join(skipped) if skipped else "no step has a P1 measurement role"
@@ -593,13 +604,17 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                              f"{sensor_id} ({why})")
     noise = estimate_noise(windows)
     if not noise:  # no noise model after all: every window's own Allan fit gives its SE
-        windows = [w if w.allan_fit is not None else ex.observe(step, role)
-                   for w, (step, role, _) in zip(windows, jobs, strict=True)]
+        with one_thread():
+            windows = [w if w.allan_fit is not None else ex.observe(step, role)
+                       for w, (step, role, _) in zip(windows, jobs, strict=True)]
     notes = list(ex.notes)
     if noise:
+        noise, floor_note = _declared_floor(rec, imu_spec, windows, noise, ex.sample_rate_hz)
         windows = [_with_model_se(w, noise) for w in windows]
         notes.append("standard errors of the window means from the noise model fitted to the "
                      "long static records (white, flicker and random-walk terms)")
+        if floor_note:
+            notes.append(floor_note)
     else:
         notes.append("no long static record: standard errors from each window's own Allan "
                      "variance (uncertain by about a factor of two)")
@@ -610,6 +625,43 @@ def extract_p1_observations(rec: Recording, sensor_id: str | None = None, *,
                           notes=tuple(notes), skipped=tuple(skipped), noise=noise,
                           equipment=equipment, imu_spec=imu_spec, acceptance=acceptance,
                           context=context)
+
+
+def _declared_floor(rec: Recording, imu_spec: ImuSpecConfig | None,
+                    windows: Sequence[WindowObservation], noise: dict[str, NoiseModel],
+                    sample_rate_hz: float) -> tuple[dict[str, NoiseModel], str | None]:
+    """Raise the fitted flicker and random walk to the plan's declared noise where needed.
+
+    When the pooled static records' longest Allan cluster is shorter than
+    :data:`~imucalib.procedures.common.noise.FLICKER_CORNERS_MIN` flicker corners of the noise
+    the recording declares — its unit grade's (the stated IMU specification's grade, else the
+    stored plan's; :func:`~imucalib.procedures.common.grade.grade_noise`, white only for a
+    plan whose twin says so) — the records cannot show the flicker floor:
+    :func:`~imucalib.procedures.common.noise.with_declared_floor` (docs/p1.md, "Noise model of
+    the window means"). Unchanged when the recording states no grade.
+    """
+    from imucalib.models.imu import sample_imu_model
+    from imucalib.plan import parse_plan
+    from imucalib.procedures.common.grade import grade_noise, plan_grade
+
+    declared: dict[str, NoiseModel] | None = None
+    grade: str = imu_spec.grade if imu_spec is not None else ""
+    text = rec.metadata.get("plan_toml")
+    if text:
+        try:
+            plan = parse_plan(str(text))
+            if not grade or plan_grade(plan) == grade:
+                declared, grade = grade_noise(plan), plan_grade(plan)
+        except ConfigurationError:
+            pass
+    if declared is None and grade:
+        model = sample_imu_model(grade, 0, nonlinear=False)
+        declared = {"accel": model.accel_noise, "gyro": model.gyro_noise}
+    if declared is None:
+        return noise, None
+    records = noise_records(windows)
+    tau_max = max(longest_cluster_s(w.duration_s, sample_rate_hz) for w in records)
+    return with_declared_floor(noise, declared, tau_max, source=f"grade {grade}")
 
 
 class _Progress:
@@ -653,34 +705,63 @@ def _with_noise_flags(todo: Sequence[tuple[StepRecord, str]]
 
 def _observe_steps(path: str, sensor_id: str, opt: P1Processing, sample_rate_hz: float,
                    todo: Sequence[tuple[StepRecord, str, bool]]) -> list[WindowObservation]:
-    """Reduce some steps of a recording in a worker process (:func:`_observe_parallel`)."""
-    from imucalib.io.opening import open_recording
+    """Reduce some steps of a recording in a worker process (:func:`_observe_parallel`).
 
-    with open_recording(path) as rec:
-        ex = _Extractor(rec, sensor_id, opt)
+    A worker of :func:`~imucalib.procedures.common.workers.local_pool` opens the recording
+    (by its path) once for all the jobs it takes; elsewhere it is opened for this call.
+    """
+    from imucalib.io.opening import open_recording
+    from imucalib.procedures.common.workers import in_worker
+
+    key = (path, sensor_id, opt)
+    if in_worker():
+        ex = _WORKER_EXTRACTORS.get(key)
+        if ex is None:  # open for the pool's life: the worker ends with the pool
+            ex = _WORKER_EXTRACTORS[key] = _Extractor(open_recording(path), sensor_id, opt)
         ex.sample_rate_hz = sample_rate_hz  # the parent's: the same time base as in one process
         return [ex.observe(*job) for job in todo]
+    with open_recording(path) as rec:
+        ex = _Extractor(rec, sensor_id, opt)
+        ex.sample_rate_hz = sample_rate_hz
+        return [ex.observe(*job) for job in todo]
+
+
+#: A worker's open recordings (:func:`_observe_steps`), by (path, IMU, processing).
+_WORKER_EXTRACTORS: dict[tuple[str, str, P1Processing], _Extractor] = {}
+
+#: IMU rows (of the windows after the first) below which ``workers`` > 1 reduces them in this
+#: process alone: a worker's fixed cost (its fork, opening the recording, the copy-on-write of
+#: the pages it touches: about 0.1 s of CPU) is about what it saves on fewer (two processes
+#: lose below about 200,000 rows and gain 1.1× at best at 420,000–490,000; docs/performance.md,
+#: "Workers").
+PARALLEL_ROWS_MIN = 1 << 19
 
 
 def _observe_parallel(ex: _Extractor, todo: list[tuple[StepRecord, str, bool]], workers: int,
                       tick: _Progress) -> list[WindowObservation]:
-    """Reduce the steps in this process and `workers` − 1 spawned ones; the serial result.
+    """Reduce the steps in this process and `workers` − 1 forked ones; the serial result.
 
     The first step is reduced here first: it fixes what later windows use (the sample rate of
-    a recording that does not state it). The rest are shared with the workers
-    (:func:`~imucalib.procedures.common.workers.share_with_workers`, jobs of about equal
-    samples). Every window is reduced by the same code from the same samples and sample rate:
-    the observations equal the serial ones bit for bit (tests/procedures/test_p1_workers.py).
+    a recording that does not state it), and the workers, forked after it, start with its
+    compiled kernels. The rest are shared with the workers
+    (:func:`~imucalib.procedures.common.workers.share_with_workers`: jobs of consecutive steps
+    of about equal samples, the longest taken first by the workers, the shortest by this
+    process) unless they hold fewer than :data:`PARALLEL_ROWS_MIN` IMU rows (then this process
+    reduces them alone). Every window is reduced by the same code from the same samples and
+    sample rate: the observations equal the serial ones bit for bit
+    (tests/procedures/test_p1_workers.py).
     """
     from imucalib.procedures.common.workers import share_with_workers
 
     first = ex.observe(*todo[0])
     tick()
     rest = todo[1:]
+    sizes = [max(1, _rows(ex, job[0])) for job in rest]
+    if sum(sizes) < PARALLEL_ROWS_MIN:
+        workers = 1
     there = functools.partial(_observe_steps, str(ex.rec.path), ex.sensor, ex.opt,
                               ex.sample_rate_hz)
-    return [first, *share_with_workers(rest, [max(1, _rows(ex, job[0])) for job in rest],
-                                       workers, here=lambda item: ex.observe(*item),
+    return [first, *share_with_workers(rest, sizes, workers, here=lambda item: ex.observe(*item),
                                        there=there, done=tick)]
 
 

@@ -112,12 +112,13 @@ class OptimizeSettings:
         The largest number of repetitions tried.
     min_static_s, max_static_s : float
         The static record's range. The least is by default the procedure's 60 min
-        (docs/p1.md, step 2): the analysis fits the noise model of every window mean's σ to it,
-        and a record of minutes cannot show the flicker floor, so the calibration of a plan
-        with a short static under-reports the biases' σ (×0.13 accelerometer, ×0.21 gyro of
-        their Monte-Carlo spread on the twin at 120 s; docs/test-design.md, "Truth on the
-        twin"). 120 s is the shortest the analysis accepts; a plan that short is predicted
-        well but not calibrated honestly. [s]
+        (docs/p1.md, step 2), from which the analysis fits the whole noise model of every
+        window mean's σ. A record of minutes cannot show the flicker floor: the analysis then
+        takes the grade's flicker and random walk as a Type B input (docs/p1.md, "Noise model
+        of the window means"), the noise the prediction assumes, so a plan with a static down
+        to 120 s (the shortest the analysis fits) is calibrated with its predicted σ
+        (docs/test-design.md, "Truth on the twin") — but its biases' σ rest on the grade's
+        declared noise, not on the unit's own record. [s]
     static_tolerance_s : float
         The 1-D search's resolution on the static record. [s]
     min_lack_of_fit_dof : int

@@ -21,8 +21,9 @@ The noise model is the unit's grade's (:func:`~imucalib.models.imu.sample_imu_mo
 coefficients: white, bias instability, rate random walk; its white terms only when the plan's
 twin says ``noise = "white"``); :func:`predict_p1` takes another one (a fitted Allan model).
 
-Not predicted: the accelerometer's K2 (chosen by the data; none by default) and the model
-choice's uncertainty (TS.4), which depend on the data.
+Not predicted: the accelerometer's K2 (chosen by the data; none by default, ``accel_k2=True``
+predicts the model with it) and the model choice's uncertainty (TS.4), which depend on the
+data.
 
 Contents
 --------
@@ -149,11 +150,13 @@ def nominal_observations(plan: Plan, noise: Mapping[str, NoiseModel]) -> P1Obser
         noise=dict(noise), equipment=plan.equipment, imu_spec=plan.imu)
 
 
-def _group(triad: str, windows: list[WindowObservation], noise: NoiseModel, g_term: bool
+def _group(triad: str, windows: list[WindowObservation], noise: NoiseModel, g_term: bool,
+           k2_term: bool = False
            ) -> tuple[PredictionGroup, dict[str, float | None], np.ndarray | None]:
     """One triad's design, identifiability and bound (Eqs. (TD.1)–(TD.3))."""
     accel = triad == "accel"
-    terms = ["bias", "scale_misalignment"] + (["g_sensitivity"] if g_term else [])
+    terms = (["bias", "scale_misalignment"] + (["g_sensitivity"] if g_term else [])
+             + (["k2"] if k2_term else []))
     if not windows:
         all_names = triad_parameter_names(triad, "triad")
         return (PredictionGroup(triad, len(all_names), 0, math.inf, all_names),
@@ -181,7 +184,8 @@ def _group(triad: str, windows: list[WindowObservation], noise: NoiseModel, g_te
             dict(bound.std_dict()), np.asarray(bound.covariance))
 
 
-def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> Prediction:
+def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None,
+               accel_k2: bool = False) -> Prediction:
     """Return the predicted σ of every parameter of a P1 plan's result (module docstring).
 
     Parameters
@@ -191,6 +195,10 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
     noise : mapping of str to NoiseModel, optional
         ``{"accel": …, "gyro": …}``; when omitted, the grade's
         (:func:`~imucalib.procedures.common.grade.grade_noise`).
+    accel_k2 : bool
+        Predict the accelerometer with its K2 (P1.K2) in the model, as a calibration with
+        ``terms="+k2"`` fits it (the six positions identify it); by default it is left out,
+        as the analysis leaves it unless the data choose it.
 
     Returns
     -------
@@ -205,10 +213,11 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None) -> 
         A plan of another procedure, without a grade (and no `noise`), or off the dual-axis
         table.
     """
-    return predict_p1_covariance(plan, noise=noise)[0]
+    return predict_p1_covariance(plan, noise=noise, accel_k2=accel_k2)[0]
 
 
-def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None
+def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None,
+                          accel_k2: bool = False
                           ) -> tuple[Prediction, dict[str, tuple[tuple[str, ...], np.ndarray]]]:
     """Return :func:`predict_p1`'s prediction and each identified triad's covariance.
 
@@ -234,7 +243,7 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
     groups, std = [], {}
     covariances: dict[str, tuple[tuple[str, ...], np.ndarray]] = {}
     for triad, wins, g in (("accel", accel_w, False), ("gyro", gyro_w, g_term)):
-        group, s, cov = _group(triad, wins, models[triad], g)
+        group, s, cov = _group(triad, wins, models[triad], g, accel_k2 and triad == "accel")
         groups.append(group)
         if cov is not None:  # (TD.4): the equipment's Type B on the misalignments
             names = tuple(s)
@@ -248,7 +257,10 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
         f"noise model ({'given' if noise is not None else 'grade ' + plan_grade(plan)}): {kinds}; "
         "window means correlated by flicker and random walk (Eq. (TD.2))",
         f"gyro G {'held in by rule' if g_term else 'not in'}; "
-        "the accelerometer's K2 and the model choice's uncertainty (TS.4) are not predicted",
+        + ("the accelerometer's K2 in the model (P1.K2); the model choice's uncertainty "
+           "(TS.4) is not predicted" if accel_k2 else
+           "the accelerometer's K2 and the model choice's uncertainty (TS.4) are not "
+           "predicted"),
         f"Type B (GUM): table position accuracy {plan.equipment.table_position_accuracy_arcsec:g}"
         f"″ and axis perpendicularity {plan.equipment.table_orthogonality_arcsec:g}″ on the "
         "misalignments (Eq. (TD.4))",

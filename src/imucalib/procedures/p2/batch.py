@@ -9,8 +9,9 @@ A unit that cannot be calibrated returns a result holding its typed error
 Where the jobs run:
 
 - ``workers=1``: in this process, all units of a recording in one job;
-- ``workers=N``: a pool of N local processes (:class:`concurrent.futures.ProcessPoolExecutor`,
-  spawned, each asked for one BLAS/Blosc thread), the units in 2N runs;
+- ``workers=N``: this process and N − 1 local ones (forked on Linux, each with one thread of
+  every numerical library; :func:`~imucalib.procedures.common.workers.share_with_workers`),
+  the units in N runs per recording, the processes taking the largest runs first;
 - ``scheduler="tcp://host:8786"``: an existing Dask cluster (``dask.distributed.Client``, the
   ``dask`` extra); the workers must see the recordings at the same paths (a shared file
   system). A :class:`dask.distributed.Client` may be passed instead of an address.
@@ -29,10 +30,10 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
+import functools
 import json
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -51,7 +52,7 @@ from imucalib.io.reader import Recording, StepRecord, StreamData
 from imucalib.models.decision import Check, Decision
 from imucalib.models.fit_quality import FitQuality
 from imucalib.models.procedure_result import ResultDefaults
-from imucalib.procedures.common.workers import local_pool
+from imucalib.procedures.common.workers import share_with_workers
 from imucalib.procedures.p2.analysis import P2Options, analyze_unit, failed_unit
 from imucalib.procedures.p2.observations import extract_unit_observations, p2_units
 from imucalib.procedures.p2.reduction import PARAM_NAMES
@@ -268,6 +269,12 @@ def _return_freed_memory() -> None:
 _TRIM: Any = None
 
 
+def _analyze_jobs(options: P2Options, jobs: list[tuple[str, list[str], str]]
+                  ) -> list[list[P2UnitResult]]:
+    """Run jobs of :func:`analyze_p2` (path, units, SHA-256) one after the other (a worker's)."""
+    return [analyze_units_file(p, units, options, sha) for p, units, sha in jobs]
+
+
 def _chunks(items: list[int], n: int) -> list[list[int]]:
     """Split `items` into at most `n` runs of consecutive items of near-equal length."""
     n = max(1, min(n, len(items)))
@@ -337,7 +344,9 @@ def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
         for i, (p, _, sha) in enumerate(tasks):
             by_file.setdefault((p, sha), []).append(i)
         parallel = scheduler is not None or workers > 1
-        n_runs = (2 * workers if scheduler is None else 8) if parallel else 1
+        # local: one run of units per process and recording (a run's fixed cost, opening the file
+        # and reading its steps and table rows, about 60 ms, paid once per process)
+        n_runs = (workers if scheduler is None else 8) if parallel else 1
         jobs = [(p, sha, run) for (p, sha), idx in by_file.items() for run in _chunks(idx, n_runs)]
 
         def done(run: list[int], res: list[P2UnitResult]) -> None:
@@ -368,12 +377,21 @@ def analyze_p2(paths: str | os.PathLike[str] | Sequence[str | os.PathLike[str]],
         elif not parallel or len(tasks) == 1:
             for p, sha, run in jobs:
                 done(run, analyze_units_file(p, names(run), opt, sha))
-        else:
-            with local_pool(min(workers, len(jobs))) as pool:
-                pending = {pool.submit(analyze_units_file, p, names(run), opt, sha): run
-                           for p, sha, run in jobs}
-                for fut in as_completed(pending):
-                    done(pending[fut], fut.result())
+        else:  # this process and workers − 1 others share the jobs (largest first)
+            shared = [(p, names(run), sha) for p, sha, run in jobs]
+            n_done = [0]
+
+            def tick(n: int) -> None:
+                n_done[0] += n
+                if progress is not None:
+                    progress(n_done[0] / len(jobs))
+
+            per_job = share_with_workers(shared, [len(run) for _, _, run in jobs], workers,
+                                         there=functools.partial(_analyze_jobs, opt),
+                                         done=tick, n_jobs=len(jobs))
+            for (_, _, run), res in zip(jobs, per_job, strict=True):
+                for i, r in zip(run, res, strict=True):
+                    results[i] = r
         return P2BatchResult(recordings=tuple(str(f) for f in files),
                              results=tuple(results[i] for i in range(len(tasks))))
 
