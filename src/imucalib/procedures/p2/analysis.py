@@ -340,6 +340,10 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         f"{opt.max_order}" + ("; heating/cooling hysteresis term" if use_leg else ""),
         "static gyro means are not used (their horizontal Earth-rate projection depends on the "
         "unit's heading on the fixture); gyro parameters come from the ±ω turns",
+        "the σ treat the windows as independent (each its own Allan deviation): a bias "
+        "wandering over the sweep's hours (flicker, random walk) moves the windows and points "
+        "together, and the biases' σ at T0 then understate their error (6–17× on a "
+        "coloured-noise consumer twin; docs/p2.md, \"Temperature models\")",
     ]
     misfits = [n for n, m in models.items() if m.quality.misfit]
     if misfits:
