@@ -28,9 +28,10 @@ RANK = {
     "station": 6, "report": 6,
     "drivers": 7, "procedures": 7,
     "exports": 9, "records": 9,
-    "calibration": 10, "web": 10,
-    "demo": 11, "cli": 11,
-    "__main__": 12, "__init__": 12,
+    "calibration": 10,
+    "web": 11,
+    "demo": 12, "cli": 12,
+    "__main__": 13, "__init__": 13,
 }
 
 

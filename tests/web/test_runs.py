@@ -84,7 +84,8 @@ def test_the_pages_show_the_run(browser):
     assert "p1-short" in page.text and 'id="run-data"' in page.text
     assert 'id="abort"' not in page.text                 # an observer sees no commands
     assert 'id="abort"' in browser("operator").get(f"/runs/{RUN}").text
-    assert "once the" in observer.get(f"/runs/{RUN}/results").text
+    results = observer.get(f"/runs/{RUN}/results").text  # a waiting run: not calibrated yet
+    assert "it is calibrated when it finishes" in results and "Files" in results
 
 
 def test_the_socket_streams_the_run_s_events(browser, supervisor):

@@ -83,8 +83,9 @@ async def _watch(web: Any) -> None:
     while True:
         try:
             await run_in_threadpool(calibrate_finished, web)
-        except (CalibrationError, OSError) as exc:
-            _log.warning("the calibrate watcher: %s", exc)
+        except Exception as exc:  # the watcher outlives any one look (a file mid-write, a
+            # database busy): it must never end while the server runs
+            _log.warning("the calibrate watcher: %s: %s", type(exc).__name__, exc)
         await asyncio.sleep(PERIOD_S)
 
 

@@ -21,8 +21,18 @@ Every event is a JSON-serialisable dict with a ``"type"`` and the ``"run_id"``
 ``command_rejected``
     The worker refused a command that had gone stale on its way (``"reason"``).
 ``signals``
-    Decimated live values (``"signals"``, ``"time_s"``, ``"step_index"``, ``"time_left_s"``); at
-    most a few a second. The only kind a slow subscriber loses: the oldest first.
+    Decimated live values (``"signals"``, ``"time_s"``, ``"step_index"``, ``"time_left_s"``; the
+    signals carry ``"soak"``, the running soak's criterion and progress, and ``"wall_unix"``); at
+    most a few a second.
+``window``
+    A recorded window ended: its step, start and end, what was commanded, and per unit the
+    count, mean, σ and σ/√n of each axis.
+``trace``
+    The temperatures for the soak chart (time, air, set point, units), about one per 5 s of
+    station time and at most two a wall second.
+
+``signals`` and ``trace`` (:data:`DROPPABLE`) are the kinds a slow subscriber loses, the oldest
+first.
 ``end``
     The worker ended (``"status"``).
 """
@@ -35,7 +45,7 @@ from typing import Any
 __all__ = ["DROPPABLE", "MAX_SAMPLES", "MAX_TOTAL", "SubscriberQueue"]
 
 #: Event types a subscriber that falls behind may lose (the oldest first): live samples.
-DROPPABLE = frozenset({"signals"})
+DROPPABLE = frozenset({"signals", "trace"})
 #: Live-sample events a subscriber's queue holds at most.
 MAX_SAMPLES = 50
 #: Events a subscriber's queue holds at most; beyond it the oldest log lines go too (state,

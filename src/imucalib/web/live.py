@@ -1,10 +1,13 @@
 """``/ws/runs/{id}``: a run's live events to its page (docs/web.md, "Live view").
 
 The socket only sends: the supervisor's events (:mod:`imucalib.web.events`), a ``snapshot``
-first, as JSON text frames. Commands go as POSTs with the CSRF token
-(:mod:`imucalib.web.pages`), so the socket needs no token of its own; it needs the session
-cookie and an ``Origin`` of this site (a page of another site cannot open it), and it closes
-when the session ends. A closed or lost socket changes nothing of the run.
+first, as JSON text frames. The snapshot carries the run's ``history`` besides its view: the
+window means so far and the temperature trace (``window`` and ``trace`` events of the run's
+``events.jsonl``, the latest :data:`HISTORY_WINDOWS` and at most :data:`HISTORY_TRACE` points),
+so that a page opened late, or reconnected, draws what it missed. Commands go as POSTs with
+the CSRF token (:mod:`imucalib.web.pages`), so the socket needs no token of its own; it needs
+the session cookie and an ``Origin`` of this site (a page of another site cannot open it), and
+it closes when the session ends. A closed or lost socket changes nothing of the run.
 
 Close codes: 4401 no session (or it ended), 4403 another origin, 4404 unknown run, 4503 no
 supervisor.
@@ -17,6 +20,8 @@ import contextlib
 import json
 import queue
 import time
+from collections import deque
+from pathlib import Path
 from typing import Any, Final
 from urllib.parse import urlsplit
 
@@ -33,7 +38,42 @@ __all__ = ["router"]
 RECHECK_S: Final = 30.0
 #: How long one wait for an event lasts before the socket checks it is still wanted. [s]
 WAIT_S: Final = 0.5
+#: Window-mean events a snapshot carries at most (the latest).
+HISTORY_WINDOWS: Final = 1000
+#: Temperature-trace points a snapshot carries at most (the whole trace, thinned evenly).
+HISTORY_TRACE: Final = 600
 router = APIRouter()
+
+
+def run_history(events_path: Path) -> dict[str, Any]:
+    """Return a run's ``window`` events and its ``trace`` thinned to :data:`HISTORY_TRACE`.
+
+    Read line by line; the memory is bounded by what is kept, not by the file.
+    """
+    windows: deque[dict[str, Any]] = deque(maxlen=HISTORY_WINDOWS)
+    trace: list[dict[str, Any]] = []
+    stride, seen = 1, 0
+    try:
+        with events_path.open("rb") as f:
+            for line in f:
+                if b'"window"' not in line and b'"trace"' not in line:
+                    continue
+                try:
+                    event = json.loads(line)
+                except ValueError:
+                    continue          # the last line, half written
+                kind = event.get("type") if isinstance(event, dict) else None
+                if kind == "window":
+                    windows.append(event)
+                elif kind == "trace":
+                    if seen % stride == 0:
+                        trace.append(event)
+                    seen += 1
+                    if len(trace) >= 2 * HISTORY_TRACE:  # thin evenly: every other point
+                        trace, stride = trace[::2], stride * 2
+    except OSError:
+        pass
+    return {"windows": list(windows), "trace": trace, "trace_stride": stride}
 
 
 def same_origin(websocket: WebSocket) -> bool:
@@ -94,6 +134,16 @@ async def run_events(websocket: WebSocket, run_id: str) -> None:
         return
     except CalibrationError as exc:
         await websocket.close(code=4503, reason=str(exc)[:120])
+        return
+    try:
+        first = events.get_nowait()          # the snapshot: sent with the run's history
+        folder = Path(getattr(supervisor, "runs_dir", web.runs_dir)) / run_id
+        first["history"] = await run_in_threadpool(run_history, folder / "events.jsonl")
+        await websocket.send_text(json.dumps(first, default=str))
+    except queue.Empty:
+        pass
+    except (WebSocketDisconnect, RuntimeError):
+        supervisor.unsubscribe(run_id, events)
         return
     pump = asyncio.create_task(_pump(websocket, events, token))
     drain = asyncio.create_task(_drain(websocket))

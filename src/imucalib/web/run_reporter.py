@@ -13,7 +13,11 @@
 3. follows the steps (running, done), the trips and the station's latest values
    (:class:`~imucalib.web.run_tap.SignalTap`), paces a twin to wall time when asked, and writes
    ``state.json`` at most :data:`STATE_HZ` times a second (at once on a change of status, step
-   or prompt) and ``events.jsonl`` at every change (docs/web-runs.md).
+   or prompt) and ``events.jsonl`` at every change (docs/web-runs.md);
+4. for the live view (:class:`~imucalib.web.live_follow.LiveFollower`): at the end of each
+   recorded step a ``window`` event with each unit's mean and σ over the step's valid window;
+   during a soak the plan's criterion and where the run stands (``signals["soak"]``); a
+   decimated ``trace`` event of the temperatures (docs/web.md, "Live view").
 """
 
 from __future__ import annotations
@@ -22,17 +26,19 @@ import sys
 import time
 import traceback
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
-from typing import IO, Any
+from typing import IO, Any, TypeVar
 
 from imucalib.plan.schema import OperatorCheckStep, Plan, step_min_duration_s
 from imucalib.station.session import RunStatus
+from imucalib.web.live_follow import LiveFollower
 from imucalib.web.run_files import RunFiles, to_json, write_json_atomic
 from imucalib.web.run_tap import SignalTap
 
 __all__ = ["COMMAND_POLL_S", "LOG_TAIL", "STATE_HZ", "RunAborted", "RunReporter"]
 
+_T = TypeVar("_T")
 #: Most ``state.json`` writes (and so live-sample events) a second.
 STATE_HZ = 5.0
 #: Wall time between two looks at the commands folder. [s]
@@ -108,7 +114,23 @@ class RunReporter:
         self.extra: dict[str, Any] = {}
         self._status: RunStatus | None = None
         self._reporting_failed = False
+        self.live = LiveFollower(plan, tap)
+        self._live_failed = False
         tap.on_safe_stop = self._safe_stop
+
+    def _live(self, work: Callable[[], _T]) -> _T | None:
+        """Return `work()`, or None when the live view's own bookkeeping fails.
+
+        The live view's extras (window means, the soak, the trace) never stop the run's state
+        and events: a failure is written to the worker's log once.
+        """
+        try:
+            return work()
+        except Exception:
+            if not self._live_failed:
+                self._live_failed = True
+                traceback.print_exc(file=sys.stderr)
+            return None
 
     # --- output -----------------------------------------------------------------------------
     def event(self, event_type: str, /, **fields: Any) -> None:
@@ -137,6 +159,7 @@ class RunReporter:
             self.steps[index] = state
             if state == "running":
                 self.current, self.step_start_s = index, self.time_s
+                self._live(lambda: self.live.step_started(index))
                 self.log(f"step {index} ({self.plan.step_label(index)}) started")
             self.event("step", index=index, state=state, label=self.plan.step_label(index),
                        kind=self.plan.steps[index].kind)
@@ -163,9 +186,12 @@ class RunReporter:
         chamber = dict(self.tap.chamber)
         if imus:
             chamber["unit_degc"] = {k: v.get("temperature_degc") for k, v in imus.items()}
+        soak = (self._live(lambda: self.live.soak(self.current, self.time_s))
+                if 0 <= self.current < len(self.steps) and self.steps[self.current] == "running"
+                else None)
         return {"time_s": self.time_s, "phase": self.phase,
                 "table": dict(self.tap.table), "centrifuge": dict(self.tap.centrifuge),
-                "chamber": chamber, "imus": imus,
+                "chamber": chamber, "imus": imus, "soak": soak,
                 "guards": {"trips": self.invalid_seen, "last_event": self.last_event,
                            "faults": dict(self.tap.faults)}}
 
@@ -182,7 +208,8 @@ class RunReporter:
             "seq": self.seq, "pid": _pid(), "status": self.status_text, "error": self.error,
             "operator": self.operator, "step_index": self.current, "steps": self.steps,
             "time_left_s": self.time_left_s(), "prompt": prompt, "prompt_seq": self.prompt_seq,
-            "log_tail": list(self.log_tail), "signals": self.signals(status),
+            "log_tail": list(self.log_tail), "signals": {**self.signals(status),
+                                                           "wall_unix": time.time()},
             "resumed": self.resumed, "updated_utc": _utc(), **self.extra})
 
     def close(self) -> None:
@@ -210,8 +237,12 @@ class RunReporter:
         self._status = status
         self.time_s = status.time_s
         self.phase = status.phase
+        self._live(lambda: self.live.tick(status.time_s, status.step_index))
         if status.steps_done > self.done_seen:
             self.done_seen = status.steps_done
+            window = self._live(lambda: self.live.window_event(status.step_index))
+            if window is not None:
+                self.event("window", **window)
             self.set_step(status.step_index, "done")
             self.next_index = max(self.next_index, status.step_index + 1)
         elif 0 <= status.step_index < len(self.steps) and self.steps[status.step_index] != "done":
@@ -222,6 +253,9 @@ class RunReporter:
             self.last_event = status.last_event
             self.log(status.last_event, "warning" if status.last_event.startswith("trip")
                      else "info")
+        point = self._live(lambda: self.live.trace_point(status.time_s, status.step_index))
+        if point is not None:
+            self.event("trace", **point)
         self.poll_commands()
         self.write(status=status)
 

@@ -4,9 +4,14 @@
 runner polls or reads passes through :class:`SignalTap` on its way back to the runner: the tap
 keeps the latest table and centrifuge feedback, chamber readings, device faults and each IMU's
 block means (the decimation of the live view: one value per block, the runner's tick), and
-notes when the runner stops a device safely (``safe_stop``, ``standby``). Every other attribute
-is the station's own (the twin's ``remount``, ``swap_units``, ``truth`` …), so the runner runs
-exactly as on the bare station (docs/web-runs.md, "Live signals").
+notes when the runner stops a device safely (``safe_stop``, ``standby``). For the window means
+of the live view it also bins each IMU's samples by receive time
+(:class:`~imucalib.web.window_stats.BinnedMoments`) and follows since when each motion axis
+holds its commanded rate (:class:`~imucalib.web.rate_hold.RateHold`, from the runner's
+``set_rate`` and the feedback), both in bounded memory; a failure of either is dropped, never
+passed to the runner. Every other attribute is the station's own (the twin's ``remount``,
+``swap_units``, ``truth`` …), so the runner runs exactly as on the bare station
+(docs/web-runs.md, "Live signals").
 """
 
 from __future__ import annotations
@@ -31,6 +36,8 @@ from imucalib.station.devices import (
     MotionStatus,
     Station,
 )
+from imucalib.web.rate_hold import RateHold
+from imucalib.web.window_stats import BinnedMoments
 
 __all__ = ["SignalTap", "TappedStation", "tap_station"]
 
@@ -59,14 +66,39 @@ class SignalTap:
         self.chamber: dict[str, Any] = {}
         self.imus: dict[str, dict[str, Any]] = {}
         self.faults: dict[str, str | None] = {}
+        self.moments: dict[str, BinnedMoments] = {}
+        self.rate_holds: dict[str, RateHold] = {}
+        self.rate_tolerance_rps = math.inf
         self.on_safe_stop = on_safe_stop
 
+    def set_rate_tolerance(self, tolerance_rps: float) -> None:
+        """Set how far a motion axis's rate may be off its command and still hold it. [rad/s]"""
+        self.rate_tolerance_rps = tolerance_rps
+        for hold in self.rate_holds.values():
+            hold.tolerance_rps = tolerance_rps
+
+    def rate_hold(self, role: str) -> RateHold:
+        """Return the :class:`~imucalib.web.rate_hold.RateHold` of a motion device."""
+        hold = self.rate_holds.get(role)
+        if hold is None:
+            hold = self.rate_holds[role] = RateHold(self.rate_tolerance_rps)
+        return hold
+
+    def command_rate(self, role: str, axis: int, rate_rps: float) -> None:
+        """Note that the runner commanded a rate of a motion device's axis. [rad/s]"""
+        self.rate_hold(role).command(axis, rate_rps)
+
     def motion(self, role: str, fb: MotionFeedback) -> None:
-        """Keep the last row of a motion device's feedback."""
+        """Keep the last row of a motion device's feedback (its time too, station clock)."""
         if len(fb):
             target = self.table if role == "table" else self.centrifuge
             target["angle_deg"] = _vector(np.degrees(fb.angle_rad[-1]))
             target["rate_dps"] = _vector(np.degrees(fb.rate_rps[-1]))
+            target["time_s"] = _finite(float(fb.time_s[-1]))
+            try:  # the live view's bookkeeping must never stop the runner's poll
+                self.rate_hold(role).feedback(fb.time_s, fb.rate_rps)
+            except Exception:
+                self.rate_holds.pop(role, None)
 
     def chamber_rows(self, rows: ChamberReadings) -> None:
         """Keep the last chamber reading and set point."""
@@ -82,6 +114,16 @@ class SignalTap:
                 "accel_g": _vector(block.accel_mps2.mean(axis=0) / units.G0_MPS2),
                 "temperature_degc": _finite(float(block.temperature_degc.mean())),
                 "samples": len(block)}
+            try:  # the live view's statistics must never stop the runner's read
+                self.moments.setdefault(name, BinnedMoments()).add(
+                    block.time_s, block.gyro_rps, block.accel_mps2)
+            except Exception:
+                self.moments.pop(name, None)
+
+    def forget_before(self, time_s: float) -> None:
+        """Drop the binned samples received before `time_s` (a step's data once used). [s]"""
+        for moments in self.moments.values():
+            moments.drop_before(time_s)
 
     def fault(self, device: str, fault: str | None) -> None:
         """Keep a device's latest fault or alarm (None: none)."""
@@ -104,6 +146,13 @@ class _Proxy:
 
 
 class _Motion(_Proxy):
+    def set_rate(self, axis: int, rate_rps: float) -> None:
+        self._inner.set_rate(axis, rate_rps)
+        try:
+            self._tap.command_rate(self._role, axis, rate_rps)
+        except Exception:
+            self._tap.rate_holds.pop(self._role, None)
+
     def poll(self) -> MotionFeedback:
         fb = cast(MotionFeedback, self._inner.poll())
         self._tap.motion(self._role, fb)
