@@ -44,7 +44,10 @@ def planned(tmp_path_factory: pytest.TempPathFactory):
                                "--out", str(tmp / "run.csv"),
                                "--step-file", str(tmp / "steps.toml")])
     assert done.exit_code == 0, done.output
-    return tmp, analyze_p1(rec).result
+    analysis = analyze_p1(rec)
+    # the exit status `calibrate` gives the same data: 0 PASS, 1 FAIL (the twin's IMU has a
+    # nonlinear gyro that the triad model leaves out: with the grade's noise its residuals fail)
+    return tmp, analysis.result, 0 if analysis.passed else 1
 
 
 def _agree(result: CalibrationResult, planned: CalibrationResult) -> None:
@@ -58,11 +61,11 @@ def _agree(result: CalibrationResult, planned: CalibrationResult) -> None:
 
 
 def test_an_exported_csv_and_its_step_file_calibrate_like_the_planned_run(planned):
-    tmp, reference = planned
+    tmp, reference, status = planned
     out = tmp / "from-csv"
     done = CliRunner().invoke(app, ["calibrate", str(tmp / "run.csv"), "--steps",
                                     str(tmp / "steps.toml"), "--out", str(out)])
-    assert done.exit_code == 0, done.output  # PASS
+    assert done.exit_code == status, done.output  # the planned run's decision
     assert "reconstructed" in done.output
     result = CalibrationResult.load(out / "run.imported.IMU-0001.p1.result.json")
     _agree(result, reference)
@@ -75,7 +78,7 @@ def test_an_exported_csv_and_its_step_file_calibrate_like_the_planned_run(planne
 
 
 def test_a_vendor_style_csv_without_counter_in_other_units_calibrates_alike(planned):
-    tmp, reference = planned
+    tmp, reference, _ = planned
     df = pd.read_csv(tmp / "run.csv")
     g0, deg = 9.80665, np.pi / 180.0
     # a vendor log's time is the IMU's own timestamp; its first sample is at the receive time
@@ -95,7 +98,7 @@ def test_a_vendor_style_csv_without_counter_in_other_units_calibrates_alike(plan
 
 
 def test_a_step_outside_the_data_is_refused_and_nothing_is_written(planned, tmp_path):
-    tmp, _ = planned
+    tmp, _, _ = planned
     text = (tmp / "steps.toml").read_text(encoding="utf-8")
     bad = text + ('\n[[steps]]\nstart_s = 1e6\nend_s = 1000010.0\nrole = "p1.accel-position"\n'
                   'label = "late"\nangles_deg = [0.0, 0.0]\n')
@@ -112,7 +115,7 @@ def test_a_step_outside_the_data_is_refused_and_nothing_is_written(planned, tmp_
 def test_calibrate_steps_applies_the_import_options_and_maps_a_temperature(planned):
     """`calibrate CSV --steps` reads the CSV through the import options (header lines, column
     map, units) like `import` and `segments` do, a vendor temperature column included."""
-    tmp, reference = planned
+    tmp, reference, status = planned
     df = pd.read_csv(tmp / "run.csv")
     g0, deg = 9.80665, np.pi / 180.0
     vendor = pd.DataFrame({"Time": df["time_s [s]"]})
@@ -130,7 +133,7 @@ def test_calibrate_steps_applies_the_import_options_and_maps_a_temperature(plann
         "calibrate", str(path), "--steps", str(tmp / "steps.toml"), "--out", str(out),
         "--no-record", "--skip-rows", "3", "--gyro-unit", "deg/s", "--accel-unit", "g",
         "--column-map", "t=Time,gx=GyroX,gy=GyroY,gz=GyroZ,ax=AccX,ay=AccY,az=AccZ,temp=Temp"])
-    assert done.exit_code == 0, done.output
+    assert done.exit_code == status, done.output
     _agree(CalibrationResult.load(out / "vendor-preamble.imported.IMU-0001.p1.result.json"),
            reference)
     with open_recording(out / "vendor-preamble.imported.h5") as rec:

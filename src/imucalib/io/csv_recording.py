@@ -268,7 +268,8 @@ def recording_from_csv(csv_path: str | os.PathLike[str], steps: StepFile,
             ("table_orthogonality_arcsec", steps.table_orthogonality_arcsec)) if v is not None},
         imu_spec={k: float(v) for k, v in (("accel_accuracy_g", steps.accel_accuracy_g),
                                            ("gyro_accuracy_dps", steps.gyro_accuracy_dps))
-                  if v is not None})
+                  if v is not None},
+        imu_unit={"grade": steps.grade} if steps.grade is not None else {})
     meta.update(context.metadata())
 
     counter = None if file_counter else _counter(t, rate_hz)

@@ -47,7 +47,9 @@ reconstructed from them), and ``latitude_deg`` is then required. Tags (``axis=x`
 Equipment and specification limits the analysis would otherwise take from a plan may be given
 at the top level: ``table_position_accuracy_arcsec``, ``table_orthogonality_arcsec`` (Type B
 uncertainty of the table angles) and ``accel_accuracy_g``, ``gyro_accuracy_dps`` (held-out
-limits).
+limits), and the unit's ``grade`` (``consumer``, ``tactical``, ``navigation``: the noise it
+declares, which P1 takes for the biases' flicker when the static records are too short to show
+it, docs/p1.md "Noise model of the window means").
 
 Contents
 --------
@@ -207,6 +209,7 @@ class StepFile(BaseModel):
     table_orthogonality_arcsec: float | None = Field(None, ge=0.0, le=3600.0)
     accel_accuracy_g: float | None = Field(None, gt=0.0, le=100.0)
     gyro_accuracy_dps: float | None = Field(None, gt=0.0, le=1000.0)
+    grade: Literal["consumer", "tactical", "navigation"] | None = None
     steps: tuple[StepEntry, ...] = Field(min_length=1)
 
     @model_validator(mode="after")
@@ -428,7 +431,14 @@ def step_file_from_recording(rec: Recording, unit: str | None = None) -> StepFil
                     heading_deg=float(meta.get("heading_deg", 0.0)), table_axes=axes,
                     sample_rate_hz=float(rate_hz) if rate_hz else None,
                     bandwidth_hz=float(band_hz) if band_hz else None, steps=tuple(steps),
-                    **limits)
+                    grade=_grade(context.imu_unit.get("grade")), **limits)
+
+
+def _grade(text: str | None) -> Literal["consumer", "tactical", "navigation"] | None:
+    """Return the recording's stated grade as a step file holds it (None: none, or another)."""
+    grades: dict[str | None, Literal["consumer", "tactical", "navigation"]] = {
+        "consumer": "consumer", "tactical": "tactical", "navigation": "navigation"}
+    return grades.get(text)
 
 
 def step_file_skeleton(intervals: Sequence[tuple[str, float, float]], *,
