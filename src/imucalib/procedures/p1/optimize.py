@@ -47,7 +47,12 @@ from imucalib.models.noise import NoiseModel
 from imucalib.plan.budget import estimate_plan_recording
 from imucalib.plan.schema import Plan
 from imucalib.procedures.common.grade import grade_noise
-from imucalib.procedures.common.prediction import OptimizedPlan, OptimizeRequest, Prediction
+from imucalib.procedures.common.prediction import (
+    OptimizedPlan,
+    OptimizeRequest,
+    Prediction,
+    parse_target_text,
+)
 from imucalib.procedures.p1.options import P1PlanOptions
 from imucalib.procedures.p1.plan import generate_p1_plan
 from imucalib.procedures.p1.predict import predict_p1_covariance
@@ -303,34 +308,14 @@ def parse_targets(text: str, names: Sequence[str]) -> dict[str, float]:
     """Parse ``NAME=σ,…`` (SI, the result's units) into targets.
 
     A NAME is a parameter (``gyro_bias_z``) or a prefix of several (``gyro_bias``,
-    ``accel_M``).
+    ``accel_M``): :func:`~imucalib.procedures.common.prediction.parse_target_text`.
 
     Raises
     ------
     ConfigurationError
         For a malformed item, an unknown name or a σ that is not > 0.
     """
-    out: dict[str, float] = {}
-    for item in (t.strip() for t in text.split(",")):
-        if not item:
-            continue
-        key, sep, value = item.partition("=")
-        key = key.strip()
-        try:
-            sigma = float(value)
-        except ValueError:
-            sigma = math.nan
-        if not sep or not sigma > 0 or not math.isfinite(sigma):
-            raise ConfigurationError(f"target {item!r}: write NAME=σ with σ > 0 in SI units "
-                                     "(e.g. gyro_bias=5e-6)")
-        hits = [n for n in names if n == key or n.startswith(key + "_")]
-        if not hits:
-            raise ConfigurationError(f"target {key!r} names no P1 parameter (e.g. accel_bias, "
-                                     "gyro_M_zz, gyro_G)")
-        out.update(dict.fromkeys(hits, sigma))
-    if not out:
-        raise ConfigurationError("--target names no parameter")
-    return out
+    return parse_target_text(text, names, "P1")
 
 
 def _lack_of_fit_dof(plan: Plan, prediction: Prediction) -> dict[str, int]:
