@@ -50,12 +50,16 @@ def _free_port() -> int:
 
 
 @contextmanager
-def live_server(app: Any) -> Iterator[str]:
-    """Serve `app` on 127.0.0.1 in a thread; yield its base URL; stop it afterwards."""
+def live_server(app: Any, *, lifespan: bool = False) -> Iterator[str]:
+    """Serve `app` on 127.0.0.1 in a thread; yield its base URL; stop it afterwards.
+
+    With `lifespan` the app's lifespan runs (the calibrate watcher, docs/web.md).
+    """
     import uvicorn
 
     config = uvicorn.Config(app, host="127.0.0.1", port=_free_port(), ws="websockets-sansio",
-                            log_level="warning", access_log=False, lifespan="off")
+                            log_level="warning", access_log=False,
+                            lifespan="on" if lifespan else "off")
     server = uvicorn.Server(config)
     thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
     thread.start()
@@ -68,4 +72,4 @@ def live_server(app: Any) -> Iterator[str]:
         yield f"http://127.0.0.1:{config.port}"
     finally:
         server.should_exit = True
-        thread.join(timeout=20)
+        thread.join(timeout=30)

@@ -15,14 +15,9 @@ import importlib.util
 import re
 import shutil
 import sys
-import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
-
-import pytest
 
 
 def _load(name: str) -> Any:
@@ -37,29 +32,6 @@ def _load(name: str) -> Any:
 
 live = _load("_live_server")
 
-
-
-@contextmanager
-def served(app: Any) -> Iterator[str]:
-    """Serve `app` on 127.0.0.1 with its lifespan (the calibrate watcher); yield its URL."""
-    import uvicorn
-
-    config = uvicorn.Config(app, host="127.0.0.1", port=live._free_port(),
-                            ws="websockets-sansio", log_level="warning", access_log=False,
-                            lifespan="on")
-    server = uvicorn.Server(config)
-    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
-    thread.start()
-    deadline = time.monotonic() + 20
-    while not server.started:
-        if not thread.is_alive() or time.monotonic() > deadline:
-            pytest.fail("the test's uvicorn server did not start on 127.0.0.1", pytrace=False)
-        time.sleep(0.02)
-    try:
-        yield f"http://127.0.0.1:{config.port}"
-    finally:
-        server.should_exit = True
-        thread.join(timeout=30)
 
 
 def _log_in(page: Any, base: str, name: str, password: str) -> None:
@@ -87,7 +59,7 @@ def test_an_operator_runs_a_plan_and_a_reviewer_releases_its_result(records_url,
     app = create_app(records_url, tmp_path / "runs", None, plans_dir=plans, station="bench-1")
     operator, reviewer = web.BY_ROLE["operator"], web.BY_ROLE["reviewer"]
     started = time.monotonic()
-    with served(app) as base, sync_playwright() as pw:
+    with live.live_server(app, lifespan=True) as base, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=executable, args=live.CHROMIUM_ARGS)
         try:
             page = browser.new_page(accept_downloads=True)
