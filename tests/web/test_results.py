@@ -61,6 +61,11 @@ def test_a_finished_run_is_calibrated_reviewed_released_and_its_history_shown(
         run_id = sup.start(plan, station="sim", serials=[], operator=operator)
         p = wait_for(lambda: sup.view(run_id).prompt, 30)
         sup.answer(run_id, p.prompt_id, p.step_index, True, operator)
+        wait_for(lambda: sup.view(run_id).status == "finished", 60)
+        # finished, the watcher not yet at it: the page says so and reloads itself until the
+        # calibration shows (a page loaded in that second must not stay there)
+        early = web.Browser(app, "reviewer").get(f"/runs/{run_id}/results")
+        assert "Not calibrated." in early.text and "Refresh" in early.headers
         lifespan = TestClient(app)                  # its lifespan: the calibrate watcher
         lifespan.__enter__()
         reviewer = web.Browser(app, "reviewer")

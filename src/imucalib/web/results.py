@@ -102,7 +102,10 @@ async def results_page(request: Request, run_id: str,
 
     values = await run_in_threadpool(gather)
     live = view.status in LIVE_STATUSES
-    working = values["calibration"].running or values["certificate"].running
+    # a finished run not calibrated yet: the watcher starts its calibration within a second
+    # (auto_calibrate.PERIOD_S), so the page reloads until it shows that job
+    pending = view.status == "finished" and values["calibration"].status == "none"
+    working = (values["calibration"].running or values["certificate"].running or pending)
     response = render(request, "results.html", run=view, live=live, **values)
     if working or live:   # no script: the browser reloads the page while something is at work
         response.headers["Refresh"] = str(REFRESH_S if working else REFRESH_LIVE_S)
