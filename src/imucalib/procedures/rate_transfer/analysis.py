@@ -1,10 +1,12 @@
 """The rate-transfer analysis of one unit (docs/rate-transfer.md, "Analysis").
 
 For each body axis tested (the turns tagged ``axis=<k>``, the unit with that axis up): the
-input rates x_j = ω_table,j + Ω_U (RT-1), the gyro k means y_j and their σ_j
-(:mod:`~imucalib.procedures.common.rate_windows`), the straight line and the
-nonlinearity (RT-5)–(RT-6), and the second fit with the asymmetry and the quadratic term
-(RT-7)–(RT-8) (:mod:`~imucalib.procedures.rate_transfer.fit`).
+input rates x_j = ω_table,j + Ω_U (RT-1), the gyro k means y_j (RT-2)–(RT-4)
+(:mod:`~imucalib.procedures.common.rate_windows`) and their covariance C under the fitted white
+noise and the declared grade's flicker and random walk (RT-4c,
+:mod:`~imucalib.procedures.rate_transfer.noise`), the straight line and the nonlinearity
+(RT-5)–(RT-6), and the second fit with the asymmetry and the quadratic term (RT-7)–(RT-8), both
+by generalized least squares with C (:mod:`~imucalib.procedures.rate_transfer.fit`).
 
 In the triad model's terms (docs/rate-transfer.md, (RT-9)): E′ = 1 + M_kk, A = (1 + M_kk)·a_k/2
 (so the asymmetry is a_k), E2 = K2_k·(1 + M_kk)², and E0′ = b_k + G_kk·g (the bias with axis k up
@@ -52,6 +54,7 @@ from imucalib.procedures.rate_transfer.fit import (
     fit_line,
     fit_rate_transfer,
 )
+from imucalib.procedures.rate_transfer.noise import turn_noise
 from imucalib.procedures.rate_transfer.roles import RATE_TRANSFER_RATE
 
 __all__ = ["AxisTransfer", "RateTransferResult", "analyze_rate_transfer", "transfer_of_axis"]
@@ -68,11 +71,13 @@ class AxisTransfer:
     ----------
     axis : {"x", "y", "z"}
     input_rps, output_rps, se_rps : ndarray
-        x_j (RT-1), y_j and σ_j of each turn. [rad/s]
+        x_j (RT-1), y_j and σ_j = √C_jj of each turn. [rad/s]
     line : LineFit
         (RT-5)–(RT-6).
     transfer : TransferFit or None
         (RT-7)–(RT-8); None when the rates cannot separate its terms.
+    covariance_rps2 : ndarray (n, n) or None
+        C of the means (RT-4c), both fits' GLS weight; None: diag σ_j² (RT-4). [(rad/s)²]
     """
 
     axis: str
@@ -81,6 +86,7 @@ class AxisTransfer:
     se_rps: _F64
     line: LineFit
     transfer: TransferFit | None
+    covariance_rps2: _F64 | None = None
 
     @property
     def nonlinearity(self) -> tuple[float, float, float]:
@@ -133,9 +139,12 @@ class AxisTransfer:
         return out
 
 
-def transfer_of_axis(axis: str, windows: Sequence[RateWindow], earth_rate_up_rps: float
-                     ) -> AxisTransfer:
+def transfer_of_axis(axis: str, windows: Sequence[RateWindow], earth_rate_up_rps: float,
+                     covariance_rps2: _F64 | None = None) -> AxisTransfer:
     """Fit the turns of one axis (module docstring).
+
+    `covariance_rps2` is C of the axis' turns' means (RT-4c), in the order of its turns in
+    `windows` [(rad/s)²]; omitted, diag σ_j² of the windows' white σ (RT-4).
 
     Raises
     ------
@@ -150,14 +159,16 @@ def transfer_of_axis(axis: str, windows: Sequence[RateWindow], earth_rate_up_rps
             f"axis {axis}: {len(mine)} turn(s) at {np.unique(np.round(x, 9)).size} distinct "
             "rate(s); the scale factor needs at least two rates"))
     y = np.array([w.gyro_mean_rps[k] for w in mine])
-    se = np.array([w.gyro_se_rps[k] for w in mine])
-    line = fit_line(x, y, se, group=f"gyro {axis}")
+    se = (np.array([w.gyro_se_rps[k] for w in mine]) if covariance_rps2 is None
+          else np.sqrt(np.diag(covariance_rps2)))
+    line = fit_line(x, y, se, group=f"gyro {axis}", covariance=covariance_rps2)
     try:
-        transfer: TransferFit | None = fit_rate_transfer(x, y, se, group=f"gyro {axis}")
+        transfer: TransferFit | None = fit_rate_transfer(x, y, se, group=f"gyro {axis}",
+                                                         covariance=covariance_rps2)
     except InsufficientExcitationError:
         transfer = None
     return AxisTransfer(axis=axis, input_rps=x, output_rps=y, se_rps=se, line=line,
-                        transfer=transfer)
+                        transfer=transfer, covariance_rps2=covariance_rps2)
 
 
 @dataclass(frozen=True)
@@ -314,11 +325,27 @@ def analyze_rate_transfer(recording: Recording | str | os.PathLike[str], *,
             return analyze_rate_transfer(rec, unit=unit, processing=processing)
     name, windows, earth_up = extract_rate_windows(recording, unit, (RATE_TRANSFER_RATE,),
                                                    processing=processing)
-    axes = tuple(transfer_of_axis(a, windows, earth_up)
+    w0 = windows[0]
+    white = np.asarray(w0.gyro_se_rps * np.sqrt(max(w0.duration_s, 1e-3)), dtype=np.float64)
+    noise = turn_noise(recording, windows, white, _sample_rate_hz(recording, name))
+    axes = tuple(transfer_of_axis(a, windows, earth_up, noise.covariance[a])
                  for a in sorted({w.axis for w in windows}))
     return RateTransferResult(
         unit=name, axes=axes, earth_rate_up_rps=earth_up, n_turns=len(windows),
         specification=Specification.of_metadata(recording.metadata),
-        notes=("means over whole table revolutions (encoder angle); σ from the pooled white "
-               "noise of 1 s block means; input = table rate + vertical Earth rate "
-               "(docs/rate-transfer.md)",))
+        notes=("means over whole table revolutions (encoder angle); white noise density from "
+               "the pooled scatter of 1 s block means (RT-4); input = table rate + vertical "
+               "Earth rate; both fits by generalized least squares with the means' covariance "
+               "(RT-4c) (docs/rate-transfer.md)", noise.note))
+
+
+def _sample_rate_hz(rec: Recording, unit: str) -> float:
+    """Return the unit's mean sample rate over its stream. [Hz]"""
+    from imucalib.io.streams import DEVICE_IMU
+
+    for s in rec.streams:
+        if s.device == DEVICE_IMU and s.unit == unit and s.n_samples > 1:
+            span = s.t_last_s - s.t_first_s
+            if span > 0:
+                return (s.n_samples - 1) / span
+    return 100.0

@@ -36,7 +36,8 @@ Contents
 --------
 :data:`MODELS`, :func:`basis`, :func:`lobatto_points`, :func:`information_matrix`,
 :func:`d_efficiency`, :func:`d_optimal_on_grid`, :func:`optimal_design`,
-:func:`plan_dwell_design`, :class:`RateDesignComparison`, :func:`compare_rate_designs`
+:func:`plan_dwell_design`, :class:`RateDesignComparison`, :func:`compare_rate_designs`,
+:func:`move_time_s`, :func:`station_time_s`
 """
 
 from __future__ import annotations
@@ -48,13 +49,13 @@ from numpy.polynomial import legendre
 from numpy.typing import ArrayLike, NDArray
 
 from imucalib.errors import ConfigurationError, InsufficientExcitationError
-from imucalib.plan.budget import estimate_plan_recording
+from imucalib.plan.budget import MIN_SETTLE_PHASE_S, estimate_plan_recording
 from imucalib.plan.schema import Plan, RateStep
 from imucalib.procedures.rate_transfer.roles import RATE_TRANSFER_RATE
 
 __all__ = ["MODELS", "RateDesignComparison", "basis", "compare_rate_designs", "d_efficiency",
-           "d_optimal_on_grid", "information_matrix", "lobatto_points", "optimal_design",
-           "plan_dwell_design"]
+           "d_optimal_on_grid", "information_matrix", "lobatto_points", "move_time_s",
+           "optimal_design", "plan_dwell_design", "station_time_s"]
 
 _F64 = NDArray[np.float64]
 
@@ -195,6 +196,33 @@ def plan_dwell_design(plan: Plan, axis: str | None = None) -> tuple[_F64, _F64, 
     return rates, dwell, float(np.max(np.abs(rates)))
 
 
+def move_time_s(plan: Plan) -> float:
+    """Return the table's moves beyond the settle phase the budget counts. [s]
+
+    The table accelerates at the plan's ``[limits] max_accel_dps2`` α: the change from the
+    previous rate ω_(j−1) (0 after a remount) to ω_j takes |ω_j − ω_(j−1)|/α, and the runner
+    settles until the rate has held for ``[guards] settle_check_s`` t_c. The budget
+    (:func:`~imucalib.plan.budget.estimate_plan_recording`) counts a settle phase of
+    max(settle_s, ``MIN_SETTLE_PHASE_S``); this returns Σ_j max(0, |Δω_j|/α + t_c −
+    max(settle_s, ``MIN_SETTLE_PHASE_S``)): zero unless the table is slow.
+    """
+    accel, check = plan.limits.max_accel_dps2, plan.guards.settle_check_s
+    extra, prev = 0.0, 0.0
+    for step in plan.steps:
+        if not isinstance(step, RateStep):
+            prev = 0.0  # a remount: the table stops
+            continue
+        move = abs(step.rate_dps - prev) / accel
+        extra += max(0.0, move + check - max(step.settle_s, MIN_SETTLE_PHASE_S))
+        prev = step.rate_dps
+    return extra
+
+
+def station_time_s(plan: Plan) -> float:
+    """Return the plan's station time with the table's moves (:func:`move_time_s`). [s]"""
+    return estimate_plan_recording(plan).duration_s + move_time_s(plan)
+
+
 @dataclass(frozen=True)
 class RateDesignComparison:
     """The default rate set against the D-optimal one at equal generalized variance (TD.R3).
@@ -315,6 +343,6 @@ def compare_rate_designs(plan: Plan, model: str, *, least_revolutions: int = 2
         optimal_revolutions=tuple(int(n) for n in revs),
         optimal_efficiency=d_efficiency(model, opt_u, t_opt),
         default_record_s=float(np.sum(dwell)), optimal_record_s=float(np.sum(t_opt)),
-        default_station_s=estimate_plan_recording(plan).duration_s,
-        optimal_station_s=estimate_plan_recording(new).duration_s)
+        default_station_s=station_time_s(plan),
+        optimal_station_s=station_time_s(new))
 

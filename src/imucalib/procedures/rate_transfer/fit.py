@@ -13,9 +13,12 @@ the vertical Earth rate Ω_U, eq. (RT-1)), y_j the gyro's mean output, σ_j its 
    quadratic coefficient E2.
 
 Both fits are solved by :func:`~imucalib.estimation.linear.solve_weighted_lsq` (Eqs. (1)–(7)
-there), weighted by 1/σ_j²: its χ²/ν is assessed by the one misfit rule (Eq. (6) there,
-:func:`~imucalib.models.fit_quality.assess_fit`) and on a misfit the σ are scaled by the Birge
-ratio (Eq. (7) there: the covariance reported here is the solver's ``covariance_birge``).
+there) as generalized least squares with the means' covariance C (RT-4c): θ̂ = (AᵀC⁻¹A)⁻¹AᵀC⁻¹y,
+Cov θ̂ = (AᵀC⁻¹A)⁻¹ (Aitken 1935), which is weighted least squares by 1/σ_j² when C = diag σ_j²
+(``covariance`` omitted). Its χ² = rᵀC⁻¹r over ν = n − m is assessed by the one misfit rule
+(Eq. (6) there, :func:`~imucalib.models.fit_quality.assess_fit`) and on a misfit the σ are
+scaled by the Birge ratio (Eq. (7) there: the covariance reported here is the solver's
+``covariance_birge``).
 
 Contents
 --------
@@ -40,9 +43,9 @@ __all__ = ["LineFit", "TransferFit", "fit_line", "fit_rate_transfer", "nonlinear
 _F64 = NDArray[np.float64]
 
 
-def _solve(design: _F64, y: _F64, se: _F64, names: tuple[str, ...], group: str) -> LsqSolution:
-    """Fit the means to (RT-5) or (RT-7), weighted by 1/σ², with the one solver."""
-    return solve_weighted_lsq(design, y, param_names=names, sigma=se, group=group,
+def _solve(design: _F64, y: _F64, cov: _F64, names: tuple[str, ...], group: str) -> LsqSolution:
+    """Fit the means to (RT-5) or (RT-7) by GLS with their covariance, with the one solver."""
+    return solve_weighted_lsq(design, y, param_names=names, covariance=cov, group=group,
                               context=f"{group} rate-transfer design",
                               advice=f"the {design.shape[0]} means' rates cannot separate the "
                                      f"{design.shape[1]} terms of the model")
@@ -116,41 +119,55 @@ class TransferFit:
         return float(np.sqrt(self.cov[i, i]))
 
 
-def _inputs(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike) -> tuple[_F64, _F64, _F64]:
+def _inputs(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike,
+            covariance: ArrayLike | None = None) -> tuple[_F64, _F64, _F64]:
+    """Return x, y and the means' covariance C: `covariance`, else diag σ_j² (RT-4)."""
     x, y, se = (np.asarray(v, dtype=np.float64).ravel() for v in (x_rps, y_rps, se_rps))
     if not (x.size == y.size == se.size) or x.size < 2:
         raise InvalidInputError(f"x, y and σ must be equal-length with ≥ 2 means; got sizes "
                                 f"{x.size}, {y.size}, {se.size}")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y)) and np.all(se > 0)):
         raise InvalidInputError("rates and means must be finite and σ > 0")
-    return x, y, se
+    if covariance is None:
+        return x, y, np.diag(se * se)
+    cov = np.asarray(covariance, dtype=np.float64)
+    if cov.shape != (x.size, x.size) or not np.all(np.isfinite(cov)):
+        raise InvalidInputError(f"the means' covariance must be finite with shape "
+                                f"({x.size}, {x.size}); got {cov.shape}")
+    return x, y, 0.5 * (cov + cov.T)
 
 
 def fit_line(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
-             group: str = "gyro") -> LineFit:
+             group: str = "gyro", covariance: ArrayLike | None = None) -> LineFit:
     """Fit the straight line (RT-5) and return it with the nonlinearity (RT-6).
+
+    `covariance` is the means' covariance C (RT-4c), shape (n, n) [(rad/s)²]: GLS; omitted,
+    diag `se_rps`² (weighted least squares).
 
     Raises
     ------
     InsufficientExcitationError
         Rates that cannot separate E0 from E (all means at one rate).
     """
-    x, y, se = _inputs(x_rps, y_rps, se_rps)
-    sol = _solve(np.column_stack([np.ones_like(x), x]), y, se, ("E0", "E"), group)
+    x, y, cov = _inputs(x_rps, y_rps, se_rps, covariance)
+    sol = _solve(np.column_stack([np.ones_like(x), x]), y, cov, ("E0", "E"), group)
     p, r = sol.estimate, sol.residuals
     full = abs(float(p[1])) * float(np.max(np.abs(x)))
     return LineFit(bias_rps=float(p[0]), scale_factor=float(p[1]), cov=sol.covariance_birge,
                    residuals_rps=r, nonlinearity_ppm=float(np.max(np.abs(r)) / full * 1e6),
                    quality=sol.fit_quality,
-                   nonlinearity_noise_std_ppm=nonlinearity_noise_std(x, y, se) * 1e6)
+                   nonlinearity_noise_std_ppm=nonlinearity_noise_std(
+                       x, y, se_rps, covariance=cov) * 1e6)
 
 
-def nonlinearity_noise_std(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike) -> float:
+def nonlinearity_noise_std(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
+                           covariance: ArrayLike | None = None) -> float:
     """Return the σ of the nonlinearity (RT-6) from the means' σ, first order, (RT-6a). [1]
 
     N = |r_j*|/(|E|·X), r = y − E0 − E·x the residuals of the weighted line (RT-5), j* the
     largest |r_j|, X = max|x|. Both r = R·y (R = I − A·P, P = (AᵀΣ⁻¹A)⁻¹AᵀΣ⁻¹, A = [1, x],
-    Σ = diag σ_j²) and E = P₂·y are linear in the means, so with j* held fixed
+    Σ the means' covariance: `covariance`, else diag σ_j²) and E = P₂·y are linear in the
+    means, so with j* held fixed
 
         ∇N = sign(r_j*)·R_j*/(|E|·X) − (N/E)·P₂,   σ_N² = ∇Nᵀ·Σ·∇N                   (RT-6a)
 
@@ -168,11 +185,13 @@ def nonlinearity_noise_std(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike
     ----------
     x_rps, y_rps, se_rps : array_like, shape (n,)
         Inputs x_j, means y_j and their σ_j. [rad/s]
+    covariance : array_like, shape (n, n), optional
+        The means' covariance (RT-4c) instead of diag σ_j². [(rad/s)²]
     """
-    x, y, se = _inputs(x_rps, y_rps, se_rps)
+    x, y, cov = _inputs(x_rps, y_rps, se_rps, covariance)
     A = np.column_stack([np.ones_like(x), x])
-    Aw = A / se[:, None] ** 2
-    P = np.linalg.solve(A.T @ Aw, Aw.T)  # (2, n): the weighted least squares' operator
+    Aw = np.linalg.solve(cov, A)  # Σ⁻¹A
+    P = np.linalg.solve(A.T @ Aw, Aw.T)  # (2, n): the (generalized) least squares' operator
     R = np.eye(x.size) - A @ P
     r = R @ y
     j = int(np.argmax(np.abs(r)))
@@ -180,19 +199,19 @@ def nonlinearity_noise_std(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike
     full = abs(e) * float(np.max(np.abs(x)))
     n = abs(float(r[j])) / full
     grad = math.copysign(1.0, float(r[j])) * R[j] / full - (n / e) * P[1]
-    return float(np.sqrt(np.sum((grad * se) ** 2)))
+    return float(np.sqrt(max(float(grad @ cov @ grad), 0.0)))
 
 
 def fit_rate_transfer(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
-                      group: str = "gyro") -> TransferFit:
-    """Fit (RT-7): y = E0′ + E′·x + A·|x| + E2·x², weighted.
+                      group: str = "gyro", covariance: ArrayLike | None = None) -> TransferFit:
+    """Fit (RT-7): y = E0′ + E′·x + A·|x| + E2·x², by GLS with `covariance` (as :func:`fit_line`).
 
     Raises
     ------
     InsufficientExcitationError
         Fewer than three distinct rate magnitudes, or rates of one sign only.
     """
-    x, y, se = _inputs(x_rps, y_rps, se_rps)
+    x, y, cov = _inputs(x_rps, y_rps, se_rps, covariance)
     mags = np.unique(np.round(np.abs(x), 9))
     if mags.size < 3 or not (np.any(x > 0) and np.any(x < 0)):
         raise InsufficientExcitationError(
@@ -200,6 +219,6 @@ def fit_rate_transfer(x_rps: ArrayLike, y_rps: ArrayLike, se_rps: ArrayLike, *,
             f"{group}: the asymmetry and quadratic terms need rates of both signs at ≥ 3 "
             f"magnitudes; got {mags.size} magnitude(s)")
     design = np.column_stack([np.ones_like(x), x, np.abs(x), x * x])
-    sol = _solve(design, y, se, ("E0'", "E'", "A", "E2"), group)
+    sol = _solve(design, y, cov, ("E0'", "E'", "A", "E2"), group)
     return TransferFit(params=sol.estimate, cov=sol.covariance_birge,
                        residuals_rps=sol.residuals, quality=sol.fit_quality)

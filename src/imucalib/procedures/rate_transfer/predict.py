@@ -4,23 +4,24 @@
 give: input x_j = ω_j + Ω_U (RT-1, Ω_U the vertical Earth rate of the twin's site), the span of
 whole revolutions T_j = n_j·360°/|ω_j| (RT-2) and its start on the run's clock (the station
 time of the steps before it, :func:`~imucalib.plan.budget.estimate_plan_recording`, plus the
-settle phase). The covariance C of gyro k's means is that of the grade's noise model
+settle phase). The covariance C of gyro k's means is that of the grade's noise model, the
+random walk from the run's start
 (:func:`~imucalib.estimation.compute_window_mean_covariance`, Eq. (TD.2): white N²/T_j on the
 diagonal, flicker and random walk correlating the turns).
 
-The analysis weights the means by the white σ_j = N/√T_j only (RT-4), so its estimator is
-θ̂ = P·y with P = (AᵀWA)⁻¹AᵀW, W = diag(1/σ_j²), for the line A = [1, x] (RT-5) and the second
-fit A = [1, x, |x|, x²] (RT-7); the predicted covariance is that estimator's
+The analysis fits both models by generalized least squares with the same C (RT-4c: the white
+density it fits, the declared grade's flicker and random walk), so its estimator is
+θ̂ = P·y with P = (AᵀC⁻¹A)⁻¹AᵀC⁻¹, for the line A = [1, x] (RT-5) and the second fit
+A = [1, x, |x|, x²] (RT-7); the predicted covariance is
 
-    (TD.R4)  Cov(θ̂) = P·C·Pᵀ,
+    (TD.R4)  Cov(θ̂) = P·C·Pᵀ = (AᵀC⁻¹A)⁻¹,
 
-which is the Cramér–Rao bound (AᵀWA)⁻¹ (:func:`~imucalib.estimation.crlb.compute_crlb`,
-Eq. (TD.3)) when the noise is white, and what calibrate reports (``std_noise``) then. With
-flicker and random walk it exceeds the bound and the σ calibrate reports (RT-4 is white
-only); the notes give the ratio. Derived quantities as the result computes them: the
-asymmetry 2A/E′ (RT-8) with E′ = 1, A = 0 gives σ = 2σ_A; the nonlinearity's σ (RT-6a)
-depends on which mean deviates most, so the largest over the turns of σ(r_j)/max|x| (r the
-line's residuals, Cov(r) = R·C·Rᵀ, R = I − A·P) is given, an upper value.
+the Cramér–Rao bound (:func:`~imucalib.estimation.crlb.compute_crlb`, Eq. (TD.3)); what
+calibrate reports as ``std_noise``. The notes give its largest ratio to the white-noise bound
+(AᵀWA)⁻¹, W = diag(T_j/N²): how much flicker and random walk add. Derived quantities as the
+result computes them: the asymmetry 2A/E′ (RT-8) with E′ = 1, A = 0 gives σ = 2σ_A; the
+nonlinearity's σ (RT-6a) depends on which mean deviates most, so the largest over the turns of
+σ(r_j)/max|x| (r the line's residuals, Cov(r) = R·C·Rᵀ, R = I − A·P) is given, an upper value.
 
 Identifiability as the analysis decides it: fewer than two distinct rates on an axis confound
 all its parameters; fewer than three commanded magnitudes, or one sign only, confound the
@@ -52,6 +53,7 @@ from imucalib.plan.budget import MIN_SETTLE_PHASE_S, estimate_plan_recording
 from imucalib.plan.schema import Plan, RateStep
 from imucalib.procedures.common.prediction import PredictedParameter, Prediction, PredictionGroup
 from imucalib.procedures.common.reference import site_vectors
+from imucalib.procedures.rate_transfer.design import station_time_s
 from imucalib.procedures.rate_transfer.roles import RATE_TRANSFER_RATE
 
 __all__ = ["parameter_names", "predict_rate_transfer"]
@@ -108,9 +110,9 @@ def _turns(plan: Plan) -> list[_Turn]:
     return out
 
 
-def _sandwich(a: _F64, white_var: _F64, cov: _F64) -> tuple[_F64, _F64]:
-    """Return P (the analysis's weighted operator) and P·C·Pᵀ (TD.R4)."""
-    aw = a / white_var[:, None]
+def _gls(a: _F64, cov: _F64) -> tuple[_F64, _F64]:
+    """Return P = (AᵀC⁻¹A)⁻¹AᵀC⁻¹ (the analysis's GLS operator) and P·C·Pᵀ (TD.R4)."""
+    aw = np.linalg.solve(cov, a)
     p = np.asarray(np.linalg.solve(a.T @ aw, aw.T), dtype=np.float64)
     return p, np.asarray(p @ cov @ p.T, dtype=np.float64)
 
@@ -165,7 +167,7 @@ def predict_rate_transfer(plan: Plan, noise: NoiseModel | None = None) -> Predic
         x = np.array([t.rate_rps + earth_up for t in mine])
         cov = compute_window_mean_covariance(
             model, [t.start_s for t in mine], [t.duration_s for t in mine],
-            reference_time_s=min(t.start_s for t in mine))[k]
+            reference_time_s=0.0)[k]  # the random walk from the run's start, as the analysis
         white = float(np.asarray(model.white_density).ravel()[k]) ** 2 / np.array(
             [t.duration_s for t in mine])
         line_names = tuple(n for n, _ in rows[:2])
@@ -176,7 +178,7 @@ def predict_rate_transfer(plan: Plan, noise: NoiseModel | None = None) -> Predic
                                  tuple(n for n, _ in rows)))
             params += [PredictedParameter(n, None, u) for n, u in rows]
             continue
-        p1, c1 = _sandwich(a1, white, cov)
+        p1, c1 = _gls(a1, cov)
         crlb = compute_crlb(a1, np.diag(white), param_names=line_names)
         worst_ratio = max(worst_ratio, float(np.max(np.sqrt(np.diag(c1)) / crlb.std)))
         std[line_names[0]] = float(math.sqrt(c1[1, 1]))
@@ -195,7 +197,7 @@ def predict_rate_transfer(plan: Plan, noise: NoiseModel | None = None) -> Predic
             confounded = tuple(n for n in second_names if n != f"gyro_M_{axis}{axis}")
             groups.append(_group(f"gyro {axis} second fit", second_names, a2, cov, confounded))
         else:
-            _, c2 = _sandwich(a2, white, cov)
+            _, c2 = _gls(a2, cov)
             s2 = np.sqrt(np.diag(c2))
             std[f"gyro_M_{axis}{axis}"] = float(s2[1])
             std[f"gyro_bias_up_{axis}"] = float(s2[0])
@@ -209,12 +211,12 @@ def predict_rate_transfer(plan: Plan, noise: NoiseModel | None = None) -> Predic
         f"{float(np.ravel(model.bias_instability)[0]):.3g}, K "
         f"{float(np.ravel(model.random_walk)[0]):.3g} (axis x, SI); turns' means correlated by "
         "flicker and random walk (Eq. (TD.2))",
-        "σ of the analysis's white-weighted fits under that noise, P·C·Pᵀ (Eq. (TD.R4)); "
-        f"largest ratio to the white-noise bound (what calibrate reports as std_noise, "
-        f"(RT-4)): {worst_ratio:.3g}",
+        "σ of the analysis's generalized least squares with that covariance, (AᵀC⁻¹A)⁻¹ "
+        "(Eq. (TD.R4)), what calibrate reports as std_noise (RT-4c); largest ratio to the "
+        f"white-noise bound: {worst_ratio:.3g}",
         "nonlinearity σ: the largest over the turns of σ(residual)/max|x| (RT-6a), an upper "
         "value; reported σ are Birge-scaled on a misfit, not predicted",
     ]
     return Prediction(procedure="rate-transfer",
-                      station_time_s=estimate_plan_recording(plan).duration_s,
+                      station_time_s=station_time_s(plan),
                       parameters=tuple(params), groups=tuple(groups), notes=tuple(notes))

@@ -2,9 +2,12 @@
 
 It implements :class:`~imucalib.procedures.common.procedure.Procedure`.
 
-The plan is :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`; the
-analysis :func:`~imucalib.procedures.rate_transfer.analysis.analyze_rate_transfer`, imported
-when first used.
+The plan is :func:`~imucalib.procedures.rate_transfer.plan.generate_rate_transfer_plan`; its
+prediction :func:`~imucalib.procedures.rate_transfer.predict.predict_rate_transfer` and its
+optimiser :func:`~imucalib.procedures.rate_transfer.optimize.optimize_request`
+(``imucalib plan optimize rate-transfer``, docs/test-design.md); the analysis
+:func:`~imucalib.procedures.rate_transfer.analysis.analyze_rate_transfer`, imported when first
+used.
 """
 
 from __future__ import annotations
@@ -25,7 +28,11 @@ from imucalib.procedures.rate_transfer.roles import ROLES
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
     from imucalib.plan.schema import Plan
-    from imucalib.procedures.common.prediction import Prediction
+    from imucalib.procedures.common.prediction import (
+        OptimizedPlan,
+        OptimizeRequest,
+        Prediction,
+    )
     from imucalib.procedures.rate_transfer.analysis import RateTransferResult
 
 __all__ = ["PROCEDURE", "RateTransferProcedure"]
@@ -59,6 +66,16 @@ class RateTransferProcedure(ProcedureDefaults):
         from imucalib.procedures.rate_transfer.predict import predict_rate_transfer
 
         return predict_rate_transfer(plan)
+
+    def optimize_plan(self, request: OptimizeRequest) -> OptimizedPlan:
+        """Return the rate-transfer plan meeting `request` (:func:`~.optimize.optimize_request`).
+
+        The optional capability of :class:`~imucalib.procedures.common.prediction.Optimizing`
+        (``imucalib plan optimize rate-transfer``; docs/test-design.md, "Rate transfer").
+        """
+        from imucalib.procedures.rate_transfer.optimize import optimize_request
+
+        return optimize_request(request)
 
     def analyze(self, recording: Recording | str | os.PathLike[str], *,
                 unit: str | None = None, options: Mapping[str, Any] | None = None,
