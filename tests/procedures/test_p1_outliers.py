@@ -11,11 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from imucalib.io import open_recording
-from imucalib.procedures.p1.observations import (
-    OUTLIER_TIMES_KEPT,
-    P1Processing,
-    extract_p1_observations,
-)
+from imucalib.procedures.p1.observations import P1Processing, extract_p1_observations
+from imucalib.procedures.p1.window_reduction import OUTLIER_TIMES_KEPT
 
 V1_FILE = Path(__file__).parents[1] / "data" / "p1_v1.h5"
 

@@ -14,7 +14,7 @@ from imucalib.errors import InvalidInputError
 from imucalib.io import open_recording
 from imucalib.procedures import registry
 from imucalib.procedures.common.workers import START_VARIABLE, balanced_groups
-from imucalib.procedures.p1 import observations as p1_observations
+from imucalib.procedures.p1 import parallel as p1_parallel
 from imucalib.procedures.p1.observations import extract_p1_observations
 
 
@@ -37,7 +37,7 @@ def _same(a, b) -> bool:
 @pytest.fixture
 def shared(monkeypatch):
     """Share every recording's windows with the workers, however small (the test runs are)."""
-    monkeypatch.setattr(p1_observations, "PARALLEL_ROWS_MIN", 0)
+    monkeypatch.setattr(p1_parallel, "PARALLEL_ROWS_MIN", 0)
     monkeypatch.delenv(START_VARIABLE, raising=False)
 
 
@@ -103,7 +103,7 @@ def test_a_small_recording_is_reduced_here_alone(consumer_run, monkeypatch):
         raise AssertionError("a pool was started")
 
     monkeypatch.setattr(workers, "local_pool", no_pool)
-    monkeypatch.setattr(p1_observations, "PARALLEL_ROWS_MIN", 1 << 40)
+    monkeypatch.setattr(p1_parallel, "PARALLEL_ROWS_MIN", 1 << 40)
     with open_recording(consumer_run) as rec:
         serial = extract_p1_observations(rec)
         two = extract_p1_observations(rec, workers=2)

@@ -8,6 +8,9 @@ Here:
 
 - :class:`RunningMoments`: the exact mean and scatter of a long window read in blocks (bounded
   memory), each block shifted by the first block's mean to keep the sums well conditioned;
+- :class:`RunningRowMean`: the mean of rows read in blocks, numpy's ``x.mean(axis=0)`` of the
+  rows stacked bit for bit (numpy adds the rows of a C-ordered array of two columns or more one
+  after the other; :mod:`imucalib.processing.moments`);
 - :func:`table_angle_at`: the table angle at IMU sample times, extrapolated at the window's rate
   just outside the feedback span (so a window of exactly N revolutions keeps N whole ones);
 - :func:`harmonic_residual_std`: the scatter of a turning window about what a calibrated model
@@ -19,8 +22,8 @@ Here:
 
 Contents
 --------
-:class:`RunningMoments`, :func:`harmonic_residual_std`, :func:`table_angle_at`,
-:func:`counter_times`, :func:`whole_revolutions`, :class:`TurnSpan`
+:class:`RunningMoments`, :class:`RunningRowMean`, :func:`harmonic_residual_std`,
+:func:`table_angle_at`, :func:`counter_times`, :func:`whole_revolutions`, :class:`TurnSpan`
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from imucalib.errors import InvalidInputError, MissingSegmentError
 from imucalib.processing import compute_integer_revolution_window, reconstruct_time_base
 from imucalib.processing.moments import shifted_sums
 
-__all__ = ["RunningMoments", "TurnSpan", "counter_times", "harmonic_residual_std",
+__all__ = ["RunningMoments", "RunningRowMean", "TurnSpan", "counter_times", "harmonic_residual_std",
            "table_angle_at", "whole_revolutions"]
 
 _F64 = NDArray[np.float64]
@@ -80,6 +83,38 @@ class RunningMoments:
         assert self._sum_f is not None and self._sum_f2 is not None
         var = (self._sum_f2 - self._sum_f**2 / self.n) / max(self.n - 1, 1)
         return np.asarray(np.sqrt(np.maximum(var, 0.0)), dtype=np.float64)
+
+
+class RunningRowMean:
+    """Mean of rows (n, k) read in blocks, equal to ``x.mean(axis=0)`` of them stacked.
+
+    numpy reduces axis 0 of a C-ordered array of k ≥ 2 columns row after row,
+    ``((x₀ + x₁) + x₂) + …``, and divides by n: adding each block's rows in turn onto the
+    running sum (the sum as the block's first row) makes the same additions, so the mean is
+    numpy's bit for bit while only one block is held. (A single column, whose contiguous rows
+    numpy sums pairwise, differs from it in the last bits.)
+    """
+
+    def __init__(self) -> None:
+        self.n = 0
+        self._sum: _F64 | None = None
+
+    def add(self, rows: _F64) -> None:
+        """Accumulate one block of rows (m, k)."""
+        if rows.shape[0] == 0:
+            return
+        block = np.asarray(rows, dtype=np.float64)
+        if self._sum is None:
+            self._sum = np.add.reduce(block, axis=0)
+        else:
+            self._sum = np.add.reduce(np.vstack([self._sum[None, :], block]), axis=0)
+        self.n += block.shape[0]
+
+    @property
+    def mean(self) -> _F64:
+        """The mean of the rows added (at least one)."""
+        assert self._sum is not None, "no rows added"
+        return np.asarray(self._sum / self.n, dtype=np.float64)
 
 
 def harmonic_residual_std(values: _F64, angle_rad: _F64) -> _F64:

@@ -63,8 +63,8 @@ class WindowObservation:
     outliers_per_channel : tuple of int
         Flagged samples per channel (gyro x, y, z, accel x, y, z); empty when not tested.
     outlier_times_s : tuple of float
-        Times of the first :data:`OUTLIER_TIMES_KEPT` rows with a flagged sample, to say where.
-        [s]
+        Times of the first :data:`~.window_reduction.OUTLIER_TIMES_KEPT` rows with a flagged
+        sample, to say where. [s]
     n_revolutions : int
     alignment_error_s : float
         Bound on the IMU-to-table synchronisation error. [s]
