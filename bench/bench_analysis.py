@@ -28,10 +28,13 @@ measurement (docs/performance.md, "BLAS threads on a busy machine").
 Printed: a markdown table, one row a procedure (IMU samples of every unit, file sizes, bare
 reads, analysis, analysis / gzip read by wall-clock and by process CPU time — the latter moves
 less when other processes share the cores —, peak memory, and for P1 and P2 the analysis with 2
-workers and its speed-up), then for P1 and P2 the peak memory of longer recordings (P1: the
-static and position records ×4, which makes the longest step 4× longer, and the repetitions ×4,
-which does not; P2: the sample rate ×4, since the twin's P2 run costs station time, not
-samples), for the field calibration the marginal analysis / read ratio (its recording at twice
+workers and its speed-up), the CPU-time ratios again with the CPU of the child processes
+each analysis forked and waited for (``RUSAGE_CHILDREN``: the opening's probe,
+docs/recording-format.md, "Hangs and crashes inside HDF5"; on one core its time is the
+analysis's too), then for P1 and P2 the peak memory of longer recordings (P1: the static and
+position records ×4, which makes the longest step 4× longer, and the repetitions ×4, which does
+not; P2: the sample rate ×4, since the twin's P2 run costs station time, not samples),
+for the field calibration the marginal analysis / read ratio (its recording at twice
 the sample rate, the same poses: (A₂ − A₁)/(R₂ − R₁), the cost of a sample without the fixed
 costs that dominate so small a read), the codecs' file sizes and the machine.
 
@@ -211,6 +214,14 @@ def _malloc_trim() -> bool:
     return True
 
 
+def _children_cpu() -> float:
+    """CPU time of this process's children that have ended (the open's forked probe) [s]."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def _bare_read(path: Path) -> float:
     """Open `path` with h5py and read every dataset under /streams whole [s]."""
     return _bare_read_times(path)[0]
@@ -273,14 +284,16 @@ def child(job: dict[str, Any]) -> dict[str, Any]:
         pstats.Stats(prof, stream=text).sort_stats("cumulative").print_stats(job["profile"])
         out["profile"] = text.getvalue()
     else:
-        times, cpu = [], []
+        times, cpu, total = [], [], []
         for _ in range(job["repeat"]):
-            t0, c0 = time.perf_counter(), time.process_time()
+            t0, c0, k0 = time.perf_counter(), time.process_time(), _children_cpu()
             proc.analyze(path, unit=None, options=options)
             times.append(time.perf_counter() - t0)
             cpu.append(time.process_time() - c0)
+            total.append(cpu[-1] + _children_cpu() - k0)
         out["analysis_s"] = min(times)
         out["analysis_cpu_s"] = min(cpu)
+        out["analysis_cpu_children_s"] = min(total)
     out["peak_mib"] = max(_status("VmHWM") - rss0, 0) / 1024
     return out
 
@@ -425,6 +438,7 @@ def main() -> None:
     load0 = os.getloadavg()
     try:
         rows, mem_rows, measured = [], [], {}
+        with_children: list[str] = []
         marginal_rows: list[str] = []
         for spec in specs:
             log(f"{spec.label}:")
@@ -448,6 +462,8 @@ def main() -> None:
                 cells += ["n/a", "n/a"]
             rows.append(_row(cells))
             log(f"  {cells}")
+            cpu_all = m["analysis_cpu_children_s"] / m[f"read_{CODECS[0]}_cpu"]
+            with_children.append(f"{label} {cpu_all:.1f}")
             versions = [("×1", main_files, m)]
             for how, full, quick in spec.longer:
                 longer = recording(base, spec.name, quick if args.quick else full)
@@ -492,6 +508,10 @@ def main() -> None:
                     "analysis, 2 workers [s]", "speed-up"]))
         print(_row(["---"] * 11))
         print("\n".join(rows))
+        print()
+        print("analysis / read gzip by CPU times with the CPU of the processes the analysis "
+              "forked and waited for (the open's probe: a child the column above does not "
+              "count): " + "; ".join(with_children))
         if mem_rows:
             print()
             print(_row(["procedure", "recording", "IMU samples", "largest step (one unit)",

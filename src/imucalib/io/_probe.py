@@ -80,10 +80,12 @@ def _frames(buf: bytearray) -> list[tuple[bytes, bytes]]:
 
 
 def run_probe(path: Path, work: Callable[[Callable[[str], None]], _T], *,
-              timeout_s: float | None = None) -> _T:
+              timeout_s: float | None = None, fork: bool = True) -> _T:
     """Return ``work(progress)`` computed in a forked child within `timeout_s` seconds.
 
-    `timeout_s` defaults to :data:`PROBE_TIMEOUT_S`.
+    `timeout_s` defaults to :data:`PROBE_TIMEOUT_S`. With ``fork=False`` (a file whose seal
+    says its metadata is what a probe read soundly before, :mod:`imucalib.io._seal`) the work
+    runs in this process, as it does where ``os.fork`` does not exist.
 
     The result must pickle. A :class:`~imucalib.errors.RecordingError` raised by `work` is
     raised again here (same class and message); any other exception in the child makes the
@@ -94,7 +96,7 @@ def run_probe(path: Path, work: Callable[[Callable[[str], None]], _T], *,
     RecordingCorruptError
         If the child has not finished within `timeout_s` (it is killed) or died from a signal.
     """
-    if not hasattr(os, "fork"):
+    if not fork or not hasattr(os, "fork"):
         return work(lambda what: None)
     timeout_s = PROBE_TIMEOUT_S if timeout_s is None else float(timeout_s)
     r, w = os.pipe()

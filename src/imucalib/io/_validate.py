@@ -33,7 +33,7 @@ import json
 import math
 import os
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final, TypeVar
@@ -389,7 +389,12 @@ def _stream(p: Path, f: h5py.File, path: str, committed: int) -> StreamLayout:
 
 # ----------------------------------------------------------------------------- tables
 def _table(p: Path, f: h5py.File, name: str, fields: Mapping[str, FieldSpec],
-           committed: int, links: _Links) -> dict[str, NDArray[Any]]:
+           committed: int, links: _Links, read: Collection[str] | None = None
+           ) -> dict[str, NDArray[Any]]:
+    """Check a table's fields (kind, shape, rows); return the committed rows of those `read`.
+
+    `read` None: every field's.
+    """
     group = _group(p, f, name, links)
     out: dict[str, NDArray[Any]] = {}
     for field, spec in fields.items():
@@ -408,6 +413,8 @@ def _table(p: Path, f: h5py.File, name: str, fields: Mapping[str, FieldSpec],
         if ds.shape[0] < committed:
             raise damaged(p, f"/{name}/{field} holds {ds.shape[0]} rows but {committed} are "
                              f"committed; expected every field of /{name} to hold them")
+        if read is not None and field not in read:
+            continue
         rows = () if ds.shape[0] == committed else slice(0, committed)  # () reads faster
         out[field] = h5call(p, f"/{name}/{field}", ds.__getitem__, rows)
     return out
@@ -468,8 +475,20 @@ def _check_truth(p: Path, f: h5py.File, links: _Links) -> None:
 
 
 # ----------------------------------------------------------------------------- whole file
-def check_layout(p: Path, f: h5py.File) -> Layout:
+#: The fields of /steps and /log whose rows a check looks into (:func:`_check_steps`,
+#: :func:`_check_log`); a sealed file's other fields are not read (:func:`check_layout`).
+_STEP_FIELDS_CHECKED: Final = frozenset({"index", "status", "commanded", "tags", "units",
+                                         "t_start_s", "t_end_s", "valid_start_s",
+                                         "valid_end_s"})
+_LOG_FIELDS_CHECKED: Final = frozenset({"time_s", "level"})
+
+
+def check_layout(p: Path, f: h5py.File, *, sealed: bool = False) -> Layout:
     """Validate everything but the time bases; return what the reader needs.
+
+    With `sealed` (a file whose seal holds, :mod:`imucalib.io._seal`) the rows of the steps' and
+    log's fields that no check looks into are not read: they were read soundly when the file
+    was validated and sealed, and their bytes have not changed since.
 
     Raises
     ------
@@ -498,8 +517,9 @@ def check_layout(p: Path, f: h5py.File) -> Layout:
                              "stream, steps and log")
     streams = tuple(_stream(p, f, path, committed[path]) for path in paths)
     _check_steps(p, _table(p, f, STEPS_GROUP, step_fields(version), committed[STEPS_GROUP],
-                            links))
-    _check_log(p, _table(p, f, LOG_GROUP, LOG_FIELDS, committed[LOG_GROUP], links))
+                            links, _STEP_FIELDS_CHECKED if sealed else None))
+    _check_log(p, _table(p, f, LOG_GROUP, LOG_FIELDS, committed[LOG_GROUP], links,
+                         _LOG_FIELDS_CHECKED if sealed else None))
     _check_truth(p, f, links)
     return Layout(version, entries, committed, streams)
 
@@ -516,14 +536,16 @@ def _describe_time(t: NDArray[np.float64], k: int, prev: float) -> str:
     return f"is {v!r}, before the previous time stamp {prev!r}"
 
 
-def first_bad_time(ds: h5py.Dataset, n: int, block_rows: int = TIME_BLOCK_ROWS
-                   ) -> tuple[int, str] | None:
+def first_bad_time(ds: h5py.Dataset, n: int, block_rows: int = TIME_BLOCK_ROWS,
+                   out: NDArray[np.float64] | None = None) -> tuple[int, str] | None:
     """First row of ``ds[:n]`` that breaks the time base, and what is wrong with it.
 
     A time base is finite, never decreases and lies in ``[0, MAX_TIME_S]``. The dataset is read
     in blocks of `block_rows` into one reused buffer; a valid block costs one comparison pass.
+    `out` is that buffer when given (float64, ``min(n, block_rows)`` rows): with ``n <=
+    block_rows`` it then holds ``ds[:n]`` whole afterwards.
     """
-    buf = np.empty(min(n, block_rows), dtype=np.float64)
+    buf = np.empty(min(n, block_rows), dtype=np.float64) if out is None else out
     prev = 0.0
     for a in range(0, n, block_rows):
         b = min(a + block_rows, n)
@@ -541,18 +563,36 @@ def first_bad_time(ds: h5py.Dataset, n: int, block_rows: int = TIME_BLOCK_ROWS
     return None
 
 
-def check_time_bases(p: Path, f: h5py.File, streams: tuple[StreamLayout, ...]) -> None:
-    """Check the committed ``time_s`` rows of every stream (see :func:`first_bad_time`)."""
+def check_time_bases(p: Path, f: h5py.File, streams: tuple[StreamLayout, ...], *,
+                     keep_bytes: int = 0) -> dict[str, NDArray[np.float64]]:
+    """Check the committed ``time_s`` rows of every stream (see :func:`first_bad_time`).
+
+    Returns the committed time columns it read whole and kept, by stream path: those of the
+    streams (not truth streams) whose column fits one block and the room `keep_bytes` leaves
+    after the ones kept before it (default: none). The reader hands them to the first read
+    that wants them instead of reading them again (docs/recording-format.md, "Cost of
+    opening").
+    """
+    kept: dict[str, NDArray[np.float64]] = {}
+    room = keep_bytes
     for s in streams:
         if not s.committed:
             continue
         ds = h5call(p, f"/{s.path}/{TIME_COLUMN}", f.__getitem__, f"{s.path}/{TIME_COLUMN}")
-        bad = h5call(p, f"{s.label} time_s", first_bad_time, ds, s.committed)
+        keep = (s.path.startswith(STREAMS_GROUP + "/") and s.committed <= TIME_BLOCK_ROWS
+                and 8 * s.committed <= room)
+        out = np.empty(s.committed, dtype=np.float64) if keep else None
+        bad = h5call(p, f"{s.label} time_s", first_bad_time, ds, s.committed, TIME_BLOCK_ROWS,
+                     out)
         if bad is not None:
             row, what = bad
             raise damaged(p, f"{s.label} time_s row {row} {what}; expected finite times from 0 "
                              f"to {_MAX_TEXT} s that never decrease",
                           f"to copy out the rows before row {row}")
+        if out is not None:
+            kept[s.path] = out
+            room -= out.nbytes
+    return kept
 
 
 # ----------------------------------------------------------------------------- probing

@@ -14,8 +14,11 @@ Opening validates the file (:mod:`imucalib.io._validate`; ``docs/recording-forma
 steps and log, and every stream's committed time base. The layout is first read in a forked
 child process with a time limit (:mod:`imucalib.io._probe`; ``docs/recording-format.md``,
 "Hangs and crashes inside HDF5"), because damaged HDF5 metadata can make the HDF5 library hang
-or crash. Every problem becomes a :class:`~imucalib.errors.RecordingError` with one line naming
-the file, what was found and what was expected. What the opened file reads, and how, is
+or crash; a file whose seal holds (:mod:`imucalib.io._seal`: its metadata byte for byte what
+such a probe read soundly when it was compacted or recovered) is checked in this process. The
+time columns the check reads whole are kept for the reader's first read of them. Every
+problem becomes a :class:`~imucalib.errors.RecordingError` with one line naming the file, what
+was found and what was expected. What the opened file reads, and how, is
 :mod:`imucalib.io.reader`'s.
 """
 
@@ -28,11 +31,14 @@ from contextvars import ContextVar
 from pathlib import Path
 
 import h5py
+import numpy as np
+from numpy.typing import NDArray
 
 from imucalib.errors import RecordingCorruptError, RecordingError, RecordingOpenForWriteError
 from imucalib.io._open import open_h5
 from imucalib.io._probe import run_probe
 from imucalib.io._schema import FORMAT_VERSION
+from imucalib.io._seal import is_sealed
 from imucalib.io._validate import (
     H5PY_ERRORS,
     Layout,
@@ -47,6 +53,11 @@ from imucalib.io.compression import register_plugin_filters
 from imucalib.io.reader import Recording
 
 __all__ = ["open_damaged", "open_recording", "reopening"]
+
+#: The time columns the time-base check reads whole (those that fit its block) are kept for
+#: the reader's first read of them, up to this many bytes a file (docs/recording-format.md,
+#: "Cost of opening"): the field calibration, P3 and the tumble read a stream whole.
+KEEP_TIME_BYTES = 4 << 20
 
 #: Inside :func:`reopening`: the files validated (probe, layout, time bases) and found sound in
 #: this scope, by their identity (:func:`_identity`), with the layout found.
@@ -114,7 +125,8 @@ def open_recording(path: str | os.PathLike[str], *, strict: bool = False, probe:
         Read the file's metadata first in a forked child process that is killed after
         `probe_timeout_s` (damaged HDF5 metadata can make the HDF5 library hang or crash; the
         probe turns that into :class:`RecordingCorruptError`). It costs about 20 ms
-        (docs/recording-format.md, "Cost of opening").
+        (docs/recording-format.md, "Cost of opening"); a sealed file needs none, its checks
+        running in this process (:mod:`imucalib.io._seal`).
     probe_timeout_s : float, optional
         Time limit of the probe [s]; default :data:`imucalib.io._probe.PROBE_TIMEOUT_S` (10 s).
 
@@ -181,6 +193,19 @@ def _probe_work(p: Path, lenient: bool) -> Callable[[Callable[[str], None]],
     return work
 
 
+def _sealed_work(p: Path, f: h5py.File) -> Callable[[Callable[[str], None]], Layout]:
+    """Make the checks of a sealed file, run in this process on its open file `f`.
+
+    The checks of :func:`_probe_work` less what a probe reads only to show that HDF5 can (the
+    root attributes, the steps' and log's fields no check looks into): the seal shows it, the
+    bytes HDF5 parses being those a probe read soundly (:mod:`imucalib.io._seal`).
+    """
+    def work(progress: Callable[[str], None]) -> Layout:
+        progress("the layout (groups, commit counts, stream columns, steps, log, truth)")
+        return check_layout(p, f, sealed=True)
+    return work
+
+
 def _root_version(p: Path, f: h5py.File, lenient: bool) -> int:
     """Return the format version; with `lenient`, a damaged one counts as the current one."""
     try:
@@ -216,7 +241,9 @@ def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, 
                 f.close()
                 raise
         f.close()
-    found = run_probe(p, _probe_work(p, lenient), timeout_s=probe_timeout_s) if probe else None
+    sealed = probe and not lenient and is_sealed(p)
+    found = (run_probe(p, _probe_work(p, lenient), timeout_s=probe_timeout_s)
+             if probe and not sealed else None)
     f, was_open = _open_h5(p)
     try:
         register_plugin_filters(f)  # imports hdf5plugin only for a file that needs it (Blosc)
@@ -227,20 +254,27 @@ def _open(p: Path, *, strict: bool, probe: bool, probe_timeout_s: float | None, 
                 f"run (it recovers and closes the file first), `imucalib recover {p}` copies "
                 "what was flushed into a cleanly closed file, or open it with strict=False to "
                 "read it in SWMR mode")
+        if sealed:  # its metadata is byte for byte what a probe read soundly when it was
+            # written (imucalib.io._seal): the checks run here on this file, without the fork
+            found = run_probe(p, _sealed_work(p, f), fork=False)
         if found is None:
             found = _checked_layout(p, f, lenient)
         damage = found if isinstance(found, RecordingCorruptError) else None
         layout = None if isinstance(found, RecordingCorruptError) else found
+        times: dict[str, NDArray[np.float64]] = {}
         if layout is not None:
             try:
-                check_time_bases(p, f, layout.streams)
+                # a file being written grows: only a closed one's time columns are kept
+                times = check_time_bases(p, f, layout.streams,
+                                         keep_bytes=0 if was_open else KEEP_TIME_BYTES)
             except RecordingCorruptError as exc:
                 if not lenient:
                     raise
                 damage, layout = exc, None
         version = (layout.format_version if layout is not None
                    else _root_version(p, f, lenient))
-        rec = Recording(f, p, version, was_open_for_write=was_open, layout=layout)
+        rec = Recording(f, p, version, was_open_for_write=was_open, layout=layout,
+                        times=times)
         if layout is not None and not was_open and damage is None:
             _remember(key, p, layout)
     except BaseException:

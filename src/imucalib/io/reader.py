@@ -218,7 +218,8 @@ class Recording:
     """
 
     def __init__(self, file: h5py.File, path: Path, format_version: int, *,
-                 was_open_for_write: bool, layout: Layout | None = None) -> None:
+                 was_open_for_write: bool, layout: Layout | None = None,
+                 times: dict[str, NDArray[np.float64]] | None = None) -> None:
         self._file = file
         self.path = path
         self.format_version = format_version
@@ -232,6 +233,9 @@ class Recording:
         # the same for the streams' extents (each reads a stream's first and last time stamps:
         # two chunks decompressed per stream, a P2 analysis asked for them once per unit)
         self._infos_cache: dict[str, tuple[StreamInfo, ...]] = {}
+        # committed time columns the opening's time-base check read whole, by stream path: the
+        # first read of a whole column takes its array, a part is copied out of it
+        self._times: dict[str, NDArray[np.float64]] = dict(times or {})
         if layout is not None:  # validated when opened
             self._commit_entries = list(layout.commit_entries)
             for s in layout.streams:
@@ -347,7 +351,9 @@ class Recording:
         layout = self._layout(path)
         n = self._n_rows(path, committed)
         if n:
-            t = self._dataset(f"{path}/{TIME_COLUMN}")
+            kept = self._times.get(path)
+            t = kept if kept is not None and n <= kept.size else self._dataset(
+                f"{path}/{TIME_COLUMN}")
             t_first, t_last = float(t[0]), float(t[n - 1])
         else:
             t_first = t_last = math.nan
@@ -428,13 +434,27 @@ class Recording:
                    dsets: dict[str, h5py.Dataset] | None = None) -> StreamData:
         def read() -> StreamData:
             ds = dsets if dsets is not None else self._open_columns(path, names)
-            t = ds[TIME_COLUMN][i0:i1]
+            t = self._kept_time(path, i0, i1)
+            if t is None:
+                t = ds[TIME_COLUMN][i0:i1]
             cols = {c: decode_counts(ds[c][i0:i1], info.columns[c].scale) for c in names}
             units = {TIME_COLUMN: info.columns[TIME_COLUMN].unit}
             units.update({c: info.columns[c].unit for c in names})
             return StreamData(t, cols, units)
 
         return self._guard(f"stream {info.name} rows {i0}:{i1}", read)
+
+    def _kept_time(self, path: str, i0: int, i1: int) -> NDArray[np.float64] | None:
+        """Rows ``[i0, i1)`` of the kept time column of `path` (None: not kept).
+
+        The whole column is handed over (the reader keeps it no longer); a part is a copy.
+        """
+        kept = self._times.get(path)
+        if kept is None or not 0 <= i0 <= i1 <= kept.size:
+            return None
+        if (i0, i1) == (0, kept.size):
+            return self._times.pop(path)
+        return kept[i0:i1].copy()
 
     def _open_columns(self, path: str, names: list[str]) -> dict[str, h5py.Dataset]:
         return {c: self._dataset(f"{path}/{c}") for c in (TIME_COLUMN, *names)}

@@ -84,6 +84,7 @@ from imucalib.io._schema import (
     parse_string_list,
     step_fields,
 )
+from imucalib.io._seal import seal
 from imucalib.io._tables import create_table
 from imucalib.io._validate import H5PY_ERRORS, first_bad_time, from_h5py, parse_columns
 from imucalib.io.compression import (
@@ -724,6 +725,7 @@ def recover_recording(path: str | os.PathLike[str], out_path: str | os.PathLike[
             copier = _write_copy(tmp, f"recovering {src} (the original is unchanged)",
                                  lambda dst: _copy(rec, dst, filters=filters))
             _verify(tmp, copier.tables, copier.hashes)
+            seal(tmp)  # validated: later opens skip the probe while its metadata is unchanged
             os.replace(tmp, out)
         except OSError as exc:
             tmp.unlink(missing_ok=True)
@@ -814,6 +816,7 @@ def compact_recording(path: str | os.PathLike[str], compression: str | None) -> 
                 f"compacting {src} stopped, the file is unchanged: the copy would differ "
                 f"({'; '.join(copier.notes + changed)})")
         _verify(tmp, copier.tables, copier.hashes)
+        seal(tmp)  # validated: later opens skip the probe while its metadata is unchanged
         os.replace(tmp, src)
     except OSError as exc:
         tmp.unlink(missing_ok=True)

@@ -8,7 +8,8 @@ Steps (docs/field.md derives each):
    the anomaly), or, with neither, normal gravity at 45° with the whole range of the Earth's
    normal gravity as a rectangular Type B (σ = 0.015 m/s²: every scale factor then carries
    1.5·10⁻³) — and a note saying so.
-3. The accelerometer: the gravity-norm fit (F.2) over the poses (unknown orientations; at
+3. The accelerometer (its form and terms chosen by :mod:`imucalib.procedures.field.accel_model`,
+   then fitted here): the gravity-norm fit (F.2) over the poses (unknown orientations; at
    least ten poses), or the nominal six-position form (F.10) when the poses were placed on a
    fixture's faces (``accel_form="six-position"``; ``"auto"`` takes it when the poses hold at
    most six distinct directions, each near its own axis direction: a fixture's faces, or the
@@ -36,7 +37,8 @@ Steps (docs/field.md derives each):
 
 Contents
 --------
-:class:`FieldOptions`, :func:`analyze_field`.
+:class:`FieldOptions`, :func:`analyze_field`; :data:`K3_SEPARATION_MAX` is
+:mod:`~imucalib.procedures.field.accel_model`'s, named here too.
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ import scipy.stats
 from numpy.typing import NDArray
 
 from imucalib import __version__
-from imucalib.errors import CalibrationError, InsufficientExcitationError, InvalidInputError
+from imucalib.errors import CalibrationError, InvalidInputError
 from imucalib.estimation.linear import solve_weighted_lsq
 from imucalib.estimation.term_selection import (
     CRITERIA,
@@ -71,6 +73,15 @@ from imucalib.procedures.common.static_intervals import (
     find_intervals,
     static_poses,
 )
+from imucalib.procedures.field.accel_model import (
+    DRIFT_MIN_POSES,
+    K3_SEPARATION_MAX,
+    accel_names,
+    choose_gravity_norm,
+    choose_six_position,
+    on_faces,
+    pose_noise_floor,
+)
 from imucalib.procedures.field.result import (
     FieldResult,
     calibration_result,
@@ -80,7 +91,7 @@ from imucalib.procedures.field.result import (
 from imucalib.procedures.field.rotations import fit_gyro, gyro_covariance
 from imucalib.units import EARTH_RATE_RPS, UG
 
-__all__ = ["FieldOptions", "analyze_field"]
+__all__ = ["K3_SEPARATION_MAX", "FieldOptions", "analyze_field"]
 
 _F64 = NDArray[np.float64]
 #: Normal gravity spans 9.7803 (equator) … 9.8322 m/s² (poles) at sea level.
@@ -91,23 +102,11 @@ _ANOMALY_REL = 3e-5
 #: accelerometer's K2 (F.1′), its K3 (F.1⁗), its bias drift (F.1″), its scale factors'
 #: temperature coefficients (F.1‴, "temp"), the gyro's g-sensitivity G (FL.2).
 TERMS = ("k2", "k3", "drift", "g", "temp")
-#: K3 (F.1⁗) is a candidate only when the poses separate it from the scale factors: with it
-#: no shared parameter's σ more than this many times its σ without it
-#: (:func:`~imucalib.estimation.gravity_norm.k3_separation`; docs/field.md, "Model terms").
-K3_SEPARATION_MAX = 2.0
-#: Fewest poses with which the accelerometer's bias drift is fitted unless told (15 unknowns):
-#: a rule, not the data's choice (docs/field.md, "Model terms": the criteria, built on white
-#: noise, under-select a term that stands for the bias's wander).
-_DRIFT_MIN_POSES = 20
 #: Fewest poses with which the gyro's G is a candidate (12 unknowns from 3 per pose).
 _G_MIN_POSES = 6
 #: A note suggests a pose-noise floor (and its size) when the accelerometer fit's χ² exceeds
 #: this quantile of χ²_ν (white noise alone: one session in twenty).
 _SUGGEST_FLOOR_QUANTILE = 0.95
-#: Poses closer than this are the same pose (a face visited twice). [°]
-_SAME_POSE_DEG = 1.0
-#: A face's pose lies within this of its axis (a unit's own misalignment is ~1°). [°]
-_FACE_DEG = 10.0
 
 
 @dataclass(frozen=True)
@@ -299,16 +298,15 @@ def _gravity(opt: FieldOptions, log: FieldLog) -> tuple[float, float, float | No
                          f"carries {sg / g:.1e} of it (give --latitude for 3e-5)")
 
 
-def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | None,
+def _gyro_design(poses: list[StaticPose], up: _F64, force: _F64, lat: float | None,
                  g_sensitivity: bool, times: _F64 | None = None
-                 ) -> tuple[_F64, _F64, FitQuality, list[_F64]]:
-    """Step 4: bias (and G) from the static gyro means less the known Earth rate (FL.2).
+                 ) -> tuple[list[str], _F64, _F64, _F64]:
+    """Return step 4's (names, design, observations, covariance) of (FL.2), every pose at once.
 
-    Returns the values (b, G row-major when fitted, the bias rates ḃ when `times` are given:
-    b then holds at the poses' mean time, as the accelerometer's (F.1″)), their covariance
-    (Birge-scaled on a misfit), the fit quality and the residual per pose. The poses' 3×3
-    covariances (noise and the Earth rate's Type B) make one block-diagonal C: GLS by
-    :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
+    Pose k's rows: ω_k − Ω·sin φ·u_k = b + G·f_k (+ ḃ·(t_k − t̄)), with C_k = diag(σ_k²) plus
+    the horizontal Earth rate's Type B, (Ω·cos φ)²/2·(I − u_k u_kᵀ) (unknown heading; Ω²/3·I
+    with no latitude, the whole Earth rate then unknown in direction). The blocks are the
+    products a pose-by-pose build makes (``np.kron``'s, ``np.diag``'s), value for value.
     """
     omega = EARTH_RATE_RPS
     names = [f"gyro_bias_{a}" for a in "xyz"]
@@ -317,169 +315,45 @@ def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | No
     if times is not None:
         names += [f"gyro_bias_rate_{a}" for a in "xyz"]
     n = len(poses)
-    design = np.zeros((3 * n, len(names)))
-    z = np.zeros(3 * n)
-    cov = np.zeros((3 * n, 3 * n))
-    for row, (p, u, f) in enumerate(zip(poses, up, force, strict=True)):
-        if lat is None:  # the whole Earth rate unknown in direction
-            vertical = np.zeros(3)
-            type_b = omega**2 / 3.0 * np.eye(3)
-        else:
-            s, c = math.sin(math.radians(lat)), math.cos(math.radians(lat))
-            vertical = omega * s * u
-            type_b = (omega * c) ** 2 / 2.0 * (np.eye(3) - np.outer(u, u))
-        rows = slice(3 * row, 3 * row + 3)
-        block = [np.eye(3)]
-        if g_sensitivity:
-            block.append(np.kron(np.eye(3), f[None, :]))
-        if times is not None:
-            block.append((times[row] - times.mean()) * np.eye(3))
-        design[rows] = np.hstack(block)
-        z[rows] = p.gyro_mean - vertical
-        cov[rows, rows] = np.diag(p.gyro_se**2) + type_b
+    eye = np.eye(3)
+    if lat is None:  # the whole Earth rate unknown in direction
+        vertical = np.zeros((n, 3))
+        type_b = np.broadcast_to(omega**2 / 3.0 * eye, (n, 3, 3))
+    else:
+        s, c = math.sin(math.radians(lat)), math.cos(math.radians(lat))
+        vertical = omega * s * up
+        type_b = (omega * c) ** 2 / 2.0 * (eye - up[:, :, None] * up[:, None, :])
+    block = [np.broadcast_to(eye, (n, 3, 3))]
+    if g_sensitivity:  # np.kron(I, f_kᵀ): row i holds f_k in columns 3i … 3i + 2
+        block.append((eye[None, :, :, None] * force[:, None, None, :]).reshape(n, 3, 9))
+    if times is not None:
+        block.append((times - times.mean())[:, None, None] * eye)
+    design = np.concatenate(block, axis=2).reshape(3 * n, len(names))
+    z = (np.array([p.gyro_mean for p in poses]) - vertical).reshape(3 * n)
+    noise = np.zeros((n, 3, 3))
+    noise[:, [0, 1, 2], [0, 1, 2]] = np.array([p.gyro_se for p in poses]) ** 2
+    cov = np.zeros((n, 3, n, 3))
+    k = np.arange(n)
+    cov[k, :, k, :] = noise + type_b
+    return names, design, z, cov.reshape(3 * n, 3 * n)
+
+
+def _gyro_static(poses: list[StaticPose], up: _F64, force: _F64, lat: float | None,
+                 g_sensitivity: bool, times: _F64 | None = None
+                 ) -> tuple[_F64, _F64, FitQuality, list[_F64]]:
+    """Step 4: bias (and G) from the static gyro means less the known Earth rate (FL.2).
+
+    Returns the values (b, G row-major when fitted, the bias rates ḃ when `times` are given:
+    b then holds at the poses' mean time, as the accelerometer's (F.1″)), their covariance
+    (Birge-scaled on a misfit), the fit quality and the residual per pose. The poses' 3×3
+    covariances (noise and the Earth rate's Type B) make one block-diagonal C
+    (:func:`_gyro_design`): GLS by :func:`~imucalib.estimation.linear.solve_weighted_lsq`.
+    """
+    names, design, z, cov = _gyro_design(poses, up, force, lat, g_sensitivity, times)
     fit = solve_weighted_lsq(design, z, covariance=cov, param_names=names,
                              group="gyro (static poses)", context="static gyro design (FL.2)")
     return (np.array(fit.estimate), np.array(fit.covariance_birge), fit.fit_quality,
-            list(fit.residuals.reshape(n, 3)))
-
-
-def _accel_estimates(terms: frozenset[str], fit: Any, *, six: bool
-                     ) -> tuple[list[str], _F64, _F64]:
-    """Return a step-3 fit's (names, values, noise σ): what (TS.4) pairs up."""
-    return (_accel_names(terms, six), fit.values,
-            np.sqrt(np.diag(fit.covariance_noise)))
-
-
-def _accel_names(terms: Collection[str], six: bool) -> list[str]:
-    """Return the names of a step-3 fit's values for a term set (what (TS.4) pairs up)."""
-    from imucalib.estimation.gravity_norm import (
-        DRIFT_PARAMETERS,
-        K2_PARAMETERS,
-        K3_PARAMETERS,
-        PARAMETERS,
-        TEMPERATURE_PARAMETERS,
-    )
-
-    core = [f"p{i}" for i in range(12)] if six else list(PARAMETERS)
-    return [*core, *(K2_PARAMETERS if "k2" in terms else ()),
-            *(K3_PARAMETERS if "k3" in terms else ()),
-            *(DRIFT_PARAMETERS if "drift" in terms else ()),
-            *(TEMPERATURE_PARAMETERS if "temp" in terms else ())]
-
-
-def _choose_accel(y: _F64, sy: _F64, g: float, times: _F64, temps: _F64 | None,
-                  forced: dict[str, bool], opt: FieldOptions) -> tuple[TermChoice, float]:
-    """Step 3's gravity-norm fit: K2 (F.1′) and (F.1‴) by the data, the drift (F.1″) by rule.
-
-    The scale factors' temperature coefficients (F.1‴) are a candidate when the poses have
-    temperatures (`temps`); K3 (F.1⁗, with K2 only) when the poses separate it from the scale
-    factors (:data:`K3_SEPARATION_MAX`; returned: the separation, NaN when not computed).
-    The drift stands for the bias's wander (its random walk and flicker), which the white-noise
-    χ² the criteria are built on does not see as a likelihood would: left to AICc it is dropped
-    and the accelerometer's z spread on the twin's grade noise rises from 1.2–1.3 to 2.1
-    (docs/field.md, "Model terms"). It is fitted with at least 20 poses unless forced.
-    """
-    from imucalib.estimation.gravity_norm import fit_gravity_norm, k3_separation
-
-    optional = ("k2", "k3", "drift") if temps is None else ("k2", "k3", "drift", "temp")
-    ruled = {"drift": len(y) >= _DRIFT_MIN_POSES}
-    separation = math.nan
-    if "k3" not in forced:
-        try:
-            separation = k3_separation(y, sy, fit_gravity_norm(y, sy, g, k2=True).values)
-        except CalibrationError:
-            separation = math.inf
-        ruled["k3"] = separation <= K3_SEPARATION_MAX
-
-    def fit(t: frozenset[str]) -> Any:
-        if "k3" in t and "k2" not in t:
-            raise InsufficientExcitationError(
-                [f"accel_K3_{a}" for a in "xyz"],
-                "K3 is fitted with K2 (a cubic term without the quadratic one is no sensor's "
-                "nonlinearity)")
-        return fit_gravity_norm(y, sy, g, k2="k2" in t, k3="k3" in t,
-                                times_s=times if "drift" in t else None,
-                                temperatures_degc=temps if "temp" in t else None)
-
-    choice, _, _ = choose_terms(
-        "accel (gravity norm)", optional, fit,
-        lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
-        forced={k: v for k, v in forced.items() if k in optional},
-        ruled=ruled,
-        criterion=opt.term_criterion, level=opt.term_level,
-        estimates=lambda t, f: _accel_estimates(t, f, six=False))
-    return choice, separation
-
-
-def _accel_floor(y: _F64, sy: _F64, g: float, form: str, k2: bool,
-                 times: _F64 | None, gravity_std_mps2: float,
-                 temps: _F64 | None = None, k3: bool = False) -> float:
-    """Return the accelerometer's pose-noise floor by Paule–Mandel (Eq. (PM.1)) for the form."""
-    from imucalib.estimation.dark_uncertainty import paule_mandel_floor
-    from imucalib.estimation.gravity_norm import fit_gravity_norm
-    from imucalib.estimation.six_position import fit_six_position, nominal_directions
-
-    if form == "gravity-norm":
-        def chi2_of(s: float) -> tuple[float, int]:
-            q = fit_gravity_norm(y, np.hypot(sy, s), g, k2=k2, k3=k3, times_s=times,
-                                 temperatures_degc=temps).quality
-            return float(q.chi2), int(q.dof)
-    else:
-        directions = nominal_directions(y)
-
-        def chi2_of(s: float) -> tuple[float, int]:
-            q = fit_six_position(y, np.hypot(sy, s), directions, g,
-                                 gravity_std_mps2=gravity_std_mps2, k2=k2).quality
-            return float(q.chi2), int(q.dof)
-    return paule_mandel_floor(chi2_of, scale=float(np.median(sy)))
-
-
-def _choose_six(y: _F64, sy: _F64, g: float, sg: float, forced: dict[str, bool],
-                opt: FieldOptions) -> tuple[TermChoice, Any]:
-    """Return step 3's six-position fit, K2 (F.12′) chosen by the data.
-
-    K2 is a candidate when all six faces and a seventh pose make it identifiable.
-    """
-    from imucalib.estimation.six_position import fit_six_position, nominal_directions
-
-    directions = nominal_directions(y)
-    can_k2 = len({tuple(d) for d in directions.tolist()}) == 6 and len(directions) >= 7
-
-    def fit(terms: frozenset[str]) -> Any:
-        if "k2" in terms and not can_k2:
-            raise InsufficientExcitationError(
-                ["accel_K2"], "K2 in the six-position form needs all six faces and a seventh "
-                              "pose")
-        return fit_six_position(y, sy, directions, g, gravity_std_mps2=sg, k2="k2" in terms)
-
-    choice, chosen, _ = choose_terms(
-        "accel (six-position)", ("k2",), fit,
-        lambda f: (float(f.quality.chi2), int(f.quality.dof), int(f.values.size)),
-        forced={k: v for k, v in forced.items() if k == "k2"},
-        criterion=opt.term_criterion, level=opt.term_level,
-        estimates=lambda t, f: _accel_estimates(t, f, six=True))
-    return choice, chosen
-
-
-def _on_faces(y: _F64) -> bool:
-    """Whether the poses are a fixture's faces (step 3).
-
-    At most six distinct directions (within :data:`_SAME_POSE_DEG`), each within
-    :data:`_FACE_DEG` of a different axis direction.
-    """
-    unit = y / np.linalg.norm(y, axis=1, keepdims=True)
-    distinct: list[_F64] = []
-    for u in unit:
-        if not any(np.degrees(np.arccos(min(1.0, float(u @ d)))) <= _SAME_POSE_DEG
-                   for d in distinct):
-            distinct.append(u)
-    axes = set()
-    for u in distinct:
-        k = int(np.argmax(np.abs(u)))
-        if np.degrees(np.arccos(min(1.0, abs(float(u[k]))))) > _FACE_DEG:
-            return False
-        axes.add((k, bool(u[k] > 0)))
-    return len(distinct) <= 6 and len(axes) == len(distinct)
+            list(fit.residuals.reshape(len(poses), 3)))
 
 
 def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
@@ -519,7 +393,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     sy = np.array([p.accel_se for p in poses])
     form = opt.accel_form
     if form == "auto":
-        form = "six-position" if _on_faces(y) else "gravity-norm"
+        form = "six-position" if on_faces(y) else "gravity-norm"
     notes = [g_note]
     six: Any = None
     drift_rows: list[ReportedParameter] = []
@@ -536,16 +410,19 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
                                 f"{form} form")
     separation = math.nan
     if form == "gravity-norm":
-        choice_a, separation = _choose_accel(y, sy, g, times, temps, forced, opt)
+        choice_a, separation = choose_gravity_norm(y, sy, g, times, temps, forced,
+                                                   criterion=opt.term_criterion,
+                                                   level=opt.term_level)
     else:
-        choice_a, six = _choose_six(y, sy, g, sg, forced, opt)
+        choice_a, six = choose_six_position(y, sy, g, sg, forced, criterion=opt.term_criterion,
+                                             level=opt.term_level)
     selection = [choice_a]
     k2, k3, drift = choice_a.has("k2"), choice_a.has("k3"), choice_a.has("drift")
     tt = temps if choice_a.has("temp") else None
     notes.append(choice_a.summary())
     floor = None
     if opt.accel_instability_auto:
-        floor = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt, k3)
+        floor = pose_noise_floor(y, sy, g, form, k2, times if drift else None, sg, tt, k3)
         poses = [dataclasses.replace(p, accel_se=np.hypot(p.accel_se, floor)) for p in poses]
         sy = np.array([p.accel_se for p in poses])
         notes.append(f"accelerometer pose-noise floor {floor / UG:.3g} µg estimated from the "
@@ -562,7 +439,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         jg = (fit_gravity_norm(y, sy, g + dg, k2=k2, k3=k3, times_s=times if drift else None,
                                temperatures_degc=tt).values - fit.values) / dg
         full_cov = fit.covariance_noise + np.outer(jg, jg) * sg**2
-        full_cov = full_cov + np.diag(_model_var(choice_a, _accel_names(choice_a.chosen, False)))
+        full_cov = full_cov + np.diag(_model_var(choice_a, accel_names(choice_a.chosen, False)))
         accel_values = fit.values[:core]
         accel_cov_noise = np.asarray(full_cov[:core, :core], dtype=np.float64)
         accel_quality = fit.quality
@@ -591,7 +468,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
             six = fit_six_position(y, sy, nominal_directions(y), g, gravity_std_mps2=sg, k2=k2)
         accel_values = six.values
         accel_cov_noise = np.asarray(six.covariance_noise, dtype=np.float64) + np.diag(
-            _model_var(choice_a, _accel_names(choice_a.chosen, True)))
+            _model_var(choice_a, accel_names(choice_a.chosen, True)))
         accel_quality = six.quality
         residuals = np.linalg.norm(six.residuals, axis=1)
         corrected = np.asarray(np.linalg.solve(np.eye(3) + six.scale_misalignment,
@@ -600,7 +477,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
     if (floor is None and opt.accel_instability_mps2 == 0.0 and accel_quality.dof > 0
             and accel_quality.chi2 > scipy.stats.chi2.ppf(_SUGGEST_FLOOR_QUANTILE,
                                                            accel_quality.dof)):
-        suggested = _accel_floor(y, sy, g, form, k2, times if drift else None, sg, tt, k3)
+        suggested = pose_noise_floor(y, sy, g, form, k2, times if drift else None, sg, tt, k3)
         notes.append(
             f"the poses scatter more than their white noise (accelerometer χ²/ν = "
             f"{accel_quality.reduced_chi2:.3g}): a bias instability of about "
@@ -627,7 +504,7 @@ def analyze_field(log: FieldLog, options: FieldOptions | None = None, *,
         lambda t: _gyro_static(poses, up, force, lat, "g" in t,
                                times if "drift" in t else None),
         lambda f: (float(f[2].chi2), int(f[2].dof), int(f[0].size)),
-        forced=forced_g, ruled={"drift": len(poses) >= _DRIFT_MIN_POSES},
+        forced=forced_g, ruled={"drift": len(poses) >= DRIFT_MIN_POSES},
         criterion=opt.term_criterion, level=opt.term_level,
         estimates=lambda t, f: (_gyro_names(t), f[0], np.sqrt(np.diag(f[1]))))
     static_cov = static_cov + np.diag(_model_var(choice_g, _gyro_names(choice_g.chosen)))
