@@ -78,14 +78,14 @@ from imucalib.station.sim import SimStation  # noqa: E402
 TERMS = "-k2,+g"
 
 
-def optimised_options(full: bool, rate_hz: float, min_static_s: float = 120.0
-                      ) -> tuple[P1PlanOptions, Any]:
+def optimised_options(full: bool, rate_hz: float, min_static_s: float = 120.0,
+                      min_repetitions: int = 3) -> tuple[P1PlanOptions, Any]:
     """Return the optimised design's plan options at `rate_hz`, and the optimiser's result."""
     base = P1PlanOptions(grade="tactical")
     # statics from 120 s: the design the optimiser finds when the procedure's 60-min static is
     # not kept (with it the optimum is the default plan itself; docs/test-design.md)
-    settings = (OptimizeSettings(min_static_s=min_static_s) if full
-                else OptimizeSettings.coarse(min_static_s=min_static_s))
+    make = OptimizeSettings if full else OptimizeSettings.coarse
+    settings = make(min_static_s=min_static_s, min_repetitions=min_repetitions)
     result = optimize_p1(base, targets=default_targets(base), settings=settings)
     opts = dataclasses.replace(result.best.design.options(base), sample_rate_hz=rate_hz)
     return opts, result
@@ -334,11 +334,14 @@ def main() -> None:
                     help="the plan's equipment states the twin's table (fair Type B)")
     ap.add_argument("--min-static", type=float, default=120.0,
                     help="the optimiser's shortest static record [s]")
+    ap.add_argument("--min-repetitions", type=int, default=3,
+                    help="the optimiser's least repetitions (docs/p1.md rule 6: three)")
     ap.add_argument("--max-minutes", type=float, default=None,
                     help="stop starting runs after this wall time")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    opts, result = optimised_options(args.full, args.rate, args.min_static)
+    opts, result = optimised_options(args.full, args.rate, args.min_static,
+                                     args.min_repetitions)
     kind = {"white": args.white, "table_as_twin": args.table_as_twin}
     plan = make_plan(opts, 1, **kind)
     k2 = "+k2" in args.terms.replace(" ", "").split(",")
@@ -348,7 +351,8 @@ def main() -> None:
     print(f"optimised plan (tactical, --target-default, {'full' if args.full else 'coarse'} grid,"
           f" {time.perf_counter() - t0:.1f} s): {d.repetitions} repetitions, record "
           f"{d.record_s:g} s, static {d.static_s:g} s, {d.revolutions} rev, rates "
-          f"{', '.join(f'{r:g}' for r in d.rates_dps)} °/s; station time "
+          f"{', '.join(f'{r:g}' for r in d.rates_dps)} °/s"
+          f"{', last repetition reversed' if d.reverse_last else ''}; station time "
           f"{prediction.station_time_s / 3600:.2f} h at {args.rate:g} Hz "
           f"(optimiser {result.best.station_time_s / 3600:.2f} h at "
           f"{P1PlanOptions().sample_rate_hz:g} Hz)")

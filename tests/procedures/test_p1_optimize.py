@@ -43,11 +43,16 @@ def test_default_targets_met_in_far_less_time_with_short_statics(least_time, tar
     assert ref.station_time_s == pytest.approx(DEFAULT_H * 3600, rel=0.01)
     sigma = best.prediction.std()
     assert all(sigma[n] <= s * (1 + 1e-6) for n, s in targets.items())
-    # the issue asks for half (2.3 h); the search reaches 58 % (the biases' flicker needs the
-    # repetitions spread in time): docs/test-design.md
-    assert best.station_time_s <= 0.6 * ref.station_time_s
+    # the issue asks for half (2.3 h); the coarse grid reaches 55 % (2.52 h), the full grid
+    # 52 %: the biases' flicker floor needs the windows spread over the session, which the
+    # warm-up shortens (docs/test-design.md, "What binds")
+    assert best.station_time_s <= 0.56 * ref.station_time_s
     assert best.design.repetitions >= 2 and min(best.lack_of_fit_dof.values()) >= 6
-    assert best.plan.steps and any("verification" in s.tags for s in best.plan.steps)
+    # the default plan's verification, whatever the calibration windows' lengths
+    held = [s for s in best.plan.steps if "verification" in s.tags]
+    assert len(held) == best.design.repetitions * (4 + 3 * 2)
+    assert {getattr(s, "record_s", None) for s in held if s.kind == "position"} == {10.0}
+    assert {getattr(s, "revolutions", None) for s in held if s.kind == "rate"} == {3}
 
 
 def test_with_the_procedures_60_min_static_no_shorter_plan_meets_the_default(targets):
@@ -88,7 +93,7 @@ def test_impossible_target_in_a_tiny_budget_is_refused(targets):
 
 
 def test_unreachable_target_names_the_best_reached(targets):
-    settings = OptimizeSettings.coarse(max_repetitions=2, record_s_grid=(10.0,),
+    settings = OptimizeSettings.coarse(max_repetitions=3, record_s_grid=(10.0,),
                                        revolutions_grid=(3,), rate_magnitudes_dps=(50.0, 100.0))
     with pytest.raises(ConfigurationError, match="meets the targets; the best reaches a worst "
                                                  "σ/target of"):

@@ -216,6 +216,12 @@ class OptimizeRequest:
         Margins kept beyond the optimum (docs/test-design.md).
     coarse : bool
         A small search grid.
+    noise_characterization : str
+        Path of a noise characterisation of the unit (the noise JSON ``imucalib allan``
+        writes); the default plan's σ and every candidate's are then predicted with its noise
+        instead of the grade's (:func:`~imucalib.procedures.common.grade.characterization_noise`;
+        docs/test-design.md, "A noise characterisation in place of the grade's"). Empty: the
+        grade's.
     """
 
     targets: Literal["default", "given", "spec"] = "default"
@@ -224,10 +230,11 @@ class OptimizeRequest:
     time_budget_s: float | None = None
     criterion: str = "targets"
     grade: str = "tactical"
-    min_repetitions: int = 2
+    min_repetitions: int = 3
     min_static_s: float = 3600.0
     min_lack_of_fit_dof: int = 6
     coarse: bool = False
+    noise_characterization: str = ""
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,11 @@ one), t = t₀ + n_rep·(s − s₀), so for every (repetitions, record, revolut
 the targets (bisection to :attr:`OptimizeSettings.static_tolerance_s`, the σ falling as the static
 grows). Grid states are visited in order of their least time and skipped when they cannot beat
 the best so far; the best state's rate set is then varied. Margins kept beyond the optimum
-(:class:`OptimizeSettings`): at least two repetitions (the repeatability check, docs/p1.md
-rule 6), the held-out rates and positions for verification, a least lack-of-fit ν per triad, the
-Z rate points (identifiability) and a least static record.
+(:class:`OptimizeSettings`): at least three repetitions (the repeatability check, docs/p1.md
+rule 6), the base plan's held-out rates and positions with their lengths (verification), a
+least lack-of-fit ν per triad, the Z rate points (identifiability) and a least static record.
+A design may run its last repetition's parts in reverse order (the six positions close the
+run): every step is kept, and under flicker the biases gain from their windows' span.
 
 Contents
 --------
@@ -46,7 +48,7 @@ from imucalib.errors import ConfigurationError, InsufficientExcitationError
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.budget import estimate_plan_recording
 from imucalib.plan.schema import Plan
-from imucalib.procedures.common.grade import grade_noise
+from imucalib.procedures.common.grade import characterization_noise, grade_noise
 from imucalib.procedures.common.prediction import (
     OptimizedPlan,
     OptimizeRequest,
@@ -62,6 +64,9 @@ __all__ = ["Candidate", "OptimizeResult", "OptimizeSettings", "P1Design", "defau
            "optimize_p1", "parse_targets", "spec_targets"]
 
 Criterion = Literal["targets", "D", "A"]
+#: A grid state: repetitions, rate set, revolutions, position record [s], last repetition
+#: reversed (the static record is chosen within it).
+_State = tuple[int, tuple[float, ...], int, float, bool]
 #: The default k of ``--target-from-spec``: σ ≤ limit / k (Eq. (TD.8)).
 SPEC_K = 3.0
 #: A ratio this close to 1 meets its target (the default plan against itself).
@@ -84,6 +89,9 @@ class P1Design:
         Record at each position. [s]
     static_s : float
         The level static record of each repetition. [s]
+    reverse_last : bool
+        The last repetition's parts in reverse order (the six positions close the run;
+        :func:`~imucalib.procedures.p1.plan.generate_p1_plan`).
     """
 
     repetitions: int
@@ -91,12 +99,23 @@ class P1Design:
     revolutions: int
     record_s: float
     static_s: float
+    reverse_last: bool = False
 
     def options(self, base: P1PlanOptions) -> P1PlanOptions:
-        """Return `base` with this design's variables."""
+        """Return `base` with this design's variables.
+
+        The held-out points keep `base`'s lengths (its ``held_out_record_s`` and
+        ``held_out_revolutions``, else its ``record_s`` and ``revolutions``): the verification
+        is the base plan's, whatever the calibration windows' lengths.
+        """
+        held_turns = (base.revolutions if base.held_out_revolutions is None
+                      else base.held_out_revolutions)
+        held_record = base.record_s if base.held_out_record_s is None else base.held_out_record_s
         return dataclasses.replace(base, repetitions=self.repetitions, rates_dps=self.rates_dps,
                                    revolutions=self.revolutions, record_s=self.record_s,
-                                   static_s=self.static_s)
+                                   static_s=self.static_s, reverse_last=self.reverse_last,
+                                   held_out_revolutions=held_turns,
+                                   held_out_record_s=held_record)
 
 
 @dataclass(frozen=True)
@@ -111,8 +130,8 @@ class OptimizeSettings:
     time_budget_s : float, optional
         Station time allowed; without it, the least time meeting every target. [s]
     min_repetitions : int
-        Margin: complete calibrations kept (2: the repeatability check can be made; docs/p1.md
-        rule 6 asks for three).
+        Margin: complete calibrations kept (docs/p1.md rule 6 asks for three; 2 is the least
+        with which the repeatability check can be made at all).
     max_repetitions : int
         The largest number of repetitions tried.
     min_static_s, max_static_s : float
@@ -132,6 +151,8 @@ class OptimizeSettings:
         Position records tried (≥ 10 s, the procedure's minimum). [s]
     revolutions_grid : tuple of int
         Revolutions tried.
+    reverse_last_grid : tuple of bool
+        Step orders tried: the procedure's (False) and the last repetition reversed (True).
     rate_magnitudes_dps : tuple of float
         Magnitudes the 5-point rate sets (0, ±a, ±b) are built from, within `max_rate_dps`. [°/s]
     max_rate_dps : float, optional
@@ -140,14 +161,15 @@ class OptimizeSettings:
 
     criterion: Criterion = "targets"
     time_budget_s: float | None = None
-    min_repetitions: int = 2
+    min_repetitions: int = 3
     max_repetitions: int = 6
     min_static_s: float = 3600.0
     max_static_s: float = 3600.0
     static_tolerance_s: float = 30.0
     min_lack_of_fit_dof: int = 6
-    record_s_grid: tuple[float, ...] = (10.0, 20.0, 30.0, 60.0)
-    revolutions_grid: tuple[int, ...] = (2, 3, 4, 5)
+    record_s_grid: tuple[float, ...] = (10.0, 20.0, 30.0, 60.0, 120.0)
+    revolutions_grid: tuple[int, ...] = (2, 3, 4, 5, 8, 12)
+    reverse_last_grid: tuple[bool, ...] = (False, True)
     rate_magnitudes_dps: tuple[float, ...] = (50.0, 100.0, 200.0, 300.0)
     max_rate_dps: float | None = None
 
@@ -156,6 +178,7 @@ class OptimizeSettings:
         """Return settings with a small grid (tests, a quick look)."""
         small: dict[str, object] = {"max_repetitions": 4, "record_s_grid": (10.0, 30.0),
                                     "revolutions_grid": (3, 5), "static_tolerance_s": 120.0,
+                                    "reverse_last_grid": (True,),
                                     "rate_magnitudes_dps": (50.0, 100.0, 200.0)}
         small.update(kwargs)
         return cls(**small)  # type: ignore[arg-type]
@@ -180,6 +203,8 @@ class OptimizeSettings:
             raise ConfigurationError("position records must be ≥ 10 s (docs/p1.md step 1)")
         if not self.revolutions_grid or min(self.revolutions_grid) < 1:
             raise ConfigurationError("revolutions must be ≥ 1")
+        if not self.reverse_last_grid:
+            raise ConfigurationError("reverse_last_grid needs at least one step order")
 
 
 @dataclass(frozen=True)
@@ -434,24 +459,26 @@ def optimize_p1(base: P1PlanOptions | None = None, *, targets: Mapping[str, floa
     scales = {n: float(targets.get(n) or v or 1.0) for n, v in ref_std.items()}
     search = _Search(base, targets, scales, settings, noise)
     reference = search.evaluate(P1Design(base.repetitions, tuple(base.rates_dps),
-                                         base.revolutions, base.record_s, base.static_s))
+                                         base.revolutions, base.record_s, base.static_s,
+                                         base.reverse_last))
     limit = settings.max_rate_dps or ref_plan.limits.max_rate_dps
     rate_sets = _rate_sets(settings, limit, base.rates_dps)
     say = progress or (lambda _line: None)
     smin, smax = settings.min_static_s, settings.max_static_s
-    states = [(r, rates_sets_0, rev, rec)
+    states = [(r, rates_sets_0, rev, rec, rev_last)
               for r in range(settings.min_repetitions, settings.max_repetitions + 1)
               for rates_sets_0 in rate_sets[:1]
-              for rev in settings.revolutions_grid for rec in settings.record_s_grid]
+              for rev in settings.revolutions_grid for rec in settings.record_s_grid
+              for rev_last in settings.reverse_last_grid]
     budget = settings.time_budget_s
     best: Candidate | None = None
     best_any: Candidate | None = None  # the least worst ratio seen, for the error line
 
-    def design(state: tuple[int, tuple[float, ...], int, float], static: float) -> P1Design:
-        r, rates, rev, rec = state
-        return P1Design(r, rates, rev, rec, float(static))
+    def design(state: _State, static: float) -> P1Design:
+        r, rates, rev, rec, rev_last = state
+        return P1Design(r, rates, rev, rec, float(static), rev_last)
 
-    def static_for(state: tuple[int, tuple[float, ...], int, float], t_limit: float) -> float:
+    def static_for(state: _State, t_limit: float) -> float:
         """Return the longest static whose station time is ≤ t_limit (linear in it)."""
         t_min = search.time_s(design(state, smin))
         return min(smax, smin + (t_limit - t_min) / state[0])
@@ -468,7 +495,7 @@ def optimize_p1(base: P1PlanOptions | None = None, *, targets: Mapping[str, floa
         if search.admissible(c) and (best_any is None or c.worst_ratio < best_any.worst_ratio):
             best_any = c
 
-    def visit(state: tuple[int, tuple[float, ...], int, float]) -> None:
+    def visit(state: _State) -> None:
         nonlocal best
         t_cap = budget if budget is not None else (
             best.station_time_s if best is not None else math.inf)
@@ -507,13 +534,17 @@ def optimize_p1(base: P1PlanOptions | None = None, *, targets: Mapping[str, floa
             say(f"{_describe(top.design)}: {top.station_time_s / 3600:.2f} h, worst ratio "
                 f"{top.worst_ratio:.3f}")
 
+    rd = reference.design
+    if (budget is None and rd.repetitions >= settings.min_repetitions
+            and rd.static_s >= smin and better(reference)):
+        best = reference  # the base plan itself is a candidate (its step order may be off-grid)
     states.sort(key=lambda s: search.time_s(design(s, smin)))
     for state in states:
         visit(state)
     if best is not None:  # the best state's rate set varied
         d = best.design
         for rates in rate_sets[1:]:
-            visit((d.repetitions, rates, d.revolutions, d.record_s))
+            visit((d.repetitions, rates, d.revolutions, d.record_s, d.reverse_last))
     elapsed = time.perf_counter() - t0
     if best is None:
         reach = ("" if best_any is None else
@@ -546,26 +577,33 @@ def _worst_name(c: Candidate) -> str:
 def _describe(d: P1Design) -> str:
     rates = "/".join(f"{r:g}" for r in d.rates_dps if r > 0)
     return (f"{d.repetitions} rep, record {d.record_s:g} s, static {d.static_s:.0f} s, "
-            f"{d.revolutions} rev, rates 0/±{rates} °/s")
+            f"{d.revolutions} rev, rates 0/±{rates} °/s"
+            + (", last repetition reversed" if d.reverse_last else ""))
 
 
 def optimize_request(request: OptimizeRequest) -> OptimizedPlan:
     """Answer ``imucalib plan optimize p1``: targets and settings, then :func:`optimize_p1`.
 
     The request is the command's :class:`~imucalib.procedures.common.prediction.OptimizeRequest`.
+    Its ``noise_characterization`` (a noise JSON of the unit) replaces the grade's noise in the
+    default plan's σ and in every candidate's (the same noise on both sides of the comparison).
 
     Raises
     ------
     ConfigurationError
         An unknown grade, targets given two ways, or settings :class:`OptimizeSettings` refuses.
     InvalidInputError
-        Targets that name no P1 parameter, or that no plan meets.
+        Targets that name no P1 parameter, or that no plan meets; a noise characterisation
+        that cannot be read.
     """
     if request.grade not in ("consumer", "tactical", "navigation"):
         raise ConfigurationError(f"--grade must be consumer, tactical or navigation; got "
                                  f"{request.grade!r}")
     base = P1PlanOptions(grade=request.grade)  # type: ignore[arg-type]
-    defaults = default_targets(base)
+    noise, source = None, f"grade {request.grade}"
+    if request.noise_characterization:
+        noise, source = characterization_noise(request.noise_characterization)
+    defaults = default_targets(base, noise=noise)
     if request.targets == "given":
         targets = parse_targets(request.target_text, list(defaults))
     elif request.targets == "spec":
@@ -581,7 +619,7 @@ def optimize_request(request: OptimizeRequest) -> OptimizedPlan:
     settings = dataclasses.replace(settings, min_static_s=request.min_static_s,
                                    max_static_s=max(settings.max_static_s,
                                                     request.min_static_s))
-    result = optimize_p1(base, targets=targets, settings=settings)
+    result = optimize_p1(base, targets=targets, settings=settings, noise=noise)
     best, ref = result.best, result.reference
     d = best.design
     return OptimizedPlan(
@@ -590,5 +628,6 @@ def optimize_request(request: OptimizeRequest) -> OptimizedPlan:
         reference_worst_ratio=ref.worst_ratio, criterion=result.settings.criterion,
         design=(f"{d.repetitions} repetitions, record {d.record_s:g} s per position, static "
                 f"{d.static_s:g} s, {d.revolutions} revolutions, rates "
-                f"{', '.join(f'{r:g}' for r in d.rates_dps)} °/s"),
-        notes=tuple(result.notes))
+                f"{', '.join(f'{r:g}' for r in d.rates_dps)} °/s"
+                + ("; the last repetition reversed" if d.reverse_last else "")),
+        notes=(f"noise model of both plans: {source}", *result.notes))

@@ -52,8 +52,14 @@ class P1PlanOptions:
         unit="°/s", min=-MAX_TABLE_RATE_DPS, max=MAX_TABLE_RATE_DPS)
     revolutions: int = option(3, help="Whole turns recorded at each non-zero rate.", min=1,
                               max=MAX_REVOLUTIONS)
+    held_out_revolutions: int | None = option(
+        None, help="Whole turns at each non-zero held-out rate (revolutions when omitted).",
+        min=1, max=MAX_REVOLUTIONS)
     repetitions: int = option(3, help="Complete calibrations (three, for the repeatability "
                                       "check; docs/p1.md, rule 6).", min=1, max=MAX_STEPS)
+    reverse_last: bool = option(
+        False, help="Run the last repetition in reverse order (held-out positions, rates, "
+                    "static, six positions): the six positions close the run.")
     z_rates: bool = option(True, help="Add rate points about pitch with roll at 90° (about the "
                                       "IMU's Z axis: the Z gyro's scale and misalignments).")
     acceptance: Literal["simple", "guarded"] = option(
@@ -63,6 +69,9 @@ class P1PlanOptions:
                              max=MAX_RECORD_S, group="timing")
     settle_s: float = settle_field(30.0, help="Settling at each position (≥ 30 s).")
     record_s: float = record_field(10.0, help="Record at each position (≥ 10 s).")
+    held_out_record_s: float | None = option(
+        None, help="Record at each held-out position (record_s when omitted).", unit="s",
+        min=0.0, max=MAX_RECORD_S, group="timing")
     rate_settle_s: float = option(20.0, help="Settling at each rate (≥ 20 s).", unit="s",
                                   min=0.0, max=MAX_SETTLE_S, group="timing")
     warm_up_s: float | None = warm_up_field(help="Warm-up duration (the grade's when omitted).")

@@ -122,6 +122,53 @@ def default_specification(grade: str, *, serial: str = "", model: str = "",
                          accel_accuracy_g=accel_g, gyro_accuracy_dps=gyro_dps, limits=limits)
 
 
+def _repetition_parts(tag: str, *, rates_dps: Sequence[float],
+                      held_out_rates_dps: Sequence[float], revolutions: int,
+                      held_out_revolutions: int, static_s: float, settle_s: float,
+                      record_s: float, held_out_record_s: float, rate_settle_s: float,
+                      z_rates: bool) -> list[list[PlanStep]]:
+    """Return one repetition's four parts, in the procedure's order (module docstring).
+
+    The six positions; the level static record (with the move to level before it); the rate
+    points of each axis (each group after its start position); the held-out positions.
+    """
+    six: list[PlanStep] = [
+        PositionStep(kind="position", angles_deg=(pitch, roll), settle_s=settle_s,
+                     record_s=record_s, label=f"{tag} {up} (pitch {pitch:g}, roll {roll:g})",
+                     role=P1_ACCEL_POSITION, tags=("calibration", "six-position", tag))
+        for (pitch, roll), up in P1_SIX_POSITIONS_DEG]
+    static: list[PlanStep] = [
+        PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=settle_s, record_s=1.0,
+                     label=f"{tag} level for the static record", tags=(tag,)),
+        StaticStep(kind="static", duration_s=static_s, label=f"{tag} level static (gyro bias)",
+                   role=P1_GYRO_BIAS, tags=("calibration", "gyro-bias", tag))]
+    rates: list[PlanStep] = []
+    groups = [(0, 0.0, "pitch (Y)"), (1, 0.0, "roll (X)")]
+    if z_rates:
+        groups.append((0, 90.0, "pitch at roll 90° (Z)"))
+    for axis, roll_deg, group in groups:
+        rates.append(PositionStep(kind="position", angles_deg=(0.0, roll_deg), settle_s=5.0,
+                                  record_s=1.0, label=f"{tag} start of {group} rates",
+                                  tags=(tag,)))
+        for rate, use in [*((r, "calibration") for r in rates_dps),
+                          *((r, "verification") for r in held_out_rates_dps)]:
+            turns = revolutions if use == "calibration" else held_out_revolutions
+            length: dict[str, float | int] = ({"record_s": record_s} if rate == 0.0
+                                              else {"revolutions": turns})
+            rates.append(RateStep(kind="rate", axis=axis, rate_dps=rate, settle_s=rate_settle_s,
+                                  label=f"{tag} {group} {rate:+g} °/s",
+                                  role=(P1_GYRO_RATE if use == "calibration"
+                                        else P1_HELD_OUT_RATE),
+                                  tags=(use, "rate", tag), **length))
+    held_out: list[PlanStep] = [
+        PositionStep(kind="position", angles_deg=(pitch, roll), settle_s=settle_s,
+                     record_s=held_out_record_s,
+                     label=f"{tag} held-out (pitch {pitch:g}, roll {roll:g})",
+                     role=P1_HELD_OUT_POSITION, tags=("verification", "position", tag))
+        for pitch, roll in P1_HELD_OUT_POSITIONS_DEG]
+    return [six, static, rates, held_out]
+
+
 def generate_p1_plan(
     *,
     name: str = "p1-dual-axis",
@@ -129,11 +176,14 @@ def generate_p1_plan(
     rates_dps: Sequence[float] = (-100.0, -50.0, 0.0, 50.0, 100.0),
     held_out_rates_dps: Sequence[float] = (-75.0, 25.0),
     revolutions: int = 3,
+    held_out_revolutions: int | None = None,
     static_s: float = 3600.0,
     settle_s: float = 30.0,
     record_s: float = 10.0,
+    held_out_record_s: float | None = None,
     rate_settle_s: float = 20.0,
     repetitions: int = 3,
+    reverse_last: bool = False,
     z_rates: bool = True,
     warm_up_s: float | None = None,
     sample_rate_hz: float = 1000.0,
@@ -159,15 +209,30 @@ def generate_p1_plan(
     held_out_rates_dps : sequence of float
         Rate points per axis kept out of the fit for verification. [°/s]
     revolutions : int
-        Whole turns recorded at each non-zero rate.
+        Whole turns recorded at each non-zero calibration rate.
+    held_out_revolutions : int, optional
+        Whole turns at each non-zero held-out rate; `revolutions` when omitted. The held-out
+        check (docs/p1.md, rule 7) compares the compensated rate with the accuracy limit, far
+        above a window's noise, so an optimised plan keeps the default plan's verification
+        (docs/test-design.md, "The optimiser (P1)") instead of lengthening it with the
+        calibration windows.
     static_s : float
         Level static record for the gyro bias (docs/p1.md, step 2: ≥60 min). [s]
     settle_s, record_s : float
         Settling and recording time at each position (≥30 s, ≥10 s). [s]
+    held_out_record_s : float, optional
+        Record at each held-out position; `record_s` when omitted (as `held_out_revolutions`).
+        [s]
     rate_settle_s : float
         Settling time at each rate (≥20 s). [s]
     repetitions : int
         Complete calibrations (docs/p1.md, rule 6: three, for the repeatability check).
+    reverse_last : bool
+        Run the last repetition's four parts in reverse order: held-out positions, rate
+        points, level static, six positions. Every step is kept; the six positions then close
+        the run, so the accelerometer's windows span the whole session, which lowers the
+        biases' σ under flicker noise (docs/test-design.md, "The optimiser (P1)"). The
+        procedure's order (False) by default.
     z_rates : bool
         Add rate points about the pitch axis with the roll axis at 90°, which turns the IMU
         about its Z axis. Procedure P1 is two-dimensional (rates about pitch and roll only);
@@ -191,8 +256,9 @@ def generate_p1_plan(
     Raises
     ------
     ConfigurationError
-        For fewer than 3 rate points or no zero rate, fewer than 1 repetition, or a rate plan
-        that P1's minimums (docs/p1.md) reject.
+        For fewer than 3 rate points or no zero rate, fewer than 1 repetition, a held-out record
+        ≤ 0 s or fewer than 1 held-out revolution, or a rate plan that P1's minimums
+        (docs/p1.md) reject.
     """
     if grade not in _WARM_UP_S:
         raise ConfigurationError(f"`grade` must be one of {sorted(_WARM_UP_S)}; got {grade!r}")
@@ -206,6 +272,12 @@ def generate_p1_plan(
             f"step 3, uses 5–7); got {list(rates_dps)}")
     if repetitions < 1:
         raise ConfigurationError(f"`repetitions` must be ≥ 1; got {repetitions}")
+    held_out_turns = revolutions if held_out_revolutions is None else held_out_revolutions
+    held_out_record = record_s if held_out_record_s is None else held_out_record_s
+    if held_out_record_s is not None and not held_out_record_s > 0:
+        raise ConfigurationError(f"`held_out_record_s` must be > 0 s; got {held_out_record_s:g}")
+    if held_out_turns < 1:
+        raise ConfigurationError(f"`held_out_revolutions` must be ≥ 1; got {held_out_turns}")
     steps: list[PlanStep] = [
         OperatorCheckStep(kind="operator-check", label="mounting",
                           item="IMU mounted: X parallel to the roll axis, Z up when level, "
@@ -215,44 +287,15 @@ def generate_p1_plan(
                    window_s=60.0),
     ]
     for rep in range(1, repetitions + 1):
-        tag = f"rep{rep}"
-        for (pitch, roll), up in P1_SIX_POSITIONS_DEG:
-            steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
-                                      settle_s=settle_s, record_s=record_s,
-                                      label=f"{tag} {up} (pitch {pitch:g}, roll {roll:g})",
-                                      role=P1_ACCEL_POSITION,
-                                      tags=("calibration", "six-position", tag)))
-        steps.append(PositionStep(kind="position", angles_deg=(0.0, 0.0), settle_s=settle_s,
-                                  record_s=1.0, label=f"{tag} level for the static record",
-                                  tags=(tag,)))
-        steps.append(StaticStep(kind="static", duration_s=static_s,
-                                label=f"{tag} level static (gyro bias)", role=P1_GYRO_BIAS,
-                                tags=("calibration", "gyro-bias", tag)))
-        groups = [(0, 0.0, "pitch (Y)"), (1, 0.0, "roll (X)")]
-        if z_rates:
-            groups.append((0, 90.0, "pitch at roll 90° (Z)"))
-        for axis, roll_deg, group in groups:
-            steps.append(PositionStep(kind="position", angles_deg=(0.0, roll_deg), settle_s=5.0,
-                                      record_s=1.0, label=f"{tag} start of {group} rates",
-                                      tags=(tag,)))
-            for rate, use in [*((r, "calibration") for r in rates_dps),
-                              *((r, "verification") for r in held_out_rates_dps)]:
-                if rate == 0.0:
-                    length: dict[str, float | int] = {"record_s": record_s}
-                else:
-                    length = {"revolutions": revolutions}
-                steps.append(RateStep(kind="rate", axis=axis, rate_dps=rate,
-                                      settle_s=rate_settle_s,
-                                      label=f"{tag} {group} {rate:+g} °/s",
-                                      role=(P1_GYRO_RATE if use == "calibration"
-                                            else P1_HELD_OUT_RATE),
-                                      tags=(use, "rate", tag), **length))
-        for pitch, roll in P1_HELD_OUT_POSITIONS_DEG:
-            steps.append(PositionStep(kind="position", angles_deg=(pitch, roll),
-                                      settle_s=settle_s, record_s=record_s,
-                                      label=f"{tag} held-out (pitch {pitch:g}, roll {roll:g})",
-                                      role=P1_HELD_OUT_POSITION,
-                                      tags=("verification", "position", tag)))
+        parts = _repetition_parts(
+            f"rep{rep}", rates_dps=rates_dps, held_out_rates_dps=held_out_rates_dps,
+            revolutions=revolutions, held_out_revolutions=held_out_turns, static_s=static_s,
+            settle_s=settle_s, record_s=record_s, held_out_record_s=held_out_record,
+            rate_settle_s=rate_settle_s, z_rates=z_rates)
+        if reverse_last and rep == repetitions:
+            parts = parts[::-1]
+        for part in parts:
+            steps += part
     max_rate = max(abs(r) for r in (*rates_dps, *held_out_rates_dps))
     twin = TwinEquipment(
         seed=seed,
