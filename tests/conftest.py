@@ -35,6 +35,8 @@ def _records_database(tmp_path_factory: pytest.TempPathFactory) -> None:
 
     os.environ["IMUCALIB_DB"] = str(tmp_path_factory.mktemp("records") / "records.db")
     os.environ.pop("IMUCALIB_USER", None)     # who is acting: only what a test says
+    # a test that unsets IMUCALIB_DB falls back to the user's data dir: the session's own
+    os.environ["XDG_DATA_HOME"] = str(tmp_path_factory.mktemp("data"))
     # the laboratory configuration: none (an empty file), not a ./imucalib.toml or the user's
     empty = tmp_path_factory.mktemp("config") / "imucalib.toml"
     empty.write_text("", encoding="utf-8")
@@ -47,18 +49,23 @@ TESTS = Path(__file__).resolve().parent
 
 #: The test files that take longest, in two groups of about equal time (seconds of each file
 #: on a loaded 2-core machine, from ``pytest -n 2 --durations``): P2 twin 190, durability 80,
-#: noise fit 50, faults 50, rate transfer twin 35 | README commands 130 (one test), P3 twin
-#: 110, P1 closed loop 67, CSV calibration 50, P1 gyro Monte Carlo 45. ``worksteal`` gives the
-#: first worker the first half of the collection and the second worker the rest; each group
-#: leads one half, so the two workers start on the long files at once and the many short tests
-#: fill the end of the run (an idle worker takes half of the other's pending tests, from their
-#: end). Collected in the usual order the README commands came last and the long files fell to
-#: one worker. Only the order changes, never a test.
+#: noise fit 50, faults 50, rate transfer twin 35, web supervisor 43–89 | README commands 130
+#: (one test), P3 twin 110, P1 closed loop 67, CSV calibration 50, P1 gyro Monte Carlo 45, a
+#: run released in a browser 20–47, the web results 27–42. ``worksteal`` gives the first worker
+#: the first half of the collection and the second worker the rest; each group leads one half,
+#: so the two workers start on the long files at once and the many short tests fill the end of
+#: the run (an idle worker takes half of the other's pending tests, from their end). Collected
+#: in the usual order the README commands came last and the long files fell to one worker;
+#: tests/web, last in the usual order, made a tail of its twin runs (and their waits leave a
+#: core idle unless the other worker is busy). The live view in a browser (20–47) stays at the
+#: end: it races a paced run against the page, which is safest with few tests beside it. Only
+#: the order changes, never a test.
 LONGEST = (
     ("procedures/test_p2_twin.py", "station/test_durability.py", "analysis/test_noise_fit.py",
-     "station/test_faults.py", "procedures/test_rate_transfer_twin.py"),
+     "station/test_faults.py", "procedures/test_rate_transfer_twin.py", "web/test_supervisor.py"),
     ("test_readme_commands.py", "procedures/test_p3_twin.py", "procedures/test_p1_closed_loop.py",
-     "procedures/test_calibrate_csv.py", "procedures/test_p1_gyro_monte_carlo.py"),
+     "procedures/test_calibrate_csv.py", "procedures/test_p1_gyro_monte_carlo.py",
+     "web/test_browser_run.py", "web/test_results.py"),
 )
 
 

@@ -21,6 +21,8 @@ PG_ENV = "IMUCALIB_TEST_PG_URL"
 
 
 def _load(name: str) -> Any:
+    """Import the helper module ``tests/web/<name>.py`` by its path (the tests import-mode is
+    ``importlib``: the folder is no package); the fixtures below hand the modules over."""
     path = Path(__file__).with_name(f"{name}.py")
     spec = importlib.util.spec_from_file_location(f"web_tests_{name}", path)
     assert spec is not None and spec.loader is not None
@@ -32,6 +34,7 @@ def _load(name: str) -> Any:
 
 fake = _load("_fake_supervisor")
 helpers = _load("_web")
+live_helpers = _load("_live_server")
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
@@ -49,6 +52,8 @@ def _isolated(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
     monkeypatch.delenv("IMUCALIB_RECORDS_SIGNING", raising=False)
     monkeypatch.delenv("IMUCALIB_DB", raising=False)
+    # with IMUCALIB_DB unset the default database is under the user's data dir: the test's own
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
     monkeypatch.setattr(access, "ARGON2_PARAMS",
                         {"time_cost": 1, "memory_cost": 1024, "parallelism": 1})
 
@@ -101,6 +106,12 @@ def web_app(records_url: str, tmp_path: Path, supervisor: Any) -> Iterator[Any]:
 def web() -> Any:
     """The helpers module (tests/web/_web.py)."""
     return helpers
+
+
+@pytest.fixture
+def live() -> Any:
+    """The live server and chromium helpers module (tests/web/_live_server.py)."""
+    return live_helpers
 
 
 @pytest.fixture

@@ -7,25 +7,8 @@ Without chromium the test fails, it is not skipped (``scripts/chromium.sh`` inst
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
 
-
-def _load(name: str):
-    path = Path(__file__).with_name(f"{name}.py")
-    spec = importlib.util.spec_from_file_location(f"web_tests_{name}", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-live = _load("_live_server")
-
-
-def test_an_operator_logs_in_takes_the_station_and_logs_out(web_app, web):
+def test_an_operator_logs_in_takes_the_station_and_logs_out(web_app, web, live):
     from playwright.sync_api import expect, sync_playwright
 
     executable = live.chromium_path()
@@ -61,7 +44,8 @@ def test_an_operator_logs_in_takes_the_station_and_logs_out(web_app, web):
         "1-login.png", "2-station.png", "3-lock-taken.png"]
 
 
-def test_the_run_page_shows_the_prompt_live_and_sends_the_answer(web_app, web, supervisor):
+def test_the_run_page_shows_the_prompt_live_and_sends_the_answer(web_app, web, supervisor,
+                                                                live):
     """run.js: the socket's snapshot opens the dialog; Confirm posts the answer with its ids."""
     from playwright.sync_api import expect, sync_playwright
 
@@ -94,7 +78,7 @@ def test_the_run_page_shows_the_prompt_live_and_sends_the_answer(web_app, web, s
     assert answers == [("answer", (run_id, 7, 1, True, web.BY_ROLE["operator"], "seated"))]
 
 
-def test_without_chromium_the_browser_tests_fail_not_skip(monkeypatch):
+def test_without_chromium_the_browser_tests_fail_not_skip(monkeypatch, live):
     import os
 
     import pytest

@@ -10,11 +10,9 @@ Screenshots go to ``out/web/live_run/``. Without chromium the test fails, it is 
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 import signal
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -22,18 +20,6 @@ import pytest
 
 from imucalib.web.supervisor import RunSupervisor
 
-
-def _load(name: str):
-    path = Path(__file__).with_name(f"{name}.py")
-    spec = importlib.util.spec_from_file_location(f"web_tests_{name}", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-live = _load("_live_server")
 #: Wall seconds per station second: the small plan's ~330 s of station time in ~10 s.
 PACE = 0.03
 
@@ -68,7 +54,7 @@ def live_app(records_url: str, tmp_path: Path, web, p1_tools):
                 pass
 
 
-def test_the_live_view_updates_and_abort_then_resume_finish_the_run(live_app, web):
+def test_the_live_view_updates_and_abort_then_resume_finish_the_run(live_app, web, live):
     from playwright.sync_api import expect, sync_playwright
 
     executable = live.chromium_path()

@@ -11,27 +11,10 @@ it released, and the certificate written again with the review. Screenshots go t
 
 from __future__ import annotations
 
-import importlib.util
 import re
 import shutil
-import sys
-import time
 from pathlib import Path
 from typing import Any
-
-
-def _load(name: str) -> Any:
-    path = Path(__file__).with_name(f"{name}.py")
-    spec = importlib.util.spec_from_file_location(f"web_tests_{name}", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-live = _load("_live_server")
-
 
 
 def _log_in(page: Any, base: str, name: str, password: str) -> None:
@@ -42,7 +25,7 @@ def _log_in(page: Any, base: str, name: str, password: str) -> None:
 
 
 def test_an_operator_runs_a_plan_and_a_reviewer_releases_its_result(records_url, tmp_path,
-                                                                     web, p1_tools):
+                                                                     web, p1_tools, live):
     from playwright.sync_api import expect, sync_playwright
 
     from imucalib.records import open_records
@@ -58,7 +41,6 @@ def test_an_operator_runs_a_plan_and_a_reviewer_releases_its_result(records_url,
     shutil.move(p1_tools.small_plan_file(tmp_path), plans / "p1-short.toml")
     app = create_app(records_url, tmp_path / "runs", None, plans_dir=plans, station="bench-1")
     operator, reviewer = web.BY_ROLE["operator"], web.BY_ROLE["reviewer"]
-    started = time.monotonic()
     with live.live_server(app, lifespan=True) as base, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=executable, args=live.CHROMIUM_ARGS)
         try:
@@ -113,11 +95,9 @@ def test_an_operator_runs_a_plan_and_a_reviewer_releases_its_result(records_url,
             page.screenshot(path=str(shots / "4-released.png"), full_page=True)
         finally:
             browser.close()
-    elapsed = time.monotonic() - started
     with open_records(records_url) as records:
         actions = [(r.actor, r.action) for r in records.audit_log(run_ref=run_id)]
     assert (operator, "start") in actions and (operator, "prompt_answer") in actions
     assert (operator, "calibrate") in actions and (reviewer, "approve") in actions
     assert sorted(p.name for p in shots.glob("*.png")) == [
         "1-prompt.png", "2-finished.png", "3-results.png", "4-released.png"]
-    assert elapsed < 90, f"the browser run took {elapsed:.0f} s"

@@ -2,7 +2,9 @@
 
 Each test starts a small P1 plan (``small_plan_file``: an operator check, then a few minutes of
 station time) through :class:`RunSupervisor`; the worker is a real process running the runner
-of ``imucalib run``.
+of ``imucalib run``. The runs record into the test's own records database, never the user's.
+The tests that only read a run answered and followed to its end share one (``answered``, made
+once per module): each worker process costs seconds of interpreter start and imports.
 """
 
 from __future__ import annotations
@@ -11,7 +13,10 @@ import os
 import queue
 import signal
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import pytest
 
@@ -27,8 +32,10 @@ from imucalib.web.supervisor import (
 )
 
 #: Wall seconds per station second for the runs an abort must catch midway (the small plan is
-#: about 330 s of station time: some 6 s of wall time at this pace).
-PACE = 0.02
+#: about 330 s of station time: some 3 s of wall time at this pace, the abort or the kill comes
+#: within a poll, 0.05 s, of the step the test waits for; the twin's own run takes about 1 s of
+#: CPU time).
+PACE = 0.01
 
 
 @pytest.fixture
@@ -38,18 +45,28 @@ def plan_file(tmp_path: Path, p1_tools) -> Path:
     return p1_tools.small_plan_file(folder)
 
 
-@pytest.fixture
-def sup(tmp_path: Path):
-    s = RunSupervisor(tmp_path / "runs")
-    yield s
+def _supervisor(folder: Path) -> RunSupervisor:
+    """A supervisor of runs under `folder`, recording into a records database of its own."""
+    return RunSupervisor(folder / "runs", db=f"sqlite:///{folder / 'records.db'}")
+
+
+def _stop(s: RunSupervisor) -> None:
+    """Close `s` and kill the workers of its runs still live: never leave a worker behind."""
     s.close()
-    for v in s.runs():  # never leave a worker behind
-        pid_file = tmp_path / "runs" / v.run_id / "worker.pid"
+    for v in s.runs():
+        pid_file = s.runs_dir / v.run_id / "worker.pid"
         if v.status in ("starting", "running", "waiting", "aborting") and pid_file.exists():
             try:
                 os.kill(int(pid_file.read_text()), signal.SIGKILL)
             except ProcessLookupError:
                 pass
+
+
+@pytest.fixture
+def sup(tmp_path: Path) -> Iterator[RunSupervisor]:
+    s = _supervisor(tmp_path)
+    yield s
+    _stop(s)
 
 
 def wait_for(check, timeout_s: float = 30.0, every_s: float = 0.05):
@@ -93,50 +110,87 @@ def drain(q: queue.Queue, until: str, timeout_s: float = 40.0) -> list[dict]:
     raise AssertionError(f"no {until!r} event; got {[e['type'] for e in out]}")
 
 
-def test_a_run_streams_its_events_and_finishes_with_a_recording_that_calibrates(sup,
-                                                                                 plan_file):
-    run_id = sup.start(plan_file, station="sim", serials=["IMU-0001"], operator="alice")
-    q = sup.subscribe(run_id)
-    first = q.get(timeout=5)
+def _raised(command: Callable[..., Any], *args: Any) -> Exception | None:
+    """Return what `command(*args)` raised (None: nothing), for a test to check afterwards."""
+    try:
+        command(*args)
+    except Exception as exc:  # the test asserts its type
+        return exc
+    return None
+
+
+@pytest.fixture(scope="module")
+def answered(tmp_path_factory: pytest.TempPathFactory, p1_tools: Any) -> SimpleNamespace:
+    """One run of the small plan, its operator check answered by bob, followed to its end and
+    calibrated; with what the stale commands tried while the prompt waited, and the commands
+    tried once it had finished, raised.
+
+    Made once per module for the tests that only read it, in a folder, a records database and
+    key folders of its own (the autouse ``_isolated`` is per test, so this sets its own).
+    """
+    from imucalib.calibration import procedure_of
+
+    folder = tmp_path_factory.mktemp("answered")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("XDG_CONFIG_HOME", str(folder / "config"))
+        mp.delenv("IMUCALIB_RECORDS_SIGNING", raising=False)
+        (folder / "plans").mkdir()
+        plan = p1_tools.small_plan_file(folder / "plans")
+        s = _supervisor(folder)
+        try:
+            run_id = s.start(plan, station="sim", serials=["IMU-0001"], operator="alice")
+            q = s.subscribe(run_id)
+            first = q.get(timeout=5)
+            p = prompt_of(s, run_id)
+            # commands for another prompt or step are stale
+            stale = [_raised(s.answer, run_id, p.prompt_id + 1, p.step_index, True, "bob"),
+                     _raised(s.answer, run_id, p.prompt_id, p.step_index + 1, True, "bob"),
+                     _raised(s.abort, run_id, p.step_index + 3, "bob")]
+            s.answer(run_id, p.prompt_id, p.step_index, True, "bob", note="checked")
+            events = drain(q, "end")
+            v = s.view(run_id)
+            # the prompt is gone: answering it again is stale; a finished run is not aborted
+            after = (_raised(s.answer, run_id, p.prompt_id, p.step_index, True, "bob"),
+                     _raised(s.abort, run_id, None, "bob"))
+            resumable = s.resumable()
+            s.unsubscribe(run_id, q)
+            calibration = (procedure_of(v.recording_path).analyze(v.recording_path).calibration
+                           if v.status == "finished" else None)
+        finally:
+            _stop(s)
+    return SimpleNamespace(plan=plan, run_id=run_id, first=first, prompt=p, stale=stale,
+                           events=events, view=v, after=after, resumable=resumable,
+                           calibration=calibration, why=why(s, v))
+
+
+def test_a_run_streams_its_events_and_finishes_with_a_recording_that_calibrates(answered):
+    run_id, p, v = answered.run_id, answered.prompt, answered.view
+    first = answered.first
     assert first["type"] == "snapshot" and first["view"]["run_id"] == run_id
-    p = prompt_of(sup, run_id)
     assert p.step_index == 0 and p.text.startswith("IMU mounted")
-    # commands for another prompt or step are stale
-    with pytest.raises(StaleCommandError):
-        sup.answer(run_id, p.prompt_id + 1, p.step_index, True, "bob")
-    with pytest.raises(StaleCommandError):
-        sup.answer(run_id, p.prompt_id, p.step_index + 1, True, "bob")
-    with pytest.raises(StaleCommandError):
-        sup.abort(run_id, p.step_index + 3, "bob")
-    sup.answer(run_id, p.prompt_id, p.step_index, True, "bob", note="checked")
-    events = drain(q, "end")
+    # commands for another prompt or step were stale
+    assert all(isinstance(e, StaleCommandError) for e in answered.stale), answered.stale
+    events = answered.events
     kinds = {e["type"] for e in events}
     assert {"prompt", "prompt_closed", "step", "signals", "log", "status", "end"} <= kinds
     assert all(e["run_id"] == run_id for e in events)
     sample = next(e for e in events if e["type"] == "signals" and e["signals"]["imus"])
     assert len(sample["signals"]["imus"]["IMU-0001"]["gyro_dps"]) == 3
-    v = sup.view(run_id)
-    assert v.status == "finished" and v.error is None and v.prompt is None
+    assert v.status == "finished" and v.error is None and v.prompt is None, answered.why
     assert [s.state for s in v.steps] == ["done"] * v.n_steps and v.time_left_s == 0.0
     assert v.signals["table"]["angle_deg"] and v.log_tail
-    # the prompt is gone: answering it again is stale; a finished run is not aborted
-    with pytest.raises(StaleCommandError):
-        sup.answer(run_id, p.prompt_id, p.step_index, True, "bob")
-    with pytest.raises(RunStateError):
-        sup.abort(run_id, None, "bob")
-    assert sup.resumable() == []
-    sup.unsubscribe(run_id, q)
+    # the prompt gone, answering it again was stale; the finished run was not aborted
+    stale_again, abort_finished = answered.after
+    assert isinstance(stale_again, StaleCommandError), stale_again
+    assert isinstance(abort_finished, RunStateError), abort_finished
+    assert answered.resumable == []
     with open_recording(v.recording_path) as rec:
         assert not rec.was_open_for_write
         assert len(rec.steps) == v.n_steps and all(s.status == "done" for s in rec.steps)
         assert rec.steps[0].note.startswith("confirmed by bob at ")
         assert rec.metadata["run_operator"] == "alice"
     assert v.records_run_id is not None  # recorded as `imucalib run` records it
-
-    from imucalib.calibration import procedure_of
-
-    result = procedure_of(v.recording_path).analyze(v.recording_path)
-    assert result.calibration is not None
+    assert answered.calibration is not None
 
 
 def test_a_refused_or_aborted_prompt_stops_safely_and_the_run_resumes(sup, plan_file):
@@ -265,26 +319,22 @@ def test_a_slow_subscriber_loses_old_samples_never_states_or_prompts():
     assert [q.get_nowait()["i"] for _ in range(3)] == [7, 8, 9]
 
 
-def test_the_page_and_imucalib_run_record_data_that_calibrate_identically(sup, plan_file,
-                                                                           tmp_path):
+def test_the_page_and_imucalib_run_record_data_that_calibrate_identically(answered, tmp_path):
     """No second way of running a plan: the same plan on the twin, one run through the
-    supervisor and one through ``imucalib run --yes``, calibrate to the same numbers."""
+    supervisor (``answered``) and one through ``imucalib run --yes``, calibrate to the same
+    numbers."""
     import numpy as np
     from typer.testing import CliRunner
 
     from imucalib.calibration import procedure_of
     from imucalib.cli import app
 
-    run_id = sup.start(plan_file, station="sim", serials=[], operator="alice")
-    p = prompt_of(sup, run_id)
-    sup.answer(run_id, p.prompt_id, p.step_index, True, "alice")
-    result = CliRunner().invoke(app, ["run", str(plan_file), "--station", "sim", "--out",
+    assert answered.view.status == "finished", answered.why
+    result = CliRunner().invoke(app, ["run", str(answered.plan), "--station", "sim", "--out",
                                       str(tmp_path / "cli.h5"), "--yes", "--operator", "alice",
                                       "--no-record"])
     assert result.exit_code == 0, result.output
-    v = ended(sup, run_id)
-    assert v.status == "finished", why(sup, v)
-    web = procedure_of(v.recording_path).analyze(v.recording_path).calibration
+    web = answered.calibration
     cli = procedure_of(tmp_path / "cli.h5").analyze(tmp_path / "cli.h5").calibration
     assert web.param_names == cli.param_names
     np.testing.assert_array_equal(web.values, cli.values)
