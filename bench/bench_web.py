@@ -137,6 +137,16 @@ def _answer_prompts(sup: RunSupervisor, run_id: str, stop: threading.Event) -> N
             print(f"  (prompt: {type(exc).__name__}: {exc})", file=sys.stderr)
 
 
+def _slope(phase: list[tuple[float, float]]) -> str:
+    """Return the phase's RSS trend after its first minute (least squares), as text."""
+    late = [(t, r) for t, r in phase if t - phase[0][0] >= 60.0]
+    if len(late) < 60:
+        return ""
+    t, r = np.array(late).T
+    per_min = 60.0 * float(np.polyfit(t, r, 1)[0])
+    return f"; trend after its first minute {per_min:+.3f} MiB/min"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seconds", type=float, default=60.0, help="length of each phase [s]")
@@ -195,7 +205,7 @@ def main() -> None:
             pages = asyncio.run(_phase(n, ws_url, cookie, base, args.seconds))
             wall = time.time() - w0
             _, cpu1 = _proc(server.pid)
-            phases.append((n, [s[1] for s in samples[first:]]))
+            phases.append((n, [(s[0], s[1]) for s in samples[first:]]))
             lat = np.array([x for p in pages for x in p["latency"]])
             p50, p95 = np.percentile(lat, [50, 95]) if lat.size else (np.nan, np.nan)
             rows.append((n, p50, p95,
@@ -230,12 +240,13 @@ def main() -> None:
         rss = [s[1] for s in samples]
         third = max(1, len(rss) // 3)
         worker = [s[2] for s in samples if s[2] is not None]
-        for n, rss_phase in phases:
+        for n, phase in phases:
+            rss_phase = [r for _t, r in phase]
             k = max(1, min(30, len(rss_phase) // 4))
             if rss_phase:
                 print(f"server RSS [MiB] with {n} page(s): first {k} s mean "
                       f"{statistics.mean(rss_phase[:k]):.1f}, last {k} s mean "
-                      f"{statistics.mean(rss_phase[-k:]):.1f}")
+                      f"{statistics.mean(rss_phase[-k:]):.1f}{_slope(phase)}")
         print(f"server RSS [MiB]: first third mean {statistics.mean(rss[:third]):.1f}, last "
               f"third mean {statistics.mean(rss[-third:]):.1f}, max {max(rss):.1f} "
               f"({len(rss)} samples over {samples[-1][0]:.0f} s)")

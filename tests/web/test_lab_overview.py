@@ -69,3 +69,20 @@ def test_a_station_whose_page_was_used_is_listed_before_its_first_run(browser):
     html = browser("observer").get("/lab").text
     # the observer's own login names this station in the audit trail
     assert 'data-station="bench-1"' in html and "No runs." in html and "free" in html
+
+
+def test_the_overview_reads_one_snapshot_and_a_read_that_writes_is_refused(web_app, web):
+    """``Records.read_snapshot``: the lab overview's public read; a write in it is refused."""
+    from sqlalchemy import func, select
+
+    from imucalib.errors import RecordsError
+    from imucalib.records.schema import Station
+    from imucalib.web.lab_state import lab_overview
+
+    records = web_app.state.web.records
+    _lab(records, web)
+    assert records.read_snapshot(lambda s: s.scalar(select(func.count()).select_from(Station))
+                                 ) == 1
+    with pytest.raises(RecordsError, match="tried to change them; nothing was written"):
+        records.read_snapshot(lambda s: s.add(Station(name="bench-9", location="")))
+    assert [s.name for s in lab_overview(records)] == ["bench-1", "bench-2"]   # bench-9 not

@@ -83,6 +83,11 @@ def test_a_twin_run_gives_each_recorded_window_s_mean_and_sigma_as_the_recording
             assert np.all(se > 0) and np.allclose(se, sd / math.sqrt(stats["n"]))
             assert np.all(np.abs(gyro.mean(axis=0) - stats["gyro_dps"]) < 4 * se + 1e-12)
             assert np.allclose(gyro.std(axis=0, ddof=1), sd, rtol=0.2)
+        # the runner's own recording-log lines are the page's log lines too, in order
+        runner_lines = [f"[t={e.time_s:.1f} s, {e.source}] {e.message}" for e in rec.log]
+    logged = [e["line"].split(": ", 1)[1] for e in _events(sup, run_id) if e["type"] == "log"]
+    assert [line for line in logged if line.startswith("[t=")] == runner_lines
+    assert any("plan 'cli-run' started" in line for line in runner_lines)
     rate = next(e for e in windows if e["kind"] == "rate" and e["commanded"]["rate_dps"] == 90.0)
     axis = rate["commanded"]["axis"]
     assert rate["duration_s"] == pytest.approx(4.0)  # one revolution at 90 °/s
@@ -259,3 +264,38 @@ def test_a_failing_live_view_never_stops_the_run_s_reporting(tmp_path, monkeypat
     rep.close()
     assert files.read_state()["steps"] == ["running"]
     assert capsys.readouterr().err.count("RuntimeError: live view bug") == 1   # told once
+
+
+def test_a_page_waits_for_its_events_on_the_loop_without_a_thread_of_its_own():
+    """``SubscriberQueue.next_event``: woken by a publish from another thread, at once."""
+    import asyncio
+    import threading
+
+    q = SubscriberQueue()
+    q.publish({"type": "snapshot"})
+
+    async def page() -> list[tuple[str | None, float]]:
+        got = []
+        threads = threading.active_count()
+        first = await q.next_event(0.5)                      # already there
+        got.append((first and first["type"], 0.0))
+        t0 = time.monotonic()
+        assert await q.next_event(0.2) is None               # nothing: the timeout
+        got.append((None, time.monotonic() - t0))
+        sent: list[float] = []
+
+        def publish_later() -> None:
+            time.sleep(0.1)
+            sent.append(time.monotonic())
+            q.publish({"type": "status"})
+
+        threading.Thread(target=publish_later).start()
+        event = await q.next_event(5.0)
+        got.append((event and event["type"], time.monotonic() - sent[0]))
+        assert threading.active_count() <= threads + 1       # the publisher's thread only
+        return got
+
+    first, empty, woken = asyncio.run(page())
+    assert first[0] == "snapshot"
+    assert empty[0] is None and 0.15 < empty[1] < 1.0
+    assert woken[0] == "status" and woken[1] < 0.05          # woken, not polled

@@ -100,3 +100,18 @@ def test_the_websocket_needs_a_session_and_this_site_s_origin(browser, superviso
         assert ws.receive_json()["type"] == "end"
         assert ws.receive()["type"] == "websocket.close"
     assert first["type"] == "snapshot" and first["view"]["prompt"]["prompt_id"] == 7
+
+
+@pytest.mark.parametrize("role", [None, *ROLES])
+def test_only_an_engineer_may_override_overdue_equipment(browser, role):
+    """``override_due`` of ``POST /runs/new``: an engineer's; any other role's is refused."""
+    who = browser(role)
+    answer = who.post("/runs/new", {"station": "sim", "override_due": "certificate renewal "
+                                    "booked"}, headers={"Accept": "application/json"})
+    if role is None:
+        assert answer.status_code == 401
+    elif role == "engineer":
+        assert answer.status_code not in (401, 403)   # on to the lock and the form's checks
+    else:
+        assert answer.status_code == 403
+        assert "only" in answer.json()["error"]

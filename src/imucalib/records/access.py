@@ -53,7 +53,7 @@ __all__ = ["AUDIT_ACTIONS", "FAILED_LOGIN_WINDOW_MIN", "MAX_FAILED_LOGINS",
 #: The actions an audit row names.
 AUDIT_ACTIONS: Final = ("login", "logout", "login_failed", "start", "prompt_answer", "abort",
                         "resume", "lock", "unlock", "lock_request", "review", "approve",
-                        "reject", "set_password", "calibrate")
+                        "reject", "set_password", "calibrate", "override_due")
 #: The shortest password accepted. [characters]
 MIN_PASSWORD_LENGTH: Final = 8
 #: How long a web session lasts after login. [h]

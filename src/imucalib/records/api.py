@@ -824,6 +824,26 @@ class Records(AccessRecords):
         want = "" if path is None else str(Path(path).expanduser().resolve())
         return self._run(lambda s: queries.run_of_recording(s, sha256, want), write=False)
 
+    def read_snapshot(self, work: Callable[[Session], _T]) -> _T:
+        """Return ``work(session)`` run on one consistent snapshot of the database, read-only.
+
+        For a reader that gathers from many tables at once (the web page's lab overview,
+        :mod:`imucalib.web.lab_state`): every query of `work` sees the same committed state
+        (SQLite's WAL read transaction, PostgreSQL's REPEATABLE READ), as :meth:`verify` does.
+
+        Raises
+        ------
+        RecordsError
+            `work` added, changed or deleted a row (nothing of it is committed).
+        """
+        def guarded(session: Session) -> _T:
+            out = work(session)
+            if session.new or session.dirty or session.deleted:   # rolled back by _run
+                raise RecordsError("a read of the records tried to change them; nothing was "
+                                   "written")
+            return out
+        return self._run(guarded, write=False)
+
     # --- tamper evidence --------------------------------------------------------------------
     def heads(self) -> list[ChainHead]:
         """Return the head of every chain (keep them elsewhere; :meth:`verify` checks them)."""

@@ -99,6 +99,7 @@ from imucalib.plan.schema import (
     operator_check_problems,
 )
 from imucalib.station.devices import ImuIdentity, Station
+from imucalib.station.log_tee import tee_log
 from imucalib.station.session import RunOptions, RunSession, RunStatus, StepStop
 
 __all__ = [
@@ -381,6 +382,7 @@ def run_plan(plan: Plan, station: Station, path: str | Path, *,
         _disconnect(station)  # nothing has moved
         raise
     with writer:
+        tee_log(writer, opt.on_log)
         writer.log_event(station.clock.now_s(), "info", "runner",
                          f"plan {plan.name!r} started on {station.describe().get('kind', '?')}")
         run = RunSession(plan, station, writer, opt, identities)
@@ -548,6 +550,7 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         # the runner died while closing (after its last step): recovery finished the close
         with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s,
                                     compression=compression) as writer:
+            tee_log(writer, opt.on_log)
             writer.log_event(point.last_time_s, "warning", "runner",
                              "the run had done every step but its file was not closed; closed "
                              f"by resume (the file as found is kept as {p.stem}.crashed.h5)")
@@ -563,6 +566,7 @@ def resume_run(path: str | Path, make_station: Callable[[Plan, float], Station],
         raise
     with RecordingWriter.reopen(p, flush_interval_s=opt.flush_interval_s,
                                 compression=compression) as writer:
+        tee_log(writer, opt.on_log)
         for index in point.interrupted:
             writer.update_step(index, status="aborted",
                                note="interrupted (runner stopped); the run was resumed")

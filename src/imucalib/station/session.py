@@ -107,6 +107,10 @@ class RunOptions:
         settling criteria are checked, and a record of a fixed length (whose rows the guards
         still check, every one); by default `tick_s`. The simulated station generates its
         streams per tick, so fewer, longer ticks make it faster. [s]
+    on_log : callable, optional
+        Called with ``(time_s, level, source, message)`` of every line the run writes to the
+        Recording's event log, once written (:mod:`imucalib.station.log_tee`; the web page's
+        live log).
     compression : str or None
         Compression of a new run's Recording once closed
         (:data:`~imucalib.io.compression.COMPRESSIONS`; default
@@ -123,6 +127,7 @@ class RunOptions:
     min_free_bytes: int = 128 << 20
     idle_tick_s: float | None = None
     compression: str | None = DEFAULT_COMPRESSION
+    on_log: Callable[[float, str, str, str], None] | None = None
 
 
 class RunSession:

@@ -51,10 +51,12 @@ PERMISSIONS: Final[dict[str, frozenset[str]]] = {
     "review": frozenset({"reviewer", "admin"}),
     "audit": frozenset({"reviewer", "admin"}),
     "users": frozenset({"admin"}),
+    "override_due": frozenset({"engineer"}),            # start on overdue equipment
 }
 _WHO: Final = {"run": "run the station", "abort": "abort a run", "lock": "hold the station",
                "force_unlock": "release another user's lock", "review": "review results",
-               "audit": "read the audit trail", "users": "manage users", "view": "view"}
+               "audit": "read the audit trail", "users": "manage users", "view": "view",
+               "override_due": "start a run on equipment overdue for calibration"}
 
 
 def can(login: LoginSession | None, action: str) -> bool:

@@ -66,6 +66,8 @@ class JobState:
     error : str or None
         Why it failed (one line).
     who, started_utc, ended_utc : str
+    reason : str
+        Why a run already calibrated was calibrated again ("" for a first calibration).
     """
 
     kind: str
@@ -75,6 +77,7 @@ class JobState:
     who: str = ""
     started_utc: str = ""
     ended_utc: str = ""
+    reason: str = ""
 
     @property
     def running(self) -> bool:
@@ -108,7 +111,8 @@ class ResultsFolder:
                               "(its log: job.log in the run's results folder)")
         return JobState(kind, status, float(data.get("progress") or 0.0),
                         str(error) if error else None, str(data.get("who") or ""),
-                        str(data.get("started_utc") or ""), str(data.get("ended_utc") or ""))
+                        str(data.get("started_utc") or ""), str(data.get("ended_utc") or ""),
+                        str(data.get("reason") or ""))
 
     def ask_certificate_again(self) -> None:
         """Ask the running certificate job to write the certificate once more."""
@@ -178,7 +182,7 @@ def download_path(results: ResultsFolder, name: str) -> Path:
 
 def start_job(results: ResultsFolder, kind: str, *, who: str, db: str | None,
               recording: str = "", records_run: int | None = None,
-              python: str | None = None) -> None:
+              python: str | None = None, reason: str = "") -> None:
     """Start the job of `kind` for the run (its process; the server does not wait for it).
 
     Parameters
@@ -190,6 +194,9 @@ def start_job(results: ResultsFolder, kind: str, *, who: str, db: str | None,
         Who calibrates (recorded as the analysis' operator) or asked for the certificate.
     db : str or None
         The records database (None: the default one).
+    reason : str
+        Why a run already calibrated is calibrated again: the new result's amendment reason in
+        the records (``imucalib calibrate --reason``), shown on the results page.
 
     Raises
     ------
@@ -213,6 +220,8 @@ def start_job(results: ResultsFolder, kind: str, *, who: str, db: str | None,
             raise CalibrationError(f"the run's recording {recording or '(none)'} is not there: "
                                    "nothing to calibrate")
         cmd += ["--recording", recording]
+        if reason.strip():
+            cmd += ["--reason", reason.strip()]
     else:
         if records_run is None:
             raise CalibrationError("the run has no calibration in the records yet: calibrate "
@@ -228,7 +237,7 @@ def start_job(results: ResultsFolder, kind: str, *, who: str, db: str | None,
                                 env={**os.environ, "PYTHONUNBUFFERED": "1"})
     write_json_atomic(state_file, {"status": "running", "progress": 0.0, "error": None,
                                    "who": who, "pid": proc.pid, "started_utc": "",
-                                   "ended_utc": None})
+                                   "ended_utc": None, "reason": reason.strip() or None})
     _REAPERS.append(proc)
     _reap()
 

@@ -166,13 +166,14 @@ def _console_text(done: Any) -> str:
     return buffer.getvalue()
 
 
-def _calibrate(folder: Path, recording: Path, who: str, db: str | None) -> None:
+def _calibrate(folder: Path, recording: Path, who: str, db: str | None, reason: str = "") -> None:
     from imucalib.calibration import calibrate
 
     state = _State(folder / STATE_FILES["calibrate"], who)
     try:
         (folder / SUMMARY_FILE).unlink(missing_ok=True)
-        done = calibrate(recording, out=folder, db=db, operator=who, progress=state.progress)
+        done = calibrate(recording, out=folder, db=db, operator=who, progress=state.progress,
+                         reason=reason)
         summary = summarise(done, folder, recording, db)
         (folder / CONSOLE_FILE).write_text(_console_text(done), encoding="utf-8")
         write_json_atomic(folder / SUMMARY_FILE, summary)
@@ -230,13 +231,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--user", default="")
     parser.add_argument("--db", default=None)
     parser.add_argument("--certificate", type=int, default=None)
+    parser.add_argument("--reason", default="")
     args = parser.parse_args(argv)
     folder: Path = args.folder
     folder.mkdir(parents=True, exist_ok=True)
     if args.certificate is not None:
         _certificate(folder, args.certificate, args.user, args.db)
     else:
-        _calibrate(folder, args.recording, args.user, args.db)
+        _calibrate(folder, args.recording, args.user, args.db, args.reason)
     return 0
 
 

@@ -39,6 +39,7 @@ first.
 
 from __future__ import annotations
 
+import asyncio
 import queue
 from typing import Any
 
@@ -72,6 +73,35 @@ class SubscriberQueue(queue.Queue[dict[str, Any]]):
         self.max_samples = max_samples
         self.max_total = max_total
         self.dropped = 0
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._wake: asyncio.Event | None = None
+
+    async def next_event(self, timeout_s: float) -> dict[str, Any] | None:
+        """Return the next event, waiting up to `timeout_s` on the running event loop (None).
+
+        The waiting costs no thread: :meth:`publish`, from the supervisor's thread, wakes the
+        loop (a blocking :meth:`get` in a worker thread per page, as before, made the server's
+        memory creep with the thread pool's churn; docs/web.md, "Bounded memory").
+        """
+        if self._wake is None:
+            self._loop, self._wake = asyncio.get_running_loop(), asyncio.Event()
+        try:
+            return self.get_nowait()
+        except queue.Empty:
+            pass
+        self._wake.clear()
+        try:                                    # published between the look and the clear
+            return self.get_nowait()
+        except queue.Empty:
+            pass
+        try:
+            await asyncio.wait_for(self._wake.wait(), timeout_s)
+        except TimeoutError:
+            return None
+        try:
+            return self.get_nowait()
+        except queue.Empty:
+            return None
 
     def publish(self, event: dict[str, Any]) -> None:
         """Add `event`, first dropping the oldest sample (or log line) when the queue is full."""
@@ -94,3 +124,9 @@ class SubscriberQueue(queue.Queue[dict[str, Any]]):
             items.append(event)
             self.unfinished_tasks += 1
             self.not_empty.notify()
+            loop, wake = self._loop, self._wake
+        if loop is not None and wake is not None:
+            try:
+                loop.call_soon_threadsafe(wake.set)
+            except RuntimeError:                # the page's loop has closed: nobody waits
+                pass

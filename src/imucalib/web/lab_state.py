@@ -12,7 +12,8 @@
 - its equipment whose certificate is due (Eq. (R.5) of docs/records.md) or due within
   :data:`SOON_DAYS`.
 
-Read-only: it writes nothing (docs/web.md, "Lab overview").
+Read-only (:meth:`~imucalib.records.api.Records.read_snapshot`): it writes nothing (docs/web.md,
+"Lab overview").
 """
 
 from __future__ import annotations
@@ -184,4 +185,4 @@ def lab_overview(records: Records, *, per_station: int = 5,
         The day equipment due dates are compared with (default: today, UTC).
     """
     day = today or datetime.now(UTC).date()
-    return records._run(lambda s: _read(s, per_station, day), write=False)
+    return records.read_snapshot(lambda s: _read(s, per_station, day))

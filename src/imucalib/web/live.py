@@ -83,14 +83,23 @@ def same_origin(websocket: WebSocket) -> bool:
     return bool(origin) and bool(host) and urlsplit(origin).netloc == host
 
 
+async def _next(events: queue.Queue[dict[str, Any]]) -> dict[str, Any] | None:
+    """Return the next event within :data:`WAIT_S` (None): on the loop, else in a thread."""
+    wait = getattr(events, "next_event", None)
+    if wait is not None:                       # a SubscriberQueue: no thread per page
+        event: dict[str, Any] | None = await wait(WAIT_S)
+        return event
+    try:                                       # a plain queue (a test's stand-in supervisor)
+        return await run_in_threadpool(events.get, True, WAIT_S)
+    except queue.Empty:
+        return None
+
+
 async def _pump(websocket: WebSocket, events: queue.Queue[dict[str, Any]], token: str) -> None:
     web = context_of(websocket)
     checked = time.monotonic()
     while True:
-        try:
-            event = await run_in_threadpool(events.get, True, WAIT_S)
-        except queue.Empty:
-            event = None
+        event = await _next(events)
         if event is not None:
             await websocket.send_text(json.dumps(event, default=str))
             if event.get("type") == "end":

@@ -120,23 +120,39 @@ def _done(request: Request, run_id: str, what: str, **extra: Any) -> Response:
 
 @router.post("/runs/{run_id}/calibrate")
 async def calibrate(request: Request, run_id: str,
-                    login: Annotated[LoginSession, Depends(require("run"))]) -> Response:
-    """Calibrate the run's recording now, in a process of its own (audited)."""
+                    login: Annotated[LoginSession, Depends(require("run"))],
+                    reason: Annotated[str, Form()] = "") -> Response:
+    """Calibrate the run's recording now, in a process of its own (audited).
+
+    A run that already has a result is calibrated again only with a `reason`: the new result's
+    amendment reason in the records, the audit row's, and the page's.
+    """
     view, results = await _view(request, run_id)
     if view.status in LIVE_STATUSES:
         raise WebError(409, f"run {run_id} is {view.status}: it is calibrated once it has "
                             "ended")
     web = context_of(request)
     who = login.user.name
+    why = " ".join(reason.split())[:500]
+    again = await run_in_threadpool(lambda: results.summary() is not None
+                                    or results.state("calibrate").status == "done")
+    if again and not why:
+        raise WebError(422, f"run {run_id} is already calibrated: calibrating it again needs "
+                            "a reason (recorded with the new result and in the audit trail); "
+                            "got none")
     try:
         await run_in_threadpool(lambda: start_job(results, "calibrate", who=who,
                                                   db=web.records_url,
-                                                  recording=view.recording_path))
+                                                  recording=view.recording_path,
+                                                  reason=why if again else ""))
     except JobBusyError as exc:
         raise WebError(409, str(exc)) from exc
     except CalibrationError as exc:
         raise WebError(409, str(exc)) from exc
-    await record(request, login, "calibrate", run_ref=run_id, details={"automatic": False})
+    details: dict[str, Any] = {"automatic": False}
+    if again:
+        details.update(again=True, reason=why)
+    await record(request, login, "calibrate", run_ref=run_id, details=details)
     return _done(request, run_id, "calibrate")
 
 

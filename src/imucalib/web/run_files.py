@@ -41,8 +41,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["RUN_ID_PATTERN", "RunFiles", "json_safe", "pid_alive", "read_json", "to_json",
-           "write_json_atomic"]
+__all__ = ["LOG_TAIL", "RUN_ID_PATTERN", "RunFiles", "json_safe", "pid_alive", "read_json",
+           "to_json", "write_json_atomic"]
+
+#: Log lines a run's ``state.json`` keeps (the worker's and, after an escalated abort, the
+#: supervisor's last words).
+LOG_TAIL = 50
 
 #: A run id: the UTC start time and six hex digits (also a safe folder name).
 RUN_ID_PATTERN = re.compile(r"^[0-9]{8}T[0-9]{6}Z-[0-9a-f]{6}$")

@@ -33,7 +33,7 @@ from typing import IO, Any, TypeVar
 from imucalib.plan.schema import OperatorCheckStep, Plan, step_min_duration_s
 from imucalib.station.session import RunStatus
 from imucalib.web.live_follow import LiveFollower
-from imucalib.web.run_files import RunFiles, to_json, write_json_atomic
+from imucalib.web.run_files import LOG_TAIL, RunFiles, to_json, write_json_atomic
 from imucalib.web.run_tap import SignalTap
 
 __all__ = ["COMMAND_POLL_S", "LOG_TAIL", "STATE_HZ", "RunAborted", "RunReporter"]
@@ -43,8 +43,6 @@ _T = TypeVar("_T")
 STATE_HZ = 5.0
 #: Wall time between two looks at the commands folder. [s]
 COMMAND_POLL_S = 0.05
-#: Log lines kept in the state.
-LOG_TAIL = 50
 
 
 class RunAborted(KeyboardInterrupt):
@@ -117,6 +115,7 @@ class RunReporter:
         self.live = LiveFollower(plan, tap)
         self._live_failed = False
         tap.on_safe_stop = self._safe_stop
+        self._stopped_after_abort: set[str] = set()
 
     def _live(self, work: Callable[[], _T]) -> _T | None:
         """Return `work()`, or None when the live view's own bookkeeping fails.
@@ -144,6 +143,13 @@ class RunReporter:
         text = f"{datetime.now(UTC):%H:%M:%S} {level}: {line}"
         self.log_tail.append(text)
         self.event("log", line=text, level=level)
+
+    def on_recording_log(self, time_s: float, level: str, source: str, message: str) -> None:
+        """Add a line the runner wrote to the Recording's event log (the runner's ``on_log``).
+
+        The line names its station time and source, as ``imucalib inspect`` lists the log.
+        """
+        self.log(f"[t={time_s:.1f} s, {source}] {message}", level)
 
     def set_status(self, status: str, error: str | None = None) -> None:
         """Change the run's status (written at once)."""
@@ -289,6 +295,15 @@ class RunReporter:
         self.event("safe_stop", device=device, latency_s=latency)
         self.log(f"{device} stopped safely" + (f" ({latency:.3f} s after the abort)"
                                                if latency is not None else ""), "warning")
+        if self.abort is None or "safe_stopped_unix" in self.extra:
+            return
+        self._stopped_after_abort.add(device)
+        if self._stopped_after_abort >= self.tap.stoppable:
+            # the supervisor's abort watch gives the close its own time from here
+            # (imucalib.web.abort_watch)
+            self.extra["safe_stopped_unix"] = wall
+            self.event("safe_stop_done", latency_s=latency)
+            self.write(force=True)
 
     # --- commands ---------------------------------------------------------------------------
     def poll_commands(self, force: bool = False) -> None:

@@ -4,14 +4,16 @@ The plan comes from the plan folder (``--plans-dir``) or an upload, and is valid
 project's plan validation (:mod:`imucalib.web.plan_check`), its problems shown per step and
 field. The run is started by the supervisor — the same runner as ``imucalib run``, in a worker
 process — with a copy of the plan kept in the runs folder. Starting needs the station's lock;
-it is audited (``start``).
+it is audited (``start``). A station whose equipment is overdue for calibration is refused in
+one line, unless an engineer gives the reason to use it (:mod:`imucalib.web.due_override`): the
+reason goes to the run, to an ``override_due`` audit row of its own and to the ``start`` row.
 """
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
+from datetime import UTC, date, datetime
 from pathlib import Path
-from typing import Annotated, Final
+from typing import Annotated, Any, Final
 
 from fastapi import APIRouter, Depends, File, Form, Request, UploadFile
 from fastapi.responses import RedirectResponse
@@ -21,8 +23,9 @@ from starlette.responses import Response
 from imucalib.errors import CalibrationError
 from imucalib.records.access import LoginSession
 from imucalib.web.audit import record
-from imucalib.web.auth import require
+from imucalib.web.auth import article, can, require
 from imucalib.web.context import context_of
+from imucalib.web.due_override import due_station_name, overdue_equipment, overdue_line
 from imucalib.web.lock import require_lock
 from imucalib.web.plan_check import FieldError, check_plan, check_serials
 from imucalib.web.render import WebError, render
@@ -41,11 +44,13 @@ def _tomls(folder: Path | None) -> list[str]:
 
 
 def _form(request: Request, *, status: int = 200, errors: list[FieldError] | None = None,
-          chosen: str = "", station: str = "sim", serials: str = "") -> Response:
+          chosen: str = "", station: str = "sim", serials: str = "",
+          override_due: str = "") -> Response:
     web = context_of(request)
     return render(request, "run_new.html", status=status, plans=_tomls(web.plans_dir),
                   stations=["sim", *_tomls(web.stations_dir)], errors=errors or [],
-                  chosen=chosen, chosen_station=station, serials=serials)
+                  chosen=chosen, chosen_station=station, serials=serials,
+                  override_due=override_due)
 
 
 @router.get("/runs/new")
@@ -70,9 +75,18 @@ async def start_run(request: Request,
                     plan_file: Annotated[str, Form()] = "",
                     station: Annotated[str, Form()] = "sim",
                     serials: Annotated[str, Form()] = "",
+                    override_due: Annotated[str, Form()] = "",
                     plan_upload: Annotated[UploadFile | None, File()] = None) -> Response:
-    """Validate the plan, the station and the serials; start the run; go to its page."""
+    """Validate the plan, the station and the serials; start the run; go to its page.
+
+    `override_due` is the reason to start on equipment overdue for calibration (engineers only,
+    :mod:`imucalib.web.due_override`).
+    """
     web = context_of(request)
+    override = override_due.strip()[:500]
+    if override and not can(login, "override_due"):
+        raise WebError(403, f"{login.user.name} is {article(login.user.role)}: only an "
+                            "engineer may start a run on equipment overdue for calibration")
     await require_lock(request, login)
     if plan_upload is not None and plan_upload.filename:
         raw = await plan_upload.read(MAX_PLAN_BYTES + 1)
@@ -105,21 +119,37 @@ async def start_run(request: Request,
         problems += found
     units, found = check_serials(serials)
     problems += found
+    overdue: list[Any] = []
+    if not problems and plan is not None:
+        name = due_station_name(station_spec)
+        equipment = await run_in_threadpool(web.records.equipment)
+        overdue = overdue_equipment(equipment, name, date.today())
+        if overdue and not override:
+            problems.append(FieldError(None, "override_due", overdue_line(
+                name, overdue, may_override=can(login, "override_due"))))
     if problems or plan is None:
         return _form(request, status=422, errors=problems, chosen=plan_file, station=station,
-                     serials=serials)
+                     serials=serials, override_due=override)
+    # an override without overdue equipment overrides nothing: it is neither passed nor audited
+    extra: dict[str, Any] = {"override_due": override} if overdue else {}
     kept = web.runs_dir / "plans" / f"{datetime.now(UTC):%Y%m%dT%H%M%S%fZ}-{Path(source).name}"
     try:
         kept.parent.mkdir(parents=True, exist_ok=True)
         kept.write_text(text, encoding="utf-8")
         supervisor = web.runs()
         run_id = await run_in_threadpool(lambda: supervisor.start(
-            kept, station=station_spec, serials=units, operator=login.user.name))
+            kept, station=station_spec, serials=units, operator=login.user.name, **extra))
     except (CalibrationError, OSError) as exc:
         raise WebError(409, f"the run could not start: {exc}") from exc
     from imucalib.plan.io import plan_hash
 
-    await record(request, login, "start", run_ref=str(run_id),
-                 details={"plan": plan.name, "plan_hash": plan_hash(plan), "station": station,
-                          "serials": units, "source": source})
+    details: dict[str, Any] = {"plan": plan.name, "plan_hash": plan_hash(plan),
+                               "station": station, "serials": units, "source": source}
+    if overdue:
+        details["override_due"] = override
+        details["overdue_equipment"] = [e.equipment_id for e in overdue]
+        # the override is an action of its own: its row names the engineer and the equipment
+        await record(request, login, "override_due", run_ref=str(run_id), details={
+            "reason": override, "overdue_equipment": details["overdue_equipment"]})
+    await record(request, login, "start", run_ref=str(run_id), details=details)
     return RedirectResponse(f"/runs/{run_id}", status_code=303)

@@ -70,6 +70,8 @@ class SignalTap:
         self.rate_holds: dict[str, RateHold] = {}
         self.rate_tolerance_rps = math.inf
         self.on_safe_stop = on_safe_stop
+        #: The devices a safe stop stops (set by :class:`TappedStation`).
+        self.stoppable: frozenset[str] = frozenset()
 
     def set_rate_tolerance(self, tolerance_rps: float) -> None:
         """Set how far a motion axis's rate may be off its command and still hold it. [rad/s]"""
@@ -208,6 +210,10 @@ class TappedStation:
         self._chamber = (cast(ChamberDevice, _Chamber(station.chamber, tap, "chamber"))
                          if station.chamber is not None else None)
         self._imus = [cast(ImuSource, _Imu(src, tap, src.name)) for src in station.imus]
+        tap.stoppable = frozenset(role for role, dev in (("table", self._table),
+                                                         ("centrifuge", self._centrifuge),
+                                                         ("chamber", self._chamber))
+                                  if dev is not None)
 
     @property
     def clock(self) -> Clock:

@@ -8,6 +8,8 @@ is who watches and who answers:
 
 - :class:`~imucalib.web.run_reporter.RunReporter` is the runner's ``on_status``: it writes the
   run's state and events for the supervisor and takes its commands;
+- its ``on_recording_log`` is the runner's ``on_log``: every line the runner writes to the
+  Recording's event log is a line of the page's log too;
 - :class:`WebOperator` is the runner's operator: an operator check opens a prompt and waits for
   the answer the supervisor passes on (a refusal is the runner's safe stop, as at the terminal);
 - an abort (a command, SIGTERM or SIGINT) raises
@@ -110,7 +112,8 @@ def _run(files: RunFiles, cfg: dict[str, Any], resume: bool) -> int:
     rep.set_status("starting")
     spec = str(cfg["station"])
     tick = cfg.get("tick_s") or (2.0 if spec == "sim" else 0.5)
-    options = RunOptions(tick_s=float(tick), operator=WebOperator(rep), on_status=rep.on_status)
+    options = RunOptions(tick_s=float(tick), operator=WebOperator(rep), on_status=rep.on_status,
+                         on_log=rep.on_recording_log)
     db = cfg.get("db")
     record = bool(cfg.get("record", True))
     try:
@@ -127,7 +130,12 @@ def _run(files: RunFiles, cfg: dict[str, Any], resume: bool) -> int:
             summary = resume_run(recording, factory, options=options)
         else:
             station_name = "sim" if spec == "sim" else Path(spec).stem
-            equipment, overdue = check_due(db, station_name, None, create=record)
+            override = cfg.get("override_due") or None
+            equipment, overdue = check_due(db, station_name, override, create=record)
+            if overdue:
+                rep.log(f"equipment overdue for calibration used "
+                        f"({', '.join(str(e.equipment_id) for e in overdue)}), overridden by "
+                        f"{cfg['operator']}: {override}", "warning")
             bare, station_toml = make_station(spec, plan)
             _check_serials(list(cfg.get("serials") or []), bare)
             options.station_toml = station_toml
@@ -137,7 +145,7 @@ def _run(files: RunFiles, cfg: dict[str, Any], resume: bool) -> int:
             rep.log(f"plan {plan.name!r} started by {who} on {spec}")
             rep.set_status("running")
             summary = run_plan(plan, tap_station(bare, tap), recording, options=options,
-                               extra_metadata=run_metadata(who, equipment, overdue, None))
+                               extra_metadata=run_metadata(who, equipment, overdue, override))
             ended = datetime.now(UTC)
             if record:
                 try:
@@ -149,7 +157,7 @@ def _run(files: RunFiles, cfg: dict[str, Any], resume: bool) -> int:
                             procedure=plan.procedure, recording=summary.path, operator=who,
                             station=station_name if equipment else None,
                             equipment=[e.equipment_id for e in equipment],
-                            environment=run_environment(summary.status, overdue, None),
+                            environment=run_environment(summary.status, overdue, override),
                             started_utc=started, ended_utc=ended)
                 except CalibrationError as exc:
                     rep.log(f"the run was not recorded in the records database: {exc}", "error")

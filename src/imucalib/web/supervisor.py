@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from imucalib.errors import ConfigurationError, InvalidInputError, RecordingError
+from imucalib.web.abort_watch import ABORT_ESCALATE_S, watch_abort
 from imucalib.web.events import SubscriberQueue
 from imucalib.web.run_errors import RunStateError, StaleCommandError, UnknownRunError
 from imucalib.web.run_files import (
@@ -77,13 +78,21 @@ class RunSupervisor:
         equipment).
     python : str
         The interpreter of the workers.
+    abort_escalate_s : float
+        How long an abort's safe stop may take before the worker is ended and the run marked
+        ``failed`` (:mod:`imucalib.web.abort_watch`). [s]
     """
 
     def __init__(self, runs_dir: Path, *, db: str | None = None, record: bool = True,
-                 tick_s: float | None = None, python: str = sys.executable) -> None:
+                 tick_s: float | None = None, python: str = sys.executable,
+                 abort_escalate_s: float = ABORT_ESCALATE_S) -> None:
+        if not abort_escalate_s > 0:
+            raise InvalidInputError(f"`abort_escalate_s` must be > 0; got {abort_escalate_s!r}")
         self.runs_dir = Path(runs_dir)
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         self.db, self.record, self.tick_s, self.python = db, record, tick_s, python
+        self.abort_escalate_s = float(abort_escalate_s)
+        self._watches: dict[str, threading.Thread] = {}
         self._procs: dict[str, subprocess.Popen[bytes]] = {}
         self._follows: dict[str, _Follow] = {}
         self._lock = threading.Lock()
@@ -94,7 +103,7 @@ class RunSupervisor:
 
     # --- runs -------------------------------------------------------------------------------
     def start(self, plan_path: Path, *, station: str, serials: list[str], operator: str,
-              pace: float | None = None) -> str:
+              pace: float | None = None, override_due: str | None = None) -> str:
         """Start a run of the plan at `plan_path`; return its run id.
 
         Parameters
@@ -110,6 +119,9 @@ class RunSupervisor:
         pace : float, optional
             Wall seconds per station second for the twin (1: real time; default: as fast as
             it goes).
+        override_due : str, optional
+            The reason to run on equipment overdue for calibration (``imucalib run
+            --override-due``); without one such a station is refused by the worker.
 
         Raises
         ------
@@ -148,7 +160,8 @@ class RunSupervisor:
             "recording": str(files.folder.resolve() / f"{stem}.h5"),
             "steps": [[s.kind, plan.step_label(i)] for i, s in enumerate(plan.steps)],
             "least_time_s": float(sum(step_min_duration_s(s) for s in plan.steps)),
-            "tick_s": self.tick_s, "pace": pace, "db": self.db, "record": self.record})
+            "tick_s": self.tick_s, "pace": pace, "db": self.db, "record": self.record,
+            "override_due": (override_due or "").strip() or None})
         self._spawn(files, resume=False)
         return run_id
 
@@ -252,6 +265,12 @@ class RunSupervisor:
             The run has ended.
         StaleCommandError
             The run is at another step than `step_index`.
+
+        Notes
+        -----
+        When the run has not ended `abort_escalate_s` after the first abort (a device call that
+        hangs), the worker is ended and the run marked ``failed``, resumable
+        (:mod:`imucalib.web.abort_watch`).
         """
         v = self.view(run_id)
         if v.status not in LIVE_STATUSES:
@@ -260,6 +279,7 @@ class RunSupervisor:
             raise StaleCommandError(f"run {run_id} is at step {v.step_index}, not {step_index}")
         self._files(run_id).send_command({"type": "abort", "step_index": step_index,
                                           "who": who})
+        self._watch_abort(run_id, who)
 
     # --- live events ------------------------------------------------------------------------
     def subscribe(self, run_id: str) -> SubscriberQueue:
@@ -318,6 +338,43 @@ class RunSupervisor:
                                     env={**os.environ, "PYTHONUNBUFFERED": "1"})
         files.pid.write_text(str(proc.pid), encoding="utf-8")
         self._procs[files.run_id] = proc
+
+    def _watch_abort(self, run_id: str, who: str) -> None:
+        """Watch an abort's safe stop in a thread (one a run: the page resends aborts)."""
+        with self._lock:
+            known = self._watches.get(run_id)
+            if known is not None and known.is_alive():
+                return
+            files = self._files(run_id)
+
+            def is_live() -> bool:
+                return self.view(run_id).status in LIVE_STATUSES
+
+            thread = threading.Thread(
+                target=watch_abort, name=f"imucalib-abort-{run_id}", daemon=True,
+                args=(files, is_live, lambda: self._worker_pid(files)),
+                kwargs={"escalate_s": self.abort_escalate_s, "who": who,
+                        "sent_at": time.monotonic(), "wait": self._reap})
+            self._watches[run_id] = thread
+        thread.start()
+
+    def _worker_pid(self, files: RunFiles) -> int | None:
+        proc = self._procs.get(files.run_id)
+        if proc is not None:
+            return proc.pid
+        try:
+            return int(files.pid.read_text(encoding="utf-8").strip())
+        except (OSError, ValueError):
+            return None
+
+    def _reap(self, pid: int, timeout_s: float) -> None:
+        """Wait up to `timeout_s` for a worker this supervisor started to exit (no zombie)."""
+        for proc in list(self._procs.values()):
+            if proc.pid == pid:
+                try:
+                    proc.wait(timeout=timeout_s)
+                except subprocess.TimeoutExpired:
+                    pass
 
     def _alive(self, files: RunFiles) -> bool:
         proc = self._procs.get(files.run_id)

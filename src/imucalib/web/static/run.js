@@ -71,6 +71,8 @@
     if (d.swap_units) { parts.push(`swap ${d.swap_units.join(" and ")}`); }
     if (d.centrifuge_load_kg !== undefined) { parts.push(`load ${d.centrifuge_load_kg} kg`); }
     $("prompt-details").textContent = parts.join(" · ");
+    window.RemountFigure.draw($("prompt-figure"), d.remount || null,
+                              Number(d.remount_yaw_deg || 0));
     if ($("prompt-note")) { $("prompt-note").value = ""; }
     const dialog = $("prompt");
     if (!dialog.open) { dialog.showModal(); }
