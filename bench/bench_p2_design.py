@@ -7,12 +7,15 @@ worst σ ratio (docs/test-design.md, "P2: temperature points").
 
 ``twin``: a small P2 plan run on the twin (white noise, fast thermal constants, the twin of
 tests/procedures/_p2_twin.py), calibrated with the models' order fixed at the predicted one;
-each predicted σ (``covariance="analysis"``, what calibrate reports) against the σ calibrate
-reports: the parameters at T0 (``std_noise``) and every model coefficient (unscaled σ).
+each predicted σ (``covariance="analysis"``: independent windows, which for a white-noise unit
+is what calibrate reports) against the σ calibrate reports: the parameters at T0
+(``std_noise``) and every model coefficient (unscaled σ).
 
 ``spread``: the same plan on a twin with the grade's coloured noise (8 units), the models'
 order fixed at 3: the c_0's errors about the truth in units of the coloured prediction and of
-the σ calibrate reports.
+the σ calibrate reports (since issue 30 the coloured covariance of the window means too,
+docs/p2.md "Temperature models"; the Monte Carlo of those σ over many runs is
+bench/p2_sigma_montecarlo.py).
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_p2_design.py
 [optimize|twin|spread] [KEEP.h5]``.

@@ -20,6 +20,16 @@ q = m + 1 (+1 rate) (+1 leg) coefficients, by :func:`~imucalib.estimation.linear
 
     β̂ = argmin ‖L⁻¹(p − Aβ)‖²,  C_β = (Aᵀ C⁻¹ A)⁻¹                                        (2)
     χ² = (p − Aβ̂)ᵀ C⁻¹ (p − Aβ̂),  ν = K − q                                               (3)
+
+Weighted least squares with weights V ≠ C (`weights`: a caller whose estimator is fixed, such
+as P2's, docs/p2.md "Temperature models"): the estimate keeps V's gain W and its covariance is
+the sandwich under the estimates' true C (Huber 1967; White 1980, *Econometrica* 48:817)::
+
+    β̂ = W·p,  W = (Aᵀ V⁻¹ A)⁻¹ Aᵀ V⁻¹,  C_β = W C Wᵀ                                       (2b)
+    χ² = min_β (p − Aβ)ᵀ C⁻¹ (p − Aβ) = rᵀ M r,  M = C⁻¹ − C⁻¹A(AᵀC⁻¹A)⁻¹AᵀC⁻¹               (3b)
+
+for any residual r = p − Aβ̂ (M·A = 0): the GLS χ² of Eq. (3), χ²_ν distributed under C
+whatever the estimator, so the order choice (6), (9) and the misfit test use C in both cases.
     c_j = b_j / s^j  (b_j the coefficient of x^j);  C_c = S C_b S,  S = diag(s^−j)          (4)
     p̂(T) = aᵀ β̂,  σ_pred² = aᵀ C_β a                                                       (5)
 
@@ -131,12 +141,12 @@ class TemperatureModelFit:
     model : TemperaturePolynomial
         The fitted coefficients (c_j about T0, d, h).
     covariance : numpy.ndarray, shape (q, q)
-        C_β of Eq. (4) from the estimates' covariance alone, ordered c_0 … c_m, d, h (the terms
-        present).
+        C_β of Eq. (4) (the sandwich of Eq. (2b) when the fit had `weights`) from the
+        estimates' covariance alone, ordered c_0 … c_m, d, h (the terms present).
     covariance_scaled : numpy.ndarray, shape (q, q)
         R_B²·C_β when the fit is a misfit, else equal to `covariance`.
     chi2 : float
-        χ² of Eq. (3).
+        χ² of Eq. (3) (Eq. (3b) with `weights`: the GLS χ² under the covariance).
     dof : int
         ν = K − q.
     quality : FitQuality
@@ -311,6 +321,30 @@ def _gls(a: NDArray[np.float64], p: NDArray[np.float64], cov: NDArray[np.float64
     return fit.estimate, fit.covariance_noise, fit.chi2
 
 
+def _sandwich(a: NDArray[np.float64], p: NDArray[np.float64], cov: NDArray[np.float64],
+              weights: NDArray[np.float64],
+              noise: tuple[Whitener, NDArray[np.float64]] | None = None
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], float] | None:
+    """β̂ = W·p and C_β = W·C·Wᵀ of Eq. (2b), χ² of Eq. (3b); None when the design is singular.
+
+    W is the gain of the weighted least squares with V = `weights`
+    (:func:`~imucalib.estimation.linear.solve_weighted_lsq`); χ² the GLS χ² under `cov` (the
+    GLS fit of Eq. (2), whose χ² is rᵀMr for any residual).
+    """
+    names = tuple(f"beta_{j}" for j in range(a.shape[1]))
+    gls = _gls(a, p, cov, noise)
+    if gls is None:
+        return None
+    try:
+        fit = solve_weighted_lsq(a, p, covariance=weights, cond_limit=_COND_LIMIT,
+                                 param_names=names, gain=True)
+    except InsufficientExcitationError:
+        return None
+    gain = np.asarray(fit.gain, dtype=np.float64)
+    cov_beta = gain @ cov @ gain.T
+    return np.asarray(fit.estimate, dtype=np.float64), 0.5 * (cov_beta + cov_beta.T), gls[2]
+
+
 def _n_extra(rate: object, leg: object) -> int:
     return int(rate is not None) + int(leg is not None)
 
@@ -373,6 +407,7 @@ def fit_temperature_model(
     temperature_rate_degc_ps: ArrayLike | None = None,
     leg: ArrayLike | None = None,
     compute_cv: bool = True,
+    weights: ArrayLike | None = None,
 ) -> TemperatureModelFit:
     """Fit Eq. (1) to per-temperature estimates by GLS and choose its order, Eqs. (2)–(9).
 
@@ -402,6 +437,10 @@ def fit_temperature_model(
     compute_cv : bool
         Compute CV(m) of Eq. (9) for every order also when AICc chooses (for comparison);
         False leaves it NaN then (it costs K fits per order: most of a fit's time).
+    weights : array_like, shape (K, K) or (K,), or None
+        The estimator's V of Eq. (2b) (full or variances): β̂ by weighted least squares with V,
+        its covariance the sandwich W·C·Wᵀ under `covariance`, χ² by Eq. (3b). None: V = C,
+        the GLS of Eq. (2). [parameter unit²]
 
     Returns
     -------
@@ -454,12 +493,14 @@ def fit_temperature_model(
     aicc: dict[int, float] = {}
     cv: dict[int, float] = {}
     noise: tuple[Whitener, NDArray[np.float64]] | None = None  # C's whitening, made once
+    v_chol = None if weights is None else _cholesky(weights, k, "weights")
+    v_cov = None if v_chol is None else v_chol @ v_chol.T
     for m in orders:
         a = _design(temp, rate, legs, m, sc)
         if noise is None and np.isfinite(a).all():
             whitener = make_whitener(k, covariance=cov)[0]
             noise = (whitener, whitener.whiten(p))
-        fit = _gls(a, p, cov, noise)
+        fit = _gls(a, p, cov, noise) if v_cov is None else _sandwich(a, p, cov, v_cov, noise)
         if fit is None:
             if order is not None or m == 0:
                 raise _order_error(m, temp, n_extra,

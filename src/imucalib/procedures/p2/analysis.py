@@ -8,21 +8,30 @@ into
    in σ of the least-squares estimate is reported; above ``AGREEMENT_LIMIT`` the unit
    fails), and the naive closed form that ignores the lever arm, whose difference shows the
    error a lever-arm-blind analysis would make;
-2. per parameter, a temperature model (:func:`~imucalib.estimation.fit_temperature_model`:
+2. the covariance Θ of every calibration point's estimates with every other's (docs/p2.md,
+   Eq. (P2.13)): each point's least-squares gain carries the covariance of the window means
+   into them, under the unit's coloured noise (:attr:`~imucalib.procedures.p2.observations.
+   UnitObservations.noise`: white, flicker, random walk; Eq. (TD.2) of docs/test-design.md
+   between every pair of windows of the sweep, :mod:`~imucalib.procedures.p2.covariance`),
+   each point's block scaled by the Birge ratio of its fit judged under that covariance
+   (Eq. (P2.14)); without a noise model, the windows as independent;
+3. per parameter, a temperature model (:func:`~imucalib.estimation.fit_temperature_model`:
    polynomial in T − T0 of the order AICc or cross-validation picks, at most
    :attr:`P2Options.max_order`; a hysteresis term when both legs were run; a dT/dt term on
-   request) fitted to the calibration points with their σ (Birge-scaled where a point's fit is
-   a misfit), and checked at the held-out points;
-3. the CalibrationResult: every parameter at T0 (the models' c_0) with the joint covariance of
-   those c_0 across parameters (each model's GLS weights applied to the per-point covariance,
-   docs/p2.md Eq. (P2.12)), the per-point fit quality, and the temperature models;
-4. the unit's result (:class:`~imucalib.procedures.p2.result.P2UnitResult`, with its decision
+   request): the weighted least squares of the calibration points with their own σ
+   (Birge-scaled where a point's fit is a misfit), its covariance the sandwich under Θ and its
+   χ² the GLS χ² under Θ (Eqs. (2b)–(3b) there), which choose the order and flag a misfit
+   (Birge scaling); checked at the held-out points;
+4. the CalibrationResult: every parameter at T0 (the models' c_0) with the joint covariance of
+   those c_0 across parameters (each model's weights applied to Θ, docs/p2.md Eq. (P2.12)),
+   the per-point fit quality, and the temperature models;
+5. the unit's result (:class:`~imucalib.procedures.p2.result.P2UnitResult`, with its decision
    under :data:`~imucalib.procedures.p2.result.DECISION_RULE`: docs/p2.md, "The decision").
 
 The unit's result is a :class:`~imucalib.models.procedure_result.ProcedureResult`
 (docs/procedures.md, "The result contract"): its parameters are the calibration's at T0 with
 the σ of Eq. (P2.12) and, beside them, the same σ before any Birge scaling (its
-``std_noise``: Eq. (P2.12) with s = 1 and each point's noise-only C_k).
+``std_noise``: Eq. (P2.12) with s = 1 and the noise-only Θ).
 
 Contents
 --------
@@ -55,7 +64,15 @@ from imucalib.estimation.temperature_model import (
     gls_weights,
     predict_temperature_model,
 )
+from imucalib.models.fit_quality import FitQuality, assess_fit
 from imucalib.models.result import CalibrationResult, Provenance, triad_parameter_unit
+from imucalib.procedures.p2.covariance import (
+    N_CHANNELS,
+    independent_covariance,
+    means_operator,
+    propagate,
+    window_covariance,
+)
 from imucalib.procedures.p2.observations import (
     P2Processing,
     P2Window,
@@ -68,6 +85,7 @@ from imucalib.procedures.p2.reduction import (
     ORIENTATIONS,
     PARAM_NAMES,
     LeverArmMode,
+    PointEstimate,
     PointWindows,
     closed_form,
     least_squares,
@@ -273,18 +291,22 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
     temps = np.array([p.temperature_degc for p in cal])
     rates = np.array([p.temperature_rate_degc_ps for p in cal])
     legs = np.array([_leg_value(p.leg) for p in cal])
-    covs = [p.least_squares.covariance_scaled() for p in cal]
-    covs_noise = [p.least_squares.covariance for p in cal]
     n_par = len(PARAM_NAMES)
+    # the covariance of every point estimate with every other, across the sweep (Eq. (P2.13)),
+    # point-major (point k's parameter i at k·n_par + i), noise only and with the points' Birge
+    # ratios
+    theta_noise, point_scale, coloured = _point_covariance(obs, cal, by_point)
+    theta_cov = theta_noise * np.outer(point_scale, point_scale)
     models: dict[str, TemperatureModelFit] = {}
     weights: list[_F64] = []
     scales: list[float] = []
     for i, name in enumerate(PARAM_NAMES):
         values = np.array([p.least_squares.values[i] for p in cal])
-        var = np.array([c[i, i] for c in covs])
+        var = np.array([p.least_squares.covariance_scaled()[i, i] for p in cal])
+        idx = np.arange(len(cal)) * n_par + i
         fit = fit_temperature_model(
-            temps, values, var, name=name, order=opt.order, max_order=opt.max_order,
-            criterion=opt.criterion,
+            temps, values, theta_cov[np.ix_(idx, idx)], weights=var, name=name,
+            order=opt.order, max_order=opt.max_order, criterion=opt.criterion,
             reference_temperature_degc=opt.reference_temperature_degc,
             temperature_rate_degc_ps=rates if opt.rate_term else None,
             leg=legs if use_leg else None, compute_cv=opt.criterion == "cv")
@@ -292,16 +314,14 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         weights.append(gls_weights(fit, temps, var, rates if opt.rate_term else None,
                                    legs if use_leg else None)[0])
         scales.append(fit.quality.birge_ratio if fit.quality.misfit else 1.0)
-    # joint covariance of the c_0 (Eq. (P2.12)): Cov(c0_i, c0_j) = Σ_k W_ik W_jk C_k[i, j]
-    w_mat = np.array(weights)                                   # (n_par, K)
-    cov0 = np.zeros((n_par, n_par))
-    for k, c in enumerate(covs):
-        cov0 += np.outer(w_mat[:, k], w_mat[:, k]) * c[:n_par, :n_par]
+    # joint covariance of the c_0 (Eq. (P2.12)): Cov(c0_i, c0_j) = Σ_kl W_ik W_jl Θ_kl[i, j]
+    w_full = np.zeros((n_par, n_par * len(cal)))               # c_0 = w_full·θ
+    for i, w_i in enumerate(weights):
+        w_full[i, np.arange(len(cal)) * n_par + i] = w_i
     s = np.array(scales)
-    cov0 = cov0 * np.outer(s, s)
-    # the same σ before any Birge scaling: s = 1 and each point's noise-only C_k, the same W
-    var0_noise = sum((w_mat[:, k] ** 2 * np.diag(c)[:n_par] for k, c in enumerate(covs_noise)),
-                     np.zeros(n_par))
+    cov0 = (w_full @ theta_cov @ w_full.T) * np.outer(s, s)
+    # the same σ before any Birge scaling: s = 1 and the noise-only Θ, the same W
+    var0_noise = np.einsum("ij,jk,ik->i", w_full, theta_noise, w_full)
     values0 = np.array([models[n].model.coefficients[0] for n in PARAM_NAMES])
     # held-out checks and the compensated error
     held = [p for p in points if p.held_out]
@@ -340,10 +360,13 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
         f"{opt.max_order}" + ("; heating/cooling hysteresis term" if use_leg else ""),
         "static gyro means are not used (their horizontal Earth-rate projection depends on the "
         "unit's heading on the fixture); gyro parameters come from the ±ω turns",
-        "the σ treat the windows as independent (each its own Allan deviation): a bias "
-        "wandering over the sweep's hours (flicker, random walk) moves the windows and points "
-        "together, and the biases' σ at T0 then understate their error (6–17× on a "
-        "coloured-noise consumer twin; docs/p2.md, \"Temperature models\")",
+        ("the σ carry the covariance of the window means across the sweep (the unit's white, "
+         "flicker and random-walk noise, Eq. (TD.2)) through the point fits into the "
+         "temperature models (Eqs. (P2.12)–(P2.13), docs/p2.md)") if coloured else
+        ("no noise model of the unit (no window with an Allan fit): the σ treat the windows "
+         "as independent, each with its standard error; a bias wandering over the sweep "
+         "(flicker, random walk) is not in them"),
+        *(n for n in obs.notes if n.startswith("noise model")),
     ]
     misfits = [n for n, m in models.items() if m.quality.misfit]
     if misfits:
@@ -388,6 +411,92 @@ def analyze_unit(obs: UnitObservations, options: P2Options | None = None, *,
                         reasons=tuple(reasons), notes=tuple(notes),
                         std_noise={n: float(np.sqrt(v)) for n, v in zip(PARAM_NAMES, var0_noise,
                                                                          strict=True)})
+
+
+def _point_scales(qualities: Sequence[FitQuality]) -> _F64:
+    """Each parameter's Birge ratio in its point's fit (1 for a good fit), shape (36,)."""
+    out = np.ones(len(PARAM_NAMES))
+    for q in qualities:
+        if q.misfit:
+            out[[i for i, n in enumerate(PARAM_NAMES) if n.startswith(q.group + "_")]] = \
+                q.birge_ratio
+    return out
+
+
+#: Each triad's parameters in a point's estimate (the lever arm with the accelerometer).
+_TRIAD_PARAMS = {"gyro": np.arange(0, 21), "accel": np.arange(21, 39)}
+
+
+def _coloured_quality(est: PointEstimate, rows_cov: _F64) -> tuple[FitQuality, ...]:
+    """χ²/ν of each triad's point fit under the covariance of its means (Eq. (P2.14)).
+
+    χ² = rᵀ·M·r, M = C⁻¹ − C⁻¹H(HᵀC⁻¹H)⁻¹HᵀC⁻¹ (the GLS χ², whatever weights the fit used:
+    Eq. (3b) of :mod:`~imucalib.estimation.temperature_model`) with r the fit's residuals, H
+    its design at the solution and C the 90 combined means' covariance; ν = rows − parameters.
+    """
+    assert est.jacobian is not None and est.residuals is not None
+    out = []
+    for group, params in _TRIAD_PARAMS.items():
+        h_all = est.jacobian[:, params]
+        rows = np.flatnonzero(np.any(h_all != 0.0, axis=1))
+        cols = np.flatnonzero(np.any(h_all[rows] != 0.0, axis=0))
+        h = h_all[np.ix_(rows, cols)]
+        chol = np.linalg.cholesky(rows_cov[np.ix_(rows, rows)])
+        hw = np.linalg.solve(chol, h)
+        rw = np.linalg.solve(chol, est.residuals[rows])
+        q, _ = np.linalg.qr(hw)
+        chi2 = float(rw @ rw - np.sum((q.T @ rw) ** 2))
+        out.append(assess_fit(group, chi2, rows.size - cols.size))
+    return tuple(out)
+
+
+def _point_covariance(obs: UnitObservations, cal: Sequence[PointResult],
+                      by_point: Mapping[int, Sequence[P2Window]]
+                      ) -> tuple[_F64, _F64, bool]:
+    """Θ: the noise-only covariance of the calibration points' estimates (Eq. (P2.13)).
+
+    θ_k = Q_k·y_k with Q_k the gain of point k's least squares on its 90 combined means
+    (:attr:`~imucalib.procedures.p2.reduction.PointEstimate.gain`) times the averaging of its
+    windows into them (:func:`~imucalib.procedures.p2.covariance.means_operator`), so
+    Θ = Σ_ch Q_ch·C_ch·Q_chᵀ (Eq. (TD.P1)) with C the covariance of every window mean: Eq.
+    (TD.2) of the unit's noise model (:attr:`UnitObservations.noise`) from the windows' start
+    times and lengths when it is known (then True), else diag(σ_j²) of the windows' standard
+    errors (each point's own noise-only covariance, no correlation between points). Shape
+    (36K, 36K), point-major. Also each parameter's Birge ratio in its point's fit (36K,):
+    under the coloured covariance, from the point fit's χ² under it (:func:`_coloured_quality`,
+    a bias wandering within a point is in that covariance, not a misfit); else the fit's own.
+    """
+    n_par = len(PARAM_NAMES)
+    wins = [w for p in cal for w in by_point[p.point]]
+    n_win = len(wins)
+    starts = [w.start_s for w in wins]
+    coloured = obs.noise is not None and all(t is not None for t in starts)
+    if coloured:
+        assert obs.noise is not None
+        cov = window_covariance(obs.noise, np.array(starts, dtype=np.float64),
+                                [w.duration_s for w in wins])
+    else:
+        cov = independent_covariance([np.concatenate([w.gyro_se_rps, w.accel_se_mps2])
+                                      for w in wins])
+    gain = np.zeros((N_CHANNELS, n_par * len(cal), n_win))
+    scales = []
+    col = 0
+    for k, p in enumerate(cal):
+        mine = by_point[p.point]
+        est = p.least_squares
+        assert est.gain is not None  # the least squares gives it
+        op, channel = means_operator([w.orientation for w in mine], [w.kind for w in mine],
+                                     [w.table_rate_rps for w in mine])
+        block = slice(col, col + len(mine))
+        rows_cov = np.zeros((90, 90))
+        for ch in range(N_CHANNELS):
+            rows = channel == ch
+            gain[ch, k * n_par:(k + 1) * n_par, block] = est.gain[:n_par, rows] @ op[rows]
+            rows_cov[np.ix_(rows, rows)] = op[rows] @ cov[ch, block, block] @ op[rows].T
+        scales.append(_point_scales(_coloured_quality(est, rows_cov) if coloured
+                                    else est.fit_quality))
+        col += len(mine)
+    return propagate(gain, cov), np.concatenate(scales), coloured
 
 
 def _mean_lever_arm(points: Sequence[PointResult]) -> list[float]:

@@ -45,7 +45,12 @@ from imucalib.errors import CalibrationError, InvalidInputError, MissingSegmentE
 from imucalib.io.reader import Recording, StepRecord, StreamData, StreamInfo
 from imucalib.io.streams import DEVICE_IMU, DEVICE_TABLE, axis_columns
 from imucalib.models.noise import NoiseModel, compute_theoretical_adev
-from imucalib.procedures.common.noise import FLICKER_FACTOR
+from imucalib.procedures.common.noise import (
+    FLICKER_FACTOR,
+    NOISE_RECORD_MIN_S,
+    longest_cluster_s,
+    with_declared_floor,
+)
 from imucalib.procedures.common.reference import site_vectors
 from imucalib.procedures.common.window_checks import WindowLimits, checked_samples
 from imucalib.procedures.common.windows import counter_times, table_angle_at
@@ -57,8 +62,8 @@ from imucalib.processing.statistics import (
     window_noise_fit,
 )
 
-__all__ = ["P2Processing", "P2Window", "UnitObservations", "extract_unit_observations",
-           "p2_units", "where"]
+__all__ = ["P2Processing", "P2Window", "UnitObservations", "declared_noise",
+           "extract_unit_observations", "p2_units", "unit_noise", "where"]
 
 _F64 = NDArray[np.float64]
 _COLUMNS = (*GYRO_COLUMNS, *ACCEL_COLUMNS)
@@ -120,6 +125,11 @@ class P2Window:
         Samples averaged; samples lost to dropouts in the window.
     orientation : str
         The body axis up (``"+x"`` …) from the static means of the window's pose and point.
+    allan_fit : ndarray, shape (3, 6), or None
+        The window's own fitted N̂, Ĉ_B, K̂ per channel (the first windows of each point).
+    start_s : float or None
+        Start of the averaged span on the recording's clock (None when unknown: then the
+        analysis treats the windows as independent). [s]
     """
 
     step_index: int
@@ -142,6 +152,7 @@ class P2Window:
     n_lost: int
     orientation: str = ""
     allan_fit: _F64 | None = None
+    start_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -149,7 +160,11 @@ class UnitObservations:
     """Every usable P2 window of one unit, and what the analysis needs of the site.
 
     ``failures`` holds, per temperature point, why a window of it could not be used (the point
-    is then left out for this unit; other points and units go on).
+    is then left out for this unit; other points and units go on). ``noise`` is the unit's
+    noise model over the whole sweep (:func:`unit_noise`: ``{"gyro", "accel"}``), whose
+    covariance of the window means (docs/test-design.md, Eq. (TD.2)) the analysis carries
+    into the temperature models; None: the windows are treated as independent, each with its
+    standard error.
     """
 
     unit: str
@@ -160,6 +175,7 @@ class UnitObservations:
     sample_rate_hz: float
     failures: dict[int, str] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    noise: dict[str, NoiseModel] | None = None
 
 
 def p2_units(rec: Recording) -> list[str]:
@@ -315,7 +331,7 @@ class _Reducer:
             temperature_degc=temp_mean_used,
             temperature_rate_degc_ps=_slope(t_used, temp_used, temp_mean_used),
             duration_s=float(t_used[-1] - t_used[0]), n_samples=int(t_used.size), n_lost=lost,
-            allan_fit=fit)
+            allan_fit=fit, start_s=float(t_used[0]))
 
     def count(self, point: int) -> bool:
         """Whether this window of `point` is one whose noise is fitted (and count it)."""
@@ -394,13 +410,83 @@ def extract_unit_observations(rec: Recording, unit: str, *,
                 failures[point] = str(exc)
         if progress is not None:
             progress(i / len(usable))
+    noise, noise_note = unit_noise(windows, red.sample_rate_hz, declared_noise(rec))
+    notes = ["standard errors of the window means from the noise model pooled over each "
+             "temperature point's windows (median Allan-fit coefficients, docs/p2.md)"]
+    if noise_note:
+        notes.append(noise_note)
     return UnitObservations(unit=unit, windows=tuple(pooled_standard_errors(windows)),
                             gravity_mps2=g, earth_rate_up_rps=float(earth_t[2]),
                             latitude_deg=lat, sample_rate_hz=red.sample_rate_hz,
-                            failures=failures,
-                            notes=("standard errors of the window means from the noise model "
-                                   "pooled over each temperature point's windows (median "
-                                   "Allan-fit coefficients, docs/p2.md)",))
+                            failures=failures, notes=tuple(notes), noise=noise)
+
+
+def _noise_of(fit: _F64) -> dict[str, NoiseModel]:
+    """Return the noise models of Allan-fit coefficients N̂, Ĉ_B, K̂ (3, 6), clipped at zero."""
+    return {triad: NoiseModel(white_density=np.maximum(fit[0, cols], 0.0),
+                              bias_instability=np.sqrt(np.maximum(fit[1, cols], 0.0)
+                                                       / FLICKER_FACTOR),
+                              random_walk=np.maximum(fit[2, cols], 0.0))
+            for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6)))}
+
+
+def declared_noise(rec: Recording) -> tuple[dict[str, NoiseModel], str] | None:
+    """Return the noise of the unit grade the recording's stored plan states, and the grade.
+
+    :func:`~imucalib.procedures.common.grade.grade_noise` (white terms only for a twin IMU
+    with ``noise = "white"``); None when the recording holds no plan or it states no grade.
+    """
+    from imucalib.errors import ConfigurationError
+    from imucalib.plan import parse_plan
+    from imucalib.procedures.common.grade import grade_noise, plan_grade
+
+    text = rec.metadata.get("plan_toml")
+    if not text:
+        return None
+    try:
+        plan = parse_plan(str(text))
+        return grade_noise(plan), plan_grade(plan)
+    except ConfigurationError:
+        return None
+
+
+def unit_noise(windows: list[P2Window], sample_rate_hz: float,
+               declared: tuple[dict[str, NoiseModel], str] | None
+               ) -> tuple[dict[str, NoiseModel] | None, str | None]:
+    """Return the unit's noise model over the sweep, and a note when a Type B input entered.
+
+    The white density N is the median of every window's Allan-fit coefficient (as
+    :func:`pooled_standard_errors` pools a point's). The flicker B and random walk K follow
+    the rule of docs/p1.md, "Noise model of the window means": windows shorter than a noise
+    record (:data:`~imucalib.procedures.common.noise.NOISE_RECORD_MIN_S`, P2's are seconds
+    long) determine neither, whose corners lie at tens of seconds to hours, so every axis takes
+    the declared grade's B and K — a Type B input (JCGM 100:2008 §4.3), none for a grade
+    declared white (a white-noise twin); longer ones keep the fit where it reaches
+    :data:`~imucalib.procedures.common.noise.FLICKER_CORNERS_MIN` flicker corners of the
+    declared noise (:func:`~imucalib.procedures.common.noise.with_declared_floor`). Without a
+    declared grade the fitted B and K stay, with a note. None when no window has an Allan fit.
+    """
+    fits = [np.nan_to_num(w.allan_fit, nan=0.0) for w in windows if w.allan_fit is not None]
+    if not fits or sample_rate_hz <= 0.0:
+        return None, None
+    fitted = _noise_of(np.median(np.array(fits), axis=0))
+    longest = max(w.duration_s for w in windows if w.allan_fit is not None)
+    if declared is None:
+        return fitted, ("noise model: no declared grade (the recording holds no plan stating "
+                        f"one): flicker and random walk fitted to windows of {longest:.3g} s, "
+                        "which do not determine them")
+    if longest >= NOISE_RECORD_MIN_S:
+        return with_declared_floor(fitted, declared[0],
+                                   longest_cluster_s(longest, sample_rate_hz),
+                                   source=f"grade {declared[1]}")
+    dec = declared[0]
+    out = {t: NoiseModel(white_density=m.white_density,
+                         bias_instability=dec[t].bias_instability,
+                         random_walk=dec[t].random_walk) for t, m in fitted.items()}
+    return out, (f"noise model: the windows ({longest:.3g} s at most) are shorter than a noise "
+                 f"record ({NOISE_RECORD_MIN_S:g} s) and determine no flicker or random walk: "
+                 f"the grade {declared[1]} bias instability and random walk (Type B) with the "
+                 "fitted white noise")
 
 
 def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
@@ -424,12 +510,7 @@ def pooled_standard_errors(windows: list[P2Window]) -> list[P2Window]:
             fits = every
         if not fits:
             continue
-        fit = np.median(np.array(fits), axis=0)
-        noise = {triad: NoiseModel(white_density=np.maximum(fit[0, cols], 0.0),
-                                   bias_instability=np.sqrt(np.maximum(fit[1, cols], 0.0)
-                                                            / FLICKER_FACTOR),
-                                   random_walk=np.maximum(fit[2, cols], 0.0))
-                 for triad, cols in (("gyro", slice(0, 3)), ("accel", slice(3, 6)))}
+        noise = _noise_of(np.median(np.array(fits), axis=0))
         gyro, accel = _window_mean_ses(noise, [w.duration_s for w in mine])
         for w, g_se, a_se in zip(mine, gyro, accel, strict=True):
             out[id(w)] = _replaced(w, gyro_se_rps=g_se, accel_se_mps2=a_se)

@@ -29,10 +29,13 @@ C is
     C_T[j, l] = σ_T²·(δ_pq − 1/n_p)·Σ_k s_k²·x_k(j)·x_k(l)   (j in pose p, l in pose q of
                                                                one point)         (TD.P3)
 
-(TD.P1) with C = diag(σ_j²) is what ``calibrate`` reports (``std_noise``; the analysis treats
-the window means as independent, each with the Allan deviation at its length); with the
-coloured C of (TD.2) (flicker and random walk correlate windows minutes and hours apart) it is
-the spread the estimates will have: the predicted σ. (TD.P3) is the chamber's stability: the
+(TD.P1) with C = diag(σ_j²) treats the window means as independent, each with the Allan
+deviation at its length (what ``calibrate`` reported before issue 30, and still reports for a
+recording without a noise model); with the coloured C of (TD.2) (flicker and random walk
+correlate windows minutes and hours apart) it is the spread the estimates will have: the
+predicted σ, and — with σ_T = 0 and the unit's noise — the σ ``calibrate`` reports, which
+carries the same C through the same estimator (docs/p2.md, Eqs. (P2.12)–(P2.13); both build it
+with :mod:`~imucalib.procedures.p2.covariance`). (TD.P3) is the chamber's stability: the
 unit's temperature differs from pose to pose within the soak's band (σ_T = band/√12, uniform,
 ``imu_band_degc`` of the soaks; its mean over a point's poses is measured and drops out), and
 each output moves with it by the typical temperature slopes s_k of the grade's parameters
@@ -70,7 +73,6 @@ from numpy.typing import NDArray
 from imucalib import units as u
 from imucalib.errors import ConfigurationError
 from imucalib.estimation.designs import build_design
-from imucalib.estimation.noise_covariance import compute_window_mean_covariance
 from imucalib.estimation.observability import compute_observability
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_unit
@@ -85,6 +87,11 @@ from imucalib.procedures.common.grade import grade_noise, plan_grade
 from imucalib.procedures.common.noise import window_mean_se
 from imucalib.procedures.common.prediction import PredictedParameter, Prediction, PredictionGroup
 from imucalib.procedures.common.reference import site_vectors
+from imucalib.procedures.p2.covariance import (
+    independent_covariance,
+    propagate,
+    window_covariance,
+)
 from imucalib.procedures.p2.reduction import ORIENTATIONS, PARAM_NAMES, up_vector
 from imucalib.procedures.p2.roles import P2_RATE, P2_SOAK, P2_STATIC
 
@@ -370,8 +377,8 @@ class P2PredictionDetail:
     names : tuple of str
         The identified coefficients, in the order of `covariance`.
     covariance, covariance_analysis : ndarray
-        Cov(β) of (TD.P1) with the coloured C of (TD.P2) and with C = diag(σ_j²) (what
-        calibrate reports). [SI²]
+        Cov(β) of (TD.P1) with the coloured C of (TD.P2) and with C = diag(σ_j²) (the
+        independent windows). [SI²]
     range_std : dict of str to float
         Per parameter, the largest σ of its model's value over the calibration range
         (Eq. (5) of :mod:`~imucalib.estimation.temperature_model`, the coloured covariance). [SI]
@@ -414,8 +421,9 @@ def predict_p2(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None,
     temperature_std_degc : float, optional
         σ_T of (TD.P3); the soaks' ``imu_band_degc``/√12 when omitted, 0 to leave it out. [°C]
     covariance : {"coloured", "analysis"}
-        The σ of (TD.P1) with the coloured C (the spread, the default) or with the analysis's
-        diag(σ_j²) and no σ_T (what ``calibrate`` reports, ``std_noise``).
+        The σ of (TD.P1) with the coloured C (the spread, the default) or with diag(σ_j²) and
+        no σ_T (the independent windows: what ``calibrate`` reports for a recording without a
+        noise model, and reported for every one before issue 30).
 
     Returns
     -------
@@ -533,28 +541,21 @@ def predict_p2_detail(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = No
     starts = np.array([w.start_s for p in cal for w in p.windows])
     durs = np.array([w.duration_s for p in cal for w in p.windows])
     slopes = _thermal_slopes(grade) if sigma_t > 0 else {}
-    cov = np.zeros((n_par * q_eff, n_par * q_eff))
-    cov_an = np.zeros_like(cov)
-    se_all = [window_mean_se(models, d) for d in durs]
-    for t_i, triad in enumerate(("gyro", "accel")):
-        c_noise = compute_window_mean_covariance(models[triad], starts, durs,
-                                                 reference_time_s=0.0)
-        for axis in range(3):
-            gch = gain[3 * t_i + axis]
-            se = np.array([pair[t_i][axis] for pair in se_all])
-            cov_an += (gch * se**2) @ gch.T
-            if covariance == "analysis":
-                continue
-            c = np.array(c_noise[axis], dtype=np.float64)
-            if sigma_t > 0:
+    se_all = np.array([np.concatenate(window_mean_se(models, d)) for d in durs])   # (n, 6)
+    cov_an = propagate(gain, independent_covariance(se_all))
+    if covariance == "analysis":
+        cov = cov_an
+    else:
+        c_all = window_covariance(models, starts, durs, reference_time_s=0.0)
+        if sigma_t > 0:
+            for t_i, triad in enumerate(("gyro", "accel")):
                 for k, p in enumerate(cal):
                     xs = _input_vectors(p, g, omega_up)[t_i]
                     block = slice(offsets[k], offsets[k + 1])
-                    c[block, block] += _thermal_covariance(p, xs, axis, slopes[triad], sigma_t)
-            cov += gch @ c @ gch.T
-    if covariance == "analysis":
-        cov = cov_an
-    cov = 0.5 * (cov + cov.T)
+                    for axis in range(3):
+                        c_all[3 * t_i + axis, block, block] += _thermal_covariance(
+                            p, xs, axis, slopes[triad], sigma_t)
+        cov = propagate(gain, c_all)
     # names of the identified coefficients, in cov's order (param-major)
     ident = []
     for n in PARAM_NAMES:
@@ -589,11 +590,12 @@ def predict_p2_detail(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = No
     notes.append(
         ("σ of the analysis's estimator under the coloured noise, G·C·Gᵀ (Eqs. (TD.P1), "
          f"(TD.P2)); chamber stability σ_T = {sigma_t:.3g} °C between poses (TD.P3); ratio to "
-         "what calibrate reports (independent windows, σ_j the Allan deviation at each "
-         f"window's length): {float(ratio.min()):.3g} … {float(ratio.max()):.3g}")
+         "the independent windows' σ (σ_j the Allan deviation at each window's length): "
+         f"{float(ratio.min()):.3g} … {float(ratio.max()):.3g}")
         if covariance == "coloured" else
-        "σ as calibrate reports them (std_noise): independent windows, σ_j the Allan deviation "
-        "at each window's length (Eq. (TD.P1) with C = diag(σ_j²)); no σ_T")
+        "σ of independent windows, σ_j the Allan deviation at each window's length (Eq. "
+        "(TD.P1) with C = diag(σ_j²); calibrate's for a recording without a noise model); no "
+        "σ_T")
     notes.append("a misfit's Birge scaling (an order too low for the unit's curve) and the "
                  "lever arm's second-order terms are not predicted")
     params = tuple(PredictedParameter(n, std.get(n), un) for n, un, _ in names) + tuple(
@@ -601,5 +603,4 @@ def predict_p2_detail(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = No
         for n in PARAM_NAMES)
     pred = Prediction(procedure="p2", station_time_s=station, parameters=params,
                       groups=groups_out, notes=tuple(notes))
-    return P2PredictionDetail(pred, tuple(ident), cov, 0.5 * (cov_an + cov_an.T), range_std,
-                              m_eff, len(cal))
+    return P2PredictionDetail(pred, tuple(ident), cov, cov_an, range_std, m_eff, len(cal))

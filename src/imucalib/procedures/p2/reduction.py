@@ -190,6 +190,19 @@ class PointEstimate:
         From the window means' standard errors (noise only).
     fit_quality : tuple of FitQuality
         Least squares only: χ²/ν of the gyro and the accelerometer fit.
+    gain : ndarray, shape (39, 90), or None
+        Least squares only: the estimator's gain at the solution, ∂values/∂means in the order
+        of :meth:`PointWindows.means_vector` (the gyro's and, linearised at the last
+        Gauss–Newton step, the accelerometer's weighted least squares, Eq. (P2.10)); zero rows
+        for the lever arm when it is not estimated with the parameters. It carries any
+        covariance of the means, not only their standard errors, into the parameters
+        (docs/p2.md, Eq. (P2.13)).
+    jacobian : ndarray, shape (90, 39), or None
+        Least squares only: the model's ∂means/∂values at the solution (the design H of each
+        triad, rows in the order of :meth:`PointWindows.means_vector`, zero for means not
+        fitted), for the fit's χ² under another covariance of the means.
+    residuals : ndarray, shape (90,), or None
+        Least squares only: means − model at the solution (zero for means not fitted).
     """
 
     method: str
@@ -198,6 +211,9 @@ class PointEstimate:
     values: _F64
     covariance: _F64
     fit_quality: tuple[FitQuality, ...] = ()
+    gain: _F64 | None = None
+    jacobian: _F64 | None = None
+    residuals: _F64 | None = None
 
     @property
     def std(self) -> _F64:
@@ -353,6 +369,7 @@ class _Step:
     estimate: _F64
     covariance_noise: _F64
     fit_quality: FitQuality
+    gain: _F64
 
 
 def _solve(h: _F64, z: _F64, se: _F64, names: Sequence[str], what: str, group: str) -> _Step:
@@ -364,9 +381,11 @@ def _solve(h: _F64, z: _F64, se: _F64, names: Sequence[str], what: str, group: s
     """
     a0, y, names_t, whitener, _ = _checked(h, z, names, None, None, se)
     core = _solve_known(a0, y, whitener, names_t, context=f"{what} design",
-                        advice="the six orientations and both turning directions are needed")
+                        advice="the six orientations and both turning directions are needed",
+                        gain=True)
+    assert core.gain is not None  # asked for
     return _Step(estimate=core.estimate, covariance_noise=core.covariance_noise,
-                 fit_quality=assess_fit(group, core.chi2, core.dof))
+                 fit_quality=assess_fit(group, core.chi2, core.dof), gain=core.gain)
 
 
 def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate",
@@ -415,6 +434,8 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
     names_a = PARAM_NAMES[21:] + (LEVER_ARM_NAMES if estimate_r else ())
     theta = np.zeros(n_p)
     cov_a = np.zeros((n_p, n_p))
+    gain_a = np.zeros((n_p, se.size))
+    h = np.zeros((se.size, n_p))
     proj = np.eye(3)[None, :, :] - u_all[:, :, None] * u_all[:, None, :]   # P_o per row
 
     def unpack(th: _F64) -> tuple[_F64, _F64, _F64, _F64]:
@@ -433,13 +454,14 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
         else:
             h = base
         step = _solve(h, (y - pred).ravel(), se, names_a, "accelerometer", "accel")
-        delta, cov_a = step.estimate, step.covariance_noise
+        delta, cov_a, gain_a = step.estimate, step.covariance_noise, step.gain
         theta = theta + delta
         if np.max(np.abs(delta[3:])) < 1e-13:
             break
     b, m, k2, r = unpack(theta)
     x = g * u_all - w2[:, None] * (proj @ r)
-    resid = ((y - (b + x @ (np.eye(3) + m).T + k2 * x**2)).ravel()) / se
+    resid_a = (y - (b + x @ (np.eye(3) + m).T + k2 * x**2)).ravel()
+    resid = resid_a / se
     q_a = assess_fit("accel", float(resid @ resid), se.size - n_p)
     cov_r = np.zeros((3, 3))
     if lever_arm == "cancel":
@@ -464,9 +486,21 @@ def least_squares(windows: PointWindows, *, lever_arm: LeverArmMode = "estimate"
     cov[21:21 + n_p, 21:21 + n_p] = cov_a
     if lever_arm == "cancel":
         cov[36:, 36:] = cov_r
+    # the gain on the means, in means_vector's order: static accel, ±ω gyro, ±ω accel
+    gain = np.zeros((n, 90))
+    jac = np.zeros((90, n))
+    res = np.zeros(90)
+    gain[:21, 18:54] = fit_g.gain
+    jac[18:54, :21] = design.H
+    res[18:54] = (y_g - x_g).ravel() - design.H @ theta_g
+    accel_rows = np.r_[0:18, 54:90] if use_turning else np.r_[0:18]
+    gain[21:21 + n_p, accel_rows] = gain_a
+    jac[np.ix_(accel_rows, np.arange(21, 21 + n_p))] = h
+    res[accel_rows] = resid_a
     return PointEstimate(method="least-squares", lever_arm=lever_arm,
                          names=(*PARAM_NAMES, *LEVER_ARM_NAMES), values=values,
-                         covariance=0.5 * (cov + cov.T), fit_quality=(q_g, q_a))
+                         covariance=0.5 * (cov + cov.T), fit_quality=(q_g, q_a), gain=gain,
+                         jacobian=jac, residuals=res)
 
 
 def _lever_arm_given(windows: PointWindows, b: _F64, m: _F64, k2: _F64,
