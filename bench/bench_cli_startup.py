@@ -9,9 +9,15 @@ Runs, each ``--repeat`` times (default 5) in a fresh process, output discarded:
   by a first, untimed run).
 
 Printed per command: the median wall time and the median CPU time (user + system) of the
-process, and the wall time as a multiple of each floor. Then the ten largest entries (cumulative
-µs) of ``python -X importtime -c "import imucalib.cli"``: what every command, ``--help`` first,
-pays before it runs (docs/architecture.md, "The command line").
+process, the wall time as a multiple of each floor, and the total of its imports (``python -X
+importtime``: the cumulative µs of its top-level imports, one more run). Then the largest entries
+(cumulative µs) of the import profile of ``imucalib --help`` and of ``imucalib records list``:
+what each pays before it runs (docs/architecture.md, "The command line").
+
+Wall and CPU times follow the machine's load (on a shared machine, compare runs made under the
+same load, or the medians of several runs). ``--instructions`` adds a number that does not: the
+instructions each command executes, counted by valgrind (``cachegrind``, where valgrind is
+installed; about 50 times slower, once per command, with ``PYTHONHASHSEED=0``).
 
 An installed imucalib starts from cached bytecode. Where ``PYTHONDONTWRITEBYTECODE`` is set (a
 container, a CI job), every start would compile imucalib's modules again; so by default the
@@ -19,10 +25,12 @@ child processes keep bytecode in a temporary ``PYTHONPYCACHEPREFIX`` (the workin
 ``__pycache__``), warmed by one untimed run of each command. ``--as-is`` runs them in this
 environment unchanged.
 
-Speed is measured here, never asserted by a test (tests/cli/test_startup_imports.py checks,
-without timing, that the heavy libraries stay out).
+Speed is measured here, never asserted by a test (tests/cli/test_startup_imports.py and
+tests/cli/test_commands_on_demand.py check, without timing, that the heavy libraries and the
+other commands' modules stay out).
 
 Run:  .venv/bin/python bench/bench_cli_startup.py [--repeat 5] [--as-is] [--top 10]
+      [--instructions]
 """
 
 from __future__ import annotations
@@ -64,18 +72,45 @@ def _median(argv: list[str], env: dict[str, str], repeat: int) -> tuple[float, f
     return (statistics.median(w for w, _ in runs), statistics.median(c for _, c in runs))
 
 
-def _import_profile(env: dict[str, str], top: int) -> list[tuple[int, int, str]]:
-    """The `top` largest (cumulative µs, self µs, module) of ``import imucalib.cli``."""
-    argv = [sys.executable, "-X", "importtime", "-c", "import imucalib.cli"]
-    subprocess.run(argv, env=env, capture_output=True, check=True)  # warm the cache
-    err = subprocess.run(argv, env=env, capture_output=True, text=True, check=True).stderr
+def _import_rows(argv: list[str], env: dict[str, str]) -> list[tuple[int, int, int, str]]:
+    """(cumulative µs, self µs, depth, module) of every import of one ``-X importtime`` run."""
+    done = subprocess.run([argv[0], "-X", "importtime", *argv[1:]], env=env, capture_output=True,
+                          text=True, check=False)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed ({done.returncode}):\n{done.stderr}")
     rows = []
-    for line in err.splitlines():
+    for line in done.stderr.splitlines():
         if not line.startswith("import time:") or "self [us]" in line:
             continue
         own, cumulative, name = line.removeprefix("import time:").split("|", 2)
-        rows.append((int(cumulative), int(own), name.rstrip()))
-    return sorted(rows, reverse=True)[:top]
+        depth = (len(name) - len(name.lstrip(" ")) - 1) // 2
+        rows.append((int(cumulative), int(own), depth, name.rstrip()))
+    return rows
+
+
+def _imports_us(rows: list[tuple[int, int, int, str]]) -> int:
+    """The total import time of a run: the cumulative µs of its top-level imports."""
+    return sum(cumulative for cumulative, _, depth, _ in rows if depth == 0)
+
+
+def _instructions(argv: list[str], env: dict[str, str]) -> int | None:
+    """The instructions `argv` executes (valgrind's cachegrind), or None without valgrind."""
+    valgrind = shutil.which("valgrind")
+    if valgrind is None:
+        return None
+    done = subprocess.run([valgrind, "--tool=cachegrind", "--cache-sim=no",
+                           "--cachegrind-out-file=/dev/null", *argv],
+                          env={**env, "PYTHONHASHSEED": "0"}, stdout=subprocess.DEVNULL,
+                          stderr=subprocess.PIPE, text=True, check=False)
+    refs = [line for line in done.stderr.splitlines() if "I   refs:" in line]
+    return int(refs[-1].rsplit(":", 1)[1].replace(",", "")) if refs else None
+
+
+def _python_argv(argv: list[str], cli: list[str]) -> list[str]:
+    """`argv` started by this interpreter (``-X importtime`` goes before the script)."""
+    if argv[0] == sys.executable:
+        return argv
+    return [sys.executable, "-m", "imucalib.cli", *argv[len(cli):]]
 
 
 def main() -> None:
@@ -84,6 +119,8 @@ def main() -> None:
     ap.add_argument("--as-is", action="store_true",
                     help="run the children in this environment (no bytecode cache of its own)")
     ap.add_argument("--top", type=int, default=10, help="import-profile entries shown")
+    ap.add_argument("--instructions", action="store_true",
+                    help="also count each command's instructions with valgrind (slow)")
     args = ap.parse_args()
 
     work = Path(tempfile.mkdtemp(prefix="imucalib-bench-cli-"))
@@ -112,16 +149,24 @@ def main() -> None:
         print(f"imucalib command-line start-up: median of {args.repeat} fresh processes; {mode}; "
               f"{os.cpu_count()} CPUs, load average {load:.2f}")
         print(f"  {'command':38s} {'wall [s]':>9s} {'cpu [s]':>8s} {'× pass':>7s} "
-              f"{'× numpy':>8s}")
+              f"{'× numpy':>8s} {'imports [ms]':>13s}"
+              + (f" {'instructions':>14s}" if args.instructions else ""))
         times = [(label, *_median(argv, env, args.repeat)) for label, argv in cases]
         bare, numpy = times[0][1], times[1][1]
+        profiles = {label: _import_rows(_python_argv(argv, cli), env) for label, argv in cases}
         for label, wall, cpu in times:
-            print(f"  {label:38s} {wall:9.3f} {cpu:8.3f} {wall / bare:7.1f} {wall / numpy:8.2f}")
-        print(f"\nimport profile of `python -X importtime -c \"import imucalib.cli\"` (what "
-              f"`imucalib --help` imports), top {args.top} by cumulative time:")
-        print(f"  {'cumulative µs':>13s} {'self µs':>8s}  module")
-        for cumulative, own, name in _import_profile(env, args.top):
-            print(f"  {cumulative:13d} {own:8d}  {name}")
+            line = (f"  {label:38s} {wall:9.3f} {cpu:8.3f} {wall / bare:7.1f} "
+                    f"{wall / numpy:8.2f} {_imports_us(profiles[label]) / 1e3:13.1f}")
+            if args.instructions:
+                argv = dict(cases)[label]
+                count = _instructions(argv, env)
+                line += f" {count:14,d}" if count is not None else f" {'(no valgrind)':>14s}"
+            print(line)
+        for label in ("imucalib --help", "imucalib records list --db EMPTY.db"):
+            print(f"\nimport profile of `{label}`, top {args.top} by cumulative time:")
+            print(f"  {'cumulative µs':>13s} {'self µs':>8s}  module")
+            for cumulative, own, _, name in sorted(profiles[label], reverse=True)[:args.top]:
+                print(f"  {cumulative:13d} {own:8d}  {name}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

@@ -52,11 +52,13 @@ def test_plan_new_refuses_options_of_p1_for_allan(tmp_path):
 
 
 def _commands(group, path=()):
-    """(argv, click command) of every command and group under the Typer app."""
+    """(argv, click command) of every command and group under the Typer app (the root group
+    builds a command when it is asked for: every one is asked for here)."""
     yield path, group
     if hasattr(group, "commands"):  # a group
-        for name, cmd in group.commands.items():
-            yield from _commands(cmd, (*path, name))
+        names = group.list_commands(None) if not path else list(group.commands)
+        for name in names:
+            yield from _commands(group.get_command(None, name), (*path, name))
 
 
 def _help_strings(cmd) -> list[str]:

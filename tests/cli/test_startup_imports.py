@@ -17,7 +17,8 @@ from typer.testing import CliRunner
 
 from imucalib.cli import app
 
-#: Never needed to start the command line, print its help or its version.
+#: Never needed to start the command line, print its help or its version ("sqlalchemy" covers
+#: its ORM, "pydantic" Typer's conversion of the options: ``cli/_plain_params.py``).
 HEAVY = ("scipy", "matplotlib", "pandas", "sqlalchemy", "alembic", "numba", "reportlab", "h5py",
          "hdf5plugin", "numpy", "pydantic")
 #: Needed by no command that reads a plan or describes a procedure's options (a procedure's
@@ -62,13 +63,16 @@ def test_plan_show_reads_the_plan_without_analysis_libraries(tmp_path):
     assert "steps; at least" in out
 
 
-def test_records_list_of_an_up_to_date_database_needs_no_alembic_nor_numpy(tmp_path):
+def test_records_list_of_an_up_to_date_database_needs_no_alembic_numpy_nor_pydantic(tmp_path):
+    """SQLAlchemy and its ORM are what the records API needs; Alembic only to migrate, numpy
+    only to record a result, pydantic never: its options are plain (``_plain_params``)."""
     from imucalib.records import open_records
 
     db = str(tmp_path / "lab.db")
     open_records(db).close()  # created and migrated here: opening it again migrates nothing
     loaded, out = _loaded(["records", "list", "--db", db],
-                          tuple(m for m in HEAVY if m not in ("sqlalchemy", "pydantic")))
+                          (*(m for m in HEAVY if m != "sqlalchemy"), "argon2", "cryptography",
+                           "rich.progress", "imucalib.records.backup", "imucalib.cli.users"))
     assert loaded == [], f"records list imported {loaded}"
     assert "serial" in out
 
@@ -84,3 +88,40 @@ def test_a_procedures_options_load_without_analysis_libraries(args, flag):
     assert loaded == [], f"{' '.join(args)} imported {loaded}"
     assert flag in out
 
+
+
+def _loaded_by_entry_point(args: list[str], among: tuple[str, ...]) -> list[str]:
+    """Run ``imucalib ARGS`` through its console entry point (:func:`imucalib.cli.main`, as a
+    user does) in a fresh interpreter; return which of `among` it imported."""
+    code = ("import json, runpy, sys\n"
+            f"sys.argv = ['imucalib', *{args!r}]\n"
+            "try:\n"
+            "    runpy.run_module('imucalib.cli', run_name='__main__')\n"
+            "except SystemExit as exc:\n"
+            "    assert exc.code in (0, None), exc.code\n"
+            f"print(json.dumps([m for m in {among!r} if m in sys.modules]))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.splitlines()[-1])
+
+
+#: What no start of the command line needs, named module by module (the ORM, Typer's pydantic
+#: adapters, the result models, the web server).
+NEVER_AT_START = (*HEAVY, "sqlalchemy.orm", "typer._adapters", "pydantic_core", "argon2",
+                  "cryptography", "fastapi", "uvicorn", "imucalib.models.result")
+
+
+@pytest.mark.parametrize("args", [["--help"], ["--version"], ["records", "--help"]],
+                         ids=["help", "version", "records-help"])
+def test_the_entry_point_starts_without_heavy_libraries(args):
+    assert _loaded_by_entry_point(args, NEVER_AT_START) == []
+
+
+def test_the_entry_points_records_list_needs_only_sqlalchemy_and_its_orm(tmp_path):
+    from imucalib.records import open_records
+
+    db = str(tmp_path / "lab.db")
+    open_records(db).close()
+    loaded = _loaded_by_entry_point(["records", "list", "--db", db], NEVER_AT_START)
+    assert loaded == ["sqlalchemy", "sqlalchemy.orm"]

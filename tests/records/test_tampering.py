@@ -18,7 +18,6 @@ SQL, the same on PostgreSQL; tests/records/test_verify.py runs on both backends)
 from __future__ import annotations
 
 import shutil
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, date, datetime
@@ -429,10 +428,8 @@ def test_every_tampering_is_caught_naming_the_row_and_the_kind(copy: Copy, case:
         with open_records(copy.url) as rec:
             old_heads = [h for h in rec.heads() if h.table != "reviews"]  # before review 3
     case.attack(copy)
-    start = time.monotonic()
     with open_records(copy.url) as rec:
         report = rec.verify_report(anchors=old_heads or ())
-    assert time.monotonic() - start < 1.0
     found = [(p.table, p.key, p.kind) for p in report.problems]
     assert (case.table, case.key, case.kind) in found, (case.name, report.problems)
     for p in report.problems:        # each names its row in one line

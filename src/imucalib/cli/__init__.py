@@ -1,6 +1,8 @@
 """The ``imucalib`` command line: argument handling and rendering only, no maths.
 
-Each module registers its commands on the one Typer app of :mod:`imucalib.cli._app`.
+Each module registers its commands on the one Typer app of :mod:`imucalib.cli._app`; the app
+imports a command's module when that command is asked for (:mod:`imucalib.cli._commands`), so
+importing this package imports none of them.
 
 Commands
 --------
@@ -47,21 +49,6 @@ import sys
 import warnings
 from typing import Any
 
-from imucalib.cli import (  # noqa: F401 (register)
-    allan,
-    calibrate,
-    plan,
-    procedures,
-    recording,
-    records,
-    report,
-    results,
-    run,
-    serve,
-    station,
-    twin,
-    users,
-)
 from imucalib.cli._app import EXCEPTHOOK, app, err_console, fail
 from imucalib.errors import CalibrationError
 

@@ -1,5 +1,9 @@
 """The Typer application and the console helpers shared by every command module.
 
+The app's root group is :class:`~imucalib.cli._commands.CommandsOnDemand`: a command's module
+is imported when the command is asked for, so the modules register their commands on this app
+as they are imported (docs/architecture.md, "The command line starts light").
+
 Help texts are plain text, not rich markup: units in brackets (``Moving-window length [s].``)
 and table names (``the plan's [twin]``) must show as written, so every Typer app of the command
 line is made by :func:`typer_app`, which turns rich markup off.
@@ -15,6 +19,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from imucalib.cli._commands import CommandsOnDemand
+
 __all__ = ["app", "console", "err_console", "fail", "typer_app"]
 
 
@@ -25,6 +31,7 @@ def typer_app(**options: Any) -> typer.Typer:
 
 app = typer_app(
     name="imucalib",
+    cls=CommandsOnDemand,
     help="Inertial-sensor calibration station: twin, recordings, analysis.",
     no_args_is_help=True,
     add_completion=False,

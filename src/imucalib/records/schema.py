@@ -27,8 +27,9 @@ stored as canonical JSON text (:func:`imucalib.records.canonical.canonical_json`
 text hashed is the text stored.
 """
 
-from __future__ import annotations
-
+# No ``from __future__ import annotations`` here: SQLAlchemy reads every ``Mapped[...]``
+# annotation, and an evaluated one saves it parsing the text of each (a command that opens the
+# records starts faster, bench/bench_cli_startup.py).
 from datetime import date, datetime
 from typing import Final
 
