@@ -11,13 +11,20 @@ import pytest
 from imucalib.calibration import calibrate
 from imucalib.io.context import (
     EQUIPMENT_KEYS,
+    IMU_NOISE_KEYS,
     IMU_SPEC_KEYS,
     IMU_UNIT_KEYS,
     SPEC_LIMIT_KEYS,
     RecordingContext,
 )
 from imucalib.io.opening import open_recording
-from imucalib.plan.schema import AcceptanceConfig, EquipmentConfig, ImuSpecConfig, SpecLimits
+from imucalib.plan.schema import (
+    AcceptanceConfig,
+    EquipmentConfig,
+    ImuNoiseConfig,
+    ImuSpecConfig,
+    SpecLimits,
+)
 from imucalib.procedures import registry
 from imucalib.records.api import open_records
 
@@ -71,7 +78,9 @@ CONTEXT_KEYS = ("procedure", "plan_name", "acceptance", "guard_band_k", "equipme
 def test_the_keys_are_the_plan_tables_fields():
     """The context carries every field P1 builds its models from (io cannot import plan)."""
     assert set(SPEC_LIMIT_KEYS) == set(SpecLimits.model_fields)
-    assert set(ImuSpecConfig.model_fields) == {*IMU_SPEC_KEYS, *IMU_UNIT_KEYS, "limits"}
+    assert set(ImuSpecConfig.model_fields) == {*IMU_SPEC_KEYS, *IMU_UNIT_KEYS, "limits",
+                                               "noise"}
+    assert set(IMU_NOISE_KEYS) == set(ImuNoiseConfig.model_fields)
     assert set(EQUIPMENT_KEYS) <= set(EquipmentConfig.model_fields)
     assert set(AcceptanceConfig.model_fields) == {"rule", "guard_band_k"}
 
@@ -112,3 +121,31 @@ def test_the_metadata_round_trips_as_json_text_or_decoded():
     assert RecordingContext.of({"guard_band_k": "2", "equipment_json": {
         "table_position_accuracy_arcsec": True, "table_orthogonality_arcsec": float("nan")},
         "imu_spec_json": {"serial": 7, "limits": {"gyro_bias_dph": "x"}}}) == RecordingContext()
+
+
+def test_the_declared_noise_is_a_fact_of_its_own():
+    """A plan's [imu.noise] (a noise characterisation's terms) travels in imu_spec_json."""
+    from imucalib.plan import parse_plan
+    from imucalib.plan.io import plan_hash, plan_to_toml
+    from imucalib.procedures.p1.plan import generate_p1_plan
+
+    plan = generate_p1_plan(repetitions=1, static_s=120.0)
+    noise = ImuNoiseConfig(source="unit.noise.json", source_sha256="ab" * 32, record="whole",
+                           record_duration_s=2621.0,
+                           gyro_white_rps_rthz=(3.5e-5, 3.6e-5, 3.7e-5),
+                           gyro_bias_instability_rps=(4.8e-6, 5e-6, 0.0),
+                           gyro_random_walk_rps_rts=(4e-8, 0.0, 1e-7),
+                           accel_white_mps2_rthz=(5e-4, 5.1e-4, 5.2e-4),
+                           accel_bias_instability_mps2=(2e-4, 2e-4, 3e-4),
+                           accel_random_walk_mps2_rts=(0.0, 0.0, 1e-6))
+    plan = parse_plan(plan_to_toml(plan.model_copy(
+        update={"imu": plan.imu.model_copy(update={"noise": noise})})))
+    ctx = RecordingContext.of_plan(plan.model_dump(mode="json"), plan_hash(plan))
+    assert ImuSpecConfig.model_validate(ctx.imu_table).noise == noise
+    # its own key (imu_spec_json) gives it without the stored plan
+    again = RecordingContext.of({k: v for k, v in ctx.metadata().items()})
+    assert again.imu_noise == ctx.imu_noise and ImuSpecConfig.model_validate(
+        again.imu_table).noise == noise
+    # a plan without it carries none
+    bare = RecordingContext.of_plan(generate_p1_plan().model_dump(mode="json"))
+    assert bare.imu_noise == {} and "noise" not in bare.imu_table

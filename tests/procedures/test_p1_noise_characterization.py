@@ -8,6 +8,7 @@ the default plan and every candidate with it (``OptimizeRequest.noise_characteri
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -99,8 +100,13 @@ def test_the_optimiser_predicts_both_plans_with_the_characterisation(noise_file)
                                               min_static_s=120.0))
     reference = predict_p1(generate_p1_plan(), noise=models).std()
     assert result.reference.std() == pytest.approx(reference, rel=1e-12)
-    assert result.notes[0] == ("noise model of both plans: noise characterisation "
-                               "unit.noise.json (record 'whole record', 2621 s)")
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    assert result.notes[0] == (f"noise model of both plans: characterisation unit.noise.json "
+                               f"(sha256 {digest[:12]}…), carried by both plans as [imu.noise]")
+    # the optimised plan names the characterisation: its run's analysis needs no file
+    noise = result.plan.imu.noise
+    assert noise is not None and noise.source_sha256 == digest
+    assert (noise.record, round(noise.record_duration_s)) == ("whole record", 2621)
     assert result.worst_ratio <= 1.0 + 1e-6
     assert result.prediction.station_time_s < result.reference.station_time_s
 

@@ -316,7 +316,8 @@ def optimize(
                             "normalised covariance; D and A need --time-budget.")] = "targets",
     grade: Annotated[str, typer.Option("--grade", help="The IMU's grade.")] = "tactical",
     min_repetitions: Annotated[int, typer.Option(
-        "--min-repetitions", help="Margin: complete calibrations kept (repeatability).")] = 2,
+        "--min-repetitions", help="Margin: complete calibrations kept (the repeatability "
+                                  "check; docs/p1.md rule 6 asks for three).")] = 3,
     min_static: Annotated[float, typer.Option(
         "--min-static", help="Margin: the least level static record [s] (the procedure's "
                              "60 min; a shorter one rests the biases' flicker on the "
@@ -325,6 +326,11 @@ def optimize(
         "--min-dof", help="Margin: least lack-of-fit ν of each triad's fit.")] = 6,
     coarse: Annotated[bool, typer.Option("--coarse", help="A small search grid (quick).")]
     = False,
+    noise_characterization: Annotated[Path | None, typer.Option(
+        "--noise-characterization", help="The unit's noise characterisation (the JSON "
+                                         "`imucalib allan` writes): both plans are predicted "
+                                         "with its noise instead of the grade's, and carry it "
+                                         "as [imu.noise].")] = None,
 ) -> None:
     """Write the plan that meets σ targets in the least station time (docs/test-design.md).
 
@@ -335,7 +341,8 @@ def optimize(
 
     try:
         result = _optimize(procedure, target_default, target, target_from_spec, k, time_budget,
-                           criterion, grade, min_repetitions, min_static, min_dof, coarse)
+                           criterion, grade, min_repetitions, min_static, min_dof, coarse,
+                           noise_characterization)
         write_plan(result.plan, out)
     except CalibrationError as exc:
         raise fail(exc) from exc
@@ -347,7 +354,7 @@ def optimize(
 def _optimize(procedure: str, target_default: bool, target: str | None,
               target_from_spec: bool, k: float, time_budget_h: float | None, criterion: str,
               grade: str, min_repetitions: int, min_static_s: float, min_dof: int,
-              coarse: bool) -> Any:
+              coarse: bool, noise_characterization: Path | None = None) -> Any:
     """Build the request of ``plan optimize`` and ask the procedure's optimiser."""
     from imucalib.procedures import registry
     from imucalib.procedures.common.prediction import OptimizeRequest, optimize_plan
@@ -359,7 +366,8 @@ def _optimize(procedure: str, target_default: bool, target: str | None,
         target_text=target or "", spec_k=k,
         time_budget_s=None if time_budget_h is None else time_budget_h * 3600.0,
         criterion=criterion, grade=grade, min_repetitions=min_repetitions,
-        min_static_s=min_static_s, min_lack_of_fit_dof=min_dof, coarse=coarse)
+        min_static_s=min_static_s, min_lack_of_fit_dof=min_dof, coarse=coarse,
+        noise_characterization=str(noise_characterization or ""))
     return optimize_plan(registry.get(procedure), request)
 
 

@@ -4,8 +4,9 @@ A station run writes, besides the plan it ran (``plan_toml``, kept as provenance
 facts an analysis, a report or the records need as metadata keys of their own
 (docs/recording-format.md, "Root attributes"): the ``procedure``, the ``plan_name`` and
 ``plan_hash``, the equipment accuracies (``equipment_json``), the IMU's specification
-(``imu_spec_json``: the unit's identity, its held-out accuracies and gyro noise, and its
-per-parameter limits under ``"limits"``, the plan's ``[imu]`` table) and the decision rule
+(``imu_spec_json``: the unit's identity, its held-out accuracies and gyro noise, its
+per-parameter limits under ``"limits"`` and its declared noise under ``"noise"``, the plan's
+``[imu]`` table) and the decision rule
 (``acceptance`` and ``guard_band_k``); an import from a CSV and its step file writes the keys
 its step file gives. A recording made before the runner wrote a fact as a key of its own has it
 only inside its stored plan: :meth:`RecordingContext.of` then reads that TOML as plain data,
@@ -20,7 +21,8 @@ Contents
     The facts, :meth:`~RecordingContext.of` a recording's metadata, :meth:`~RecordingContext.
     of_plan` a plan given as plain data, and the :meth:`~RecordingContext.metadata` keys that
     carry them.
-:data:`EQUIPMENT_KEYS`, :data:`IMU_SPEC_KEYS`, :data:`IMU_UNIT_KEYS`, :data:`SPEC_LIMIT_KEYS`
+:data:`EQUIPMENT_KEYS`, :data:`IMU_SPEC_KEYS`, :data:`IMU_UNIT_KEYS`, :data:`SPEC_LIMIT_KEYS`,
+:data:`IMU_NOISE_KEYS`
     Which entries of the plan's tables it carries.
 """
 
@@ -33,8 +35,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["EQUIPMENT_KEYS", "IMU_SPEC_KEYS", "IMU_UNIT_KEYS", "SPEC_LIMIT_KEYS",
-           "RecordingContext"]
+__all__ = ["EQUIPMENT_KEYS", "IMU_NOISE_KEYS", "IMU_SPEC_KEYS", "IMU_UNIT_KEYS",
+           "SPEC_LIMIT_KEYS", "RecordingContext"]
 
 #: The equipment accuracies a calibration uses (plan table ``[equipment]``).
 EQUIPMENT_KEYS = ("table_position_accuracy_arcsec", "table_orthogonality_arcsec")
@@ -47,6 +49,15 @@ IMU_UNIT_KEYS = ("serial", "model", "maker", "grade")
 SPEC_LIMIT_KEYS = ("accel_bias_ug", "accel_scale_ppm", "accel_misalignment_urad",
                    "gyro_bias_dph", "gyro_scale_ppm", "gyro_misalignment_urad",
                    "gyro_g_sensitivity_dph_per_g", "gyro_arw_deg_rth", "accel_vrw_ug_rthz")
+#: The unit's declared noise (plan table ``[imu.noise]``, a noise characterisation's terms; the
+#: fields of :class:`imucalib.plan.schema.ImuNoiseConfig`): its text entries, its number, and
+#: its per-axis triples (SI).
+_NOISE_TEXTS = ("source", "source_sha256", "record")
+_NOISE_NUMBERS = ("record_duration_s",)
+_NOISE_TRIPLES = ("gyro_white_rps_rthz", "gyro_bias_instability_rps", "gyro_random_walk_rps_rts",
+                  "accel_white_mps2_rthz", "accel_bias_instability_mps2",
+                  "accel_random_walk_mps2_rts")
+IMU_NOISE_KEYS = (*_NOISE_TEXTS, *_NOISE_NUMBERS, *_NOISE_TRIPLES)
 
 
 def _text(value: Any) -> str:
@@ -78,6 +89,24 @@ def _texts(table: Any, keys: tuple[str, ...]) -> dict[str, str]:
     if not isinstance(table, Mapping):
         return {}
     return {k: v for k in keys if isinstance(v := table.get(k), str) and v}
+
+
+def _noise(table: Any) -> dict[str, Any]:
+    """Return the ``[imu.noise]`` entries of `table` (:data:`IMU_NOISE_KEYS`) of their type.
+
+    Texts, the number, and the triples of three finite numbers; {} without a source (no
+    declared noise). The analysis validates the whole table (ImuNoiseConfig).
+    """
+    if not isinstance(table, Mapping):
+        return {}
+    out: dict[str, Any] = {**_texts(table, _NOISE_TEXTS), **_numbers(table, _NOISE_NUMBERS)}
+    for key in _NOISE_TRIPLES:
+        value = table.get(key)
+        if isinstance(value, list | tuple) and len(value) == 3:
+            numbers = [_number(v) for v in value]
+            if all(n is not None for n in numbers):
+                out[key] = numbers
+    return out if out.get("source") else {}
 
 
 def _json_table(value: Any) -> dict[str, Any]:
@@ -115,6 +144,9 @@ class RecordingContext:
         The unit's identity in its specification (:data:`IMU_UNIT_KEYS`) that was given.
     spec_limits : dict of str to float
         The per-parameter specification limits (:data:`SPEC_LIMIT_KEYS`) that were given.
+    imu_noise : dict of str to Any
+        The unit's declared noise (:data:`IMU_NOISE_KEYS`), the plan's ``[imu.noise]``; {} when
+        none was given.
     acceptance : str
         The decision rule (``"simple"``, ``"guarded"``); ``""`` when not given.
     guard_band_k : float or None
@@ -128,6 +160,7 @@ class RecordingContext:
     imu_spec: dict[str, float] = field(default_factory=dict)
     imu_unit: dict[str, str] = field(default_factory=dict)
     spec_limits: dict[str, float] = field(default_factory=dict)
+    imu_noise: dict[str, Any] = field(default_factory=dict)
     acceptance: str = ""
     guard_band_k: float | None = None
 
@@ -160,6 +193,7 @@ class RecordingContext:
                    imu_spec=_numbers(imu, IMU_SPEC_KEYS), imu_unit=_texts(imu, IMU_UNIT_KEYS),
                    spec_limits=_numbers(imu.get("limits") if isinstance(imu, Mapping) else None,
                                         SPEC_LIMIT_KEYS),
+                   imu_noise=_noise(imu.get("noise") if isinstance(imu, Mapping) else None),
                    acceptance=rule if isinstance(rule, str) else "",
                    guard_band_k=_number(acceptance.get("guard_band_k")))
 
@@ -188,6 +222,7 @@ class RecordingContext:
                                      EQUIPMENT_KEYS),
                   imu_spec=_numbers(imu, IMU_SPEC_KEYS), imu_unit=_texts(imu, IMU_UNIT_KEYS),
                   spec_limits=_numbers(imu.get("limits"), SPEC_LIMIT_KEYS),
+                  imu_noise=_noise(imu.get("noise")),
                   acceptance=_text(metadata.get("acceptance")),
                   guard_band_k=_number(metadata.get("guard_band_k")))
         return cls(procedure=own.procedure or planned.procedure,
@@ -197,16 +232,19 @@ class RecordingContext:
                    imu_spec=own.imu_spec or planned.imu_spec,
                    imu_unit=own.imu_unit or planned.imu_unit,
                    spec_limits=own.spec_limits or planned.spec_limits,
+                   imu_noise=own.imu_noise or planned.imu_noise,
                    acceptance=own.acceptance or planned.acceptance,
                    guard_band_k=(own.guard_band_k if own.guard_band_k is not None
                                  else planned.guard_band_k))
 
     @property
     def imu_table(self) -> dict[str, Any]:
-        """The IMU specification as the plan's ``[imu]`` table: identity, numbers, ``limits``."""
+        """The IMU specification as the plan's ``[imu]`` table: identity, numbers, and tables."""
         table: dict[str, Any] = {**self.imu_unit, **self.imu_spec}
         if self.spec_limits:
             table["limits"] = dict(self.spec_limits)
+        if self.imu_noise:
+            table["noise"] = dict(self.imu_noise)
         return table
 
     def metadata(self) -> dict[str, str | float]:

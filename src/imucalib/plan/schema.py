@@ -7,7 +7,8 @@ numbers of P1 (docs/p1.md, calibration steps 1–3: settle ≥30 s within 5″ a
 
 Contents
 --------
-:class:`Plan` and its parts :class:`PlanLimits`, :class:`GuardConfig`, :class:`ImuSpecConfig`;
+:class:`Plan` and its parts :class:`PlanLimits`, :class:`GuardConfig`, :class:`ImuSpecConfig`
+(with :class:`ImuNoiseConfig`, the unit's declared noise);
 the step kinds :class:`SoakStep`, :class:`WarmUpStep`, :class:`PositionStep`, :class:`RateStep`,
 :class:`CentrifugeStep`, :class:`StaticStep`, :class:`OperatorCheckStep`; :data:`PlanStep`;
 :func:`operator_check_problems` (unit swaps and load changes a station cannot do).
@@ -65,6 +66,7 @@ __all__ = [
     "CentrifugeStep",
     "EquipmentConfig",
     "GuardConfig",
+    "ImuNoiseConfig",
     "ImuSpecConfig",
     "OperatorCheckStep",
     "Plan",
@@ -179,8 +181,46 @@ class SpecLimits(_Model):
     accel_vrw_ug_rthz: float | None = Field(None, ge=0.0, le=1e7, description="[µg/√Hz]")
 
 
+#: One non-negative coefficient per axis (x, y, z), SI.
+_PER_AXIS = tuple[Annotated[float, Field(ge=0.0, le=1e3)],
+                  Annotated[float, Field(ge=0.0, le=1e3)],
+                  Annotated[float, Field(ge=0.0, le=1e3)]]
+
+
+class ImuNoiseConfig(_Model):
+    """The unit's declared noise: the fitted terms of its noise characterisation, per axis, SI.
+
+    The terms of the overlapping Allan variance σ²(τ) = N²/τ + (2 ln 2/π)·B² + K²·τ/3 (IEEE
+    Std 952-1997 Annex C; docs/noise.md §4) as the noise JSON ``imucalib allan`` writes gives
+    them for its longest record (two-sided densities): white density N, bias instability B and
+    random walk K, for the gyro and the accelerometer. The plan carries the values, so that it
+    and the recording that copies it need no file later, and the file's name, record and
+    SHA-256 for traceability (docs/test-design.md, "A noise characterisation in place of the
+    grade's"). The prediction and the analysis's declared flicker floor take it instead of the
+    grade's noise (docs/p1.md, "Noise model of the window means").
+    """
+
+    source: str = Field(min_length=1, max_length=255,
+                        description="file name of the noise characterisation")
+    source_sha256: str = Field(pattern=r"^[0-9a-f]{64}$",
+                               description="SHA-256 (hex) of the file's bytes")
+    record: str = Field("", max_length=200, description="label of the record read")
+    record_duration_s: float = Field(0.0, ge=0.0, le=1e9,
+                                     description="length of the record read [s]")
+    gyro_white_rps_rthz: _PER_AXIS = Field(description="gyro N [rad/s/√Hz = rad/√s]")
+    gyro_bias_instability_rps: _PER_AXIS = Field(description="gyro B [rad/s]")
+    gyro_random_walk_rps_rts: _PER_AXIS = Field(description="gyro K [rad/s/√s]")
+    accel_white_mps2_rthz: _PER_AXIS = Field(description="accelerometer N [m/s²/√Hz]")
+    accel_bias_instability_mps2: _PER_AXIS = Field(description="accelerometer B [m/s²]")
+    accel_random_walk_mps2_rts: _PER_AXIS = Field(description="accelerometer K [m/s²/√s]")
+
+
 class ImuSpecConfig(_Model):
-    """The IMU under test: identity, specification, held-out limits (docs/p1.md, "Acceptance")."""
+    """The IMU under test: identity, specification, held-out limits (docs/p1.md, "Acceptance").
+
+    ``noise`` (optional, the ``[imu.noise]`` table): the unit's declared noise from its noise
+    characterisation (:class:`ImuNoiseConfig`); without it the unit's grade's.
+    """
 
     serial: str = Field("", max_length=100, description="serial number")
     model: str = Field("", max_length=200)
@@ -194,6 +234,10 @@ class ImuSpecConfig(_Model):
                                          description="gyro noise spec [°/s]")
     limits: SpecLimits = Field(default_factory=SpecLimits,
                                description="per-parameter limits (none: not checked)")
+    noise: ImuNoiseConfig | None = Field(
+        None, exclude_if=lambda value: value is None,  # a plan without it dumps as before
+        description="the unit's declared noise from its noise characterisation (none: the "
+                    "grade's)")
 
 
 class AcceptanceConfig(_Model):

@@ -9,16 +9,21 @@ A plan's predicted uncertainty (docs/test-design.md) takes the noise of the unit
 :func:`plan_grade` and :func:`grade_noise`, shared by every procedure's ``predict``. A noise
 characterisation of the unit itself (the noise JSON ``imucalib allan`` writes, docs/noise.md)
 can stand in for the grade's: :func:`characterization_noise` reads it
-(docs/test-design.md, "A noise characterisation in place of the grade's").
+(docs/test-design.md, "A noise characterisation in place of the grade's"),
+:func:`characterization_config` turns it into the plan's ``[imu.noise]`` table
+(:class:`~imucalib.plan.schema.ImuNoiseConfig`), and :func:`declared_noise` returns the noise a
+plan declares — its ``[imu.noise]``, else its grade's — with its source.
 
 Contents
 --------
 :data:`WARM_UP_S`, :func:`check_grade`, :func:`plan_grade`, :func:`grade_noise`,
-:data:`NOISE_CHARACTERIZATION_FORMAT`, :func:`characterization_noise`
+:func:`declared_noise`, :func:`spec_noise`, :data:`NOISE_CHARACTERIZATION_FORMAT`,
+:func:`characterization_noise`, :func:`characterization_config`
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -30,10 +35,11 @@ from imucalib.errors import ConfigurationError, InvalidInputError
 
 if TYPE_CHECKING:
     from imucalib.models.noise import NoiseModel
-    from imucalib.plan.schema import Plan
+    from imucalib.plan.schema import ImuNoiseConfig, ImuSpecConfig, Plan
 
-__all__ = ["NOISE_CHARACTERIZATION_FORMAT", "WARM_UP_S", "characterization_noise", "check_grade",
-           "grade_noise", "plan_grade"]
+__all__ = ["NOISE_CHARACTERIZATION_FORMAT", "WARM_UP_S", "characterization_config",
+           "characterization_noise", "check_grade", "declared_noise", "grade_noise",
+           "plan_grade", "spec_noise"]
 
 #: The ``format`` of the noise characterisation ``imucalib allan`` writes (its noise JSON).
 NOISE_CHARACTERIZATION_FORMAT = "imucalib-noise-characterization"
@@ -42,6 +48,17 @@ _NOISE_FORMAT_VERSION = 1
 #: The noise terms read per axis, as :class:`~imucalib.models.noise.NoiseModel` takes them.
 _TERMS = {"white": "white_density", "bias_instability": "bias_instability",
           "random_walk": "random_walk"}
+#: The fields of :class:`~imucalib.plan.schema.ImuNoiseConfig` per triad and NoiseModel term.
+_CONFIG_FIELDS = {
+    "gyro": {"white_density": "gyro_white_rps_rthz",
+             "bias_instability": "gyro_bias_instability_rps",
+             "random_walk": "gyro_random_walk_rps_rts"},
+    "accel": {"white_density": "accel_white_mps2_rthz",
+              "bias_instability": "accel_bias_instability_mps2",
+              "random_walk": "accel_random_walk_mps2_rts"},
+}
+#: Hex digits of the SHA-256 a source line shows.
+_HASH_SHOWN = 12
 
 #: Default warm-up of each grade; its keys are the grades a plan accepts. [s]
 WARM_UP_S = {"consumer": 900.0, "tactical": 1800.0, "navigation": 3600.0}
@@ -92,6 +109,45 @@ def grade_noise(plan: Plan) -> dict[str, NoiseModel]:
     return out
 
 
+def declared_noise(plan: Plan) -> tuple[dict[str, NoiseModel], str]:
+    """Return the noise ``{"accel", "gyro"}`` the plan declares for its unit, and its source.
+
+    The plan's ``[imu.noise]`` (a noise characterisation of the unit, :func:`spec_noise`) when
+    it has one, else its grade's (:func:`grade_noise`). The source names it for a result's or a
+    prediction's notes: ``"characterisation FILE (sha256 0123456789ab…)"`` or
+    ``"grade tactical"`` (docs/test-design.md, "A noise characterisation in place of the
+    grade's").
+
+    Raises
+    ------
+    ConfigurationError
+        The plan has no ``[imu.noise]`` and states no grade.
+    """
+    stated = spec_noise(plan.imu)
+    if stated is not None:
+        return stated
+    return grade_noise(plan), f"grade {plan_grade(plan)}"
+
+
+def spec_noise(spec: ImuSpecConfig | None) -> tuple[dict[str, NoiseModel], str] | None:
+    """Return the noise an IMU specification declares (its ``noise``) and its source; None if none.
+
+    The models are the table's N, B and K per axis (:class:`~imucalib.plan.schema.ImuNoiseConfig`,
+    SI); the source is ``"characterisation FILE (sha256 0123456789ab…)"``.
+    """
+    from imucalib.models.noise import NoiseModel
+
+    if spec is None or spec.noise is None:
+        return None
+    cfg = spec.noise
+    models = {triad: NoiseModel(white_density=list(getattr(cfg, fields["white_density"])),
+                                bias_instability=list(getattr(cfg, fields["bias_instability"])),
+                                random_walk=list(getattr(cfg, fields["random_walk"])))
+              for triad, fields in _CONFIG_FIELDS.items()}
+    return models, (f"characterisation {cfg.source} "
+                    f"(sha256 {cfg.source_sha256[:_HASH_SHOWN]}…)")
+
+
 def characterization_noise(path: str | os.PathLike[str]
                            ) -> tuple[dict[str, NoiseModel], str]:
     """Return the noise models ``{"accel", "gyro"}`` of a unit's noise characterisation file.
@@ -118,9 +174,57 @@ def characterization_noise(path: str | os.PathLike[str]
     """
     from imucalib.models.noise import NoiseModel
 
+    coeffs, name, label, span, _ = _read_characterization(path)
+    models = {sensor: NoiseModel(white_density=c["white_density"],
+                                 bias_instability=c["bias_instability"],
+                                 random_walk=c["random_walk"]) for sensor, c in coeffs.items()}
+    return models, f"noise characterisation {name} (record {label!r}, {span:.0f} s)"
+
+
+def characterization_config(path: str | os.PathLike[str]) -> ImuNoiseConfig:
+    """Return a noise characterisation file as a plan's ``[imu.noise]`` table.
+
+    The values are :func:`characterization_noise`'s (N, B, K per axis of the gyro and the
+    accelerometer, SI, the longest record's), with the file's name, the record's label and
+    length, and the SHA-256 of the file's bytes: the plan then carries the unit's noise and
+    needs the file no more (:class:`~imucalib.plan.schema.ImuNoiseConfig`).
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`characterization_noise`; also a coefficient the plan's bounds refuse.
+    """
+    from pydantic import ValidationError
+
+    from imucalib.plan.schema import ImuNoiseConfig
+
+    coeffs, name, label, span, digest = _read_characterization(path)
+    values: dict[str, Any] = {
+        field: tuple(coeffs[triad][term])
+        for triad, fields in _CONFIG_FIELDS.items() for term, field in fields.items()}
+    try:
+        return ImuNoiseConfig(source=name, source_sha256=digest, record=label[:200],
+                              record_duration_s=span if math.isfinite(span) else 0.0, **values)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        where = ".".join(str(p) for p in err["loc"])
+        raise InvalidInputError(f"noise characterisation {name}: {where} {err['msg']}; got "
+                                f"{err.get('input')!r}") from None
+
+
+def _read_characterization(path: str | os.PathLike[str]
+                           ) -> tuple[dict[str, dict[str, list[float]]], str, str, float, str]:
+    """Read a noise JSON: per triad and term the three axes' values, name, label, span, sha256.
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`characterization_noise`.
+    """
     name = Path(path).name
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        raw = Path(path).read_bytes()
+        data = json.loads(raw.decode("utf-8"))
     except OSError as exc:
         raise InvalidInputError(f"noise characterisation {name}: cannot read it "
                                 f"({exc.strerror or exc})") from exc
@@ -145,11 +249,15 @@ def characterization_noise(path: str | os.PathLike[str]
         sensor: {f: [0.0, 0.0, 0.0] for f in _TERMS.values()} for sensor in ("gyro", "accel")}
     seen: set[str] = set()
     for ch in seg.get("channels") or ():
+        if not isinstance(ch, dict):
+            continue
         axis = str(ch.get("channel", "")).rsplit("_", 1)[0]  # "gyro_x_rps" → "gyro_x"
         sensor, _, letter = axis.partition("_")
         if sensor not in coeffs or letter not in ("x", "y", "z"):
             continue
-        terms = {t.get("name"): t for t in (ch.get("fit") or {}).get("terms") or ()}
+        fit = ch.get("fit")
+        listed = fit.get("terms") if isinstance(fit, dict) else None
+        terms = {t.get("name"): t for t in listed or () if isinstance(t, dict)}
         for term, field in _TERMS.items():
             coeffs[sensor][field]["xyz".index(letter)] = _term_value(terms.get(term))
         seen.add(axis)
@@ -158,12 +266,8 @@ def characterization_noise(path: str | os.PathLike[str]
         raise InvalidInputError(f"noise characterisation {name}: expected gyro and accelerometer "
                                 f"channels x, y, z in its longest record ({seg.get('label')!r}); "
                                 f"missing {', '.join(missing)}")
-    models = {sensor: NoiseModel(white_density=c["white_density"],
-                                 bias_instability=c["bias_instability"],
-                                 random_walk=c["random_walk"]) for sensor, c in coeffs.items()}
     span = _number(seg.get("t_end_s")) - _number(seg.get("t_start_s"))
-    return models, (f"noise characterisation {name} (record {seg.get('label')!r}, "
-                    f"{span:.0f} s)")
+    return coeffs, name, str(seg.get("label", "")), span, hashlib.sha256(raw).hexdigest()
 
 
 def _number(value: Any) -> float:

@@ -48,7 +48,7 @@ from imucalib.errors import ConfigurationError, InsufficientExcitationError
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.budget import estimate_plan_recording
 from imucalib.plan.schema import Plan
-from imucalib.procedures.common.grade import characterization_noise, grade_noise
+from imucalib.procedures.common.grade import declared_noise
 from imucalib.procedures.common.prediction import (
     OptimizedPlan,
     OptimizeRequest,
@@ -292,7 +292,7 @@ def default_targets(base: P1PlanOptions | None = None, *,
     """
     base = base or P1PlanOptions()
     plan = _generate(base)
-    prediction = predict_p1_covariance(plan, noise=noise or grade_noise(plan))[0]
+    prediction = predict_p1_covariance(plan, noise=noise or declared_noise(plan)[0])[0]
     if prediction.confounded:
         raise InsufficientExcitationError(prediction.confounded, "the base plan cannot identify "
                                           f"{', '.join(prediction.confounded)}: no default σ")
@@ -429,7 +429,9 @@ def optimize_p1(base: P1PlanOptions | None = None, *, targets: Mapping[str, floa
     settings : OptimizeSettings, optional
         Objective, grid and margins.
     noise : mapping of str to NoiseModel, optional
-        The unit's noise model; the grade's when omitted.
+        The unit's noise model; when omitted, the base plan's declared noise (its
+        ``noise_characterization``, else the grade's:
+        :func:`~imucalib.procedures.common.grade.declared_noise`).
     progress : callable, optional
         Called with a line per improvement.
 
@@ -454,7 +456,7 @@ def optimize_p1(base: P1PlanOptions | None = None, *, targets: Mapping[str, floa
         raise ConfigurationError("no targets: give --target-default, --target NAME=σ,… or "
                                  "--target-from-spec")
     ref_plan = _generate(base)
-    noise = dict(noise) if noise is not None else grade_noise(ref_plan)
+    noise = dict(noise) if noise is not None else declared_noise(ref_plan)[0]
     ref_std = predict_p1_covariance(ref_plan, noise=noise)[0].std()
     scales = {n: float(targets.get(n) or v or 1.0) for n, v in ref_std.items()}
     search = _Search(base, targets, scales, settings, noise)
@@ -585,8 +587,11 @@ def optimize_request(request: OptimizeRequest) -> OptimizedPlan:
     """Answer ``imucalib plan optimize p1``: targets and settings, then :func:`optimize_p1`.
 
     The request is the command's :class:`~imucalib.procedures.common.prediction.OptimizeRequest`.
-    Its ``noise_characterization`` (a noise JSON of the unit) replaces the grade's noise in the
-    default plan's σ and in every candidate's (the same noise on both sides of the comparison).
+    Its ``noise_characterization`` (a noise JSON of the unit) is the base options' (every plan,
+    the default and the optimised one, carries it as its ``[imu.noise]``), so it replaces the
+    grade's noise in the default plan's σ and in every candidate's (the same noise on both sides
+    of the comparison), and the analysis of the optimised plan's run takes it for its declared
+    flicker floor.
 
     Raises
     ------
@@ -599,10 +604,11 @@ def optimize_request(request: OptimizeRequest) -> OptimizedPlan:
     if request.grade not in ("consumer", "tactical", "navigation"):
         raise ConfigurationError(f"--grade must be consumer, tactical or navigation; got "
                                  f"{request.grade!r}")
-    base = P1PlanOptions(grade=request.grade)  # type: ignore[arg-type]
-    noise, source = None, f"grade {request.grade}"
+    base = P1PlanOptions(grade=request.grade,  # type: ignore[arg-type]
+                         noise_characterization=request.noise_characterization)
+    noise, source = declared_noise(_generate(base))
     if request.noise_characterization:
-        noise, source = characterization_noise(request.noise_characterization)
+        source += ", carried by both plans as [imu.noise]"
     defaults = default_targets(base, noise=noise)
     if request.targets == "given":
         targets = parse_targets(request.target_text, list(defaults))

@@ -79,6 +79,10 @@ class P1PlanOptions:
                          group="unit")
     model: str = option("", help="The unit's model, carried into the result.", group="unit")
     maker: str = option("", help="The unit's maker, carried into the result.", group="unit")
+    noise_characterization: str = option(
+        "", help="A noise characterisation of the unit (the JSON `imucalib allan` writes): its "
+                 "noise, carried in the plan's [imu.noise], replaces the grade's in the "
+                 "prediction and the analysis's declared flicker floor.", group="unit")
     grade: Literal["consumer", "tactical", "navigation"] = option(
         "tactical", help="The IMU's grade (the twin's IMU, the warm-up and the specification "
                          "checked).", group="twin")

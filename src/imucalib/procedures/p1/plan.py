@@ -27,6 +27,8 @@ warm-up and the moves to a start position have none.
 
 The plan carries a ``[twin]`` table describing a simulated station for it (a high-grade dual-axis
 table and one IMU of the chosen grade), so that ``imucalib run PLAN --station sim`` runs it.
+Given a noise characterisation of the unit, its ``[imu.noise]`` table carries the unit's declared
+noise (docs/test-design.md, "A noise characterisation in place of the grade's").
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ from imucalib.plan.schema import (
     StaticStep,
     WarmUpStep,
 )
+from imucalib.procedures.common.grade import characterization_config
 from imucalib.procedures.p1.roles import (
     P1_ACCEL_POSITION,
     P1_GYRO_BIAS,
@@ -194,6 +197,7 @@ def generate_p1_plan(
     model: str = "",
     maker: str = "",
     acceptance: str = "simple",
+    noise_characterization: str = "",
 ) -> Plan:
     """Return the default P1 plan.
 
@@ -249,6 +253,13 @@ def generate_p1_plan(
         The unit's identity, carried into the result.
     acceptance : {"simple", "guarded"}
         The decision rule (:class:`~imucalib.plan.schema.AcceptanceConfig`, guard band 2u).
+    noise_characterization : str
+        Path of a noise characterisation of the unit (the noise JSON ``imucalib allan``
+        writes); its fitted N, B and K per axis, with the file's name and SHA-256, become the
+        plan's ``[imu.noise]``
+        (:func:`~imucalib.procedures.common.grade.characterization_config`), the noise the
+        prediction and the analysis's declared flicker floor take instead of the grade's
+        (docs/p1.md, "Noise model of the window means"). Empty: none, the grade's.
 
     The unit's specification is the grade's (:func:`default_specification`); edit the plan's
     ``[imu]`` and ``[imu.limits]`` for a unit's own datasheet.
@@ -259,6 +270,8 @@ def generate_p1_plan(
         For fewer than 3 rate points or no zero rate, fewer than 1 repetition, a held-out record
         ≤ 0 s or fewer than 1 held-out revolution, or a rate plan that P1's minimums
         (docs/p1.md) reject.
+    InvalidInputError
+        A noise characterisation that cannot be read (one line naming the file).
     """
     if grade not in _WARM_UP_S:
         raise ConfigurationError(f"`grade` must be one of {sorted(_WARM_UP_S)}; got {grade!r}")
@@ -296,6 +309,9 @@ def generate_p1_plan(
             parts = parts[::-1]
         for part in parts:
             steps += part
+    imu = default_specification(grade, serial=serial, model=model, maker=maker)
+    if noise_characterization:
+        imu = imu.model_copy(update={"noise": characterization_config(noise_characterization)})
     max_rate = max(abs(r) for r in (*rates_dps, *held_out_rates_dps))
     twin = TwinEquipment(
         seed=seed,
@@ -309,7 +325,7 @@ def generate_p1_plan(
                     f"static, {len(rates_dps)} rates per axis, held-out checks, "
                     f"{repetitions} repetition(s).",
         procedure="p1",
-        imu=default_specification(grade, serial=serial, model=model, maker=maker),
+        imu=imu,
         acceptance=AcceptanceConfig(rule=acceptance),
         limits=PlanLimits(max_rate_dps=max(300.0, 1.2 * max_rate)),
         guards=GuardConfig(),

@@ -17,9 +17,13 @@ Cramér–Rao bound (:func:`~imucalib.estimation.crlb.compute_crlb`, Eqs. (TD.1)
 equipment's Type B terms are added as the analysis adds them (docs/p1.md, "Equipment
 uncertainty"; Eq. (TD.4)).
 
-The noise model is the unit's grade's (:func:`~imucalib.models.imu.sample_imu_model`'s
+The noise model is the one the plan declares
+(:func:`~imucalib.procedures.common.grade.declared_noise`): its ``[imu.noise]`` (a noise
+characterisation of the unit, docs/test-design.md, "A noise characterisation in place of the
+grade's"), else the unit's grade's (:func:`~imucalib.models.imu.sample_imu_model`'s
 coefficients: white, bias instability, rate random walk; its white terms only when the plan's
 twin says ``noise = "white"``); :func:`predict_p1` takes another one (a fitted Allan model).
+The notes name the source.
 
 Not predicted: the accelerometer's K2 (chosen by the data; none by default, ``accel_k2=True``
 predicts the model with it) and the model choice's uncertainty (TS.4), which depend on the
@@ -27,8 +31,8 @@ data.
 
 Contents
 --------
-:func:`predict_p1`, :func:`nominal_observations` (the grade's noise:
-:func:`~imucalib.procedures.common.grade.grade_noise`)
+:func:`predict_p1`, :func:`predict_p1_covariance`, :func:`nominal_observations` (the declared
+noise: :func:`~imucalib.procedures.common.grade.declared_noise`)
 """
 
 from __future__ import annotations
@@ -48,7 +52,7 @@ from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names, triad_parameter_unit
 from imucalib.plan.budget import MIN_SETTLE_PHASE_S, estimate_plan_recording
 from imucalib.plan.schema import PositionStep, RateStep, StaticStep
-from imucalib.procedures.common.grade import grade_noise, plan_grade
+from imucalib.procedures.common.grade import declared_noise
 from imucalib.procedures.common.prediction import PredictedParameter, Prediction, PredictionGroup
 from imucalib.procedures.common.reference import rate_inputs_b, site_vectors, static_inputs_b
 from imucalib.procedures.p1.fit import (
@@ -193,8 +197,9 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None,
     plan : Plan
         A P1 plan.
     noise : mapping of str to NoiseModel, optional
-        ``{"accel": …, "gyro": …}``; when omitted, the grade's
-        (:func:`~imucalib.procedures.common.grade.grade_noise`).
+        ``{"accel": …, "gyro": …}``; when omitted, the plan's declared noise: its
+        ``[imu.noise]``, else the grade's
+        (:func:`~imucalib.procedures.common.grade.declared_noise`).
     accel_k2 : bool
         Predict the accelerometer with its K2 (P1.K2) in the model, as a calibration with
         ``terms="+k2"`` fits it (the six positions identify it); by default it is left out,
@@ -210,8 +215,8 @@ def predict_p1(plan: Plan, *, noise: Mapping[str, NoiseModel] | None = None,
     Raises
     ------
     ConfigurationError
-        A plan of another procedure, without a grade (and no `noise`), or off the dual-axis
-        table.
+        A plan of another procedure, without a grade or ``[imu.noise]`` (and no `noise`), or
+        off the dual-axis table.
     """
     return predict_p1_covariance(plan, noise=noise, accel_k2=accel_k2)[0]
 
@@ -235,7 +240,7 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
 
     if plan.procedure and plan.procedure != "p1":
         raise ConfigurationError(f"plan {plan.name!r} is a {plan.procedure} plan, not a p1 plan")
-    models = dict(noise) if noise is not None else grade_noise(plan)
+    models, source = ((dict(noise), "given") if noise is not None else declared_noise(plan))
     obs = nominal_observations(plan, models)
     g_term = bool(RULED_TERMS.get("g"))
     accel_w = obs.select(kind="static", role="calibration", tag="six-position")
@@ -254,7 +259,7 @@ def predict_p1_covariance(plan: Plan, *, noise: Mapping[str, NoiseModel] | None 
     params = tuple(PredictedParameter(n, v, triad_parameter_unit(n)) for n, v in std.items())
     kinds = ", ".join(f"{k}: {_describe(m)}" for k, m in sorted(models.items()))
     notes = [
-        f"noise model ({'given' if noise is not None else 'grade ' + plan_grade(plan)}): {kinds}; "
+        f"noise model ({source}): {kinds}; "
         "window means correlated by flicker and random walk (Eq. (TD.2))",
         f"gyro G {'held in by rule' if g_term else 'not in'}; "
         + ("the accelerometer's K2 in the model (P1.K2); the model choice's uncertainty "
