@@ -199,3 +199,19 @@ def test_a_bad_configuration_is_refused_in_one_line(calibrated, tmp_path):
                                        str(tmp_path / "none.toml")])
     assert missing.exit_code != 0 and "no such file" in missing.output
     assert "Traceback" not in missing.output
+
+
+def test_both_formats_in_one_call_are_the_same_report(calibrated, recorded):
+    """``--format pdf,html`` analyses the run once and writes one report, with one id, twice."""
+    out = recorded.out / "both"
+    said = _report("--run", str(recorded.run_id), "--db", recorded.db, "-o", str(out),
+                   "--format", "pdf,html", "--config", str(calibrated.config))
+    pdf, html = out / "c.IMU-0001.p1.report.pdf", out / "c.IMU-0001.p1.report.html"
+    assert said.count(f"(report {calibrated.rid}") == 2
+    assert _ids(_pages(pdf)) == {calibrated.rid}
+    text = html.read_text(encoding="utf-8")
+    assert calibrated.rid in text and "<td>decision</td><td>PASS</td>" in text
+    bad = CliRunner().invoke(app, ["report", "--run", str(recorded.run_id), "--db",
+                                   recorded.db, "--format", "pdf,docx"])
+    assert bad.exit_code != 0 and "--format must be pdf, html or pdf,html; got 'pdf,docx'" in (
+        " ".join(bad.output.split()))

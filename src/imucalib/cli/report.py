@@ -150,7 +150,9 @@ def report(
         "--run", help="A run of the records database: its recording is analysed again (its "
                       "SHA-256 checked) and each unit's report carries its records id and "
                       "reviews.")] = None,
-    fmt: Annotated[str, typer.Option("--format", help="pdf or html.")] = "pdf",
+    fmt: Annotated[str, typer.Option(
+        "--format", help="pdf or html, or both (pdf,html: the same report in each, analysed "
+                         "once).")] = "pdf",
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="The file to write (default: beside the input); for an array or "
                             "a run, the folder.")] = None,
@@ -195,8 +197,9 @@ def _write_reports(path: Path | None, run: int | None, fmt: str, out: Path | Non
     from imucalib.exports.report import build_report, build_summary_report, laboratory_facts
     from imucalib.report.document import write_report
 
-    if fmt not in ("pdf", "html"):
-        raise InvalidInputError(f"--format must be pdf or html; got {fmt!r}")
+    formats = tuple(dict.fromkeys(f.strip() for f in fmt.split(",")))
+    if not formats or any(f not in ("pdf", "html") for f in formats):
+        raise InvalidInputError(f"--format must be pdf, html or pdf,html; got {fmt!r}")
     if (path is None) == (run is None):
         raise InvalidInputError("give a RESULT or RECORDING, or --run N (one of them); got "
                                 + ("both" if path is not None else "neither"))
@@ -234,17 +237,20 @@ def _write_reports(path: Path | None, run: int | None, fmt: str, out: Path | Non
             unit_result, path, run_view)
         document = build_report(unit_result, recording=unit_recording, review=reviews,
                                 result_id=rid, facts=laboratory_facts(**given))
-        name = (f"{file_stem(stem, unit_result.unit, unit_result.procedure)}.report.{fmt}"
-                if len(units) > 1 or run is not None else f"{stem}.report.{fmt}")
-        target = (folder / name if folder is not None else
-                  out if out is not None else path.with_name(name))
-        target.parent.mkdir(parents=True, exist_ok=True)
-        written.append((write_report(document, target, fmt), document.report_id,
-                        bool(document.watermark)))
+        for form in formats:
+            name = (f"{file_stem(stem, unit_result.unit, unit_result.procedure)}.report.{form}"
+                    if len(units) > 1 or run is not None else f"{stem}.report.{form}")
+            target = (folder / name if folder is not None else
+                      out.with_suffix(f".{form}") if out is not None and len(formats) > 1 else
+                      out if out is not None else path.with_name(name))
+            target.parent.mkdir(parents=True, exist_ok=True)
+            written.append((write_report(document, target, form), document.report_id,
+                            bool(document.watermark)))
         ids[str(unit_result.unit)] = document.report_id
     if len(units) > 1:
         document = build_summary_report(result, recordings=[path], report_ids=ids)
-        target = ((folder or path.parent)
-                  / f"{file_stem(stem, result.unit, result.procedure)}.summary.report.{fmt}")
-        written.append((write_report(document, target, fmt), document.report_id, False))
+        for form in formats:
+            target = ((folder or path.parent)
+                      / f"{file_stem(stem, result.unit, result.procedure)}.summary.report.{form}")
+            written.append((write_report(document, target, form), document.report_id, False))
     return written

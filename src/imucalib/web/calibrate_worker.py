@@ -208,19 +208,19 @@ def _certificate(folder: Path, run: int, who: str, db: str | None) -> None:
 def _write_certificate(folder: Path, run: int, db: str | None, state: _State) -> None:
     out = folder / CERTIFICATE_DIR
     out.mkdir(parents=True, exist_ok=True)
-    for i, fmt in enumerate(("pdf", "html")):
-        cmd = [sys.executable, "-m", "imucalib", "report", "--run", str(run), "--format", fmt,
-               "--out", str(out)]
-        if db:
-            cmd += ["--db", db]
-        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
-        sys.stdout.write(done.stdout)
-        sys.stdout.write(done.stderr)
-        if done.returncode != 0:
-            lines = [ln.strip() for ln in (done.stderr or done.stdout).splitlines() if ln.strip()]
-            state.end(lines[-1][:400] if lines else f"imucalib report exited {done.returncode}")
-            raise SystemExit(2)
-        state.progress(0.5 * (i + 1))
+    # one process writes both formats of the same report: the run is analysed once
+    cmd = [sys.executable, "-m", "imucalib", "report", "--run", str(run), "--format", "pdf,html",
+           "--out", str(out)]
+    if db:
+        cmd += ["--db", db]
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    sys.stdout.write(done.stdout)
+    sys.stdout.write(done.stderr)
+    if done.returncode != 0:
+        lines = [ln.strip() for ln in (done.stderr or done.stdout).splitlines() if ln.strip()]
+        state.end(lines[-1][:400] if lines else f"imucalib report exited {done.returncode}")
+        raise SystemExit(2)
+    state.progress(1.0)
 
 
 def main(argv: list[str] | None = None) -> int:
