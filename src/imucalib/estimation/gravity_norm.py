@@ -44,8 +44,9 @@ temperature term
 (T̄ the poses' mean temperature, s then the scale-factor errors at T̄, ṡ_T [1/°C] per axis) adds
 three coefficients; the bias's own temperature dependence is in (F.1″) when the temperature
 follows the time (a warm-up), and the two are not told apart. :func:`fit_gravity_norm`
-solves (F.2) by Gauss–Newton with the analytic Jacobian (each step by
-:func:`~imucalib.estimation.linear.solve_weighted_lsq`), returns the covariance
+solves (F.2) by Gauss–Newton with the analytic Jacobian (each step the estimate of
+:func:`~imucalib.estimation.linear.solve_weighted_lsq` by its operations,
+:func:`~imucalib.estimation.linear.solve_step`), returns the covariance
 (JᵀW J)⁻¹ (the Cramér–Rao bound of the design for white noise), χ²/ν and its Birge-scaled
 covariance on a misfit (the project's rule, docs/processing-estimation.md), and refuses a
 rank-deficient design naming the parameters it cannot see (:class:`InsufficientExcitationError`:
@@ -79,7 +80,7 @@ from imucalib.errors import (
     InvalidInputError,
 )
 from imucalib.estimation._common import check_rank
-from imucalib.estimation.linear import LsqSolution, solve_weighted_lsq
+from imucalib.estimation.linear import _checked, _solve_known, solve_step, solve_weighted_lsq
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["DRIFT_PARAMETERS", "K2_PARAMETERS", "K3_PARAMETERS", "PARAMETERS",
@@ -271,30 +272,35 @@ def fit_gravity_norm(y: ArrayLike, y_std: ArrayLike, gravity_mps2: float, *,
              *(DRIFT_PARAMETERS if drift else ()),
              *(TEMPERATURE_PARAMETERS if dtemp is not None else ())]
 
-    def linearised(p: _F64, check: bool) -> tuple[LsqSolution, _F64, _F64, _F64]:
-        """Solve the Gauss–Newton step at p by the one solver: (step solution, r, σ_r, a)."""
+    def residual(p: _F64, check: bool) -> tuple[_F64, _F64, _F64, _F64]:
+        """Return the Jacobian, r, σ_r and a at p (the rank checked when `check`)."""
         a, j = evaluate(p)
-        u = a / np.linalg.norm(a, axis=1, keepdims=True)
-        sr = np.sqrt(np.sum((u * sy) ** 2, axis=1))
-        r = np.linalg.norm(a, axis=1) - gravity_mps2
+        norm = np.linalg.norm(a, axis=1)
+        sr = np.sqrt(np.sum((a / norm[:, None] * sy) ** 2, axis=1))  # u = a/‖a‖
+        r = norm - gravity_mps2
         if check:
             _check_rank(j, 1.0 / sr, names)
-        return solve_weighted_lsq(
-            j, -r, sigma=sr, param_names=names, context="gravity-norm Jacobian",
-            advice="poses along the axes alone cannot see the non-orthogonality; add tilted "
-                   "poses, or use the six-position form for a fixture's faces"), r, sr, a
+        return j, r, sr, a
 
+    context = "gravity-norm Jacobian"
+    advice = ("poses along the axes alone cannot see the non-orthogonality; add tilted poses, "
+              "or use the six-position form for a fixture's faces")
     p = np.zeros(m)
     for it in range(1, max_iter + 1):
-        step = linearised(p, it == 1)[0].estimate
+        j, r, sr, _ = residual(p, it == 1)
+        # the step alone (the one solver's x̂ by its operations, no diagnostics)
+        step = solve_step(j, -r, sigma=sr, param_names=names, context=context, advice=advice)
         p = p + step
         if np.max(np.abs(step)) < tol:
             break
     else:
         raise ConvergenceError(f"the gravity-norm fit did not converge in {max_iter} "
                                "iterations")
-    at_solution, r, sr, forces = linearised(p, True)  # checked at the solution too: axis poses
-    cov = at_solution.covariance_noise
+    j, r, sr, forces = residual(p, True)  # checked at the solution too: axis poses
+    # (JᵀW J)⁻¹ at the solution: the one solver's Σ_x by its operations (Eq. (2) there)
+    args = _checked(j, -r, names, None, None, sr)
+    cov = _solve_known(args[0], args[1], args[3], args[2], context=context,
+                       advice=advice).covariance_noise
     quality = assess_fit("accel (gravity norm)", float(np.sum((r / sr) ** 2)), n - m)
     return GravityNormFit(values=p, covariance=cov * quality.sigma_scale**2,
                           covariance_noise=cov, quality=quality, residuals=r, iterations=it,

@@ -13,6 +13,8 @@ Contents
     :class:`~imucalib.models.fit_quality.FitQuality`, condition number and rank.
 :func:`solve_weighted_lsq`
     Pure solver for z = H·x + n, n ~ N(0, C), C given as σ per observation, weights, or full.
+:func:`solve_step`
+    x̂ of Eq. (1) alone, by the same operations (a Gauss–Newton step: no diagnostics).
 
 Method
 ------
@@ -86,7 +88,7 @@ from imucalib.estimation.observability import (
 )
 from imucalib.models.fit_quality import MISFIT_QUANTILE, FitQuality, assess_fit
 
-__all__ = ["LsqSolution", "LsqStatistics", "solve_weighted_lsq"]
+__all__ = ["LsqSolution", "LsqStatistics", "solve_step", "solve_weighted_lsq"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,6 +287,54 @@ def solve_weighted_lsq(
     )
 
 
+def solve_step(
+    H: ArrayLike,
+    z: ArrayLike,
+    *,
+    param_names: Sequence[str],
+    weights: ArrayLike | None = None,
+    covariance: ArrayLike | None = None,
+    sigma: ArrayLike | None = None,
+    cond_limit: float = DEFAULT_COND_LIMIT,
+    context: str = "design matrix H",
+    advice: str | None = None,
+) -> NDArray[np.float64]:
+    """Return x̂ of Eq. (1) alone: :func:`solve_weighted_lsq`'s estimate, bit for bit.
+
+    The lean solve of an iteration (a Gauss–Newton step), whose caller reads only the estimate:
+    the same argument checks, whitening, column scaling, SVD and operations for x̂ as
+    :func:`solve_weighted_lsq`, and the same errors (a rank-deficient or ill-conditioned design
+    gets the same :class:`~imucalib.errors.InsufficientExcitationError`), but neither the
+    observability report of an observable design nor the covariance, residuals and fit
+    statistics of Eqs. (2)–(7) (Björck 1996, §2.7; docs/performance.md, "Field calibration:
+    the fits' fixed costs").
+
+    Parameters
+    ----------
+    H, z, param_names, weights, covariance, sigma, cond_limit, context, advice
+        As for :func:`solve_weighted_lsq`.
+
+    Returns
+    -------
+    ndarray, shape (p,)
+        x̂ (read-only). [units of the parameters]
+
+    Raises
+    ------
+    InvalidInputError
+        As :func:`solve_weighted_lsq` for the arguments (not the ν = 0 rule of an estimated
+        noise level, which concerns the covariance).
+    InsufficientExcitationError
+        As :func:`solve_weighted_lsq`.
+    """
+    A0, y, names, whitener, _ = _checked(H, z, param_names, weights, covariance, sigma)
+    U, s, vt, norms = _factorise_checked(whitener.whiten(A0), names, cond_limit, context,
+                                         advice)
+    x_hat = (vt.T @ ((U.T @ whitener.whiten(y)) / s)) / norms  # Eq. (1)
+    x_hat.setflags(write=False)
+    return x_hat
+
+
 def _checked(H: ArrayLike, z: ArrayLike, param_names: Sequence[str], weights: ArrayLike | None,
              covariance: ArrayLike | None, sigma: ArrayLike | None
              ) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[str, ...], Whitener, bool]:
@@ -306,6 +356,7 @@ class _KnownFit:
     chi2: float
     dof: int
     gain: NDArray[np.float64] | None
+    residuals: NDArray[np.float64] | None = None  # r of Eq. (3)
 
 
 def _solve_known(A0: NDArray[np.float64], y: NDArray[np.float64], whitener: Whitener,
@@ -319,8 +370,9 @@ def _solve_known(A0: NDArray[np.float64], y: NDArray[np.float64], whitener: Whit
     χ² (Eq. (3)) and K, and the same :class:`~imucalib.errors.InsufficientExcitationError` for
     an unobservable design; what a caller of this path does not read (the observability
     report of an observable design, the normalised residuals, the Birge-scaled covariance, the
-    :class:`FitQuality`) is not made. `A0` (m, p) and `y` (m,) finite float64, `names` of p
-    distinct strings, `whitener` from :func:`make_whitener`; `yw` = W·y when the caller has it.
+    :class:`FitQuality`) is not made (r of Eq. (3) is returned, not copied). `A0` (m, p) and
+    `y` (m,) finite float64, `names` of p distinct strings, `whitener` from
+    :func:`make_whitener`; `yw` = W·y when the caller has it.
     """
     m, p = A0.shape
     A = whitener.whiten(A0)
@@ -332,8 +384,7 @@ def _solve_known(A0: NDArray[np.float64], y: NDArray[np.float64], whitener: Whit
     rw = whitener.whiten(r)
     k = whitener.whiten_transpose((U / s) @ vt / norms).T if gain else None
     return _KnownFit(estimate=x_hat, covariance_noise=_covariance(s, vt, norms),
-                          chi2=float(rw @ rw), dof=m - p, gain=k)
-
+                     chi2=float(rw @ rw), dof=m - p, gain=k, residuals=r)
 
 
 def _factorise_checked(A: NDArray[np.float64], names: tuple[str, ...], cond_limit: float,

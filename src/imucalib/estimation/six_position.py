@@ -15,7 +15,8 @@ input axis of the fixture frame), and separates per sensor axis i into
 four unknowns (b_i, M_i·) per axis; the six faces give six equations per axis (ν = 2 each).
 With ``k2=True`` a quadratic term K2_i·(g·d_k,i)² joins each axis (F.12′; ν = 1).
 :func:`fit_six_position` solves (F.12) by weighted least squares per axis
-(:func:`~imucalib.estimation.linear.solve_weighted_lsq`), with the covariance (AᵀWA)⁻¹, χ²/ν
+(the operations of :func:`~imucalib.estimation.linear.solve_weighted_lsq`, through its core
+without the diagnostics this fit does not read), with the covariance (AᵀWA)⁻¹, χ²/ν
 over the three axes and the Birge-scaled covariance on a misfit (the project's
 rule): a pose placed off its nominal direction is a misfit here, which the gravity-norm fit of
 :mod:`imucalib.estimation.gravity_norm` does not mind. A Type B standard uncertainty of g adds
@@ -35,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imucalib._checks import as_array
 from imucalib.errors import InsufficientExcitationError, InvalidInputError
-from imucalib.estimation.linear import solve_weighted_lsq
+from imucalib.estimation.linear import _checked, _solve_known
 from imucalib.models.fit_quality import FitQuality, assess_fit
 
 __all__ = ["SixPositionFit", "fit_six_position", "nominal_directions"]
@@ -157,9 +158,12 @@ def fit_six_position(y: ArrayLike, y_std: ArrayLike, directions: ArrayLike,
     chi2 = 0.0
     for i, ax in enumerate(_AXES):
         names = [f"bias_{ax}", *(f"M_{ax}{j}" for j in _AXES), *([f"K2_{ax}"] if k2 else [])]
-        fit = solve_weighted_lsq(
-            np.column_stack([a, (gravity_mps2 * d[:, i]) ** 2]) if k2 else a,
-            yy[:, i] - gravity_mps2 * d[:, i], sigma=sy[:, i], param_names=names,
+        # the one solver's x̂, Σ_x, r and χ² by its operations (estimation.linear), without
+        # the diagnostics this fit does not read
+        args = _checked(np.column_stack([a, (gravity_mps2 * d[:, i]) ** 2]) if k2 else a,
+                        yy[:, i] - gravity_mps2 * d[:, i], names, None, None, sy[:, i])
+        fit = _solve_known(
+            args[0], args[1], args[3], args[2],
             context=f"six-position design of axis {ax} (F.12)",
             advice=f"the poses do not separate K2_{ax} from the bias (both faces of {ax} and "
                    "one across are needed)" if k2 else None)

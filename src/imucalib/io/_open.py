@@ -60,10 +60,14 @@ def marked_open_for_write(path: str | os.PathLike[str]) -> bool:
 
 #: HDF5's chunk cache per open dataset of a file opened for reading (HDF5 2.0 defaults to
 #: 8 MiB). A Recording keeps a column's dataset open from one window to the next so the chunk
-#: two windows share is decompressed once; 4 MiB holds eight 512 KiB chunks of a float64
-#: column, as fast as 8 MiB on the bench's analyses, and with a dozen columns open the caches'
-#: share of an analysis's memory stays about 50 MiB instead of about 100 (docs/performance.md).
-CHUNK_CACHE_BYTES = 1 << 22
+#: two windows share is decompressed once, and the row search's probes (the time column's
+#: first and last rows, then the probe's chunk) stay cached from one search to the next: 2 MiB
+#: holds four 512 KiB chunks of a float64 column (eight of an int32 one), as fast as 4 and
+#: 8 MiB on the bench's analyses, while 1 MiB (two float64 chunks: the probes evict each
+#: other) made P1 9–33 % slower. With the sixteen columns of a P1 file open the caches hold at
+#: most 32 MiB (64 MiB at 4 MiB): the memory that grew with a recording's length
+#: (docs/performance.md, "Memory and the chunk cache").
+CHUNK_CACHE_BYTES = 1 << 21
 
 
 def open_h5(path: str | os.PathLike[str]) -> tuple[h5py.File, bool]:

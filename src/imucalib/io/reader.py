@@ -490,7 +490,7 @@ class Recording:
         layout = self._guard(f"stream {device}/{unit}", self._layout, path)
         names = self._select(layout, columns)
         n = self._guard(f"stream {device}/{unit}", self._n_rows, path)
-        # HDF5 keeps one chunk cache (4 MiB a column: _open.CHUNK_CACHE_BYTES) per open dataset
+        # HDF5 keeps one chunk cache (2 MiB a column: _open.CHUNK_CACHE_BYTES) per open dataset
         # while any handle to it is open: the reader's cached handles of these columns are
         # dropped, and the iterator's own closed with it, so reading stream after stream does
         # not pile caches up

@@ -244,16 +244,16 @@ def detect_for_thresholds(
         if k <= 1.0:
             raise InvalidInputError(f"`threshold_factor` (--static-threshold) must be > 1; "
                                     f"got {k}")
-    t = as_time(time_s, "time_s")
-    gyro = as_array(gyro_rps, "gyro_rps", shape=(t.size, 3))
-    accel = as_array(accel_mps2, "accel_mps2", shape=(t.size, 3))
+    t, steps = _checked_time(time_s)
+    gyro = _checked_samples(gyro_rps, "gyro_rps", t.size)
+    accel = _checked_samples(accel_mps2, "accel_mps2", t.size)
     win = check_positive(window_s, "window_s")
     t_init = check_positive(init_static_s, "init_static_s")
     min_static = check_positive(min_static_s, "min_static_s")
     min_rot = np.deg2rad(check_positive(min_rotation_deg, "min_rotation_deg"))
     if t.size < 2:
         raise InvalidInputError(f"`time_s` must have at least 2 samples; got {t.size}")
-    dt = float(np.median(np.diff(t)))
+    dt = float(np.median(steps))
     if not win / dt < 1e9:
         raise InvalidInputError(f"`window_s` = {win:g} s is longer than the record")
     w = round(win / dt)
@@ -289,6 +289,46 @@ def detect_for_thresholds(
     inside.setflags(write=False)
     return [_detect(t, gyro, accel, var_a, var_g, init_a, init_g, inside, w, k, min_static,
                     min_rot, means) for k in ks]
+
+
+def _usable(value: ArrayLike, ndim: int) -> NDArray[np.float64] | None:
+    """`value` itself when it is a C-ordered float64 array of `ndim` dimensions, all finite.
+
+    The detector only reads its inputs, so such an array needs no copy (``as_array`` copies
+    each: a field log's three columns, 10 MB at 1 kHz); finiteness is tested through the sum
+    (NaN and ±∞ propagate), element by element only when the sum is not finite.
+    """
+    if not (isinstance(value, np.ndarray) and value.dtype == np.float64 and value.ndim == ndim
+            and value.flags.c_contiguous):
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):  # huge finite values may overflow
+        total = value.sum()
+    if not np.isfinite(total) and not np.isfinite(value).all():
+        return None
+    return value
+
+
+def _checked_time(time_s: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Return ``as_time(time_s, "time_s")`` and its steps, without a copy when it can.
+
+    The same checks and errors as :func:`~imucalib.processing._common.as_time` (which raises
+    them when the times are not a finite, strictly increasing float64 vector).
+    """
+    t = _usable(time_s, 1)
+    if t is not None:
+        steps = np.diff(t)
+        if not (steps <= 0).any():
+            return t, steps
+    t = as_time(time_s, "time_s")
+    return t, np.diff(t)
+
+
+def _checked_samples(value: ArrayLike, name: str, n: int) -> NDArray[np.float64]:
+    """Return ``as_array(value, name, shape=(n, 3))``, without a copy when it can."""
+    arr = _usable(value, 2)
+    if arr is not None and arr.shape == (n, 3):
+        return arr
+    return as_array(value, name, shape=(n, 3))
 
 
 #: An interval's mean rate and mean specific force, by (start, stop) index.

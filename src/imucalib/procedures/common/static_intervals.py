@@ -38,7 +38,7 @@ from imucalib.errors import (
     RecordingError,
 )
 from imucalib.procedures.common.noise import block_variance, pooled_white_density
-from imucalib.processing.moments import mean_rows
+from imucalib.processing.moments import block_means, mean_rows
 
 if TYPE_CHECKING:
     from imucalib.io.reader import Recording
@@ -217,13 +217,23 @@ def _block_variance_pair(accel: _F64, gyro: _F64, period_s: float, block_s: floa
                          ) -> tuple[int, _F64]:
     """Return :func:`~imucalib.procedures.common.noise.block_variance` of [accel | gyro].
 
-    Each column's block means (rows added one after the other) and their variance (numpy's
-    reductions along the rows) do not depend on the other columns, so the two triads reduced
-    apiece give the six columns' values without stacking them into a copy.
+    Each column's block means (:func:`~imucalib.processing.moments.block_means`, rows added one
+    after the other) and their variance (numpy's reduction along the rows of a C-ordered array
+    of two columns or more, also one row after the other) do not depend on the other columns:
+    the two triads' block means, side by side, give the six columns' values bit for bit with
+    one ``np.var`` instead of two (its fixed cost, per interval) and without stacking the
+    samples into a copy.
     """
-    dof, var_a = block_variance(accel, period_s, block_s)
-    _, var_g = block_variance(gyro, period_s, block_s)
-    return dof, np.concatenate([var_a, var_g])
+    per_block = max(round(block_s / period_s), 1)
+    k = accel.shape[0] // per_block
+    if k < 3 or accel.ndim != 2 or gyro.shape != accel.shape:
+        dof, var_a = block_variance(accel, period_s, block_s)
+        _, var_g = block_variance(gyro, period_s, block_s)
+        return dof, np.concatenate([var_a, var_g])
+    means = np.concatenate([block_means(accel, per_block), block_means(gyro, per_block)],
+                           axis=1)
+    return k - 1, np.asarray(np.var(means, axis=0, ddof=1) * per_block * period_s,
+                             dtype=np.float64)
 
 
 def _segment_mean(found: _F64 | None, rows: _F64) -> _F64:
