@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import re
@@ -178,3 +179,19 @@ def test_the_estimate_matches_a_station_run(tmp_path):
     summary = run_plan(plan, SimStation(plan.twin), path, options=RunOptions(tick_s=2.0))
     assert summary.status == "done", summary.reason
     _bounds_the_run(estimate_plan_recording(plan), path)
+
+
+def test_each_steps_start_is_the_duration_of_the_plan_before_it():
+    """``plan_step_starts_s`` in one pass equals the cut plans' durations, bit for bit."""
+    from imucalib.plan.budget import plan_facts, plan_step_starts_s
+    from imucalib.procedures.p2.plan import generate_p2_plan
+
+    for plan in (generate_p1_plan(), generate_p2_plan()):
+        starts = plan_step_starts_s(plan, plan_facts(plan))
+        assert len(starts) == len(plan.steps) + 1 and starts[0] == 0.0
+        cut = [estimate_plan_recording(plan.model_copy(update={"steps": plan.steps[:i]}),
+                                       plan_facts(plan)).duration_s
+               for i in range(1, len(plan.steps) + 1)]
+        assert list(starts[1:]) == cut
+        assert starts[-1] == estimate_plan_recording(plan).duration_s
+        assert all(b >= a for a, b in itertools.pairwise(starts))

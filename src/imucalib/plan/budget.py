@@ -129,7 +129,9 @@ __all__ = [
     "estimate_recording",
     "estimate_recording_bytes",
     "format_bytes",
+    "plan_facts",
     "plan_run_duration_s",
+    "plan_step_starts_s",
 ]
 
 #: Time allowed per position, rate or centrifuge step for ticks and the move's end. [s]
@@ -385,8 +387,15 @@ def _soak_s(step: SoakStep, from_degc: float, facts: StationFacts) -> float:
     return min(60.0 * delta / ramp + approach + span, step.timeout_s)
 
 
-def plan_run_duration_s(plan: Plan, facts: StationFacts) -> float:
-    """Return the expected duration of a plan's run on a station (module docstring). [s]"""
+def plan_step_starts_s(plan: Plan, facts: StationFacts) -> tuple[float, ...]:
+    """Return the expected station time at which each step of a plan's run starts. [s]
+
+    Element ``i`` is the expected duration of the steps before step ``i`` (module docstring),
+    summed in the plan's order, so it equals ``plan_run_duration_s`` of the plan cut before
+    step ``i`` on the same `facts`; one element more, the last, is the whole run's duration.
+    One pass over the steps, for a caller that needs every step's start (a plan's prediction).
+    """
+    starts = [0.0]
     total = 0.0
     chamber_degc = facts.initial_temperature_degc
     for step in plan.steps:
@@ -400,7 +409,18 @@ def plan_run_duration_s(plan: Plan, facts: StationFacts) -> float:
             total += max(step.settle_s, MIN_SETTLE_PHASE_S) + record + MOVE_ALLOWANCE_S
         else:
             total += step_min_duration_s(step)
-    return total
+        starts.append(total)
+    return tuple(starts)
+
+
+def plan_run_duration_s(plan: Plan, facts: StationFacts) -> float:
+    """Return the expected duration of a plan's run on a station (module docstring). [s]"""
+    return plan_step_starts_s(plan, facts)[-1]
+
+
+def plan_facts(plan: Plan) -> StationFacts:
+    """Return the station facts a plan's estimates assume: its ``[twin]``'s, else its steps'."""
+    return StationFacts.of_twin(plan.twin) if plan.twin is not None else _facts_from_plan(plan)
 
 
 def estimate_plan_recording(plan: Plan, facts: StationFacts | None = None
@@ -416,8 +436,7 @@ def estimate_plan_recording(plan: Plan, facts: StationFacts | None = None
         at ``equipment.acquisition_rate_min_hz`` with the devices the steps need.
     """
     if facts is None:
-        facts = (StationFacts.of_twin(plan.twin) if plan.twin is not None
-                 else _facts_from_plan(plan))
+        facts = plan_facts(plan)
     return estimate_recording(plan_run_duration_s(plan, facts), len(plan.steps), facts)
 
 

@@ -6,7 +6,7 @@ or one edited by hand) and builds the windows its run would give: for each calib
 in the body frame (:func:`~imucalib.procedures.common.reference.static_inputs_b`,
 :func:`~imucalib.procedures.common.reference.rate_inputs_b`), its length (``record_s``, the
 static's ``duration_s``, or whole revolutions) and its start on the run's clock (the station
-time of the steps before it, :func:`~imucalib.plan.budget.estimate_plan_recording`, plus its
+time of the steps before it, :func:`~imucalib.plan.budget.plan_step_starts_s`, plus its
 settle phase). The windows are then selected, weighted and fitted as the analysis does
 (:func:`~imucalib.procedures.p1.fit.fit_p1`): the accelerometer's six positions, the gyro's
 rate points and statics (:func:`~imucalib.procedures.p1.fit.gyro_windows`), the coloured-noise
@@ -50,7 +50,12 @@ from imucalib.estimation.designs import build_design
 from imucalib.estimation.observability import compute_observability
 from imucalib.models.noise import NoiseModel
 from imucalib.models.result import triad_parameter_names, triad_parameter_unit
-from imucalib.plan.budget import MIN_SETTLE_PHASE_S, estimate_plan_recording
+from imucalib.plan.budget import (
+    MIN_SETTLE_PHASE_S,
+    estimate_plan_recording,
+    plan_facts,
+    plan_step_starts_s,
+)
 from imucalib.plan.schema import PositionStep, RateStep, StaticStep
 from imucalib.procedures.common.grade import declared_noise
 from imucalib.procedures.common.prediction import PredictedParameter, Prediction, PredictionGroup
@@ -117,6 +122,7 @@ def nominal_observations(plan: Plan, noise: Mapping[str, NoiseModel]) -> P1Obser
     g, earth_t = site_vectors(lat, heading, None)
     angles = np.zeros(len(TABLE_AXES))
     windows: list[WindowObservation] = []
+    starts_s = plan_step_starts_s(plan, plan_facts(plan))  # each step's start, one pass
     for i, step in enumerate(plan.steps):
         if isinstance(step, PositionStep):
             if len(step.angles_deg) != len(TABLE_AXES):
@@ -128,8 +134,7 @@ def nominal_observations(plan: Plan, noise: Mapping[str, NoiseModel]) -> P1Obser
         if role not in _ROLE_TAGS or not isinstance(step, PositionStep | StaticStep | RateStep):
             continue
         tags = step.tags if _ROLE_TAGS[role] in step.tags else (*step.tags, _ROLE_TAGS[role])
-        before = (estimate_plan_recording(plan.model_copy(update={"steps": plan.steps[:i]}))
-                  .duration_s if i else 0.0)
+        before = starts_s[i]
         label = plan.step_label(i)
         if isinstance(step, StaticStep):
             rate_b, force_b = static_inputs_b(TABLE_AXES, angles, g, earth_t)
