@@ -66,3 +66,21 @@ def test_serve_imports_no_server_until_it_runs():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=Path(__file__).parent)
     assert out.stdout.strip() == "False"
+
+
+def test_the_abort_bound_reaches_the_supervisor(tmp_path):
+    """``serve --abort-escalate-s`` → create_app → the supervisor the server makes."""
+    from imucalib.web.abort_watch import ABORT_ESCALATE_S
+    from imucalib.web.app import create_app
+
+    for given, expected in ((None, ABORT_ESCALATE_S), (3.5, 3.5)):
+        web = create_app(f"sqlite:///{tmp_path / 'r.db'}", tmp_path / f"runs-{given}",
+                         abort_escalate_s=given).state.web
+        try:
+            assert web.runs().abort_escalate_s == expected
+        finally:
+            web.close()
+    refused = CliRunner().invoke(app, ["serve", "--abort-escalate-s", "0", "--db",
+                                       str(tmp_path / "r.db")])
+    assert refused.exit_code == 2 and "--abort-escalate-s" in refused.output
+    assert "Traceback" not in refused.output

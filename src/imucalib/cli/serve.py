@@ -105,6 +105,9 @@ def serve(
                                 "(warned).")] = False,
     session_hours: Annotated[float, typer.Option(
         min=0.05, max=24 * 7, help="How long a login lasts [h].")] = 8.0,
+    abort_escalate_s: Annotated[float, typer.Option(
+        min=1.0, max=3600.0, help="How long an abort may take before the worker is ended "
+                                  "(a hung device call) [s].")] = 10.0,
 ) -> None:
     """Serve the station's operator web page: run, watch, answer prompts, abort (docs/web.md)."""
     try:
@@ -123,7 +126,8 @@ def serve(
 
         web_app = create_app(records, folder, plans_dir=plans_dir, stations_dir=stations_dir,
                              station=station or socket.gethostname(),
-                             secure_cookies=certfile is not None, session_hours=session_hours)
+                             secure_cookies=certfile is not None, session_hours=session_hours,
+                             abort_escalate_s=abort_escalate_s)
     except CalibrationError as exc:
         raise fail(exc) from exc
     if warning:

@@ -47,7 +47,8 @@ _log = logging.getLogger(__name__)
 def create_app(records_url: str | None, runs_dir: Path, supervisor: Any = None, *,
                plans_dir: Path | None = None, stations_dir: Path | None = None,
                station: str = "station", secure_cookies: bool = False,
-               session_hours: float | None = None) -> FastAPI:
+               session_hours: float | None = None,
+               abort_escalate_s: float | None = None) -> FastAPI:
     """Return the web application of one station.
 
     Parameters
@@ -66,6 +67,9 @@ def create_app(records_url: str | None, runs_dir: Path, supervisor: Any = None, 
         Served over TLS: the session cookie is ``Secure``.
     session_hours : float, optional
         How long a login lasts (default :data:`imucalib.records.access.SESSION_HOURS`). [h]
+    abort_escalate_s : float, optional
+        How long an abort may take before the supervisor ends the worker (default
+        :data:`imucalib.web.abort_watch.ABORT_ESCALATE_S`; docs/web-runs.md). [s]
 
     Raises
     ------
@@ -82,7 +86,8 @@ def create_app(records_url: str | None, runs_dir: Path, supervisor: Any = None, 
                      secure_cookies=secure_cookies,
                      session_hours=SESSION_HOURS if session_hours is None else session_hours,
                      templates=Jinja2Templates(directory=str(HERE / "templates")),
-                     supervisor=supervisor, records_url=records_url)
+                     supervisor=supervisor, records_url=records_url,
+                     abort_escalate_s=abort_escalate_s)
 
     @asynccontextmanager
     async def lifespan(_app: FastAPI) -> AsyncIterator[None]:

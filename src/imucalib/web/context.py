@@ -52,6 +52,8 @@ class WebContext:
     records_url : str or None
         The records database's URL the server was given (None: the default one); the
         supervisor's workers record their runs there.
+    abort_escalate_s : float or None
+        The supervisor's bound on an abort before it ends the worker (None: its default). [s]
     """
 
     records: Records
@@ -64,6 +66,7 @@ class WebContext:
     templates: Jinja2Templates
     supervisor: Any = None
     records_url: str | None = None
+    abort_escalate_s: float | None = None
     owns_supervisor: bool = False
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
@@ -84,7 +87,12 @@ class WebContext:
                         f"the run supervisor is not available in this installation: {exc}"
                     ) from exc
                 # the runs are recorded in this server's database, not the worker's default
-                self.supervisor = RunSupervisor(self.runs_dir, db=self.records_url)
+                from imucalib.web.abort_watch import ABORT_ESCALATE_S
+
+                bound = (ABORT_ESCALATE_S if self.abort_escalate_s is None
+                         else self.abort_escalate_s)
+                self.supervisor = RunSupervisor(self.runs_dir, db=self.records_url,
+                                                abort_escalate_s=bound)
                 self.owns_supervisor = True
             return self.supervisor
 
