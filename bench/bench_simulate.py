@@ -8,6 +8,14 @@ Prints, per scenario, the virtual time, the wall time (best of ``--repeat``) and
 Before the single runner (issue 10) ``simulate`` had its own scheduler; on the 2-core development
 machine it took 3.1 s (dual-axis-p1) and 3.3 s (static-hour) inside the process.
 
+Per-tick cost (2026-11, same 2-core machine, other jobs running, CPU seconds of one process,
+old and new code alternated, recordings bit-identical): a chamber's piece states and lagged
+fluctuation constants are computed once per setpoint command instead of per IMU per tick, and a
+table axis's servo constants once per command. A 2-unit P2 plan on the thermal twin (50 Hz,
+tick 5 s) went from 6.3–7.1 s to 5.2–5.7 s; chamber-array (6 units, soaks of 600 s stability
+checked every second) from 46–54 s to 45.5–49 s — the load's noise is as large as the gain;
+its profile is now flat (synthesis, kinematics and the HDF5 writer, each a few per cent).
+
 Run:  .venv/bin/python bench/bench_simulate.py [--tick 1.0] [--repeat 2] [NAME ...]
 """
 

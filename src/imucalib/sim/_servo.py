@@ -141,6 +141,26 @@ class Segment:
     target: float  # target angle (position, stop, off) or rate (rate)
 
 
+@dataclass(frozen=True)
+class _Transient:
+    """Per-segment servo-transient constants (:meth:`AxisProfile.servo_terms`)."""
+
+    u: NDArray[np.float64]
+    any_u: bool
+    x0: NDArray[np.float64]
+    v0e: NDArray[np.float64]
+    active: NDArray[np.bool_]
+    horizon_s: float
+
+
+@dataclass(frozen=True)
+class _ServoTerms:
+    """The servo transient's constants (None for an ideal servo) and whether any ripple."""
+
+    transient: _Transient | None
+    ripple: bool
+
+
 class AxisProfile:
     """Segments of one axis and their vectorised evaluation."""
 
@@ -152,6 +172,7 @@ class AxisProfile:
         self.segments = [Segment(0.0, initial_angle_rad, 0.0, 0.0, 0.0, 0.0, 0.0, 0,
                                  initial_angle_rad)]
         self._arrays: dict[str, NDArray[np.float64]] | None = None
+        self._terms: _ServoTerms | None = None
 
     @property
     def t0s(self) -> list[float]:
@@ -167,6 +188,29 @@ class AxisProfile:
                             for n in names}
         return self._arrays
 
+    def servo_terms(self) -> _ServoTerms:
+        """Return the per-segment constants of :meth:`evaluate` (cached until the next command).
+
+        u = a/ω² is each piece's steady servo error, x0 = e0 − u and ė0 its transient's initial
+        state (active where either is non-zero), dropped beyond the horizon 60/λ (λ:
+        :func:`decay_rate`; e^{−60}: below 1e-26 rad); `ripple` tells whether any piece has
+        rate ripple.
+        """
+        if self._terms is None:
+            arr = self.arrays()
+            omega = self.omega
+            ripple = bool(np.any(arr["ripple_rps"] != 0.0))
+            if math.isfinite(omega):
+                u = arr["a"] / omega**2
+                x0, v0e = arr["e0"] - u, arr["ed0"]
+                self._terms = _ServoTerms(_Transient(
+                    u=u, any_u=bool(np.any(u != 0.0)), x0=x0, v0e=v0e,
+                    active=(x0 != 0.0) | (v0e != 0.0),
+                    horizon_s=60.0 / decay_rate(self.zeta, omega)), ripple)
+            else:
+                self._terms = _ServoTerms(None, ripple)
+        return self._terms
+
     def evaluate(self, t: NDArray[np.float64], *, with_jerk: bool = False) -> tuple[
             NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.intp],
             NDArray[np.float64] | None]:
@@ -181,14 +225,13 @@ class AxisProfile:
         accel = a.copy()
         jerk = np.zeros_like(t) if with_jerk else None
         omega, zeta = self.omega, self.zeta
-        if math.isfinite(omega):
-            u = arr["a"] / omega**2  # steady servo error of each piece
-            if np.any(u != 0.0):
-                theta -= u[idx]
-            x0, v0e = arr["e0"] - u, arr["ed0"]
-            active = (x0 != 0.0) | (v0e != 0.0)
-            horizon = 60.0 / decay_rate(zeta, omega)  # e^{-60}: below 1e-26 rad
-            mask = active[idx] & (tau < horizon)
+        terms = self.servo_terms()
+        tr = terms.transient
+        if tr is not None:
+            if tr.any_u:
+                theta -= tr.u[idx]
+            x0, v0e = tr.x0, tr.v0e
+            mask = tr.active[idx] & (tau < tr.horizon_s)
             if np.any(mask):
                 im = idx[mask]
                 x, xd, xdd = free_response(x0[im], v0e[im], tau[mask], zeta, omega)
@@ -197,8 +240,8 @@ class AxisProfile:
                 accel[mask] -= xdd
                 if jerk is not None:
                     jerk[mask] += 2.0 * zeta * omega * xdd + omega * omega * xd
-        rip = arr["ripple_rps"]
-        if np.any(rip != 0.0):
+        if terms.ripple:
+            rip = arr["ripple_rps"]
             mask = rip[idx] != 0.0
             w = self.ripple_w
             amp, ph = rip[idx[mask]], w * tau[mask]
@@ -293,6 +336,7 @@ class AxisProfile:
         for seg in self.segments[first_new:]:
             seg.target = final_r if target is None else target
         self._arrays = None
+        self._terms = None
         return t
 
 

@@ -132,6 +132,8 @@ class SimChamber:
         self._segments: list[tuple[float, float, float]] = [(0.0, temp, 0.0)]  # (t0, s0, slope)
         self._rng = rng
         self._sines: tuple[_F64, _F64, _F64] | None = None
+        #: _lagged_sines of the fluctuation per lag [s] (constants of the chamber and the IMUs)
+        self._lagged: dict[float, tuple[_F64, _F64, _F64, _F64]] = {}
         self._last_command_s = 0.0
 
     def _check_range(self, value: float, name: str) -> float:
@@ -228,10 +230,12 @@ class SimChamber:
             amp = rng.rayleigh(1.0, _N_SINES)
             amp *= sigma * math.sqrt(2.0) / np.linalg.norm(amp)  # RMS of Σ a·sin = |a|/√2
             self._sines = (w, amp, rng.uniform(0.0, 2.0 * np.pi, _N_SINES))
-        w, amp, phase = self._sines
-        gain = 1.0 / np.sqrt(1.0 + (w * lag_s) ** 2)
-        arg = np.outer(t, w) + (phase - np.arctan(w * lag_s))
-        return np.sin(arg) @ (amp * gain), np.cos(arg) @ (amp * gain * w)
+        lagged = self._lagged.get(lag_s)
+        if lagged is None:
+            lagged = self._lagged[lag_s] = _lagged_sines(*self._sines, lag_s)
+        w, shift, sin_gain, cos_gain = lagged
+        arg = np.outer(t, w) + shift
+        return np.sin(arg) @ sin_gain, np.cos(arg) @ cos_gain
 
 
 def _growth(tau: _F64, tau_a: float, tau_i: float) -> _F64:
@@ -254,6 +258,48 @@ def _cascade(segments: list[tuple[float, float, float]], tau_a: float, tau_i: fl
 
     `heating` applies from `power_on_s` (None: always on, the IMU starting in equilibrium).
     """
+    key = repr((segments, tau_a, tau_i, heating, power_on_s))  # exact: repr round-trips, ±0
+    cached = _STARTS_CACHE.get(key)
+    if cached is None:
+        if len(_STARTS_CACHE) >= _STARTS_CACHE_SIZE:
+            _STARTS_CACHE.clear()
+        cached = _STARTS_CACHE[key] = _piece_starts(segments, tau_a, tau_i, heating, power_on_s)
+    pieces, starts, t0s = cached
+    tau_ii = 1.0 if tau_i is None else tau_i
+    idx = np.maximum(np.searchsorted(t0s, t, side="right") - 1, 0)
+    if idx.size and idx.min() == idx.max():  # one piece (the usual chunk): no masking
+        t0, s0, k, on = pieces[int(idx[0])]
+        a_start, t_start = starts[int(idx[0])]
+        return _piece(s0, k, heating if on else 0.0, a_start, t_start, tau_a, tau_ii,
+                      np.maximum(t - t0, 0.0))
+    air, air_rate = np.empty_like(t), np.empty_like(t)
+    imu, imu_rate = np.empty_like(t), np.empty_like(t)
+    for n in np.unique(idx):
+        sel = idx == n
+        t0, s0, k, on = pieces[n]
+        tau = np.maximum(t[sel] - t0, 0.0)
+        a_start, t_start = starts[n]
+        air[sel], air_rate[sel], imu[sel], imu_rate[sel] = _piece(
+            s0, k, heating if on else 0.0, a_start, t_start, tau_a, tau_ii, tau)
+    return air, air_rate, imu, imu_rate
+
+
+#: _piece_starts results by the exact text of their arguments (a chamber's history changes only
+#: at a command, so every chunk of every IMU between two commands shares one entry)
+_STARTS_CACHE: dict[str, tuple[list[tuple[float, float, float, bool]],
+                               list[tuple[float, float]], _F64]] = {}
+_STARTS_CACHE_SIZE = 256
+
+
+def _piece_starts(segments: list[tuple[float, float, float]], tau_a: float,
+                  tau_i: float | None, heating: float, power_on_s: float | None
+                  ) -> tuple[list[tuple[float, float, float, bool]], list[tuple[float, float]],
+                             _F64]:
+    """Return the cascade's linear pieces, the (A, T) state at each one's start, their starts.
+
+    Pieces are (t0, s0, k, heating on); the states follow the module equations and depend on the
+    setpoint history only. Pure; :func:`_cascade` caches it (:data:`_STARTS_CACHE`).
+    """
     pieces = [(t0, s0, k, True) for t0, s0, k in segments]
     if tau_i is not None and power_on_s is not None and power_on_s > pieces[0][0]:
         pieces = [(t0, s0, k, t0 >= power_on_s) for t0, s0, k, _ in pieces]
@@ -274,17 +320,19 @@ def _cascade(segments: list[tuple[float, float, float]], tau_a: float, tau_i: fl
                                         tau_ii, d)
             a_state, t_state = float(a_val[0]), float(t_val[0])
     t0s = np.array([p[0] for p in pieces])
-    idx = np.maximum(np.searchsorted(t0s, t, side="right") - 1, 0)
-    air, air_rate = np.empty_like(t), np.empty_like(t)
-    imu, imu_rate = np.empty_like(t), np.empty_like(t)
-    for n in np.unique(idx):
-        sel = idx == n
-        t0, s0, k, on = pieces[n]
-        tau = np.maximum(t[sel] - t0, 0.0)
-        a_start, t_start = starts[n]
-        air[sel], air_rate[sel], imu[sel], imu_rate[sel] = _piece(
-            s0, k, heating if on else 0.0, a_start, t_start, tau_a, tau_ii, tau)
-    return air, air_rate, imu, imu_rate
+    t0s.flags.writeable = False
+    return pieces, starts, t0s
+
+
+def _lagged_sines(w: _F64, amp: _F64, phase: _F64, lag_s: float
+                  ) -> tuple[_F64, _F64, _F64, _F64]:
+    """Return the fluctuation's frequencies, phases and sine/cosine weights through a lag.
+
+    A sinusoid a·sin(ωt + φ) through a first-order lag τ becomes a·g·sin(ωt + φ − atan ωτ),
+    g = 1/√(1 + (ωτ)²); its rate has weight a·g·ω on the cosine (module docstring).
+    """
+    gain = 1.0 / np.sqrt(1.0 + (w * lag_s) ** 2)
+    return w, phase - np.arctan(w * lag_s), amp * gain, amp * gain * w
 
 
 def _piece(s0: float, k: float, h: float, a0: float, t0: float, tau_a: float, tau_i: float,
