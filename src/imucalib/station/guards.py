@@ -174,26 +174,37 @@ class RollingWindow:
     def __init__(self, span_s: float) -> None:
         self.span_s = float(span_s)
         self._blocks: deque[tuple[_F64, _F64]] = deque()
+        # the kept blocks joined, once :meth:`rows` has asked for them (None: not joined yet);
+        # kept up to date by push, so a guard asking every tick joins two arrays, not hundreds
+        self._joined: tuple[_F64, _F64] | None = None
 
     def clear(self) -> None:
         """Forget everything."""
         self._blocks.clear()
+        self._joined = None
 
     def push(self, time_s: _F64, values: _F64) -> None:
         """Add rows and drop those older than `span_s` before the newest."""
         if time_s.size == 0:
             return
         self._blocks.append((time_s, values))
+        if self._joined is not None:
+            self._joined = (np.concatenate((self._joined[0], time_s)),
+                            np.concatenate((self._joined[1], values)))
         newest = float(time_s[-1])
         while self._blocks and float(self._blocks[0][0][-1]) < newest - self.span_s:
-            self._blocks.popleft()
+            dropped = len(self._blocks.popleft()[0])
+            if self._joined is not None:
+                self._joined = (self._joined[0][dropped:], self._joined[1][dropped:])
 
     def rows(self, since_s: float | None = None) -> tuple[_F64, _F64]:
         """Return the rows kept (those at or after `since_s` when given)."""
         if not self._blocks:
             return np.zeros(0), np.zeros((0, 0))
-        t = np.concatenate([b[0] for b in self._blocks])
-        v = np.concatenate([b[1] for b in self._blocks])
+        if self._joined is None:
+            self._joined = (np.concatenate([b[0] for b in self._blocks]),
+                            np.concatenate([b[1] for b in self._blocks]))
+        t, v = self._joined
         keep = t >= (t[-1] - self.span_s if since_s is None else max(since_s, t[-1] - self.span_s))
         return t[keep], v[keep]
 
