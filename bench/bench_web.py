@@ -14,7 +14,9 @@ measures per phase:
   was when the page subscribed);
 - events and bytes a second per page;
 - the server's CPU (user + system time of its process over the phase's wall time) and its
-  resident memory (``VmRSS``), sampled every second; the run's worker process besides.
+  resident memory (``VmRSS``), sampled every second; the run's worker process besides (its
+  first, last and largest, and its trend after the first minute and over the second half of
+  both phases: the worker builds the twin and fills its caches for some minutes first).
 
 Run:  .venv/bin/python bench/bench_web.py [--seconds 60] [--pages 10] [--pace 1] [--points 2]
       (``--seconds 900 --points 4``: the "memory flat over a 30-minute run" check.)
@@ -137,14 +139,15 @@ def _answer_prompts(sup: RunSupervisor, run_id: str, stop: threading.Event) -> N
             print(f"  (prompt: {type(exc).__name__}: {exc})", file=sys.stderr)
 
 
-def _slope(phase: list[tuple[float, float]]) -> str:
-    """Return the phase's RSS trend after its first minute (least squares), as text."""
-    late = [(t, r) for t, r in phase if t - phase[0][0] >= 60.0]
+def _slope(phase: list[tuple[float, float]], skip_s: float = 60.0,
+           what: str = "after its first minute") -> str:
+    """Return the RSS trend after `skip_s` of `phase` (least squares), as text."""
+    late = [(t, r) for t, r in phase if t - phase[0][0] >= skip_s]
     if len(late) < 60:
         return ""
     t, r = np.array(late).T
     per_min = 60.0 * float(np.polyfit(t, r, 1)[0])
-    return f"; trend after its first minute {per_min:+.3f} MiB/min"
+    return f"; trend {what} {per_min:+.3f} MiB/min"
 
 
 def main() -> None:
@@ -251,8 +254,12 @@ def main() -> None:
               f"third mean {statistics.mean(rss[-third:]):.1f}, max {max(rss):.1f} "
               f"({len(rss)} samples over {samples[-1][0]:.0f} s)")
         if worker:
-            print(f"worker RSS [MiB]: first {worker[0]:.1f}, last {worker[-1]:.1f}, "
-                  f"max {max(worker):.1f}")
+            worker_rows = [(s[0], s[2]) for s in samples if s[2] is not None]
+            half_s = (worker_rows[-1][0] - worker_rows[0][0]) / 2
+            print(f"worker RSS [MiB]: first {worker[0]:.1f}, at half time "
+                  f"{worker_rows[len(worker_rows) // 2][1]:.1f}, last {worker[-1]:.1f}, "
+                  f"max {max(worker):.1f}{_slope(worker_rows)}"
+                  f"{_slope(worker_rows, half_s, 'over the second half')}")
 
 
 if __name__ == "__main__":

@@ -245,8 +245,11 @@ class RunSession:
                 cols[c] = block.accel_mps2[:, j]
             self.writer.append(DEVICE_IMU, name, cols)
             self.accel[name].push(block.time_s, block.accel_mps2)
-            self.temps[name].push(block.time_s[-1:], block.temperature_degc[-1:, None])
-            self.gyro_means[name].push(block.time_s[-1:],
+            # copies: a one-row view would keep the tick's whole block alive for the window's
+            # hour (about 50 MiB an hour at 1 kHz)
+            t_last = block.time_s[-1:].copy()
+            self.temps[name].push(t_last, block.temperature_degc[-1:, None].copy())
+            self.gyro_means[name].push(t_last,
                                        np.r_[block.gyro_rps.mean(axis=0),
                                              block.accel_mps2.mean(axis=0)][None, :])
             self.last_sample_s[name] = float(block.time_s[-1])
