@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
@@ -14,18 +11,8 @@ import pytest
 from imucalib.errors import RecordingCorruptError
 from imucalib.io import _probe, open_recording, recover_recording
 
+from . import damage
 
-def _load_damage() -> ModuleType:
-    name = "imucalib_tests_damage"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name("damage.py"))
-        assert spec is not None and spec.loader is not None
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
-damage = _load_damage()
 IMU, TABLE, TRUTH = "streams/imu/IMU-0001", "streams/table/main", "truth/streams/imu/IMU-0001"
 
 #: What the report says (a piece of its summary) and rows copied per table, for each damage.

@@ -8,13 +8,10 @@ one clear line.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import shutil
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
@@ -24,18 +21,7 @@ from imucalib.io import open_recording
 from imucalib.io._seal import ATTRIBUTE, is_sealed, seal
 from imucalib.io.recover import compact_recording, recover_recording
 
-
-def _load_damage() -> ModuleType:
-    name = "imucalib_tests_damage"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name("damage.py"))
-        assert spec is not None and spec.loader is not None
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
-damage = _load_damage()
+from . import damage
 
 
 def _xattrs_here(folder: Path) -> bool:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import shutil
@@ -11,7 +10,6 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from types import ModuleType
 
 import h5py
 import numpy as np
@@ -23,18 +21,7 @@ from imucalib.io._probe import run_probe
 from imucalib.io._validate import first_bad_time
 from imucalib.io.inspect import summarize_recording
 
-
-def _load_damage() -> ModuleType:
-    name = "imucalib_tests_damage"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name("damage.py"))
-        assert spec is not None and spec.loader is not None
-        sys.modules[name] = module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    return sys.modules[name]
-
-
-damage = _load_damage()
+from . import damage
 
 
 @pytest.fixture(scope="module")
