@@ -34,12 +34,13 @@ from typing import TYPE_CHECKING, Any
 from imucalib.errors import ConfigurationError, InvalidInputError
 
 if TYPE_CHECKING:
+    from imucalib.io.reader import Recording
     from imucalib.models.noise import NoiseModel
     from imucalib.plan.schema import ImuNoiseConfig, ImuSpecConfig, Plan
 
 __all__ = ["NOISE_CHARACTERIZATION_FORMAT", "WARM_UP_S", "characterization_config",
            "characterization_noise", "check_grade", "declared_noise", "grade_noise",
-           "plan_grade", "spec_noise"]
+           "plan_grade", "recording_declared_noise", "spec_noise"]
 
 #: The ``format`` of the noise characterisation ``imucalib allan`` writes (its noise JSON).
 NOISE_CHARACTERIZATION_FORMAT = "imucalib-noise-characterization"
@@ -285,3 +286,36 @@ def _term_value(term: Mapping[str, Any] | None) -> float:
         bound = _number(term.get("upper_bound_si"))
         value = bound if math.isfinite(bound) else value
     return max(value, 0.0) if math.isfinite(value) else 0.0
+
+
+def recording_declared_noise(rec: Recording, imu_spec: ImuSpecConfig | None
+                             ) -> tuple[dict[str, NoiseModel], str] | None:
+    """Return the noise a recording declares for its unit, with its source; None if none.
+
+    In order: the stated IMU specification's ``noise`` (a noise characterisation,
+    :func:`~imucalib.procedures.common.grade.spec_noise`); the stored plan's declared noise
+    (:func:`~imucalib.procedures.common.grade.declared_noise`: its ``[imu.noise]``, else its
+    grade's, white only for a plan whose twin says so) when the plan's grade is the stated one
+    (or none is stated); the stated grade's. The source is ``"characterisation FILE (sha256
+    …)"`` or ``"grade G"`` (docs/test-design.md, "A noise characterisation in place of the
+    grade's").
+    """
+    from imucalib.models.imu import sample_imu_model
+    from imucalib.plan import parse_plan
+
+    stated = spec_noise(imu_spec)
+    if stated is not None:
+        return stated
+    grade: str = imu_spec.grade if imu_spec is not None else ""
+    text = rec.metadata.get("plan_toml")
+    if text:
+        try:
+            plan = parse_plan(str(text))
+            if not grade or plan_grade(plan) == grade:
+                return declared_noise(plan)
+        except ConfigurationError:
+            pass
+    if not grade:
+        return None
+    model = sample_imu_model(grade, 0, nonlinear=False)
+    return {"accel": model.accel_noise, "gyro": model.gyro_noise}, f"grade {grade}"

@@ -8,55 +8,22 @@ plan carries (``[imu.noise]``), else its unit grade's.
 
 Contents
 --------
-:func:`declared_floor`, :func:`recording_declared_noise`
+:func:`declared_floor`; :func:`recording_declared_noise` is
+:func:`imucalib.procedures.common.grade.recording_declared_noise` (shared with the rate transfer)
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from imucalib.errors import ConfigurationError
 from imucalib.io.reader import Recording
 from imucalib.models.noise import NoiseModel
 from imucalib.plan.schema import ImuSpecConfig
+from imucalib.procedures.common.grade import recording_declared_noise
 from imucalib.procedures.common.noise import longest_cluster_s, noise_records, with_declared_floor
 from imucalib.procedures.p1.windows import WindowObservation
 
-__all__ = ["declared_floor", "recording_declared_noise"]
-
-
-def recording_declared_noise(rec: Recording, imu_spec: ImuSpecConfig | None
-                             ) -> tuple[dict[str, NoiseModel], str] | None:
-    """Return the noise a recording declares for its unit, with its source; None if none.
-
-    In order: the stated IMU specification's ``noise`` (a noise characterisation,
-    :func:`~imucalib.procedures.common.grade.spec_noise`); the stored plan's declared noise
-    (:func:`~imucalib.procedures.common.grade.declared_noise`: its ``[imu.noise]``, else its
-    grade's, white only for a plan whose twin says so) when the plan's grade is the stated one
-    (or none is stated); the stated grade's. The source is ``"characterisation FILE (sha256
-    …)"`` or ``"grade G"`` (docs/test-design.md, "A noise characterisation in place of the
-    grade's").
-    """
-    from imucalib.models.imu import sample_imu_model
-    from imucalib.plan import parse_plan
-    from imucalib.procedures.common.grade import declared_noise, plan_grade, spec_noise
-
-    stated = spec_noise(imu_spec)
-    if stated is not None:
-        return stated
-    grade: str = imu_spec.grade if imu_spec is not None else ""
-    text = rec.metadata.get("plan_toml")
-    if text:
-        try:
-            plan = parse_plan(str(text))
-            if not grade or plan_grade(plan) == grade:
-                return declared_noise(plan)
-        except ConfigurationError:
-            pass
-    if not grade:
-        return None
-    model = sample_imu_model(grade, 0, nonlinear=False)
-    return {"accel": model.accel_noise, "gyro": model.gyro_noise}, f"grade {grade}"
+__all__ = ["declared_floor", "recording_declared_noise"]  # the latter: common.grade's
 
 
 def declared_floor(rec: Recording, imu_spec: ImuSpecConfig | None,

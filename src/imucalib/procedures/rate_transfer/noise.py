@@ -19,10 +19,11 @@ model of the window means"), the means of gyro k's turns get the covariance of E
   P1 applies); and the turn reduction (RT-4) fits the white density only, so even turns long
   enough for the floor take the declared terms, and the note says which case it is.
 
-The declared grade is the one the recording states: the stored plan's (its ``[imu]`` grade or
-its twin IMU's, white only for a twin with ``noise = "white"``), else the metadata's IMU
-specification. A recording that states none keeps the white σ (RT-4), and the note says the σ
-then hold for white noise only.
+The declared noise is a noise characterisation the recording's plan or IMU specification
+carries (``[imu.noise]``, docs/p1.md), else that of the grade the recording states: the
+stored plan's (its ``[imu]`` grade or its twin IMU's, white only for a twin with ``noise =
+"white"``), else the metadata's IMU specification. A recording that states none keeps the
+white σ (RT-4), and the note says the σ then hold for white noise only.
 
 Each turn's span of whole revolutions lies inside its step's valid window; its start is taken
 as the window's centre less half the span (an error under half a revolution, small against
@@ -42,7 +43,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from imucalib.errors import ConfigurationError
 from imucalib.estimation.noise_covariance import compute_window_mean_covariance
 from imucalib.io.reader import Recording
 from imucalib.models.noise import NoiseModel
@@ -84,30 +84,26 @@ class TurnNoise:
 
 
 def declared_gyro_noise(rec: Recording) -> tuple[NoiseModel | None, str]:
-    """Return the gyro noise of the grade the recording states, and the grade (module docstring).
+    """Return the gyro noise the recording declares for its unit, and its source.
 
-    (None, "") when it states none.
+    :func:`~imucalib.procedures.common.grade.recording_declared_noise` (the one lookup P1's
+    floor uses too) with the IMU specification the metadata states: ``"grade G"`` or
+    ``"characterisation FILE (sha256 …)"``; (None, "") when it declares none (module
+    docstring).
     """
-    from imucalib.models.imu import sample_imu_model
-    from imucalib.plan import parse_plan
-    from imucalib.procedures.common.grade import grade_noise, plan_grade
+    from pydantic import ValidationError
 
-    text = rec.metadata.get("plan_toml")
-    if text:
-        try:
-            plan = parse_plan(str(text))
-            return grade_noise(plan)["gyro"], plan_grade(plan)
-        except ConfigurationError:
-            pass
     from imucalib.io.context import RecordingContext
+    from imucalib.plan.schema import ImuSpecConfig
+    from imucalib.procedures.common.grade import recording_declared_noise
 
-    grade = RecordingContext.of(rec.metadata).imu_table.get("grade")
-    if isinstance(grade, str) and grade:
-        try:
-            return sample_imu_model(grade, 0, nonlinear=False).gyro_noise, grade
-        except (ConfigurationError, ValueError, KeyError):
-            return None, ""
-    return None, ""
+    table = RecordingContext.of(rec.metadata).imu_table
+    try:
+        spec = ImuSpecConfig.model_validate(table) if table else None
+    except ValidationError:
+        spec = None  # a specification the metadata states badly declares nothing
+    found = recording_declared_noise(rec, spec)
+    return (None, "") if found is None else (found[0]["gyro"], found[1])
 
 
 def _starts(rec: Recording, windows: Sequence[RateWindow]) -> tuple[_F64, float]:
@@ -140,19 +136,19 @@ def turn_noise(rec: Recording, windows: Sequence[RateWindow], white_density_rps:
         The unit's sample rate (the Allan fit's longest cluster of a turn). [Hz]
     """
     fitted = NoiseModel(white_density=np.asarray(white_density_rps, dtype=np.float64))
-    declared, grade = declared_gyro_noise(rec)
+    declared, source = declared_gyro_noise(rec)
     model, note, coloured = fitted, "", False
     if declared is not None:
         tau_max = longest_cluster_s(max(w.duration_s for w in windows), sample_rate_hz)
         floored, floor_note = with_declared_floor({"gyro": fitted}, {"gyro": declared}, tau_max,
-                                                  source=f"grade {grade}")
+                                                  source=source)
         model = floored["gyro"]
         coloured = bool(np.any(np.asarray(model.bias_instability) > 0)
                         or np.any(np.asarray(model.random_walk) > 0))
         if floor_note is not None:
             tau_c = float(np.max(flicker_corner_s(declared)))
             note = (f"turn means' covariance (RT-4c, Eq. (TD.2)): white density fitted to the "
-                    f"turns (RT-4), flicker and random walk of the grade {grade} (Type B, "
+                    f"turns (RT-4), flicker and random walk of the {source} (Type B, "
                     f"JCGM 100:2008 §4.3): the longest turn's Allan cluster ({tau_max:.3g} s) "
                     f"is shorter than {FLICKER_CORNERS_MIN:g} flicker corners (τ_c {tau_c:.3g}"
                     " s), so the turns cannot determine the flicker floor")
@@ -163,11 +159,11 @@ def turn_noise(rec: Recording, windows: Sequence[RateWindow], white_density_rps:
                                random_walk=declared.random_walk)
             coloured = True
             note = (f"turn means' covariance (RT-4c, Eq. (TD.2)): white density fitted (RT-4), "
-                    f"the grade {grade} bias instability and random walk (Type B): the turn "
+                    f"the {source} bias instability and random walk (Type B): the turn "
                     f"reduction fits no flicker, though the longest turn's Allan cluster "
                     f"({tau_max:.3g} s) reaches {FLICKER_CORNERS_MIN:g} flicker corners")
         else:
-            note = (f"turn means' covariance (RT-4c): white only, as the grade {grade} the "
+            note = (f"turn means' covariance (RT-4c): white only, as the {source} the "
                     "recording states declares (its twin's noise)")
     else:
         note = ("the recording states no IMU grade: the turns' means weighted by their white σ "
